@@ -1,0 +1,86 @@
+"""Solver timing figures (``hexapod bench``, ``benchmarks/run_benchmarks.py``).
+
+* warm FK: seed 002's trajectory A, scaled to the hexapod (paper unit = base radius / 50),
+  sampled at 1 kHz; each solve starts from the previous solution, tolerance 1e-10;
+* cold FK: random poses of the +-50 mm / +-25 deg box, each solved from home;
+* IK: the same poses, each from home.
+
+Times are wall-clock per solve (``time.perf_counter``), in microseconds.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .hexapod import Hexapod
+from .trajectories import box_poses, trajectory_poses
+
+TARGETS_US = {"warm_fk": 50.0, "cold_fk": 1000.0, "ik": 100.0}
+
+
+def _stats(times_s: list[float], iterations: list[int]) -> dict:
+    t = np.asarray(times_s) * 1e6
+    return {"n": int(t.size), "median_us": float(np.median(t)), "p95_us": float(np.percentile(t, 95)),
+            "p99_us": float(np.percentile(t, 99)), "iterations_mean": float(np.mean(iterations)),
+            "iterations_max": int(np.max(iterations))}
+
+
+def _radius(hexa: Hexapod) -> float:
+    g = hexa.geometry
+    if g is None:
+        return 0.25
+    return float(np.max(np.linalg.norm(g.base_points()[:, :2], axis=1)))
+
+
+def run_benchmarks(spec: str = "reference", samples: int = 1000, seed: int = 0) -> dict:
+    """Time warm FK, cold FK and IK on the hexapod ``spec`` (URDF path or preset name)."""
+    hexa = Hexapod.from_urdf(spec)
+    _, traj = trajectory_poses("A", hexa.home_pose, _radius(hexa) / 50.0)
+    readings, sol = [], None
+    for T in traj:
+        sol = hexa.inverse(T, guess=sol)
+        readings.append(sol.lengths)
+    poses = box_poses(hexa.home_pose, samples, seed)
+    box = [hexa.inverse(T, check=False) for T in poses]
+    box = [s for s in box if s.converged]
+    for _ in range(2):  # warm-up: JIT, caches
+        hexa.forward(readings[1], guess=hexa.forward(readings[0]))
+    report = {"hexapod": spec, "nq": hexa.model.nq}
+
+    sol, times, its = hexa.forward(readings[0]), [], []
+    for lengths in readings[1:]:
+        t0 = time.perf_counter()
+        sol = hexa.forward(lengths, guess=sol)
+        times.append(time.perf_counter() - t0)
+        its.append(sol.iterations)
+    report["warm_fk"] = _stats(times, its)
+
+    times, its = [], []
+    for s in box:
+        t0 = time.perf_counter()
+        sol = hexa.forward(s.lengths)
+        times.append(time.perf_counter() - t0)
+        its.append(sol.iterations)
+    report["cold_fk"] = _stats(times, its)
+
+    times, its = [], []
+    for s in box:
+        t0 = time.perf_counter()
+        sol = hexa.inverse(s.pose)
+        times.append(time.perf_counter() - t0)
+        its.append(sol.iterations)
+    report["ik"] = _stats(times, its)
+    report["targets_median_us"] = TARGETS_US
+    return report
+
+
+def print_report(report: dict) -> None:
+    """Print the figures as a table."""
+    print(f"hexapod {report['hexapod']} (nq = {report['nq']}); times per solve in microseconds")
+    print(f"{'case':10s}{'n':>7s}{'median':>10s}{'p95':>10s}{'p99':>10s}{'iter mean':>11s}{'iter max':>10s}{'target':>10s}")
+    for key in ("warm_fk", "cold_fk", "ik"):
+        r = report[key]
+        print(f"{key:10s}{r['n']:7d}{r['median_us']:10.1f}{r['p95_us']:10.1f}{r['p99_us']:10.1f}"
+              f"{r['iterations_mean']:11.2f}{r['iterations_max']:10d}{'<= %g' % report['targets_median_us'][key]:>10s}")

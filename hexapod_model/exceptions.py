@@ -1,0 +1,106 @@
+"""One error family for the whole package.
+
+Every error raised on purpose by :mod:`hexapod_model` derives from :class:`HexapodError`,
+so ``except hm.HexapodError`` catches them all. Each subclass carries the offending value
+(and, where there is one, the limit it broke) as attributes, and its message names both.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+class HexapodError(Exception):
+    """Base class of every error raised by hexapod_model."""
+
+
+class GeometryError(HexapodError, ValueError):
+    """A geometry description (dataclass or file) is malformed.
+
+    Attributes:
+        field: dotted name of the bad field, e.g. ``"legs[2].stroke"``.
+        value: the value found there.
+    """
+
+    def __init__(self, field: str, value: Any, reason: str):
+        self.field = field
+        self.value = value
+        self.reason = reason
+        super().__init__(f"geometry field {field!r} = {value!r}: {reason}")
+
+
+class UrdfError(HexapodError, ValueError):
+    """A URDF does not follow the hexapod contract (see docs/urdf_contract.md).
+
+    Attributes:
+        path: the file (or ``"<string>"``).
+        value: the offending element, link or joint name.
+    """
+
+    def __init__(self, path: str, value: Any, reason: str):
+        self.path = path
+        self.value = value
+        self.reason = reason
+        super().__init__(f"{path}: {reason} ({value!r})")
+
+
+class InputError(HexapodError, ValueError):
+    """A solver input is invalid: NaN/inf, wrong count, unknown joint name, bad pose matrix.
+
+    Attributes:
+        name: what the input is (``"lengths"``, ``"pose"``, ...).
+        value: the offending value.
+    """
+
+    def __init__(self, name: str, value: Any, reason: str):
+        self.name = name
+        self.value = value
+        self.reason = reason
+        super().__init__(f"invalid {name} {value!r}: {reason}")
+
+
+class LimitError(HexapodError, ValueError):
+    """A joint value lies outside its limit (leg stroke, Cardan angle, ...).
+
+    Attributes:
+        joint: the URDF joint name.
+        value: the value (metres for prismatic joints, radians for revolute ones).
+        lower, upper: the limit, same unit.
+    """
+
+    def __init__(self, joint: str, value: float, lower: float, upper: float, what: str = "joint"):
+        self.joint = joint
+        self.value = float(value)
+        self.lower = float(lower)
+        self.upper = float(upper)
+        unit = "m" if what == "stroke" else "rad"
+        super().__init__(
+            f"{what} limit: {joint} = {self.value:.9g} {unit} is outside "
+            f"[{self.lower:.9g}, {self.upper:.9g}] {unit}"
+        )
+
+
+class SolverError(HexapodError, RuntimeError):
+    """The Newton solver did not return a pose to use.
+
+    Attributes:
+        result: the :class:`hexapod_model.solver.Solution` with ``status`` saying why
+            (``"max_iterations"``, ``"singular"``, ``"out_of_limits"``).
+    """
+
+    def __init__(self, result: Any, reason: str):
+        self.result = result
+        self.status = getattr(result, "status", None)
+        super().__init__(reason)
+
+
+class ConvergenceError(SolverError):
+    """The solver hit its iteration limit before the residual reached the tolerance."""
+
+
+class SingularityError(SolverError):
+    """The constraint Jacobian is (numerically) singular: the pose is at or near a singularity."""
+
+
+class WorkspaceError(SolverError):
+    """The solution leaves the workspace: a stroke or Cardan angle limit is violated."""

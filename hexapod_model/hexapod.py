@@ -1,0 +1,232 @@
+"""The user-facing :class:`Hexapod`: direct, inverse and hybrid kinematics in a few calls.
+
+>>> import hexapod_model as hm
+>>> hexa = hm.Hexapod.from_preset("reference")
+>>> sol = hexa.forward([0.01, 0.0, -0.01, 0.0, 0.01, 0.0])   # leg readings, metres
+>>> back = hexa.inverse(sol.pose)                           # back.lengths ~ the readings
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from . import kernels
+from .exceptions import ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
+from .geometry import HexapodGeometry
+from .model import ClosedLoopModel
+from .presets import PRESETS, get_preset
+from .solver import NewtonSolver, Solution
+from .urdf import geometry_to_urdf
+
+DEFAULT_TOL = 1e-10
+DEFAULT_MAX_ITER = 20
+_LIMIT_SLACK = 1e-12
+
+
+class Hexapod:
+    """A hexapod loaded from a URDF that follows the contract of ``docs/urdf_contract.md``.
+
+    Construct with :meth:`from_urdf`, :meth:`from_preset` or :meth:`from_geometry`.
+    Leg readings (``lengths``) are the measured prismatic joints in metres, zero at home;
+    poses are 4x4 base -> platform transforms in metres.
+    """
+
+    def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None):
+        self.model = model
+        self.geometry = geometry
+        m = model.model
+        self.joint_names: tuple[str, ...] = tuple(m.names[1:])
+        self.stroke = np.array([[model.lower[i], model.upper[i]] for i in model.prismatic_q])
+        self.prismatic_names = tuple(m.names[leg.prismatic] for leg in model.legs)
+        self._limited = model.limited_q()
+        self._solvers: dict[tuple[int, ...], NewtonSolver] = {}
+        self._home_inv = model.home.inverse()
+        self._stroke_lo = np.ascontiguousarray(self.stroke[:, 0])
+        self._stroke_hi = np.ascontiguousarray(self.stroke[:, 1])
+        self._limited_lo = model.lower[self._limited].copy()
+        self._limited_hi = model.upper[self._limited].copy()
+        self._held_forward = tuple(leg.prismatic for leg in model.legs)
+        self._held_inverse = (model.platform_joint,)
+
+    # ----- construction -----
+    @classmethod
+    def from_urdf(cls, path: str | Path) -> "Hexapod":
+        """Load a URDF file, or a preset when ``path`` is a preset name (see ``PRESETS``)."""
+        if str(path) in PRESETS:
+            return cls.from_preset(str(path))
+        return cls(ClosedLoopModel.from_file(path))
+
+    @classmethod
+    def from_preset(cls, name: str = "reference") -> "Hexapod":
+        """One of the bundled geometries: ``reference``, ``intersecting``, ``spherical``, ``3-6``, ``guideway``."""
+        return cls.from_geometry(get_preset(name))
+
+    @classmethod
+    def from_geometry(cls, geometry: HexapodGeometry) -> "Hexapod":
+        """Generate the URDF of ``geometry`` in memory and load it."""
+        return cls(ClosedLoopModel(geometry_to_urdf(geometry), f"<geometry {geometry.name}>"), geometry)
+
+    # ----- conversions -----
+    @property
+    def home_pose(self) -> np.ndarray:
+        """Platform pose at home (4x4, base frame, metres)."""
+        return self.model.home.homogeneous
+
+    @property
+    def q_home(self) -> np.ndarray:
+        """The zero configuration (assembled at home)."""
+        return self.model.q_home.copy()
+
+    def pose_of(self, q: np.ndarray) -> np.ndarray:
+        """Platform pose (4x4) of configuration ``q``."""
+        i = self.model.platform_q
+        return (self.model.home * pin.XYZQUATToSE3(q[i: i + 7])).homogeneous
+
+    def lengths_of(self, q: np.ndarray) -> np.ndarray:
+        """Leg readings (m) of configuration ``q``, leg order."""
+        return q[self.model.prismatic_q].copy()
+
+    def _set_pose(self, q: np.ndarray, pose: np.ndarray) -> None:
+        pose = check_pose(pose)
+        i = self.model.platform_q
+        q[i: i + 7] = pin.SE3ToXYZQUAT(self._home_inv * pin.SE3(pose[:3, :3], pose[:3, 3]))
+
+    def _solver(self, held: tuple[int, ...]) -> NewtonSolver:
+        solver = self._solvers.get(held)
+        if solver is None:
+            solver = self._solvers[held] = NewtonSolver(self.model, held)
+        return solver
+
+    def _start(self, guess) -> np.ndarray:
+        if guess is None:
+            return self.model.q_home.copy()
+        if isinstance(guess, Solution):
+            return guess.q.copy()
+        q = guess
+        q = np.array(q, dtype=float)
+        if q.shape != (self.model.nq,) or not np.all(np.isfinite(q)):
+            raise InputError("guess", q, f"expected a finite configuration of {self.model.nq} values or a Solution")
+        return q
+
+    # ----- solves -----
+    def forward(self, lengths: Sequence[float], guess=None, *, tol: float = DEFAULT_TOL,
+                max_iter: int = DEFAULT_MAX_ITER, check: bool = True) -> Solution:
+        """Direct kinematics: platform pose from the six leg readings (m).
+
+        Args:
+            lengths: six readings, leg order, metres (zero at home).
+            guess: previous :class:`Solution` or configuration to start from (default: home).
+            tol: closure residual to reach.
+            max_iter: Newton step limit.
+            check: raise on a result that is not ``converged`` (default). With
+                ``check=False`` the :class:`Solution` is returned and its ``status`` says why.
+
+        Raises:
+            InputError: wrong count, NaN or inf.
+            LimitError: a reading outside its stroke.
+            ConvergenceError, SingularityError, WorkspaceError: when ``check`` and the solve failed.
+        """
+        lengths = np.asarray(lengths, dtype=float)
+        if lengths.shape != (6,):
+            lengths = check_vector("lengths", lengths, 6)
+        k = kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, _LIMIT_SLACK)
+        if k >= 0:
+            check_vector("lengths", lengths, 6)  # names NaN / inf first
+            raise LimitError(self.prismatic_names[k], lengths[k], *self.stroke[k], what="stroke")
+        q = self._start(guess)
+        q[self.model.prismatic_q] = lengths
+        return self._finish(self._solver(self._held_forward), q, tol, max_iter, check)
+
+    def inverse(self, pose: np.ndarray, guess=None, *, tol: float = DEFAULT_TOL,
+                max_iter: int = DEFAULT_MAX_ITER, check: bool = True) -> Solution:
+        """Inverse kinematics: leg readings (and all passive joints) for a platform pose.
+
+        A pose that needs a reading outside the stroke or a Cardan angle outside its limit is
+        outside the workspace: ``WorkspaceError`` (or status ``out_of_limits``).
+        """
+        q = self._start(guess)
+        self._set_pose(q, pose)
+        return self._finish(self._solver(self._held_inverse), q, tol, max_iter, check)
+
+    def solve(self, held: Mapping[str, object], guess=None, *, tol: float = DEFAULT_TOL,
+              max_iter: int = DEFAULT_MAX_ITER, check: bool = True) -> Solution:
+        """Hybrid kinematics: hold the named joints at the given values, solve for the rest.
+
+        ``held`` maps URDF joint names to values: a float (m or rad) for a one-dof joint, a
+        4x4 pose for ``platform_joint`` (the floating joint). Example: hold three legs and
+        the platform height is not possible (whole joints only), but holding five prismatic
+        joints and one Cardan angle is.
+        """
+        if not isinstance(held, Mapping) or not held:
+            raise InputError("held", held, "expected a non-empty mapping of joint name -> value")
+        q = self._start(guess)
+        m = self.model.model
+        ids = []
+        for name, value in held.items():
+            if name not in self.joint_names:
+                raise InputError("held joint", name, f"not a joint of this URDF ({len(self.joint_names)} joints)")
+            j = m.getJointId(name)
+            if j == self.model.platform_joint:
+                self._set_pose(q, np.asarray(value, dtype=float))
+            else:
+                v = check_vector(name, [value], 1)[0]
+                iq = m.joints[j].idx_q
+                lo, hi = self.model.lower[iq], self.model.upper[iq]
+                if not lo - _LIMIT_SLACK <= v <= hi + _LIMIT_SLACK:
+                    raise LimitError(name, v, lo, hi, what="stroke" if iq in self.model.prismatic_q else "joint")
+                q[iq] = v
+            ids.append(j)
+        return self._finish(self._solver(tuple(sorted(ids))), q, tol, max_iter, check)
+
+    def _finish(self, solver: NewtonSolver, q0: np.ndarray, tol: float, max_iter: int, check: bool) -> Solution:
+        q, status, it, res, jac, msg = solver.run(q0, tol, max_iter)
+        if status == "converged":
+            bad = kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, _LIMIT_SLACK)
+            if bad >= 0:
+                k = int(self._limited[bad])
+                name = self.model.joint_name_of_q(k)
+                what = "stroke" if k in self.model.prismatic_q else "joint"
+                status, msg = "out_of_limits", str(LimitError(name, q[k], self.model.lower[k], self.model.upper[k], what))
+        sol = Solution(self.pose_of(q), q, q[self.model.prismatic_q], status, it, res, jac, msg)
+        if check and status != "converged":
+            raise {"singular": SingularityError, "out_of_limits": WorkspaceError}.get(status, ConvergenceError)(
+                sol, f"{status}: {msg}")
+        return sol
+
+    def closure_residual(self, q: np.ndarray) -> np.ndarray:
+        """Per-leg closure error at ``q`` computed by Pinocchio's constraint models."""
+        return self.model.closure_errors(np.asarray(q, dtype=float))
+
+
+def check_vector(name: str, values, n: int) -> np.ndarray:
+    """``values`` as a finite float array of length ``n``, or :class:`InputError`."""
+    try:
+        arr = np.asarray(values, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(name, values, f"expected {n} numbers") from None
+    if arr.size != n:
+        raise InputError(name, values, f"expected {n} values, got {arr.size}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(name, values, "values must be finite (found NaN or inf)")
+    return arr
+
+
+def check_pose(pose) -> np.ndarray:
+    """``pose`` as a valid 4x4 rigid transform, or :class:`InputError`."""
+    try:
+        T = np.asarray(pose, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError("pose", pose, "expected a 4x4 matrix") from None
+    if T.shape != (4, 4):
+        raise InputError("pose", pose, f"expected a 4x4 matrix, got shape {T.shape}")
+    if not np.all(np.isfinite(T)):
+        raise InputError("pose", pose, "values must be finite (found NaN or inf)")
+    R = T[:3, :3]
+    err = float(np.abs(R.T @ R - np.eye(3)).max())
+    if err > 1e-6 or np.linalg.det(R) < 0 or np.abs(T[3] - [0, 0, 0, 1]).max() > 1e-12:
+        raise InputError("pose", pose, f"not a rigid transform (|R^T R - I| = {err:.2g}, det = {np.linalg.det(R):.3g})")
+    return T

@@ -1,0 +1,188 @@
+"""Numba kernels of the Newton solver's hot path (no allocation, no Python loop per call).
+
+Inputs come from one ``pin.computeJointJacobians`` call on the augmented solver model (see
+:mod:`hexapod_model.model`): ``J`` is Pinocchio's ``data.J`` (6 x nv, WORLD convention:
+column ``c`` is the spatial motion of velocity ``c`` expressed at the world origin).
+
+Residual of closure ``i`` (seed 000 eqs. 10-14, written in the base/world frame):
+
+* translation ``e_t = p_tip - p_anchor`` (m);
+* rotation ``e_R = vex(skew(E))`` with ``E = R_tip R_anchor^T`` (rad near closure), only for
+  ``6d`` closures. ``e_R = 0`` also at a 180 deg flip: callers check ``trace(E) > 1``.
+
+Its exact derivative along a velocity ``v`` (rows ``[d e_t; d e_R]``):
+
+* ``d e_t = (v_o - p_tip x w)_tip - (v_o - p_anchor x w)_anchor``;
+* ``d e_R = H_tip w_tip - H_anchor w_anchor``, ``H_tip = (tr(E) I - E)/2``,
+  ``H_anchor = (tr(E) I - E^T)/2``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def placements(J, probe_cols, R, p):
+    """Rotation ``R[k]`` and position ``p[k]`` of every probe frame from its adjoint columns."""
+    for k in range(probe_cols.shape[0]):
+        c3, c4, c5 = probe_cols[k, 3], probe_cols[k, 4], probe_cols[k, 5]
+        for a in range(3):
+            R[k, a, 0] = J[3 + a, c3]
+            R[k, a, 1] = J[3 + a, c4]
+            R[k, a, 2] = J[3 + a, c5]
+        # [p] R = top-right block  =>  [p] = block @ R^T
+        p[k, 0] = J[2, c3] * R[k, 1, 0] + J[2, c4] * R[k, 1, 1] + J[2, c5] * R[k, 1, 2]
+        p[k, 1] = J[0, c3] * R[k, 2, 0] + J[0, c4] * R[k, 2, 1] + J[0, c5] * R[k, 2, 2]
+        p[k, 2] = J[1, c3] * R[k, 0, 0] + J[1, c4] * R[k, 0, 1] + J[1, c5] * R[k, 0, 2]
+
+
+@njit(cache=True)
+def residual(J, probe_cols, rows, R, p, E, r):
+    """Fill ``r`` (6*rows) and ``E`` (6, 3, 3); return ``(norm(r), min trace(E))``."""
+    placements(J, probe_cols, R, p)
+    min_trace = 3.0
+    for i in range(6):
+        o = i * rows
+        for a in range(3):
+            r[o + a] = p[i, a] - p[6 + i, a]
+        if rows == 6:
+            for a in range(3):
+                for b in range(3):
+                    E[i, a, b] = R[i, a, 0] * R[6 + i, b, 0] + R[i, a, 1] * R[6 + i, b, 1] + R[i, a, 2] * R[6 + i, b, 2]
+            r[o + 3] = 0.5 * (E[i, 2, 1] - E[i, 1, 2])
+            r[o + 4] = 0.5 * (E[i, 0, 2] - E[i, 2, 0])
+            r[o + 5] = 0.5 * (E[i, 1, 0] - E[i, 0, 1])
+            tr = E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2]
+            if tr < min_trace:
+                min_trace = tr
+    s = 0.0
+    for k in range(r.shape[0]):
+        s += r[k] * r[k]
+    return np.sqrt(s), min_trace
+
+
+@njit(cache=True)
+def _add_columns(J, G, o, rows, cols, colmap, point, H, sign):
+    for c in cols:
+        if c < 0:
+            continue
+        jc = colmap[c]
+        if jc < 0:
+            continue
+        wx, wy, wz = J[3, c], J[4, c], J[5, c]
+        G[o + 0, jc] += sign * (J[0, c] - (point[1] * wz - point[2] * wy))
+        G[o + 1, jc] += sign * (J[1, c] - (point[2] * wx - point[0] * wz))
+        G[o + 2, jc] += sign * (J[2, c] - (point[0] * wy - point[1] * wx))
+        if rows == 6:
+            for a in range(3):
+                G[o + 3 + a, jc] += sign * (H[a, 0] * wx + H[a, 1] * wy + H[a, 2] * wz)
+
+
+@njit(cache=True)
+def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
+    """Fill ``G`` (6*rows x n_free): derivative of the residual w.r.t. the free velocities.
+
+    ``colmap[v]`` is the column of velocity index ``v`` in ``G`` or -1 when that joint is held.
+    """
+    G[:, :] = 0.0
+    Ht = np.empty((3, 3))
+    Ha = np.empty((3, 3))
+    for i in range(6):
+        o = i * rows
+        if rows == 6:
+            tr = E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2]
+            for a in range(3):
+                for b in range(3):
+                    Ht[a, b] = -0.5 * E[i, a, b]
+                    Ha[a, b] = -0.5 * E[i, b, a]
+                Ht[a, a] += 0.5 * tr
+                Ha[a, a] += 0.5 * tr
+        _add_columns(J, G, o, rows, leg_cols[i], colmap, p[i], Ht, 1.0)
+        _add_columns(J, G, o, rows, ff_cols, colmap, p[6 + i], Ha, -1.0)
+
+
+@njit(cache=True)
+def lu_factor(A, LU, piv):
+    """LU factorisation with partial pivoting of the square ``A`` into ``LU`` / ``piv``.
+
+    Returns the ratio of the smallest to the largest pivot magnitude: 0 when ``A`` is
+    singular (then ``LU`` is unusable), tiny near a singularity.
+    """
+    n = A.shape[0]
+    LU[:, :] = A
+    pmax = 0.0
+    pmin = np.inf
+    for k in range(n):
+        p = k
+        best = abs(LU[k, k])
+        for i in range(k + 1, n):
+            v = abs(LU[i, k])
+            if v > best:
+                best, p = v, i
+        piv[k] = p
+        if best == 0.0:
+            return 0.0
+        if p != k:
+            for j in range(n):
+                LU[k, j], LU[p, j] = LU[p, j], LU[k, j]
+        pmax = max(pmax, best)
+        pmin = min(pmin, best)
+        inv = 1.0 / LU[k, k]
+        for i in range(k + 1, n):
+            f = LU[i, k] * inv
+            LU[i, k] = f
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    LU[i, j] -= f * LU[k, j]
+    return pmin / pmax
+
+
+@njit(cache=True)
+def lu_apply(LU, piv, b, x):
+    """Solve ``A x = b`` with the factors of :func:`lu_factor`."""
+    n = LU.shape[0]
+    x[:] = b
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            x[k], x[p] = x[p], x[k]
+    for i in range(n):
+        s = x[i]
+        for j in range(i):
+            s -= LU[i, j] * x[j]
+        x[i] = s
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for j in range(i + 1, n):
+            s -= LU[i, j] * x[j]
+        x[i] = s / LU[i, i]
+
+
+@njit(cache=True)
+def scatter_step(x, free_v, dv):
+    """``dv[free_v] = -x`` (the Newton step in the full velocity space; held entries stay 0)."""
+    for k in range(free_v.shape[0]):
+        dv[free_v[k]] = -x[k]
+
+
+@njit(cache=True)
+def first_outside(values, lower, upper, slack):
+    """Index of the first entry that is NaN/inf or outside ``[lower - slack, upper + slack]``,
+    or -1 when all are fine."""
+    for k in range(values.shape[0]):
+        v = values[k]
+        if not (lower[k] - slack <= v <= upper[k] + slack):
+            return k
+    return -1
+
+
+@njit(cache=True)
+def first_outside_at(q, idx, lower, upper, slack):
+    """Like :func:`first_outside` on ``q[idx]``; returns the position in ``idx`` or -1."""
+    for k in range(idx.shape[0]):
+        v = q[idx[k]]
+        if not (lower[k] - slack <= v <= upper[k] + slack):
+            return k
+    return -1
