@@ -25,6 +25,7 @@ from .urdf import geometry_to_urdf
 DEFAULT_TOL = 1e-10
 DEFAULT_MAX_ITER = 20
 _LIMIT_SLACK = 1e-12
+POSE_TOLERANCE = 1e-6  # max deviation of a pose from a rigid transform
 
 
 class Hexapod:
@@ -44,7 +45,7 @@ class Hexapod:
         self.prismatic_names = tuple(m.names[leg.prismatic] for leg in model.legs)
         self._limited = model.limited_q()
         self._solvers: dict[tuple[int, ...], NewtonSolver] = {}
-        self._home_inv = model.home.inverse()
+        self._home_h = model.home.homogeneous
         self._stroke_lo = np.ascontiguousarray(self.stroke[:, 0])
         self._stroke_hi = np.ascontiguousarray(self.stroke[:, 1])
         self._limited_lo = model.lower[self._limited].copy()
@@ -82,18 +83,20 @@ class Hexapod:
         return self.model.q_home.copy()
 
     def pose_of(self, q: np.ndarray) -> np.ndarray:
-        """Platform pose (4x4) of configuration ``q``."""
+        """Platform pose (4x4, base frame, metres) of configuration ``q``."""
         i = self.model.platform_q
-        return (self.model.home * pin.XYZQUATToSE3(q[i: i + 7])).homogeneous
+        T = np.empty((4, 4))
+        kernels.xyzquat_to_pose(q[i: i + 7], self._home_h, T)
+        return T
 
     def lengths_of(self, q: np.ndarray) -> np.ndarray:
         """Leg readings (m) of configuration ``q``, leg order."""
         return q[self.model.prismatic_q].copy()
 
-    def _set_pose(self, q: np.ndarray, pose: np.ndarray) -> None:
-        pose = check_pose(pose)
+    def _set_pose(self, q: np.ndarray, pose) -> None:
+        T = check_pose(pose)
         i = self.model.platform_q
-        q[i: i + 7] = pin.SE3ToXYZQUAT(self._home_inv * pin.SE3(pose[:3, :3], pose[:3, 3]))
+        kernels.pose_to_xyzquat(T, self._home_h, q[i: i + 7])
 
     def _solver(self, held: tuple[int, ...]) -> NewtonSolver:
         solver = self._solvers.get(held)
@@ -216,17 +219,17 @@ def check_vector(name: str, values, n: int) -> np.ndarray:
 
 
 def check_pose(pose) -> np.ndarray:
-    """``pose`` as a valid 4x4 rigid transform, or :class:`InputError`."""
+    """``pose`` as a valid 4x4 rigid transform (float array), or :class:`InputError`."""
     try:
         T = np.asarray(pose, dtype=float)
     except (TypeError, ValueError):
         raise InputError("pose", pose, "expected a 4x4 matrix") from None
     if T.shape != (4, 4):
         raise InputError("pose", pose, f"expected a 4x4 matrix, got shape {T.shape}")
-    if not np.all(np.isfinite(T)):
-        raise InputError("pose", pose, "values must be finite (found NaN or inf)")
-    R = T[:3, :3]
-    err = float(np.abs(R.T @ R - np.eye(3)).max())
-    if err > 1e-6 or np.linalg.det(R) < 0 or np.abs(T[3] - [0, 0, 0, 1]).max() > 1e-12:
-        raise InputError("pose", pose, f"not a rigid transform (|R^T R - I| = {err:.2g}, det = {np.linalg.det(R):.3g})")
+    err = kernels.rigid_error(T)
+    if not err <= POSE_TOLERANCE:
+        if not np.all(np.isfinite(T)):
+            raise InputError("pose", pose, "values must be finite (found NaN or inf)")
+        raise InputError("pose", pose, f"not a rigid transform: orthonormality/det/bottom-row error {err:.2g} "
+                                       f"exceeds {POSE_TOLERANCE:g}")
     return T

@@ -186,3 +186,89 @@ def first_outside_at(q, idx, lower, upper, slack):
         if not (lower[k] - slack <= v <= upper[k] + slack):
             return k
     return -1
+
+
+@njit(cache=True)
+def block_solve(G, r, rows, block_cols, LUb, piv, rb, xb, x):
+    """Solve ``G x = r`` when ``G`` is block diagonal: closure ``i``'s rows touch only the
+    columns ``block_cols[i]`` (inverse kinematics: the platform is held). Six small LUs
+    instead of one large one. Returns the smallest per-block pivot ratio (0 = singular)."""
+    worst = 1.0
+    for i in range(block_cols.shape[0]):
+        o = i * rows
+        for a in range(rows):
+            rb[a] = r[o + a]
+            for b in range(rows):
+                LUb[a, b] = G[o + a, block_cols[i, b]]
+        ratio = lu_factor(LUb, LUb, piv)  # in place: LU[:, :] = A is a no-op
+        if ratio == 0.0:
+            return 0.0
+        worst = min(worst, ratio)
+        lu_apply(LUb, piv, rb, xb)
+        for b in range(rows):
+            x[block_cols[i, b]] = xb[b]
+    return worst
+
+
+@njit(cache=True)
+def rigid_error(T):
+    """How far the 4x4 ``T`` is from a rigid transform: ``max |R^T R - I|``, ``det R - 1``
+    and the bottom row, folded into one number (``inf`` for NaN/inf entries)."""
+    err = 0.0
+    for a in range(4):
+        for b in range(4):
+            if not np.isfinite(T[a, b]):
+                return np.inf
+    for a in range(3):
+        for b in range(3):
+            s = T[0, a] * T[0, b] + T[1, a] * T[1, b] + T[2, a] * T[2, b]
+            err = max(err, abs(s - (1.0 if a == b else 0.0)))
+    det = (T[0, 0] * (T[1, 1] * T[2, 2] - T[1, 2] * T[2, 1]) - T[0, 1] * (T[1, 0] * T[2, 2] - T[1, 2] * T[2, 0])
+           + T[0, 2] * (T[1, 0] * T[2, 1] - T[1, 1] * T[2, 0]))
+    err = max(err, abs(det - 1.0))
+    err = max(err, abs(T[3, 0]), abs(T[3, 1]), abs(T[3, 2]), abs(T[3, 3] - 1.0))
+    return err
+
+
+@njit(cache=True)
+def pose_to_xyzquat(T, H, out):
+    """Free-flyer configuration ``(x, y, z, qx, qy, qz, qw)`` of pose ``T`` relative to the
+    home placement ``H`` (both 4x4): ``H^-1 T``."""
+    M = np.empty((3, 3))
+    for a in range(3):
+        out[a] = H[0, a] * (T[0, 3] - H[0, 3]) + H[1, a] * (T[1, 3] - H[1, 3]) + H[2, a] * (T[2, 3] - H[2, 3])
+        for b in range(3):
+            M[a, b] = H[0, a] * T[0, b] + H[1, a] * T[1, b] + H[2, a] * T[2, b]
+    tr = M[0, 0] + M[1, 1] + M[2, 2]
+    if tr > 0.0:
+        s = 2.0 * np.sqrt(1.0 + tr)
+        qw, qx, qy, qz = 0.25 * s, (M[2, 1] - M[1, 2]) / s, (M[0, 2] - M[2, 0]) / s, (M[1, 0] - M[0, 1]) / s
+    elif M[0, 0] > M[1, 1] and M[0, 0] > M[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + M[0, 0] - M[1, 1] - M[2, 2])
+        qw, qx, qy, qz = (M[2, 1] - M[1, 2]) / s, 0.25 * s, (M[0, 1] + M[1, 0]) / s, (M[0, 2] + M[2, 0]) / s
+    elif M[1, 1] > M[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + M[1, 1] - M[0, 0] - M[2, 2])
+        qw, qx, qy, qz = (M[0, 2] - M[2, 0]) / s, (M[0, 1] + M[1, 0]) / s, 0.25 * s, (M[1, 2] + M[2, 1]) / s
+    else:
+        s = 2.0 * np.sqrt(1.0 + M[2, 2] - M[0, 0] - M[1, 1])
+        qw, qx, qy, qz = (M[1, 0] - M[0, 1]) / s, (M[0, 2] + M[2, 0]) / s, (M[1, 2] + M[2, 1]) / s, 0.25 * s
+    n = np.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+    out[3], out[4], out[5], out[6] = qx / n, qy / n, qz / n, qw / n
+
+
+@njit(cache=True)
+def xyzquat_to_pose(x, H, T):
+    """Pose ``T = H * X`` (4x4) of the free-flyer configuration ``x`` relative to ``H``."""
+    qx, qy, qz, qw = x[3], x[4], x[5], x[6]
+    n = np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+    qx, qy, qz, qw = qx / n, qy / n, qz / n, qw / n
+    X = np.empty((3, 3))
+    X[0, 0], X[0, 1], X[0, 2] = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)
+    X[1, 0], X[1, 1], X[1, 2] = 2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)
+    X[2, 0], X[2, 1], X[2, 2] = 2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)
+    for a in range(3):
+        for b in range(3):
+            T[a, b] = H[a, 0] * X[0, b] + H[a, 1] * X[1, b] + H[a, 2] * X[2, b]
+        T[a, 3] = H[a, 0] * x[0] + H[a, 1] * x[1] + H[a, 2] * x[2] + H[a, 3]
+        T[3, a] = 0.0
+    T[3, 3] = 1.0

@@ -114,8 +114,25 @@ class NewtonSolver:
         self.x = np.zeros(n_free)
         self.LU = np.zeros((n_res, n_free))
         self.piv = np.zeros(n_free, dtype=np.int64)
+        self.block_cols = self._blocks(held_v)
+        if self.block_cols is not None:
+            self.LUb = np.zeros((self.rows, self.rows))
+            self.rb, self.xb = np.zeros(self.rows), np.zeros(self.rows)
         self.dv = np.zeros(self.model.nv)
         self.q_aug = pin.neutral(self.model)
+
+    def _blocks(self, held_v: np.ndarray) -> np.ndarray | None:
+        """(6, rows) columns of G per closure when G is block diagonal and square per block
+        (platform held, every leg with as many free joints as closure rows), else None."""
+        if not held_v[self.clm.platform_v]:
+            return None
+        blocks = []
+        for row in self.leg_cols:
+            cols = [int(self.colmap[c]) for c in row if c >= 0 and self.colmap[c] >= 0]
+            if len(cols) != self.rows:
+                return None
+            blocks.append(cols)
+        return np.array(blocks, dtype=np.int64)
 
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``."""
@@ -149,12 +166,16 @@ class NewtonSolver:
                 break
             kernels.jacobian(*jac_args)
             if self.square:
-                ratio = kernels.lu_factor(self.G, self.LU, self.piv)
+                if self.block_cols is not None:
+                    ratio = kernels.block_solve(self.G, r, rows, self.block_cols, self.LUb, self.piv, self.rb,
+                                                self.xb, self.x)
+                else:
+                    ratio = kernels.lu_factor(self.G, self.LU, self.piv)
+                    kernels.lu_apply(self.LU, self.piv, r, self.x)
                 if ratio < SINGULAR_PIVOT_RATIO:
                     status = "singular"
                     message = f"constraint Jacobian singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g})"
                     break
-                kernels.lu_apply(self.LU, self.piv, r, self.x)
             else:
                 self.x[:] = np.linalg.lstsq(self.G, r, rcond=None)[0]
             kernels.scatter_step(self.x, self.free_v, self.dv)
