@@ -22,7 +22,7 @@ from .presets import PRESETS, get_preset
 from .solver import NewtonSolver, Solution
 from .urdf import geometry_to_urdf
 
-DEFAULT_TOL = 1e-10
+DEFAULT_TOL = 1e-12  # closure residual (m, rad): pose errors stay below 1e-9 on every preset
 DEFAULT_MAX_ITER = 20
 _LIMIT_SLACK = 1e-12
 POSE_TOLERANCE = 1e-6  # max deviation of a pose from a rigid transform
@@ -133,8 +133,7 @@ class Hexapod:
             LimitError: a reading outside its stroke.
             ConvergenceError, SingularityError, WorkspaceError: when ``check`` and the solve failed.
         """
-        lengths = np.asarray(lengths, dtype=float)
-        if lengths.shape != (6,):
+        if not (isinstance(lengths, np.ndarray) and lengths.shape == (6,) and lengths.dtype == np.float64):
             lengths = check_vector("lengths", lengths, 6)
         k = kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, _LIMIT_SLACK)
         if k >= 0:

@@ -171,7 +171,8 @@ class NewtonSolver:
                                                 self.xb, self.x)
                 else:
                     ratio = kernels.lu_factor(self.G, self.LU, self.piv)
-                    kernels.lu_apply(self.LU, self.piv, r, self.x)
+                    if ratio >= SINGULAR_PIVOT_RATIO:
+                        kernels.lu_apply(self.LU, self.piv, r, self.x)
                 if ratio < SINGULAR_PIVOT_RATIO:
                     status = "singular"
                     message = f"constraint Jacobian singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g})"

@@ -1,0 +1,113 @@
+"""The ``hexapod`` CLI through ``main(argv)``: URDF generation, fk/ik files, bench."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hexapod_model as hm
+from hexapod_model.cli import main
+from hexapod_model.trajectories import box_poses
+
+from .conftest import PRESET_NAMES, hexapod
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def read_rows(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_urdf_default_and_presets(tmp_path, capsys):
+    assert main(["urdf", "-o", str(tmp_path / "my.urdf")]) == 0
+    assert (tmp_path / "my.urdf").read_text() == (ROOT / "urdf" / "reference.urdf").read_text()
+    assert main(["urdf", "--preset", "3-6", "-o", str(tmp_path / "sensor.urdf")]) == 0
+    assert 'type="3d"' in (tmp_path / "sensor.urdf").read_text()
+    assert main(["urdf", "--list-presets"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert [ln.split()[0] for ln in lines] == PRESET_NAMES and all(len(ln.split()) > 2 for ln in lines)
+
+
+def test_urdf_from_geometry_file(tmp_path, capsys):
+    d = hm.get_preset("intersecting").to_dict()
+    d["name"] = "mine"
+    (tmp_path / "mine.json").write_text(json.dumps(d))
+    assert main(["urdf", "--geometry", str(tmp_path / "mine.json"), "-o", str(tmp_path / "mine.urdf")]) == 0
+    assert hm.Hexapod.from_urdf(tmp_path / "mine.urdf").forward(np.zeros(6)).converged
+    d["legs"][0]["stroke"] = [0.1, 0.2]
+    (tmp_path / "bad.json").write_text(json.dumps(d))
+    assert main(["urdf", "--geometry", str(tmp_path / "bad.json")]) == 2
+    assert "legs[0].stroke" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_fk_ik_files_round_trip(name, tmp_path):
+    hexa = hexapod(name)
+    poses = box_poses(hexa.home_pose, 20, seed=2)
+    lengths = np.array([hexa.inverse(T).lengths for T in poses])
+    inp = tmp_path / "lengths.csv"
+    inp.write_text("l1,l2,l3,l4,l5,l6\n" + "\n".join(",".join(f"{v:.15g}" for v in row) for row in lengths) + "\n")
+    urdf = tmp_path / "h.urdf"
+    hm.write_urdf(hm.get_preset(name), urdf)
+    assert main(["fk", str(urdf), str(inp), "-o", str(tmp_path / "poses.csv")]) == 0
+    rows = read_rows(tmp_path / "poses.csv")
+    assert list(rows[0]) == ["x", "y", "z", "qx", "qy", "qz", "qw", "roll", "pitch", "yaw", "status", "iterations", "residual"]
+    xyz = np.array([[float(r[c]) for c in "xyz"] for r in rows])
+    np.testing.assert_allclose(xyz, poses[:, :3, 3], atol=1e-9)
+    rpy = np.radians([[float(r[c]) for c in ("roll", "pitch", "yaw")] for r in rows])
+    np.testing.assert_allclose(hm.angles.rpy_to_matrix(*rpy.T), poses[:, :3, :3], atol=1e-9)
+    assert {r["status"] for r in rows} == {"ok"}
+    # ik back from fk's own output, with the preset name in place of the file
+    assert main(["ik", name, str(tmp_path / "poses.csv"), "-o", str(tmp_path / "back.csv")]) == 0
+    back = np.array([[float(r[f"l{i}"]) for i in range(1, 7)] for r in read_rows(tmp_path / "back.csv")])
+    np.testing.assert_allclose(back, lengths, atol=1e-9)
+
+
+def test_fk_bad_rows_are_reported_and_the_rest_solved(tmp_path, capsys):
+    hexa = hexapod("reference")
+    good = [hexa.inverse(T).lengths for T in box_poses(hexa.home_pose, 3, seed=4)]
+    lines = ["l1,l2,l3,l4,l5,l6", ",".join(map(str, good[0])), "0.01,nan,0,0,0,0",
+             ",".join(map(str, good[1])), "0.9,0,0,0,0,0", "0.01,0.01,,0,0,0", ",".join(map(str, good[2]))]
+    (tmp_path / "in.csv").write_text("\n".join(lines) + "\n")
+    code = main(["fk", "reference", str(tmp_path / "in.csv"), "-o", str(tmp_path / "out.csv")])
+    err = capsys.readouterr().err
+    assert code == 1
+    assert "3 of 6 rows failed" in err and "row 2" in err and len(err.strip().splitlines()) == 1
+    rows = read_rows(tmp_path / "out.csv")
+    assert [r["status"] for r in rows] == ["ok", "invalid_input", "ok", "invalid_input", "invalid_input", "ok"]
+    assert rows[1]["x"] == "" and rows[1]["qw"] == ""  # no pose presented for a bad row
+    for k, T in zip((0, 2, 5), box_poses(hexa.home_pose, 3, seed=4)):
+        assert abs(float(rows[k]["z"]) - T[2, 3]) < 1e-9
+
+
+def test_ik_pose_outside_workspace_row(tmp_path, capsys):
+    (tmp_path / "p.csv").write_text("x,y,z,roll,pitch,yaw\n0,0,0.4,0,0,0\n0,0,0.9,0,0,0\n0.01,0,0.41,5,0,0\n")
+    assert main(["ik", "reference", str(tmp_path / "p.csv"), "-o", str(tmp_path / "l.csv")]) == 1
+    rows = read_rows(tmp_path / "l.csv")
+    assert [r["status"] for r in rows] == ["ok", "out_of_limits", "ok"]
+    assert rows[1]["l1"] == ""
+    assert "stroke limit" in capsys.readouterr().err
+
+
+def test_missing_columns_and_files(tmp_path, capsys):
+    (tmp_path / "x.csv").write_text("a,b\n1,2\n")
+    assert main(["fk", "reference", str(tmp_path / "x.csv")]) == 2
+    assert "missing columns" in capsys.readouterr().err
+    assert main(["fk", "reference", str(tmp_path / "none.csv")]) == 2
+    assert main(["fk", str(tmp_path / "none.urdf"), str(tmp_path / "x.csv")]) == 2
+    assert "cannot read URDF" in capsys.readouterr().err
+
+
+def test_bench_runs_and_writes_json(tmp_path, capsys):
+    assert main(["bench", "--samples", "20", "--json", str(tmp_path / "b.json")]) == 0
+    out = capsys.readouterr().out
+    assert "warm_fk" in out and "median" in out
+    report = json.loads((tmp_path / "b.json").read_text())
+    for key in ("warm_fk", "cold_fk", "ik"):
+        assert report[key]["median_us"] > 0 and report[key]["n"] > 0
+    assert report["warm_fk"]["iterations_max"] <= 3 and report["cold_fk"]["iterations_max"] <= 8

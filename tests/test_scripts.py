@@ -1,0 +1,34 @@
+"""Scripts and benchmarks run (their figures are not asserted: timing is not a unit test)."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import hexapod_model as hm
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_benchmark_script_runs(tmp_path):
+    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "run_benchmarks.py"), "reference", "3-6",
+                          "--samples", "10", "--json", str(tmp_path / "b.json")],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.count("warm_fk") == 2 and "p99" in out.stdout
+    assert (tmp_path / "b.json").stat().st_size > 100
+
+
+def test_geometry_doc_example_loads():
+    text = (ROOT / "docs" / "geometry.md").read_text()
+    block = re.search(r"```toml\n(.*?)```", text, re.S).group(1)
+    head, leg = block.split("[[legs]]")
+    ref = hm.get_preset("reference").legs
+    assert "[0.2445, -0.0520, 0.0]" in leg  # the example is reference leg 1
+    legs = "".join(("[[legs]]" + leg).replace("[0.2445, -0.0520, 0.0]", str(list(lg.base_anchor)))
+                   .replace("[0.1004, -0.1115, 0.0]", str(list(lg.platform_anchor))) for lg in ref)
+    g = hm.geometry_from_dict(tomllib.loads(head + legs))
+    assert g.name == "my_hexapod" and hm.Hexapod.from_geometry(g).forward([0.0] * 6).converged

@@ -1,0 +1,168 @@
+"""Newton solver: Jacobian vs finite differences, round trips, statuses and errors."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import hexapod_model as hm
+from hexapod_model.angles import rotation_angle
+from hexapod_model.solver import NewtonSolver
+from hexapod_model.trajectories import box_poses, trajectory_poses
+
+from .conftest import PRESET_NAMES, hexapod
+
+
+def random_configuration(hexa: hm.Hexapod, rng) -> np.ndarray:
+    """A random, generally *not* closed configuration near home."""
+    m = hexa.model
+    q = hexa.q_home
+    legs = np.array([m.model.joints[j].idx_q for leg in m.legs for j in leg.joints])
+    q[legs] = rng.uniform(-0.4, 0.4, legs.size)
+    i = m.platform_q
+    q[i: i + 7] = pin.SE3ToXYZQUAT(pin.exp6(rng.uniform(-0.2, 0.2, 6)))
+    return q
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_jacobian_matches_finite_differences(name):
+    hexa = hexapod(name)
+    solver = NewtonSolver(hexa.model, ())  # every joint free: the full closure Jacobian
+    rng = np.random.default_rng(1)
+    h = 1e-6
+    for _ in range(5):
+        q = random_configuration(hexa, rng)
+        r0, G = solver.evaluate(q)
+        assert np.linalg.norm(r0) > 1e-3  # really off the constraint manifold
+        fd = np.empty_like(G)
+        for k in range(hexa.model.nv):
+            dv = np.zeros(hexa.model.nv)
+            dv[k] = h
+            rp, _ = solver.evaluate(pin.integrate(hexa.model.model, q, dv))
+            rm, _ = solver.evaluate(pin.integrate(hexa.model.model, q, -dv))
+            fd[:, k] = (rp - rm) / (2 * h)
+        np.testing.assert_allclose(G, fd, atol=1e-7, rtol=0)
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_round_trip_pose_lengths_pose_on_1000_box_poses(name):
+    hexa = hexapod(name)
+    poses = box_poses(hexa.home_pose, 1000, seed=7)
+    worst_p = worst_r = worst_l = 0.0
+    for T in poses:
+        back = hexa.inverse(T)  # whole box is inside the limits of every preset
+        sol = hexa.forward(back.lengths)  # cold start from home
+        worst_p = max(worst_p, np.linalg.norm(sol.pose[:3, 3] - T[:3, 3]))
+        worst_r = max(worst_r, rotation_angle(sol.pose[:3, :3], T[:3, :3]))
+        worst_l = max(worst_l, np.abs(hexa.inverse(sol.pose, guess=sol).lengths - back.lengths).max())
+        assert sol.iterations <= 8
+    assert worst_p < 1e-9 and worst_r < 1e-9 and worst_l < 1e-9
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_solutions_close_the_loops_per_pinocchio_constraints(name):
+    hexa = hexapod(name)
+    T = box_poses(hexa.home_pose, 1, seed=3)[0]
+    sol = hexa.inverse(T)
+    # the independent reference: Pinocchio's own constraint models (log6 / point distance)
+    assert hexa.closure_residual(sol.q).max() < 1e-9
+    assert sol.residual <= 1e-10
+
+
+def test_warm_start_along_trajectory_converges_in_two_steps():
+    hexa = hexapod("reference")
+    _, poses = trajectory_poses("A", hexa.home_pose, 0.25 / 50, rate_hz=1000)
+    sol = inv = None
+    for T in poses[::40]:
+        inv = hexa.inverse(T, guess=inv)
+        sol = hexa.forward(inv.lengths, guess=sol)
+        assert np.abs(sol.pose - T).max() < 1e-9
+    sol2 = hexa.forward(inv.lengths, guess=sol)
+    assert sol2.iterations == 0  # already there
+
+
+def test_hybrid_solve_holds_named_joints():
+    hexa = hexapod("reference")
+    T = box_poses(hexa.home_pose, 1, seed=11)[0]
+    truth = hexa.inverse(T)
+    names = list(hexa.prismatic_names[:5]) + ["leg6_cardan_base_1"]
+    iq = [hexa.model.model.joints[hexa.model.model.getJointId(n)].idx_q for n in names]
+    sol = hexa.solve(dict(zip(names, truth.q[iq])), guess=hexa.q_home)
+    np.testing.assert_allclose(sol.pose, T, atol=1e-9)
+    np.testing.assert_allclose(sol.lengths, truth.lengths, atol=1e-9)
+    # holding the platform is the inverse problem
+    inv = hexa.solve({"platform_joint": T})
+    np.testing.assert_allclose(inv.lengths, truth.lengths, atol=1e-9)
+    with pytest.raises(hm.InputError, match="not a joint"):
+        hexa.solve({"leg9_prismatic": 0.0})
+    with pytest.raises(hm.LimitError, match=r"leg1_cardan_base_1 = 3 rad is outside"):
+        hexa.solve({"leg1_cardan_base_1": 3.0})
+
+
+@pytest.mark.parametrize("bad, error, pattern", [
+    ([0.0] * 5, hm.InputError, "expected 6 values, got 5"),
+    ([0.0, np.nan, 0, 0, 0, 0], hm.InputError, "finite"),
+    ([0.0, 0, np.inf, 0, 0, 0], hm.InputError, "finite"),
+    ([0.0, 0, 0, 0.5, 0, 0], hm.LimitError, r"stroke limit: leg4_prismatic = 0.5 m is outside \[-0.16, 0.2\] m"),
+    ("abc", hm.InputError, "expected 6"),
+])
+def test_bad_readings_raise_clear_errors(bad, error, pattern):
+    with pytest.raises(error, match=pattern):
+        hexapod("reference").forward(bad)
+
+
+def test_bad_poses_raise_clear_errors():
+    hexa = hexapod("reference")
+    T = hexa.home_pose.copy()
+    T[0, 0] = 2.0
+    with pytest.raises(hm.InputError, match="not a rigid transform"):
+        hexa.inverse(T)
+    T = hexa.home_pose.copy()
+    T[1, 3] = np.nan
+    with pytest.raises(hm.InputError, match="finite"):
+        hexa.inverse(T)
+    with pytest.raises(hm.InputError, match="4x4"):
+        hexa.inverse(np.eye(3))
+
+
+def test_pose_outside_workspace():
+    hexa = hexapod("reference")
+    T = hexa.home_pose.copy()
+    T[2, 3] += 0.3  # 30 cm up: beyond the stroke
+    with pytest.raises(hm.WorkspaceError, match=r"stroke limit: leg\d_prismatic = .* m is outside"):
+        hexa.inverse(T)
+    sol = hexa.inverse(T, check=False)
+    assert sol.status == "out_of_limits" and not sol.converged
+    assert issubclass(hm.WorkspaceError, hm.HexapodError)
+
+
+def test_non_convergence_is_never_presented_as_converged():
+    hexa = hexapod("reference")
+    lengths = hexa.inverse(box_poses(hexa.home_pose, 1, seed=5)[0]).lengths
+    with pytest.raises(hm.ConvergenceError, match="no convergence"):
+        hexa.forward(lengths, max_iter=1)
+    sol = hexa.forward(lengths, max_iter=1, check=False)
+    assert sol.status == "max_iterations" and not sol.converged and sol.residual > 1e-10
+
+
+def test_singular_layout_is_reported():
+    # all six legs vertical: the platform can rotate about z and slide sideways freely
+    legs = tuple(hm.LegGeometry(base_anchor=(0.2 * np.cos(a), 0.2 * np.sin(a), 0.0),
+                                platform_anchor=(0.2 * np.cos(a), 0.2 * np.sin(a), 0.0), stroke=(-0.1, 0.1))
+                 for a in np.linspace(0, 2 * np.pi, 6, endpoint=False))
+    g = dataclasses.replace(hm.get_preset("spherical"), name="vertical", legs=legs)
+    hexa = hm.Hexapod.from_geometry(g)
+    with pytest.raises(hm.SingularityError, match="singular"):
+        hexa.forward([0.01] * 6)
+    assert hexa.forward([0.0] * 6, check=False).condition_number > 1e12
+
+
+def test_solution_reports_everything():
+    sol = hexapod("reference").forward([0.01, -0.01, 0.02, 0.0, 0.0, 0.01])
+    assert sol.pose.shape == (4, 4) and sol.q.shape == (43,) and sol.lengths.shape == (6,)
+    assert sol.status in hm.STATUSES and sol.converged and sol.iterations >= 1
+    assert sol.residual <= 1e-10 and 1 < sol.condition_number < 1e4
+    np.testing.assert_allclose(sol.lengths, [0.01, -0.01, 0.02, 0.0, 0.0, 0.01])
