@@ -70,3 +70,76 @@ def rotation_angle(Ra, Rb) -> np.ndarray:
     s = 0.5 * np.sqrt((E[..., 2, 1] - E[..., 1, 2]) ** 2 + (E[..., 0, 2] - E[..., 2, 0]) ** 2
                       + (E[..., 1, 0] - E[..., 0, 1]) ** 2)
     return np.arctan2(s, c)  # accurate near 0, unlike arccos of the trace
+
+
+# ----- all six Tait-Bryan orders (seed 003 eq. 12) and yaw-pitch-roll (eqs. 13-15) -----
+EULER_ORDERS = ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx")
+_AXIS = {"x": 0, "y": 1, "z": 2}
+
+
+def axis_rotation(axis: str, angle) -> np.ndarray:
+    """(..., 3, 3) rotation by ``angle`` (rad) about the fixed ``axis`` (``"x"``, ``"y"`` or ``"z"``)."""
+    a = np.asarray(angle, dtype=float)
+    c, s = np.cos(a), np.sin(a)
+    i = _AXIS[axis]
+    j, k = (i + 1) % 3, (i + 2) % 3
+    R = np.zeros(a.shape + (3, 3))
+    R[..., i, i] = 1.0
+    R[..., j, j] = c
+    R[..., k, k] = c
+    R[..., k, j] = s
+    R[..., j, k] = -s
+    return R
+
+
+def _check_order(order: str) -> tuple[int, int, int, float]:
+    if order not in EULER_ORDERS:
+        raise ValueError(f"unknown rotation order {order!r}; choose one of {EULER_ORDERS}")
+    i, j, k = (_AXIS[c] for c in order)
+    return i, j, k, (1.0 if (j - i) % 3 == 1 else -1.0)
+
+
+def euler_to_matrix(order: str, angles) -> np.ndarray:
+    """(..., 3, 3) ``R = R_a(t1) R_b(t2) R_c(t3)`` for ``order = "abc"`` (seed 003 eq. 12).
+
+    ``angles[..., 0:3]`` are ``t1, t2, t3`` in radians, in the order of the factors; e.g.
+    ``euler_to_matrix("zyx", [yaw, pitch, roll])`` equals ``rpy_to_matrix(roll, pitch, yaw)``.
+    """
+    _check_order(order)
+    a = np.asarray(angles, dtype=float)
+    return axis_rotation(order[0], a[..., 0]) @ axis_rotation(order[1], a[..., 1]) @ axis_rotation(order[2], a[..., 2])
+
+
+def matrix_to_euler(order: str, R) -> np.ndarray:
+    """(..., 3) angles ``t1, t2, t3`` (rad) of :func:`euler_to_matrix`, ``t2`` in [-pi/2, pi/2],
+    ``t1``, ``t3`` in (-pi, pi]. At gimbal lock (``|t2| = pi/2``) ``t3 = 0`` is chosen."""
+    i, j, k, s = _check_order(order)
+    R = np.asarray(R, dtype=float)
+    t2 = np.arcsin(np.clip(s * R[..., i, k], -1.0, 1.0))
+    lock = np.hypot(R[..., k, k], R[..., j, k]) < 1e-12
+    t1 = np.where(lock, np.arctan2(s * R[..., k, j], R[..., j, j]), np.arctan2(-s * R[..., j, k], R[..., k, k]))
+    t3 = np.where(lock, 0.0, np.arctan2(-s * R[..., i, j], R[..., i, i]))
+    return np.stack([t1, t2, t3], -1)
+
+
+def euler_solutions(order: str, R) -> np.ndarray:
+    """(..., 2, 3) both angle triples of ``R`` for ``order``: :func:`matrix_to_euler` and
+    ``(t1 + pi, pi - t2, t3 + pi)`` (wrapped to (-pi, pi]); seed 003 notes this ambiguity."""
+    a = matrix_to_euler(order, R)
+    b = np.stack([a[..., 0] + np.pi, np.pi - a[..., 1], a[..., 2] + np.pi], -1)
+    b = np.pi - np.mod(np.pi - b, 2 * np.pi)
+    return np.stack([a, b], -2)
+
+
+def ypr_to_matrix(yaw, pitch, roll) -> np.ndarray:
+    """(..., 3, 3) yaw-pitch-roll (Tait-Bryan z-y'-x''): ``Rz(yaw) Ry(pitch) Rx(roll)``, radians.
+
+    Seed 003 eq. 14 (``a11 = cos yaw, a22 = cos pitch, a33 = cos roll``) holds only for a
+    rotation about a single axis; this is the standard definition it approximates.
+    """
+    return rpy_to_matrix(roll, pitch, yaw)
+
+
+def matrix_to_ypr(R) -> np.ndarray:
+    """(..., 3) ``yaw, pitch, roll`` (rad) of :func:`ypr_to_matrix`, pitch in [-pi/2, pi/2]."""
+    return matrix_to_euler("zyx", R)
