@@ -64,20 +64,35 @@ def residual(J, probe_cols, rows, R, p, E, r):
 
 
 @njit(cache=True)
+def _column(J, c, rows, point, H, sign, out, row, col):
+    """Write ``sign`` times the residual derivative along velocity ``c`` into ``out[row:row+rows, col]``:
+    linear velocity of ``point`` and, for 6-row closures, ``H`` times the angular velocity."""
+    wx, wy, wz = J[3, c], J[4, c], J[5, c]
+    out[row + 0, col] += sign * (J[0, c] - (point[1] * wz - point[2] * wy))
+    out[row + 1, col] += sign * (J[1, c] - (point[2] * wx - point[0] * wz))
+    out[row + 2, col] += sign * (J[2, c] - (point[0] * wy - point[1] * wx))
+    if rows == 6:
+        for a in range(3):
+            out[row + 3 + a, col] += sign * (H[a, 0] * wx + H[a, 1] * wy + H[a, 2] * wz)
+
+
+@njit(cache=True)
 def _add_columns(J, G, o, rows, cols, colmap, point, H, sign):
     for c in cols:
-        if c < 0:
-            continue
-        jc = colmap[c]
-        if jc < 0:
-            continue
-        wx, wy, wz = J[3, c], J[4, c], J[5, c]
-        G[o + 0, jc] += sign * (J[0, c] - (point[1] * wz - point[2] * wy))
-        G[o + 1, jc] += sign * (J[1, c] - (point[2] * wx - point[0] * wz))
-        G[o + 2, jc] += sign * (J[2, c] - (point[0] * wy - point[1] * wx))
-        if rows == 6:
-            for a in range(3):
-                G[o + 3 + a, jc] += sign * (H[a, 0] * wx + H[a, 1] * wy + H[a, 2] * wz)
+        if c >= 0 and colmap[c] >= 0:
+            _column(J, c, rows, point, H, sign, G, o, colmap[c])
+
+
+@njit(cache=True)
+def _rotation_weights(E, i, Ht, Ha):
+    """``H_tip = (tr(E) I - E)/2`` and ``H_anchor = (tr(E) I - E^T)/2`` of closure ``i``."""
+    tr = E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2]
+    for a in range(3):
+        for b in range(3):
+            Ht[a, b] = -0.5 * E[i, a, b]
+            Ha[a, b] = -0.5 * E[i, b, a]
+        Ht[a, a] += 0.5 * tr
+        Ha[a, a] += 0.5 * tr
 
 
 @njit(cache=True)
@@ -92,72 +107,9 @@ def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
     for i in range(6):
         o = i * rows
         if rows == 6:
-            tr = E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2]
-            for a in range(3):
-                for b in range(3):
-                    Ht[a, b] = -0.5 * E[i, a, b]
-                    Ha[a, b] = -0.5 * E[i, b, a]
-                Ht[a, a] += 0.5 * tr
-                Ha[a, a] += 0.5 * tr
+            _rotation_weights(E, i, Ht, Ha)
         _add_columns(J, G, o, rows, leg_cols[i], colmap, p[i], Ht, 1.0)
         _add_columns(J, G, o, rows, ff_cols, colmap, p[6 + i], Ha, -1.0)
-
-
-@njit(cache=True)
-def lu_factor(A, LU, piv):
-    """LU factorisation with partial pivoting of the square ``A`` into ``LU`` / ``piv``.
-
-    Returns the ratio of the smallest to the largest pivot magnitude: 0 when ``A`` is
-    singular (then ``LU`` is unusable), tiny near a singularity.
-    """
-    n = A.shape[0]
-    LU[:, :] = A
-    pmax = 0.0
-    pmin = np.inf
-    for k in range(n):
-        p = k
-        best = abs(LU[k, k])
-        for i in range(k + 1, n):
-            v = abs(LU[i, k])
-            if v > best:
-                best, p = v, i
-        piv[k] = p
-        if best == 0.0:
-            return 0.0
-        if p != k:
-            for j in range(n):
-                LU[k, j], LU[p, j] = LU[p, j], LU[k, j]
-        pmax = max(pmax, best)
-        pmin = min(pmin, best)
-        inv = 1.0 / LU[k, k]
-        for i in range(k + 1, n):
-            f = LU[i, k] * inv
-            LU[i, k] = f
-            if f != 0.0:
-                for j in range(k + 1, n):
-                    LU[i, j] -= f * LU[k, j]
-    return pmin / pmax
-
-
-@njit(cache=True)
-def lu_apply(LU, piv, b, x):
-    """Solve ``A x = b`` with the factors of :func:`lu_factor`."""
-    n = LU.shape[0]
-    x[:] = b
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            x[k], x[p] = x[p], x[k]
-    for i in range(n):
-        s = x[i]
-        for j in range(i):
-            s -= LU[i, j] * x[j]
-        x[i] = s
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for j in range(i + 1, n):
-            s -= LU[i, j] * x[j]
-        x[i] = s / LU[i, i]
 
 
 @njit(cache=True)
@@ -186,28 +138,6 @@ def first_outside_at(q, idx, lower, upper, slack):
         if not (lower[k] - slack <= v <= upper[k] + slack):
             return k
     return -1
-
-
-@njit(cache=True)
-def block_solve(G, r, rows, block_cols, LUb, piv, rb, xb, x):
-    """Solve ``G x = r`` when ``G`` is block diagonal: closure ``i``'s rows touch only the
-    columns ``block_cols[i]`` (inverse kinematics: the platform is held). Six small LUs
-    instead of one large one. Returns the smallest per-block pivot ratio (0 = singular)."""
-    worst = 1.0
-    for i in range(block_cols.shape[0]):
-        o = i * rows
-        for a in range(rows):
-            rb[a] = r[o + a]
-            for b in range(rows):
-                LUb[a, b] = G[o + a, block_cols[i, b]]
-        ratio = lu_factor(LUb, LUb, piv)  # in place: LU[:, :] = A is a no-op
-        if ratio == 0.0:
-            return 0.0
-        worst = min(worst, ratio)
-        lu_apply(LUb, piv, rb, xb)
-        for b in range(rows):
-            x[block_cols[i, b]] = xb[b]
-    return worst
 
 
 @njit(cache=True)

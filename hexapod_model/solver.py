@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from . import kernels
+from . import kernels, linalg
 from .model import ClosedLoopModel
 
 STATUSES = ("converged", "max_iterations", "singular", "out_of_limits", "invalid_input")
@@ -115,11 +115,20 @@ class NewtonSolver:
         self.LU = np.zeros((n_res, n_free))
         self.piv = np.zeros(n_free, dtype=np.int64)
         self.block_cols = self._blocks(held_v)
+        self.held_pos = self._schur(held_v)
+        if self.held_pos is not None:
+            self.LB = np.zeros((6, self.rows, self.rows))
+            self.PB = np.zeros((6, self.rows), dtype=np.int64)
+            self.A = np.zeros((6, self.rows, 6))
+            self.M = np.zeros((6, 6))
+            self.pm = np.zeros(6, dtype=np.int64)
+            self.nb, self.wb = np.zeros(6), np.zeros(6)
         if self.block_cols is not None:
             self.LUb = np.zeros((self.rows, self.rows))
             self.rb, self.xb = np.zeros(self.rows), np.zeros(self.rows)
         self.dv = np.zeros(self.model.nv)
         self.q_aug = pin.neutral(self.model)
+        self._jac_args = (self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
 
     def _blocks(self, held_v: np.ndarray) -> np.ndarray | None:
         """(6, rows) columns of G per closure when G is block diagonal and square per block
@@ -134,12 +143,45 @@ class NewtonSolver:
             blocks.append(cols)
         return np.array(blocks, dtype=np.int64)
 
+    def _schur(self, held_v: np.ndarray) -> np.ndarray | None:
+        """Position of the held joint in each leg when the Schur path applies (platform free,
+        every leg with ``rows`` one-dof joints of which exactly one is held), else None."""
+        if held_v[self.clm.platform_v] or not self.square:
+            return None
+        pos = []
+        for row in self.leg_cols:
+            cols = [int(c) for c in row if c >= 0]
+            held = [k for k, c in enumerate(cols) if self.colmap[c] < 0]
+            if len(cols) != self.rows or len(held) != 1:
+                return None
+            pos.append(held[0])
+        return np.array(pos, dtype=np.int64)
+
+    def _solve_step(self) -> float:
+        """Fill ``self.x`` with the solution of ``G x = r``; return the smallest pivot ratio
+        (0 when singular, 1 for the least-squares path of non-square hybrid problems)."""
+        if self.held_pos is not None:
+            return linalg.schur_solve(self.J, self.leg_cols, self.held_pos, self.ff_cols, self.colmap, self.rows,
+                                       self.p, self.E, self.r, self.x, self.LB, self.PB, self.A, self.M, self.pm,
+                                       self.nb, self.wb)
+        kernels.jacobian(*self._jac_args)
+        if not self.square:
+            self.x[:] = np.linalg.lstsq(self.G, self.r, rcond=None)[0]
+            return 1.0
+        if self.block_cols is not None:
+            return linalg.block_solve(self.G, self.r, self.rows, self.block_cols, self.LUb, self.piv, self.rb,
+                                       self.xb, self.x)
+        ratio = linalg.lu_factor(self.G, self.LU, self.piv)
+        if ratio >= SINGULAR_PIVOT_RATIO:
+            linalg.lu_apply(self.LU, self.piv, self.r, self.x)
+        return ratio
+
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``."""
         self.q_aug[: self.clm.nq] = q
         pin.computeJointJacobians(self.model, self.data, self.q_aug)
         kernels.residual(self.J, self.probe_cols, self.rows, self.R, self.p, self.E, self.r)
-        kernels.jacobian(self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
+        kernels.jacobian(*self._jac_args)
         return self.r.copy(), self.G.copy()
 
     def run(self, q0: np.ndarray, tol: float, max_iter: int) -> tuple[np.ndarray, str, int, float, np.ndarray, str]:
@@ -149,7 +191,6 @@ class NewtonSolver:
         """
         model, data, J = self.model, self.data, self.J
         probe_cols, rows, R, p, E, r = self.probe_cols, self.rows, self.R, self.p, self.E, self.r
-        jac_args = (J, self.leg_cols, self.ff_cols, self.colmap, rows, p, E, self.G)
         q = self.q_aug
         q[: self.clm.nq] = q0
         status, message, it = "max_iterations", "", 0
@@ -161,27 +202,17 @@ class NewtonSolver:
                 if min_trace < 1.0:
                     status, message = "max_iterations", "converged to a spurious closure flipped by 180 deg"
                 break
-            if it >= max_iter or not np.isfinite(norm):
+            if it >= max_iter or not norm < np.inf:  # also stops on NaN
                 message = f"no convergence to {tol:g} in {it} iterations (residual {norm:.3g})"
                 break
-            kernels.jacobian(*jac_args)
-            if self.square:
-                if self.block_cols is not None:
-                    ratio = kernels.block_solve(self.G, r, rows, self.block_cols, self.LUb, self.piv, self.rb,
-                                                self.xb, self.x)
-                else:
-                    ratio = kernels.lu_factor(self.G, self.LU, self.piv)
-                    if ratio >= SINGULAR_PIVOT_RATIO:
-                        kernels.lu_apply(self.LU, self.piv, r, self.x)
-                if ratio < SINGULAR_PIVOT_RATIO:
-                    status = "singular"
-                    message = f"constraint Jacobian singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g})"
-                    break
-            else:
-                self.x[:] = np.linalg.lstsq(self.G, r, rcond=None)[0]
+            ratio = self._solve_step()
+            if ratio < SINGULAR_PIVOT_RATIO:
+                status = "singular"
+                message = f"constraint Jacobian singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g})"
+                break
             kernels.scatter_step(self.x, self.free_v, self.dv)
             q = pin.integrate(model, q, self.dv)
             it += 1
-        kernels.jacobian(*jac_args)
+        kernels.jacobian(*self._jac_args)
         self.q_aug = q
         return q[: self.clm.nq].copy(), status, it, float(norm), self.G.copy(), message

@@ -166,3 +166,18 @@ def test_solution_reports_everything():
     assert sol.status in hm.STATUSES and sol.converged and sol.iterations >= 1
     assert sol.residual <= 1e-10 and 1 < sol.condition_number < 1e4
     np.testing.assert_allclose(sol.lengths, [0.01, -0.01, 0.02, 0.0, 0.0, 0.01])
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_structured_steps_equal_the_dense_step(name):
+    # the Schur (direct kinematics) and block-diagonal (inverse kinematics) paths must solve
+    # exactly the same linear system as a dense solve of the reduced Jacobian
+    hexa = hexapod(name)
+    rng = np.random.default_rng(4)
+    for held, attr in ((hexa._held_forward, "held_pos"), (hexa._held_inverse, "block_cols")):
+        solver = NewtonSolver(hexa.model, held)
+        assert getattr(solver, attr) is not None
+        q = random_configuration(hexa, rng)
+        r, G = solver.evaluate(q)
+        assert solver._solve_step() > 1e-6
+        np.testing.assert_allclose(solver.x, np.linalg.solve(G, r), rtol=1e-9, atol=1e-12)
