@@ -50,29 +50,19 @@ def run_benchmarks(spec: str = "reference", samples: int = 1000, seed: int = 0) 
         hexa.forward(readings[1], guess=hexa.forward(readings[0]))
     report = {"hexapod": spec, "nq": hexa.model.nq}
 
-    sol, times, its = hexa.forward(readings[0]), [], []
-    for lengths in readings[1:]:
-        t0 = time.perf_counter()
-        sol = hexa.forward(lengths, guess=sol, tol=BENCH_TOL)
-        times.append(time.perf_counter() - t0)
-        its.append(sol.iterations)
-    report["warm_fk"] = _stats(times, its)
+    def timed(solve, inputs) -> dict:
+        times, its, sol = [], [], None
+        for x in inputs:
+            t0 = time.perf_counter()
+            sol = solve(x, sol)
+            times.append(time.perf_counter() - t0)
+            its.append(sol.iterations)
+        return _stats(times, its)
 
-    times, its = [], []
-    for s in box:
-        t0 = time.perf_counter()
-        sol = hexa.forward(s.lengths, tol=BENCH_TOL)
-        times.append(time.perf_counter() - t0)
-        its.append(sol.iterations)
-    report["cold_fk"] = _stats(times, its)
-
-    times, its = [], []
-    for s in box:
-        t0 = time.perf_counter()
-        sol = hexa.inverse(s.pose, tol=BENCH_TOL)
-        times.append(time.perf_counter() - t0)
-        its.append(sol.iterations)
-    report["ik"] = _stats(times, its)
+    first = hexa.forward(readings[0])
+    report["warm_fk"] = timed(lambda x, prev: hexa.forward(x, guess=prev or first, tol=BENCH_TOL), readings[1:])
+    report["cold_fk"] = timed(lambda x, _: hexa.forward(x, tol=BENCH_TOL), [s.lengths for s in box])
+    report["ik"] = timed(lambda x, _: hexa.inverse(x, tol=BENCH_TOL), [s.pose for s in box])
     report["targets_median_us"] = TARGETS_US
     return report
 

@@ -14,7 +14,22 @@ class HexapodError(Exception):
     """Base class of every error raised by hexapod_model."""
 
 
-class GeometryError(HexapodError, ValueError):
+class _BadValue(HexapodError, ValueError):
+    """A value that cannot be used, with where it was found and why.
+
+    Subclasses name the location attribute (``_where``) and the message format."""
+
+    _where = "where"
+    _format = "{where}: {reason} ({value!r})"
+
+    def __init__(self, where: str, value: Any, reason: str):
+        setattr(self, self._where, where)
+        self.value = value
+        self.reason = reason
+        super().__init__(self._format.format(where=where, value=value, reason=reason))
+
+
+class GeometryError(_BadValue):
     """A geometry description (dataclass or file) is malformed.
 
     Attributes:
@@ -22,14 +37,11 @@ class GeometryError(HexapodError, ValueError):
         value: the value found there.
     """
 
-    def __init__(self, field: str, value: Any, reason: str):
-        self.field = field
-        self.value = value
-        self.reason = reason
-        super().__init__(f"geometry field {field!r} = {value!r}: {reason}")
+    _where = "field"
+    _format = "geometry field {where!r} = {value!r}: {reason}"
 
 
-class UrdfError(HexapodError, ValueError):
+class UrdfError(_BadValue):
     """A URDF does not follow the hexapod contract (see docs/urdf_contract.md).
 
     Attributes:
@@ -37,14 +49,10 @@ class UrdfError(HexapodError, ValueError):
         value: the offending element, link or joint name.
     """
 
-    def __init__(self, path: str, value: Any, reason: str):
-        self.path = path
-        self.value = value
-        self.reason = reason
-        super().__init__(f"{path}: {reason} ({value!r})")
+    _where = "path"
 
 
-class InputError(HexapodError, ValueError):
+class InputError(_BadValue):
     """A solver input is invalid: NaN/inf, wrong count, unknown joint name, bad pose matrix.
 
     Attributes:
@@ -52,11 +60,8 @@ class InputError(HexapodError, ValueError):
         value: the offending value.
     """
 
-    def __init__(self, name: str, value: Any, reason: str):
-        self.name = name
-        self.value = value
-        self.reason = reason
-        super().__init__(f"invalid {name} {value!r}: {reason}")
+    _where = "name"
+    _format = "invalid {where} {value!r}: {reason}"
 
 
 class LimitError(HexapodError, ValueError):
