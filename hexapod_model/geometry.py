@@ -1,4 +1,4 @@
-"""Geometry description of a hexapod: frozen, validated values, loadable from TOML or JSON.
+"""Geometry description of a hexapod: frozen, validated values, loadable from TOML, YAML or JSON.
 
 Frames and units (SI throughout):
 
@@ -248,19 +248,28 @@ def geometry_from_dict(data: dict, source: str = "<dict>") -> HexapodGeometry:
 
 
 def load_geometry(path: str | Path) -> HexapodGeometry:
-    """Load a geometry file (``.toml`` or ``.json``); see ``docs/geometry.md`` for the format."""
+    """Load a geometry file (``.toml``, ``.yaml`` or ``.json``); see ``docs/geometry.md`` for the format."""
     path = Path(path)
     try:
         text = path.read_text()
     except OSError as exc:
         raise GeometryError(str(path), None, f"cannot read file: {exc.strerror}") from None
+    suffix = path.suffix.lower()
     try:
-        if path.suffix.lower() == ".json":
+        if suffix == ".json":
             data = json.loads(text)
-        elif path.suffix.lower() == ".toml":
+        elif suffix == ".toml":
             data = tomllib.loads(text)
+        elif suffix in (".yaml", ".yml"):
+            import yaml
+
+            data = yaml.safe_load(text)
         else:
-            raise GeometryError(str(path), path.suffix, "geometry files are .toml or .json")
+            raise GeometryError(str(path), path.suffix, "geometry files are .toml, .yaml or .json")
     except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise GeometryError(str(path), None, f"not valid {path.suffix[1:].upper()}: {exc}") from None
+        raise GeometryError(str(path), None, f"not valid {suffix[1:].upper()}: {exc}") from None
+    except Exception as exc:  # yaml.YAMLError without importing yaml up front
+        if type(exc).__module__.startswith("yaml"):
+            raise GeometryError(str(path), None, f"not valid YAML: {exc}") from None
+        raise
     return geometry_from_dict(data, source=str(path))

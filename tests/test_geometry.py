@@ -49,6 +49,10 @@ def test_toml_and_json_files_load(tmp_path):
         f"cardan_limit_deg = 60\n{legs}")
     g = load_geometry(tmp_path / "g.toml")
     assert g.name == "mine" and math.isclose(g.cardan_limit, math.radians(60))
+    import yaml
+
+    (tmp_path / "g.yaml").write_text(yaml.safe_dump(d))
+    assert load_geometry(tmp_path / "g.yaml") == hm.get_preset("reference")
 
 
 @pytest.mark.parametrize("mutate, field, pattern", [
@@ -77,9 +81,12 @@ def test_malformed_files(tmp_path):
     (tmp_path / "bad.toml").write_text("name = [unclosed")
     with pytest.raises(hm.GeometryError, match="not valid TOML"):
         load_geometry(tmp_path / "bad.toml")
-    (tmp_path / "g.yaml").write_text("name: x")
-    with pytest.raises(hm.GeometryError, match=r"\.toml or \.json"):
+    (tmp_path / "g.yaml").write_text("name: [x")
+    with pytest.raises(hm.GeometryError, match="not valid YAML"):
         load_geometry(tmp_path / "g.yaml")
+    (tmp_path / "g.xml").write_text("<x/>")
+    with pytest.raises(hm.GeometryError, match=r"\.toml, \.yaml or \.json"):
+        load_geometry(tmp_path / "g.xml")
     with pytest.raises(hm.GeometryError, match="cannot read"):
         load_geometry(tmp_path / "missing.toml")
 
