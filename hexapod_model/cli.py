@@ -21,7 +21,7 @@ from .presets import DEFAULT_PRESET, PRESETS, get_preset
 from .tables import LENGTH_COLUMNS, POSE_COLUMNS, SOLVER_COLUMNS, column, pose_row, poses_from_table, read_table, write_table
 from .urdf import geometry_to_urdf
 
-COMMAND_MODULES: list[str] = ["track"]
+COMMAND_MODULES: list[str] = ["track", "evaluate"]
 
 
 def progress(iterable, total: int, desc: str):
@@ -116,7 +116,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="output file (default: stdout)")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--preset", default=DEFAULT_PRESET, help=f"preset name (default {DEFAULT_PRESET})")
-    src.add_argument("--geometry", help="geometry file (.toml or .json), see docs/geometry.md")
+    src.add_argument("--geometry", help="geometry file (.toml, .yaml or .json), see docs/geometry.md")
     src.add_argument("--list-presets", action="store_true", help="print 'NAME  description' per preset")
     p.set_defaults(func=cmd_urdf)
 

@@ -158,7 +158,8 @@ def run_table(hexa: Hexapod, trajectories=("A", "B"), predictors=PREDICTORS, spe
     return rows
 
 
-def print_table(rows: list[dict], file=sys.stdout) -> None:
+def print_table(rows: list[dict], file=None) -> None:
+    file = file or sys.stdout
     print(f"{'traj':5s}{'speed':>6s}{'predictor':>10s}{'max ang (deg)':>15s}{'max pos (m)':>13s}"
           f"{'jumps':>7s}{'flagged':>9s}{'unflagged off':>15s}{'median us':>11s}", file=file)
     for r in rows:
