@@ -36,15 +36,15 @@ class Settings:
     ``cone_deg``/``cone_samples``: the orientation cone; ``length_unit``: m per length unit of
     the Jacobian figures (None: the platform anchor radius, our reading of seed 002)."""
 
-    grid: int = 15
+    grid: int = 21
     cone_deg: float = 20.0
     cone_samples: int = 8
     length_unit: float | None = None
 
 
 def load_spec(spec: str) -> Hexapod:
-    """Preset name, URDF file, or geometry file (``.toml`` / ``.json``)."""
-    if str(spec).lower().endswith((".toml", ".json")):
+    """Preset name, URDF file, or geometry file (``.toml``, ``.json``, ``.yaml``)."""
+    if str(spec).lower().endswith((".toml", ".json", ".yaml", ".yml")):
         from .geometry import load_geometry
 
         return Hexapod.from_geometry(load_geometry(spec))

@@ -161,10 +161,11 @@ def run_table(hexa: Hexapod, trajectories=("A", "B"), predictors=PREDICTORS, spe
 def print_table(rows: list[dict], file=None) -> None:
     file = file or sys.stdout
     print(f"{'traj':5s}{'speed':>6s}{'predictor':>10s}{'max ang (deg)':>15s}{'max pos (m)':>13s}"
-          f"{'jumps':>7s}{'flagged':>9s}{'unflagged off':>15s}{'median us':>11s}", file=file)
+          f"{'jumps':>7s}{'flagged':>9s}{'(limits)':>9s}{'unflagged off':>15s}{'median us':>11s}", file=file)
     for r in rows:
         print(f"{r['trajectory']:5s}{r['speed']:6g}{r['predictor']:>10s}{r['max_angle_error_deg']:15.2e}"
               f"{r['max_position_error_m']:13.2e}{r['branch_jumps']:7d}{r['flagged']:9d}"
+              f"{r['flags'].get('out_of_limits', 0):9d}"
               f"{r['unflagged_off_branch']:15d}{r['median_solve_us']:11.1f}", file=file)
 
 
@@ -181,13 +182,18 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from .cli import load_hexapod, progress
+    from .cli import load_hexapod
 
     hexa = load_hexapod(args.urdf)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if args.table:
-        rows = run_table(hexa, progress=lambda it, n, d: progress(it, 1000 if sys.stderr.isatty() else n, d))
+        bar = None
+        if sys.stderr.isatty():
+            from tqdm import tqdm
+
+            bar = lambda it, n, d: tqdm(it, total=n, desc=d, file=sys.stderr, unit="run")  # noqa: E731
+        rows = run_table(hexa, progress=bar)
         print(f"hexapod {args.urdf}: seed 002 tracking at 1 kHz, tolerance 1e-10")
         print_table(rows)
         result = rows

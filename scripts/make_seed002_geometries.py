@@ -1,7 +1,8 @@
 """Write seed 002's two hexapods (Table I) as geometry files docs/geometries/seed002_model{1,2}.toml.
 
 Reading of the paper (see docs/evaluate.md): one paper length unit = 1 cm = 0.01 m; angles alpha,
-beta = 0 put the two anchors of a pair at the same point (3-3 layouts); legs of base pair k go
+beta = 0 put the two anchors of a pair at the same point (3-3 layouts); model 2's r1, r2 are
+the radii of the guideway ends (the paper's r11, r12) and r_b2 the platform joint radius; legs of base pair k go
 to the platform points at 120k +- 60 deg; phi_max = 45 deg is the Cardan angle limit; the home
 pose is mid-stroke (model 1) / sliders at mid-rail (model 2); the tool length l_alat = 0 puts the
 tool point at the platform origin.
@@ -43,9 +44,10 @@ def model1() -> HexapodGeometry:
 
 
 def model2() -> HexapodGeometry:
-    """Table I, model 2: fixed struts l = 70 on guideways from r1 = 75 (floor) to r_b2 = 30 at
-    height h = 20, pairs d = 3.5 apart; platform r2 = 10, beta = 0, phi_max = 45 deg."""
-    l, r_out, r_in, h, d, r2 = 70.0, 75.0, 30.0, 20.0, 3.5, 10.0
+    """Table I, model 2: fixed struts l = 70 on guideways from r1 = 75 (floor) up to r2 = 10 at
+    height h = 20 (r1, r2 = the paper's r11, r12), pairs d = 3.5 apart; platform joints on
+    r_b2 = 30, beta = 0, phi_max = 45 deg."""
+    l, r_out, r_in, h, d, r2 = 70.0, 75.0, 10.0, 20.0, 3.5, 30.0
     rail_len = math.hypot(r_out - r_in, h)
     legs, heights = [], []
     for k in range(3):
@@ -64,7 +66,7 @@ def model2() -> HexapodGeometry:
     return HexapodGeometry(name="seed002_model2", joint_type="guideway",
                            legs=tuple(LegGeometry(**leg) for leg in legs), home_height=heights[0] * UNIT,
                            cardan_limit=math.radians(45.0),
-                           description="seed 002 Table I model 2: 70 cm struts on guideways r 75->30 cm, h 20 cm, platform r 10 cm")
+                           description="seed 002 Table I model 2: 70 cm struts on guideways r 75->10 cm, h 20 cm, platform r 30 cm")
 
 
 def to_toml(g: HexapodGeometry, header: str) -> str:

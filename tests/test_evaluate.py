@@ -136,7 +136,9 @@ def test_seed002_models_load_with_table1_dimensions():
     np.testing.assert_allclose(lengths + np.array([leg.stroke for leg in g1.legs]).T, [[0.45] * 6, [0.85] * 6])
     np.testing.assert_allclose(np.linalg.norm(g1.base_points()[:, :2], axis=1), 0.50)
     np.testing.assert_allclose(np.linalg.norm(g1.platform_points()[:, :2], axis=1), 0.25)
-    np.testing.assert_allclose(np.linalg.norm(g2.platform_points()[:, :2], axis=1), 0.10)
+    np.testing.assert_allclose(np.linalg.norm(g2.platform_points()[:, :2], axis=1), 0.30)
+    rail = np.array([leg.stroke for leg in g2.legs])
+    np.testing.assert_allclose(rail[:, 1] - rail[:, 0], 0.999 * np.hypot(0.65, 0.20))  # r 75 -> 10, h 20
     assert np.degrees(g1.cardan_limit) == pytest.approx(45) and np.degrees(g2.cardan_limit) == pytest.approx(45)
     hm.Hexapod.from_geometry(g2)  # assembles at home
 
