@@ -216,3 +216,14 @@ def test_reproduce_from_a_urdf_file(tmp_path, reference):
     code, report = _reproduce(tmp_path, "--urdf", str(urdf), "--poses", "30", "--convergence-poses", "0")
     assert code == 0 and report["poses"] == 30
     assert report["cardan"]["translation_mean_mm"] < report["spherical"]["translation_mean_mm"]
+
+
+def test_standard_model_benchmark_script_runs():
+    import subprocess
+    import sys
+
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "standard_model.py"
+    out = subprocess.run([sys.executable, str(script), "--poses", "2000", "--repeat", "1"],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert "batch IK" in out.stdout and "batch FK" in out.stdout and "100.0% converged" in out.stdout
