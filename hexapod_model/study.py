@@ -300,7 +300,7 @@ def run(args) -> int:
 
 def register(sub) -> None:
     p = sub.add_parser("reproduce", help="seed 000 accuracy study: Cardan-aware vs standard model (Table 1, Figs. 4-7)",
-                       description=__doc__.split("\n\n")[0])
+                       description=__doc__.split("\n\n")[0].replace("``", ""))
     src = p.add_mutually_exclusive_group()
     src.add_argument("--urdf", help="hexapod URDF file (default: --preset)")
     src.add_argument("--preset", help="preset name (default: reference)")
