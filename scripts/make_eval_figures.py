@@ -2,6 +2,8 @@
 
 * evaluate_seed002_model1.png: seed 002 Fig. 5 for model 1 (condition number, sigma_min sections);
 * track_B_reference.png: seed 002 Figs. 7-10, trajectory B at 1 kHz on the reference hexapod;
+* track_B_three_six.png: seed 002 Figs. 9-10, trajectory B on the 3-6 preset without and with
+  prediction (the 'division' onto another branch);
 * track_singular_passage.png: the spherical preset turned through its 90 deg yaw singularity,
   without prediction (follows the wrong branch, flagged) and with eq. 22 (stays on the true one);
 * three_six_assemblies.png: every assembly of the 3-6 sensor for one set of readings (seed 003).
@@ -41,6 +43,28 @@ def evaluate_figure(grid: int) -> None:
 def track_figure() -> None:
     hexa = hm.Hexapod.from_preset("reference")
     plot_run(simulate(hexa, "B", 1, "eq22"), IMG / "track_B_reference.png")
+
+
+def three_six_division_figure() -> None:
+    """Seed 002 Figs. 9/10 on the 3-6 preset: trajectory B without and with prediction."""
+    hexa = hm.Hexapod.from_preset("3-6")
+    fig, axes = plt.subplots(2, 1, figsize=(6.4, 4.8), sharex=True)
+    for ax, predictor in zip(axes, ("none", "eq22")):
+        run = simulate(hexa, "B", 1, predictor)
+        ends, w = run.window_max()
+        for c, name, style in zip(range(3), ("roll", "pitch", "yaw"), ("-", "--", ":")):
+            ax.semilogy(ends, np.maximum(w[:, c], 1e-16), style, label=name)
+        s = run.summary()
+        ax.set_title(f"predictor {predictor}: {s['branch_jumps']} branch jump(s), {s['flagged']} samples flagged",
+                     fontsize=9)
+        ax.set_ylabel("abs. error (deg)")
+        ax.legend(loc="lower right", fontsize=7, ncol=3)
+        ax.grid(True, alpha=0.3)
+    axes[1].set_xlabel("time (s)")
+    fig.suptitle("3-6 preset, trajectory B at 1 kHz: worst angle error per 100 ms (seed 002 Figs. 9-10)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(IMG / "track_B_three_six.png", dpi=80)
+    plt.close(fig)
 
 
 def singular_passage_figure() -> None:
@@ -111,9 +135,11 @@ def main() -> None:
     IMG.mkdir(parents=True, exist_ok=True)
     evaluate_figure(args.grid)
     track_figure()
+    three_six_division_figure()
     singular_passage_figure()
     three_six_figure()
-    for name in ("evaluate_seed002_model1", "track_B_reference", "track_singular_passage", "three_six_assemblies"):
+    for name in ("evaluate_seed002_model1", "track_B_reference", "track_B_three_six", "track_singular_passage",
+                 "three_six_assemblies"):
         p = IMG / f"{name}.png"
         print(f"{p.relative_to(ROOT)}: {p.stat().st_size // 1024} kB")
 

@@ -140,3 +140,16 @@ def test_table_rows(reference):
     rows = run_table(reference, trajectories=("A",), predictors=("none", "eq22"), speeds=(8,))
     assert [(r["trajectory"], r["predictor"], r["speed"]) for r in rows] == [("A", "none", 8), ("A", "eq22", 8)]
     assert all(r["median_solve_us"] > 0 and r["branch_jumps"] == 0 for r in rows)
+
+
+def test_three_six_trajectory_b_division_without_prediction():
+    """Seed 002's 'division' on a real trajectory: B passes near a singularity of the 3-6
+    preset; without prediction the solver leaves the true branch (flagged, never 'ok'), with
+    eq. 22 it holds on."""
+    hexa = hm.Hexapod.from_preset("3-6")
+    none = simulate(hexa, "B", 8, "none").summary()
+    eq22 = simulate(hexa, "B", 8, "eq22").summary()
+    assert none["branch_jumps"] >= 1 and none["off_branch_samples"] > 0
+    assert none["unflagged_off_branch"] == 0 and none["flags"].get("jump", 0) >= 1
+    assert eq22["branch_jumps"] == 0 and eq22["off_branch_samples"] == 0
+    assert eq22["flags"].get("near_singular", 0) > 0
