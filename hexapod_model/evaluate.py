@@ -78,6 +78,9 @@ _WORKER: dict = {}
 
 
 def _init(spec: str) -> None:
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's: it saves and stops
     _WORKER["hexa"] = load_spec(spec)
 
 
@@ -121,14 +124,20 @@ def run_evaluation(spec: str, settings: Settings = Settings(), out: str | Path |
         with ProcessPoolExecutor(max_workers=min(workers, len(todo)), initializer=_init,
                                  initargs=(str(Path(spec).resolve()) if Path(spec).exists() else spec,)) as pool:
             futures = [pool.submit(_task, k, zs[k], xs, ys, rotations, unit) for k in todo]
-            for fut in as_completed(futures):
-                r = fut.result()
-                done[r.index] = r
-                if ckpt is not None:
-                    np.savez_compressed(ckpt / f"slice_{r.index:03d}.npz", index=r.index, inside=r.inside,
-                                        kappa=r.kappa, sigma_min=r.sigma_min, abs_det=r.abs_det)
-                if bar is not None:
-                    bar.update(1)
+            try:
+                for fut in as_completed(futures):
+                    r = fut.result()
+                    done[r.index] = r
+                    if ckpt is not None:
+                        np.savez_compressed(ckpt / f"slice_{r.index:03d}.npz", index=r.index, inside=r.inside,
+                                            kappa=r.kappa, sigma_min=r.sigma_min, abs_det=r.abs_det)
+                    if bar is not None:
+                        bar.update(1)
+            except KeyboardInterrupt:
+                pool.shutdown(wait=False, cancel_futures=True)
+                where = f"; rerun with --out {out} to resume" if ckpt is not None else ""
+                print(f"\ninterrupted after {len(done)} of {len(zs)} slices{where}", file=sys.stderr)
+                raise
     if bar is not None:
         bar.close()
     stack = [done[k] for k in range(len(zs))]
@@ -223,7 +232,10 @@ def register(sub) -> None:
 
 def run(args) -> int:
     settings = Settings(args.grid, args.cone_deg, args.cone_samples, args.length_unit)
-    r = run_evaluation(args.urdf, settings, args.out, args.workers, show_progress=sys.stderr.isatty())
+    try:
+        r = run_evaluation(args.urdf, settings, args.out, args.workers, show_progress=sys.stderr.isatty())
+    except KeyboardInterrupt:
+        return 130
     r["home_z"] = float(load_spec(args.urdf).home_pose[2, 3])
     print_report(r)
     if args.out:
