@@ -52,8 +52,14 @@ def load_spec(spec: str) -> Hexapod:
 
 
 def platform_radius(hexa: Hexapod) -> float:
+    """Largest horizontal radius of the platform anchors (m); for a URDF, of the closure
+    frames on the platform."""
     g = hexa.geometry
-    return 0.1 if g is None else float(np.max(np.linalg.norm(g.platform_points()[:, :2], axis=1)))
+    if g is not None:
+        return float(np.max(np.linalg.norm(g.platform_points()[:, :2], axis=1)))
+    m = hexa.model.model
+    pts = np.array([m.frames[leg.anchor_frame].placement.translation for leg in hexa.model.legs])
+    return float(np.max(np.linalg.norm(pts[:, :2], axis=1))) or 0.1
 
 
 def make_grid(hexa: Hexapod, grid: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:

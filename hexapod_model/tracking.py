@@ -50,11 +50,13 @@ _COEFFS = {"none": (0.0, 0.0), "eq22": (-1.0, 0.0), "eq23": (0.0, -0.5), "eq24":
 
 
 def characteristic_length(hexa: Hexapod) -> float:
-    """Largest horizontal base anchor radius (m), 0.25 m when the geometry is unknown."""
+    """Largest horizontal base anchor radius (m); for a URDF, of the legs' first joints."""
     g = hexa.geometry
-    if g is None:
-        return 0.25
-    return float(np.max(np.linalg.norm(g.base_points()[:, :2], axis=1)))
+    if g is not None:
+        return float(np.max(np.linalg.norm(g.base_points()[:, :2], axis=1)))
+    m = hexa.model.model
+    pts = np.array([m.jointPlacements[leg.joints[0]].translation for leg in hexa.model.legs])
+    return float(np.max(np.linalg.norm(pts[:, :2], axis=1))) or 0.25
 
 
 def predict(model: pin.Model, history, predictor: str) -> np.ndarray:

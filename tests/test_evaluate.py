@@ -165,3 +165,15 @@ def test_evaluate_command_writes_figure_and_resumes(tmp_path, capsys):
     assert second["resumed_slices"] == second["grid"]["nz"]
     assert second["points_inside"] == first["points_inside"]
     assert "seed 002" in capsys.readouterr().out
+
+
+def test_urdf_without_geometry_gets_its_sizes_from_the_model(tmp_path):
+    from hexapod_model.evaluate import platform_radius
+    from hexapod_model.tracking import characteristic_length
+
+    path = tmp_path / "ref.urdf"
+    path.write_text(hm.geometry_to_urdf(hm.get_preset("reference")))
+    bare, preset = load_spec(str(path)), hm.Hexapod.from_preset("reference")
+    assert bare.geometry is None
+    assert platform_radius(bare) == pytest.approx(platform_radius(preset), rel=0.02)
+    assert characteristic_length(bare) == pytest.approx(characteristic_length(preset), rel=0.02)
