@@ -68,3 +68,32 @@ def test_cli_block_commands_run(tmp_path, monkeypatch):
             cmd += ["--samples", "10"]
         assert main(cmd[1:]) == 0, line
     assert (tmp_path / "lengths.csv").exists() and (tmp_path / "mine.urdf").exists()
+
+
+def test_study_and_evaluation_commands_run(tmp_path, monkeypatch):
+    """Every other `hexapod ...` line of the README runs, with smaller sizes where it is slow."""
+    from hexapod_model.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "docs").symlink_to(ROOT / "docs")
+    lines = [ln for b in code_blocks("text") if not b.startswith("hexapod urdf") for ln in b.strip().splitlines()]
+    assert any("reproduce" in ln for ln in lines) and any("evaluate" in ln for ln in lines)
+    shrink = {"--poses": ["--poses", "40"]}
+    for line in lines:
+        cmd = shlex.split(line.split("#")[0])
+        if "--table" in cmd:
+            continue  # 32 tracking runs: covered by tests/test_tracking.py
+        args = []
+        skip = False
+        for a in cmd[1:]:
+            if skip:
+                skip = False
+                continue
+            if a in shrink:
+                args += shrink[a]
+                skip = True
+            else:
+                args.append(a)
+        if args[0] == "evaluate":
+            args += ["--grid", "6", "--workers", "1"]
+        assert main(args) == 0, line
