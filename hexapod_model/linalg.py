@@ -34,7 +34,7 @@ def lu_factor(A, LU, piv):
             if v > best:
                 best, p = v, i
         piv[k] = p
-        if best == 0.0:
+        if not best > 0.0:  # zero pivot, or NaN entries
             return 0.0
         if p != k:
             for j in range(n):

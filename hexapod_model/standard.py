@@ -31,6 +31,7 @@ import pinocchio as pin
 from numba import njit
 
 from .exceptions import GeometryError, InputError, UrdfError
+from .linalg import lu_apply, lu_factor
 from .geometry import HexapodGeometry
 
 
@@ -258,17 +259,21 @@ def _newton_steps(Rp, v, dist, f, step, R, t):
     ``t += dt``, ``R <- exp([dtheta]) R`` (Rodrigues)."""
     E = np.empty((3, 3))
     Rn = np.empty((3, 3))
-    J = np.empty((1, 6, 6))
-    rhs = np.empty((1, 6))
+    J = np.empty((6, 6))
+    piv = np.empty(6, dtype=np.int64)
+    rhs = np.empty(6)
     x = np.empty((1, 6))
     for n in range(f.shape[0]):
         for i in range(6):
             ux, uy, uz = v[n, 0, i] / dist[n, i], v[n, 1, i] / dist[n, i], v[n, 2, i] / dist[n, i]
             px, py, pz = Rp[n, 0, i], Rp[n, 1, i], Rp[n, 2, i]
-            J[0, i, 0], J[0, i, 1], J[0, i, 2] = ux, uy, uz
-            J[0, i, 3], J[0, i, 4], J[0, i, 5] = py * uz - pz * uy, pz * ux - px * uz, px * uy - py * ux
-            rhs[0, i] = -f[n, i]
-        solve6(J, rhs, x)
+            J[i, 0], J[i, 1], J[i, 2] = ux, uy, uz
+            J[i, 3], J[i, 4], J[i, 5] = py * uz - pz * uy, pz * ux - px * uz, px * uy - py * ux
+            rhs[i] = -f[n, i]
+        if lu_factor(J, J, piv) == 0.0:  # singular: the step (and so the pose) becomes NaN
+            x[0, :] = np.nan
+        else:
+            lu_apply(J, piv, rhs, x[0])
         step[n, :] = x[0]
         wx, wy, wz = x[0, 3], x[0, 4], x[0, 5]
         a = np.sqrt(wx * wx + wy * wy + wz * wz)
@@ -287,49 +292,6 @@ def _newton_steps(Rp, v, dist, f, step, R, t):
             for q in range(3):
                 Rn[r, q] = E[r, 0] * R[n, 0, q] + E[r, 1] * R[n, 1, q] + E[r, 2] * R[n, 2, q]
         R[n] = Rn
-
-
-@njit(cache=True)
-def solve6(J: np.ndarray, f: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Solve ``J[n] x[n] = f[n]`` for a batch of square systems (LU, partial pivoting).
-
-    Returns an (N,) bool array, False where a pivot vanished (``x[n]`` is then NaN)."""
-    n_sys, m = f.shape
-    ok = np.ones(n_sys, dtype=np.bool_)
-    A = np.empty((m, m))
-    b = np.empty(m)
-    for n in range(n_sys):
-        A[:, :] = J[n]
-        b[:] = f[n]
-        for k in range(m):
-            p = k
-            best = abs(A[k, k])
-            for i in range(k + 1, m):
-                if abs(A[i, k]) > best:
-                    best, p = abs(A[i, k]), i
-            if best == 0.0:
-                ok[n] = False
-                break
-            if p != k:
-                for j in range(m):
-                    A[k, j], A[p, j] = A[p, j], A[k, j]
-                b[k], b[p] = b[p], b[k]
-            inv = 1.0 / A[k, k]
-            for i in range(k + 1, m):
-                g = A[i, k] * inv
-                if g != 0.0:
-                    for j in range(k + 1, m):
-                        A[i, j] -= g * A[k, j]
-                    b[i] -= g * b[k]
-        if not ok[n]:
-            x[n, :] = np.nan
-            continue
-        for i in range(m - 1, -1, -1):
-            s = b[i]
-            for j in range(i + 1, m):
-                s -= A[i, j] * x[n, j]
-            x[n, i] = s / A[i, i]
-    return ok
 
 
 def _poses(poses: np.ndarray) -> np.ndarray:
