@@ -92,9 +92,10 @@ def three_six() -> HexapodGeometry:
 def guideway() -> HexapodGeometry:
     """Seed 002's second model: fixed-length struts whose base ends slide on guideways.
 
-    Three pairs of parallel guideways, ``0.06 m`` apart, run from radius 0.45 m on the floor
-    up and inwards to radius 0.15 m at 0.25 m height; the slider (the measured joint) is at
-    mid-rail at home; struts go to ball joints on a 0.15 m platform.
+    Three pairs of parallel guideways, ``0.06 m`` apart, inclined like the line from radius
+    0.45 m on the floor to radius 0.15 m at 0.25 m height; the slider (the measured joint) is
+    on that line's midpoint at home and travels +-0.22 m along the rail; struts go to ball
+    joints on a 0.15 m platform.
     """
     r_lo, r_hi, h, d, rp = 0.45, 0.15, 0.25, 0.06, 0.15
     legs = []

@@ -34,7 +34,11 @@ COLOURS = {
     "joint": (0.70, 0.12, 0.15, 1.0),
     "axis": (0.10, 0.10, 0.10, 1.0),
     "rail": (0.45, 0.45, 0.40, 1.0),
+    "x_axis": (0.85, 0.10, 0.10, 1.0),
+    "y_axis": (0.10, 0.65, 0.10, 1.0),
+    "z_axis": (0.10, 0.25, 0.90, 1.0),
 }
+TRIAD_LENGTH = 0.10  # m, platform frame triad drawn in the URDF visuals
 
 
 @dataclass(frozen=True)
@@ -118,11 +122,16 @@ def geometry_to_urdf(geom: HexapodGeometry) -> str:
     base_r = float(np.max(np.linalg.norm(geom.base_points()[:, :2], axis=1)))
     plat_r = float(np.max(np.linalg.norm(geom.platform_points()[:, :2], axis=1)))
     zb = float(np.min(geom.base_points()[:, 2]))
+    if geom.joint_type == "guideway":  # the plate goes under the lowest end of the rails
+        zb = min(zb, min(leg.base_anchor[2] + min(s * leg.guideway[2] for s in leg.stroke) for leg in geom.legs))
     zp = float(np.max(geom.platform_points()[:, 2]))
     w_.link("base_link", [("cyl", (base_r + 0.04, 0.02), (0, 0, zb - 0.03), (0, 0, 0), "base")])
+    top, half = zp + 0.035, TRIAD_LENGTH / 2
     w_.link("platform", [
         ("cyl", (plat_r + 0.03, 0.015), (0, 0, zp + 0.0275), (0, 0, 0), "platform"),
-        ("cyl", (0.004, 0.10), (0.05, 0, zp + 0.04), (0, np.pi / 2, 0), "joint"),  # x of the frame triad
+        ("cyl", (0.005, TRIAD_LENGTH), (half, 0, top), (0, np.pi / 2, 0), "x_axis"),  # frame triad on the plate
+        ("cyl", (0.005, TRIAD_LENGTH), (0, half, top), (np.pi / 2, 0, 0), "y_axis"),
+        ("cyl", (0.005, TRIAD_LENGTH), (0, 0, top + half), (0, 0, 0), "z_axis"),
     ])
     w_.joint("platform_joint", "floating", "base_link", "platform", geom.home_translation)
     lim = geom.cardan_limit
@@ -144,10 +153,10 @@ def _write_leg(w_: _Writer, geom: HexapodGeometry, i: int, lim: float) -> Closur
     w, length = geom.home_leg_axis(i)
     eb, ep = geom.base_offset, geom.platform_offset
     b = np.asarray(leg.base_anchor)
-    block = max(0.012, 0.6 * max(eb, ep, 0.02))
+    block = 0.022  # m, Cardan joint blocks; their axis pins show the offset between the two axes
     blk = ("box", (block, block, block), (0, 0, 0), (0, 0, 0), "joint")
-    ax_x = ("cyl", (0.004, 3 * block), (0, 0, 0), (0, np.pi / 2, 0), "axis")
-    ax_y = ("cyl", (0.004, 3 * block), (0, 0, 0), (np.pi / 2, 0, 0), "axis")
+    ax_x = ("cyl", (0.005, 3 * block), (0, 0, 0), (0, np.pi / 2, 0), "axis")
+    ax_y = ("cyl", (0.005, 3 * block), (0, 0, 0), (np.pi / 2, 0, 0), "axis")
     rpy = _rpy(R)
     parent, start = "base_link", b - eb / 2 * w
     if geom.joint_type == "guideway":
