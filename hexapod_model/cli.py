@@ -21,7 +21,7 @@ from .presets import DEFAULT_PRESET, PRESETS, get_preset
 from .tables import LENGTH_COLUMNS, POSE_COLUMNS, SOLVER_COLUMNS, column, pose_row, poses_from_table, read_table, write_table
 from .urdf import geometry_to_urdf
 
-COMMAND_MODULES: list[str] = ["track", "evaluate", "study"]
+COMMAND_MODULES: list[str] = ["track", "evaluate", "study", "view_cli"]
 
 
 def progress(iterable, total: int, desc: str):

@@ -76,6 +76,7 @@ def test_study_and_evaluation_commands_run(tmp_path, monkeypatch):
 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "docs").symlink_to(ROOT / "docs")
+    assert main(["fk", "reference", str(ROOT / "docs/examples/lengths.csv"), "-o", "poses.csv"]) == 0
     lines = [ln for b in code_blocks("text") if not b.startswith("hexapod urdf") for ln in b.strip().splitlines()]
     assert any("reproduce" in ln for ln in lines) and any("evaluate" in ln for ln in lines)
     shrink = {"--poses": ["--poses", "40"]}
@@ -96,4 +97,6 @@ def test_study_and_evaluation_commands_run(tmp_path, monkeypatch):
                 args.append(a)
         if args[0] == "evaluate":
             args += ["--grid", "6", "--workers", "1"]
+        if args[0] == "view":
+            args += ["--once", "--rate", "1000"]  # show, then exit instead of serving until Ctrl-C
         assert main(args) == 0, line

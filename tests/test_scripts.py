@@ -32,3 +32,10 @@ def test_geometry_doc_example_loads():
                    .replace("[0.1004, -0.1115, 0.0]", str(list(lg.platform_anchor))) for lg in ref)
     g = hm.geometry_from_dict(tomllib.loads(head + legs))
     assert g.name == "my_hexapod" and hm.Hexapod.from_geometry(g).forward([0.0] * 6).converged
+
+
+def test_view_images_script_runs(tmp_path):
+    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_view_images.py"), "--out", str(tmp_path)],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert (tmp_path / "reference.png").stat().st_size > 10_000 and (tmp_path / "cell.png").stat().st_size > 10_000
