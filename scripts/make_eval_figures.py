@@ -33,6 +33,14 @@ ROOT = Path(__file__).resolve().parents[1]
 IMG = ROOT / "docs" / "img"
 
 
+
+def _save(fig, title: str, name: str) -> None:
+    """Title, tight layout, PNG in docs/img/, close."""
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(IMG / name, dpi=80)
+    plt.close(fig)
+
 def evaluate_figure(grid: int) -> None:
     spec = ROOT / "docs" / "geometries" / "seed002_model1.toml"
     r = run_evaluation(str(spec), Settings(grid=grid))
@@ -61,10 +69,7 @@ def three_six_division_figure() -> None:
         ax.legend(loc="lower right", fontsize=7, ncol=3)
         ax.grid(True, alpha=0.3)
     axes[1].set_xlabel("time (s)")
-    fig.suptitle("3-6 preset, trajectory B at 1 kHz: worst angle error per 100 ms (seed 002 Figs. 9-10)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(IMG / "track_B_three_six.png", dpi=80)
-    plt.close(fig)
+    _save(fig, "3-6 preset, trajectory B at 1 kHz: worst angle error per 100 ms (seed 002 Figs. 9-10)", "track_B_three_six.png")
 
 
 def singular_passage_figure() -> None:
@@ -90,10 +95,7 @@ def singular_passage_figure() -> None:
         ax.set_title(f"predictor {predictor}", fontsize=9)
         ax.legend(loc="upper left", fontsize=7)
     axes[1].set_xlabel("true yaw (deg); the spherical preset is singular at 90 deg")
-    fig.suptitle("1 kHz tracking through a forward-kinematics singularity (seed 002 §V)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(IMG / "track_singular_passage.png", dpi=80)
-    plt.close(fig)
+    _save(fig, "1 kHz tracking through a forward-kinematics singularity (seed 002 §V)", "track_singular_passage.png")
 
 
 def three_six_figure() -> None:
@@ -131,7 +133,9 @@ def three_six_figure() -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, default=25)
+    ap.add_argument("--out", type=Path, default=IMG, help="figure directory (default docs/img)")
     args = ap.parse_args()
+    globals()["IMG"] = args.out  # the figure functions write to IMG
     IMG.mkdir(parents=True, exist_ok=True)
     evaluate_figure(args.grid)
     track_figure()
@@ -141,7 +145,7 @@ def main() -> None:
     for name in ("evaluate_seed002_model1", "track_B_reference", "track_B_three_six", "track_singular_passage",
                  "three_six_assemblies"):
         p = IMG / f"{name}.png"
-        print(f"{p.relative_to(ROOT)}: {p.stat().st_size // 1024} kB")
+        print(f"{p}: {p.stat().st_size // 1024} kB")
 
 
 if __name__ == "__main__":

@@ -23,12 +23,15 @@ ROOT = Path(__file__).resolve().parents[1]
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--poses", type=int, default=3000)
+    ap.add_argument("--img", type=Path, default=ROOT / "docs" / "img", help="figure directory")
+    ap.add_argument("--examples", type=Path, default=ROOT / "docs" / "examples", help="measured.csv directory")
     args = ap.parse_args(argv)
     data = simulate(Hexapod.from_preset("reference"), 40, seed=7, encoder_noise=10e-6, reference_noise=0.3e-3,
                     show_progress=False)
-    print("wrote", save_measured(ROOT / "docs" / "examples" / "measured.csv", data))
+    args.examples.mkdir(parents=True, exist_ok=True)
+    print("wrote", save_measured(args.examples / "measured.csv", data))
     return hexapod(["reproduce", "--preset", "reference", "--poses", str(args.poses), "--seed", "0",
-                    "--out", str(ROOT / "docs" / "img")])
+                    "--out", str(args.img)])
 
 
 if __name__ == "__main__":

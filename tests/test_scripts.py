@@ -39,3 +39,28 @@ def test_view_images_script_runs(tmp_path):
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert (tmp_path / "reference.png").stat().st_size > 10_000 and (tmp_path / "cell.png").stat().st_size > 10_000
+
+
+def test_seed002_geometry_files_match_their_generator(tmp_path):
+    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_seed002_geometries.py"), str(tmp_path)],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    for made in tmp_path.glob("*.toml"):
+        assert made.read_text() == (ROOT / "docs" / "geometries" / made.name).read_text(), made.name
+    assert len(list(tmp_path.glob("*.toml"))) == 2
+
+
+def test_study_figures_script_runs_and_measured_example_matches(tmp_path):
+    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_study_figures.py"), "--poses", "40",
+                          "--img", str(tmp_path / "img"), "--examples", str(tmp_path)],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert (tmp_path / "measured.csv").read_text() == (ROOT / "docs" / "examples" / "measured.csv").read_text()
+    assert len(list((tmp_path / "img").glob("reproduce_*.png"))) >= 4
+
+
+def test_eval_figures_script_runs(tmp_path):
+    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_eval_figures.py"), "--grid", "6",
+                          "--out", str(tmp_path)], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert len(list(tmp_path.glob("*.png"))) == 5
