@@ -64,3 +64,12 @@ def test_eval_figures_script_runs(tmp_path):
                           "--out", str(tmp_path)], capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr
     assert len(list(tmp_path.glob("*.png"))) == 5
+
+
+def test_baseline_benchmark_runs():
+    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "baseline_newton.py"), "spherical"],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.strip().splitlines()
+    assert [ln.split()[0] for ln in lines] == ["baseline", "hexapod_model"]
+    assert all(float(ln.rsplit("error", 1)[1]) < 1e-9 for ln in lines)  # both reach the true pose
