@@ -16,8 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from hexapod_model import Hexapod
-from hexapod_model.bench import BENCH_TOL, _radius
-from hexapod_model.trajectories import trajectory_poses
+from hexapod_model.bench import BENCH_TOL, trajectory_readings
 
 
 def baseline_forward(hexa: Hexapod, lengths: np.ndarray, q0: np.ndarray, tol: float = BENCH_TOL,
@@ -47,11 +46,7 @@ def baseline_forward(hexa: Hexapod, lengths: np.ndarray, q0: np.ndarray, tol: fl
 def main(argv=None) -> int:
     preset = (argv if argv is not None else sys.argv[1:] or ["reference"])[0]
     hexa = Hexapod.from_preset(preset)
-    _, poses = trajectory_poses("A", hexa.home_pose, _radius(hexa) / 50.0)
-    readings, sol = [], None
-    for T in poses:
-        sol = hexa.inverse(T, guess=sol)
-        readings.append(sol.lengths)
+    poses, readings = trajectory_readings(hexa)
     for name in ("baseline", "hexapod_model"):
         q, times = hexa.forward(readings[0]).q, []
         prev = hexa.forward(readings[0])

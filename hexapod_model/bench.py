@@ -15,6 +15,7 @@ import time
 import numpy as np
 
 from .hexapod import Hexapod
+from .tracking import characteristic_length
 from .trajectories import box_poses, trajectory_poses
 
 BENCH_TOL = 1e-10  # closure residual of every timed solve (the issue's figure)
@@ -28,21 +29,21 @@ def _stats(times_s: list[float], iterations: list[int]) -> dict:
             "iterations_max": int(np.max(iterations))}
 
 
-def _radius(hexa: Hexapod) -> float:
-    g = hexa.geometry
-    if g is None:
-        return 0.25
-    return float(np.max(np.linalg.norm(g.base_points()[:, :2], axis=1)))
+def trajectory_readings(hexa: Hexapod, name: str = "A") -> tuple[np.ndarray, np.ndarray]:
+    """Seed 002's trajectory ``name`` at 1 kHz scaled to the hexapod (paper unit = base
+    radius / 50): the (n, 4, 4) true poses and the (n, 6) leg readings (m) that produce them."""
+    _, poses = trajectory_poses(name, hexa.home_pose, characteristic_length(hexa) / 50.0)
+    readings, sol = [], None
+    for T in poses:
+        sol = hexa.inverse(T, guess=sol)
+        readings.append(sol.lengths)
+    return poses, np.array(readings)
 
 
 def run_benchmarks(spec: str = "reference", samples: int = 1000, seed: int = 0) -> dict:
     """Time warm FK, cold FK and IK on the hexapod ``spec`` (URDF path or preset name)."""
     hexa = Hexapod.from_urdf(spec)
-    _, traj = trajectory_poses("A", hexa.home_pose, _radius(hexa) / 50.0)
-    readings, sol = [], None
-    for T in traj:
-        sol = hexa.inverse(T, guess=sol)
-        readings.append(sol.lengths)
+    _, readings = trajectory_readings(hexa)
     poses = box_poses(hexa.home_pose, samples, seed)
     box = [hexa.inverse(T, check=False) for T in poses]
     box = [s for s in box if s.converged]
