@@ -8,8 +8,8 @@ Quick start::
     back = hexa.inverse(sol.pose)                   # back.lengths (m)
 """
 
-from .exceptions import (ConvergenceError, GeometryError, HexapodError, InputError, LimitError,
-                         SingularityError, SolverError, UrdfError, WorkspaceError)
+from .exceptions import (ConvergenceError, GeometryError, HexapodError, InputError, LimitError, RenderError,
+                         SingularityError, SolverError, UnreachableError, UrdfError, ViewError, WorkspaceError)
 from .geometry import HexapodGeometry, LegGeometry, geometry_from_dict, load_geometry
 from .hexapod import Hexapod
 from .presets import DEFAULT_PRESET, PRESETS, get_preset
@@ -19,8 +19,8 @@ from .urdf import geometry_to_urdf, read_closures, write_urdf
 __version__ = "0.1.0"
 
 __all__ = [
-    "ConvergenceError", "GeometryError", "HexapodError", "InputError", "LimitError", "SingularityError",
-    "SolverError", "UrdfError", "WorkspaceError", "HexapodGeometry", "LegGeometry", "geometry_from_dict",
+    "ConvergenceError", "GeometryError", "HexapodError", "InputError", "LimitError", "RenderError",
+    "SingularityError", "SolverError", "UnreachableError", "UrdfError", "ViewError", "WorkspaceError", "HexapodGeometry", "LegGeometry", "geometry_from_dict",
     "load_geometry", "Hexapod", "DEFAULT_PRESET", "PRESETS", "get_preset", "STATUSES", "Solution",
     "geometry_to_urdf", "read_closures", "write_urdf", "__version__",
 ]

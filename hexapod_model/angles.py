@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .exceptions import InputError
+
 
 def rpy_to_matrix(roll, pitch, yaw) -> np.ndarray:
     """(..., 3, 3) rotation ``Rz(yaw) Ry(pitch) Rx(roll)``; angles in radians."""
@@ -94,7 +96,7 @@ def axis_rotation(axis: str, angle) -> np.ndarray:
 
 def _check_order(order: str) -> tuple[int, int, int, float]:
     if order not in EULER_ORDERS:
-        raise ValueError(f"unknown rotation order {order!r}; choose one of {EULER_ORDERS}")
+        raise InputError("rotation order", order, f"choose one of {EULER_ORDERS}")
     i, j, k = (_AXIS[c] for c in order)
     return i, j, k, (1.0 if (j - i) % 3 == 1 else -1.0)
 

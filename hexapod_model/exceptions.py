@@ -109,3 +109,29 @@ class SingularityError(SolverError):
 
 class WorkspaceError(SolverError):
     """The solution leaves the workspace: a stroke or Cardan angle limit is violated."""
+
+
+class ViewError(HexapodError):
+    """The 3-D scene cannot be built or shown (missing optional package, bad configuration)."""
+
+
+class RenderError(ViewError):
+    """Chromium is missing or failed to render a snapshot."""
+
+
+class UnreachableError(HexapodError, ValueError):
+    """The robot of the cell cannot put its flange at the requested pose.
+
+    Attributes:
+        target: the 4x4 flange target in the robot base frame.
+        error: remaining pose error norm (m and rad mixed) when the IK stopped.
+    """
+
+    def __init__(self, target, error: float, reason: str):
+        import numpy as np
+
+        self.target = target
+        self.error = float(error)
+        super().__init__(f"UR10 cannot reach the tool-changer pose at {np.round(target[:3, 3], 4).tolist()} m "
+                         f"(robot base frame): {reason}")
+

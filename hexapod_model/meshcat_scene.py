@@ -22,16 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .exceptions import HexapodError
+from .exceptions import ViewError
 from .hexapod import Hexapod
 from .solver import Solution
 
 SCENE_CENTRE = (0.0, 0.0, 0.22)  # m, base frame: the point shown at the centre of the view
 DEFAULT_CAMERA = (0.62, 0.45, 0.62)  # m, camera position relative to the centre, meshcat's three.js axes (y up)
-
-
-class ViewError(HexapodError):
-    """The scene cannot be built or shown (missing optional package, bad configuration)."""
 
 
 def _require_meshcat():

@@ -13,15 +13,11 @@ import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
-from .meshcat_scene import ViewError
+from .exceptions import RenderError
 
 CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")
 HIDE_CONTROLS = "<style>.dg{display:none!important}</style>"  # meshcat's control panel (dat.GUI)
 MIN_SIZE = (1024, 768)
-
-
-class RenderError(ViewError):
-    """Chromium is missing or failed to render a snapshot."""
 
 
 def find_chromium() -> str:

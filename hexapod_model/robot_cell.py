@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .exceptions import HexapodError
+from .exceptions import HexapodError, UnreachableError
 
 ROBOT_BASE_XYZ = (0.80, 0.0, 0.0)  # m, UR10 base in the hexapod base frame
 ROBOT_BASE_YAW = np.pi  # rad: the robot faces the hexapod (its x axis towards -x of the base frame)
@@ -24,21 +24,6 @@ TOOL_CHANGER_HEIGHT = 0.07  # m above the platform frame origin (on top of the p
 UR10_REACH = 1.30  # m, from the shoulder axis (datasheet)
 FLANGE_FRAME = "tool0"
 Q_START = np.array([0.0, -1.9, 1.9, -1.57, -1.57, 0.0])  # elbow up, wrist down
-
-
-class UnreachableError(HexapodError, ValueError):
-    """The robot cannot put its flange at the requested pose.
-
-    Attributes:
-        target: the 4x4 flange target in the robot base frame.
-        error: remaining pose error norm (m and rad mixed) when the IK stopped.
-    """
-
-    def __init__(self, target: np.ndarray, error: float, reason: str):
-        self.target = target
-        self.error = float(error)
-        super().__init__(f"UR10 cannot reach the tool-changer pose at {np.round(target[:3, 3], 4).tolist()} m "
-                         f"(robot base frame): {reason}")
 
 
 def _transform(xyz, yaw: float = 0.0, flip_x: bool = False) -> np.ndarray:

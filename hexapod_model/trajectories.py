@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .angles import rpy_to_matrix
+from .exceptions import InputError
 
 DURATION_S = 4.0
 
@@ -27,7 +28,7 @@ def trajectory_coordinates(name: str, t: np.ndarray) -> np.ndarray:
     elif name == "B":
         z, a, b = 3 * np.sin(2 * t), 55 * np.sin(1.8 * t), 30 * np.sin(t / 2) + 5 * np.cos(4 * t)
     else:
-        raise ValueError(f"unknown trajectory {name!r}; seed 002 defines 'A' and 'B'")
+        raise InputError("trajectory", name, "seed 002 defines 'A' and 'B'")
     return np.stack([2 * np.sin(t * np.pi / 2), 2.2 * np.cos(t * np.pi / 2), z, a, b, 15 * np.arctan(2 * t - 4)], -1)
 
 

@@ -115,7 +115,7 @@ def _serve(args, vis) -> int:
 
 
 def parse_size(text: str) -> tuple[int, int]:
-    from .meshcat_scene import ViewError
+    from .exceptions import ViewError
 
     try:
         w, h = (int(v) for v in text.lower().split("x"))
