@@ -113,10 +113,15 @@ def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
 
 
 @njit(cache=True)
-def scatter_step(x, free_v, dv):
-    """``dv[free_v] = -x`` (the Newton step in the full velocity space; held entries stay 0)."""
+def scatter_step(x, free_v, dv, max_step):
+    """``dv[free_v] = -x`` (the Newton step in the full velocity space; held entries stay 0),
+    scaled down, direction kept, so that no entry exceeds ``max_step`` (rad or m)."""
+    biggest = 0.0
+    for k in range(x.shape[0]):
+        biggest = max(biggest, abs(x[k]))
+    scale = 1.0 if biggest <= max_step else max_step / biggest
     for k in range(free_v.shape[0]):
-        dv[free_v[k]] = -x[k]
+        dv[free_v[k]] = -scale * x[k]
 
 
 @njit(cache=True)

@@ -6,7 +6,9 @@ Unknowns are the velocities of the free joints; each step solves the reduced clo
 kinematics holds the platform's floating joint, a hybrid problem holds any joints named.
 
 The stopping rule is on the closure residual itself (``tol``, mixed metres/radians), checked
-after every step (a warm start 1 ms away takes two steps to 1e-10).
+after every step (a warm start 1 ms away takes two steps to 1e-10). A step with an entry
+larger than ``MAX_STEP`` is shortened along its direction: cold starts far from home
+otherwise overshoot into a spurious 180-degree-flipped closure.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from .model import ClosedLoopModel
 
 STATUSES = ("converged", "max_iterations", "singular", "out_of_limits", "invalid_input")
 SINGULAR_PIVOT_RATIO = 1e-13
+MAX_STEP = 0.5  # rad or m: largest entry of one Newton step (cold starts far from the solution)
 
 
 @dataclass(frozen=True)
@@ -210,7 +213,7 @@ class NewtonSolver:
                 status = "singular"
                 message = f"constraint Jacobian singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g})"
                 break
-            kernels.scatter_step(self.x, self.free_v, self.dv)
+            kernels.scatter_step(self.x, self.free_v, self.dv, MAX_STEP)
             q = pin.integrate(model, q, self.dv)
             it += 1
         kernels.jacobian(*self._jac_args)

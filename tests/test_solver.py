@@ -181,3 +181,17 @@ def test_structured_steps_equal_the_dense_step(name):
         r, G = solver.evaluate(q)
         assert solver._solve_step() > 1e-6
         np.testing.assert_allclose(solver.x, np.linalg.solve(G, r), rtol=1e-9, atol=1e-12)
+
+
+def test_cold_starts_far_from_home_converge_or_say_why():
+    # beyond the seed 000 box (+-80 mm, +-35 deg): without the step limit, Newton from home
+    # overshot to a 180-degree flipped closure on some of these
+    hexa = hexapod("reference")
+    statuses = set()
+    for T in box_poses(hexa.home_pose, 400, seed=3, translation=0.08, angle_deg=35):
+        sol = hexa.inverse(T, check=False)
+        statuses.add(sol.status)
+        if sol.converged:
+            np.testing.assert_allclose(sol.pose, T, atol=1e-9)
+            assert np.abs(hexa.forward(sol.lengths).pose - T).max() < 1e-9
+    assert statuses <= {"converged", "out_of_limits"} and "converged" in statuses
