@@ -8,6 +8,8 @@ import sys
 import tomllib
 from pathlib import Path
 
+import numpy as np
+
 import hexapod_model as hm
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -55,7 +57,12 @@ def test_study_figures_script_runs_and_measured_example_matches(tmp_path):
                           "--img", str(tmp_path / "img"), "--examples", str(tmp_path)],
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
-    assert (tmp_path / "measured.csv").read_text() == (ROOT / "docs" / "examples" / "measured.csv").read_text()
+    # same rows and columns; values equal to 1e-9 (they are solver outputs printed to 12 digits,
+    # whose last digit may move when the solver's iteration path changes)
+    made, kept = ([ln.split(",") for ln in (d / "measured.csv").read_text().splitlines()]
+                  for d in (tmp_path, ROOT / "docs" / "examples"))
+    assert made[0] == kept[0] and len(made) == len(kept)
+    np.testing.assert_allclose(np.array(made[1:], float), np.array(kept[1:], float), rtol=0, atol=1e-9)
     assert len(list((tmp_path / "img").glob("reproduce_*.png"))) >= 4
 
 
