@@ -27,7 +27,7 @@ from .hexapod import Hexapod
 from .solver import Solution
 
 SCENE_CENTRE = (0.0, 0.0, 0.22)  # m, base frame: the point shown at the centre of the view
-DEFAULT_CAMERA = (0.62, 0.45, 0.62)  # m, camera position relative to the centre, meshcat's three.js axes (y up)
+DEFAULT_CAMERA = (0.46, 0.34, 0.46)  # m, camera position relative to the centre, meshcat's three.js axes (y up)
 
 
 def _require_meshcat():

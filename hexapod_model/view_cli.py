@@ -60,7 +60,7 @@ def add_cell(scene, sol: Solution) -> None:
 
     scene.recentre((0.4, 0.0, 0.4))
     robot_cell.add_ur10(scene.vis, robot_cell.couple_to_plate(sol.pose), world=scene.world)
-    style_scene(scene.vis, camera=(0.95, 0.6, 0.95))
+    style_scene(scene.vis, camera=(0.72, 0.46, 0.72))
 
 
 def play_frames(hexa, path: str | Path) -> list[Solution]:
