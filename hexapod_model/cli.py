@@ -12,7 +12,6 @@ import importlib
 import sys
 from pathlib import Path
 
-import numpy as np
 
 from .exceptions import HexapodError
 from .geometry import load_geometry

@@ -12,7 +12,6 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 
 from . import kernels
 from .exceptions import ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
@@ -179,10 +178,15 @@ class Hexapod:
                 iq = m.joints[j].idx_q
                 lo, hi = self.model.lower[iq], self.model.upper[iq]
                 if not lo - _LIMIT_SLACK <= v <= hi + _LIMIT_SLACK:
-                    raise LimitError(name, v, lo, hi, what="stroke" if iq in self.model.prismatic_q else "joint")
+                    raise self._limit_error(iq, v)
                 q[iq] = v
             ids.append(j)
         return self._finish(self._solver(tuple(sorted(ids))), q, tol, max_iter, check)
+
+    def _limit_error(self, iq: int, value: float) -> LimitError:
+        """The error for configuration entry ``iq`` at ``value`` outside its limits."""
+        what = "stroke" if iq in self.model.prismatic_q else "joint"
+        return LimitError(self.model.joint_name_of_q(iq), value, self.model.lower[iq], self.model.upper[iq], what)
 
     def _finish(self, solver: NewtonSolver, q0: np.ndarray, tol: float, max_iter: int, check: bool) -> Solution:
         q, status, it, res, jac, msg = solver.run(q0, tol, max_iter)
@@ -190,9 +194,7 @@ class Hexapod:
             bad = kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, _LIMIT_SLACK)
             if bad >= 0:
                 k = int(self._limited[bad])
-                name = self.model.joint_name_of_q(k)
-                what = "stroke" if k in self.model.prismatic_q else "joint"
-                status, msg = "out_of_limits", str(LimitError(name, q[k], self.model.lower[k], self.model.upper[k], what))
+                status, msg = "out_of_limits", str(self._limit_error(k, q[k]))
         sol = Solution(self.pose_of(q), q, q[self.model.prismatic_q], status, it, res, jac, msg)
         if check and status != "converged":
             raise {"singular": SingularityError, "out_of_limits": WorkspaceError}.get(status, ConvergenceError)(
