@@ -16,13 +16,14 @@ import numpy as np
 import pinocchio as pin
 
 from hexapod_model import Hexapod
-from hexapod_model.bench import BENCH_TOL, trajectory_readings
+from hexapod_model.studies.bench import BENCH_TOL, trajectory_readings
 
 
-def baseline_forward(hexa: Hexapod, lengths: np.ndarray, q0: np.ndarray, tol: float = BENCH_TOL,
-                     max_iter: int = 20) -> tuple[np.ndarray, int]:
+def baseline_forward(
+    hexa: Hexapod, lengths: np.ndarray, q0: np.ndarray, tol: float = BENCH_TOL, max_iter: int = 20
+) -> tuple[np.ndarray, int]:
     """Direct kinematics by plain Newton with Pinocchio's constraint models."""
-    clm = hexa.model
+    clm = hexa.closed_loop
     m, d = clm.model, clm.data
     free = np.setdiff1d(np.arange(clm.nv), clm.prismatic_v)
     q = q0.copy()
@@ -60,8 +61,10 @@ def main(argv=None) -> int:
             times.append(time.perf_counter() - t0)
         t = np.array(times) * 1e6
         err = np.abs(hexa.pose_of(q) - poses[-1]).max()
-        print(f"{name:14s} warm FK, trajectory A, {preset}: median {np.median(t):6.1f} us, p95 "
-              f"{np.percentile(t, 95):6.1f} us, p99 {np.percentile(t, 99):6.1f} us; final pose error {err:.1e}")
+        print(
+            f"{name:14s} warm FK, trajectory A, {preset}: median {np.median(t):6.1f} us, p95 "
+            f"{np.percentile(t, 95):6.1f} us, p99 {np.percentile(t, 99):6.1f} us; final pose error {err:.1e}"
+        )
     return 0
 
 

@@ -1,6 +1,6 @@
 """Print the solver timing figures for every preset (or the ones named).
 
-    python benchmarks/run_benchmarks.py [PRESET ...] [--samples N] [--json FILE]
+python benchmarks/run_benchmarks.py [PRESET ...] [--samples N] [--json FILE]
 """
 
 from __future__ import annotations
@@ -8,8 +8,10 @@ from __future__ import annotations
 import argparse
 import json
 
-from hexapod_model.bench import print_report, run_benchmarks
-from hexapod_model.presets import PRESETS
+from hexapod_model import Hexapod
+from hexapod_model.cli.core import format_bench
+from hexapod_model.description.presets import PRESETS
+from hexapod_model.studies.bench import run_benchmarks
 
 
 def main(argv=None) -> int:
@@ -20,8 +22,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     reports = []
     for name in args.presets:
-        reports.append(run_benchmarks(name, samples=args.samples))
-        print_report(reports[-1])
+        reports.append({"hexapod": name, **run_benchmarks(Hexapod.load(name), samples=args.samples)})
+        print(format_bench(reports[-1]))
         print()
     if args.json:
         with open(args.json, "w") as fh:

@@ -15,9 +15,9 @@ import time
 
 import numpy as np
 
-from hexapod_model.presets import get_preset
-from hexapod_model.standard import StandardModel
-from hexapod_model.trajectories import box_poses
+from hexapod_model.analysis.standard import StandardModel
+from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.description.presets import get_preset
 
 
 def best_rate(func, n: int, repeat: int) -> float:
@@ -46,8 +46,10 @@ def main(argv=None) -> int:
     print(f"standard model, preset {args.preset}, {args.poses} poses (seed 000 box)")
     print(f"  batch IK : {ik:12,.0f} poses/s   (target >= 1,000,000)")
     print(f"  batch FK : {fk:12,.0f} poses/s   (target >=   200,000; from home, tol 1e-12 m)")
-    print(f"  FK: {res.converged.mean():.1%} converged, mean {res.iterations.mean():.2f} / max {res.iterations.max()} "
-          f"iterations, max |pose - truth| {err:.2g}")
+    print(
+        f"  FK: {res.converged.mean():.1%} converged, mean {res.iterations.mean():.2f} / max {res.iterations.max()} "
+        f"iterations, max |pose - truth| {err:.2g}"
+    )
     return 0
 
 

@@ -8,19 +8,53 @@ Quick start::
     back = hexa.inverse(sol.pose)                   # back.lengths (m)
 """
 
-from .exceptions import (ConvergenceError, GeometryError, HexapodError, InputError, LimitError, RenderError,
-                         SingularityError, SolverError, UnreachableError, UrdfError, ViewError, WorkspaceError)
-from .geometry import HexapodGeometry, LegGeometry, geometry_from_dict, load_geometry
-from .hexapod import Hexapod
-from .presets import DEFAULT_PRESET, PRESETS, get_preset
-from .solver import STATUSES, Solution
-from .urdf import geometry_to_urdf, read_closures, write_urdf
-
-__version__ = "0.1.0"
+from ._version import __version__
+from .description.geometry import HexapodGeometry, LegGeometry, geometry_from_dict, load_geometry
+from .description.presets import DEFAULT_PRESET, PRESETS, get_preset
+from .description.urdf import geometry_to_urdf, read_closures, write_urdf
+from .exceptions import (
+    ConvergenceError,
+    GeometryError,
+    HexapodError,
+    InputError,
+    LimitError,
+    RenderError,
+    SingularityError,
+    SolverError,
+    UnreachableError,
+    UrdfError,
+    ViewError,
+    WorkspaceError,
+)
+from .kinematics.hexapod import Hexapod, load_hexapod
+from .kinematics.solver import STATUSES, Solution
 
 __all__ = [
-    "ConvergenceError", "GeometryError", "HexapodError", "InputError", "LimitError", "RenderError",
-    "SingularityError", "SolverError", "UnreachableError", "UrdfError", "ViewError", "WorkspaceError", "HexapodGeometry", "LegGeometry", "geometry_from_dict",
-    "load_geometry", "Hexapod", "DEFAULT_PRESET", "PRESETS", "get_preset", "STATUSES", "Solution",
-    "geometry_to_urdf", "read_closures", "write_urdf", "__version__",
+    "ConvergenceError",
+    "GeometryError",
+    "HexapodError",
+    "InputError",
+    "LimitError",
+    "RenderError",
+    "SingularityError",
+    "SolverError",
+    "UnreachableError",
+    "UrdfError",
+    "ViewError",
+    "WorkspaceError",
+    "HexapodGeometry",
+    "LegGeometry",
+    "geometry_from_dict",
+    "load_geometry",
+    "Hexapod",
+    "load_hexapod",
+    "DEFAULT_PRESET",
+    "PRESETS",
+    "get_preset",
+    "STATUSES",
+    "Solution",
+    "geometry_to_urdf",
+    "read_closures",
+    "write_urdf",
+    "__version__",
 ]

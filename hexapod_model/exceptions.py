@@ -17,7 +17,8 @@ class HexapodError(Exception):
 class _BadValue(HexapodError, ValueError):
     """A value that cannot be used, with where it was found and why.
 
-    Subclasses name the location attribute (``_where``) and the message format."""
+    Subclasses name the location attribute (``_where``) and the message format.
+    """
 
     _where = "where"
     _format = "{where}: {reason} ({value!r})"
@@ -80,8 +81,7 @@ class LimitError(HexapodError, ValueError):
         self.upper = float(upper)
         unit = "m" if what == "stroke" else "rad"
         super().__init__(
-            f"{what} limit: {joint} = {self.value:.9g} {unit} is outside "
-            f"[{self.lower:.9g}, {self.upper:.9g}] {unit}"
+            f"{what} limit: {joint} = {self.value:.9g} {unit} is outside [{self.lower:.9g}, {self.upper:.9g}] {unit}"
         )
 
 
@@ -132,6 +132,7 @@ class UnreachableError(HexapodError, ValueError):
 
         self.target = target
         self.error = float(error)
-        super().__init__(f"UR10 cannot reach the tool-changer pose at {np.round(target[:3, 3], 4).tolist()} m "
-                         f"(robot base frame): {reason}")
-
+        super().__init__(
+            f"UR10 cannot reach the tool-changer pose at {np.round(target[:3, 3], 4).tolist()} m "
+            f"(robot base frame): {reason}"
+        )

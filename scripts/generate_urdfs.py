@@ -11,8 +11,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from hexapod_model.presets import PRESETS, get_preset
-from hexapod_model.urdf import geometry_to_urdf
+from hexapod_model.description.presets import PRESETS, get_preset
+from hexapod_model.description.urdf import geometry_to_urdf
 
 URDF_DIR = Path(__file__).resolve().parent.parent / "urdf"
 

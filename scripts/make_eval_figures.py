@@ -23,15 +23,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import hexapod_model as hm  # noqa: E402
-from hexapod_model.angles import rpy_to_matrix  # noqa: E402
-from hexapod_model.evaluate import Settings, plot_sections, run_evaluation  # noqa: E402
-from hexapod_model.three_six import ThreeSixFK  # noqa: E402
-from hexapod_model.track import plot_run, simulate  # noqa: E402
-from hexapod_model.tracking import Tracker, pose_distance  # noqa: E402
+from hexapod_model.analysis.three_six import ThreeSixFK  # noqa: E402
+from hexapod_model.analysis.tracking import Tracker, pose_distance  # noqa: E402
+from hexapod_model.kinematics.rotations import rpy_to_matrix  # noqa: E402
+from hexapod_model.plots.evaluate import plot_sections  # noqa: E402
+from hexapod_model.plots.track import plot_run  # noqa: E402
+from hexapod_model.studies.evaluate import Settings, run_evaluation  # noqa: E402
+from hexapod_model.studies.track import simulate  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 IMG = ROOT / "docs" / "img"
-
 
 
 def _save(fig, title: str, name: str) -> None:
@@ -40,6 +41,7 @@ def _save(fig, title: str, name: str) -> None:
     fig.tight_layout()
     fig.savefig(IMG / name, dpi=80)
     plt.close(fig)
+
 
 def evaluate_figure(grid: int) -> None:
     spec = ROOT / "docs" / "geometries" / "seed002_model1.toml"
@@ -63,13 +65,18 @@ def three_six_division_figure() -> None:
         for c, name, style in zip(range(3), ("roll", "pitch", "yaw"), ("-", "--", ":")):
             ax.semilogy(ends, np.maximum(w[:, c], 1e-16), style, label=name)
         s = run.summary()
-        ax.set_title(f"predictor {predictor}: {s['branch_jumps']} branch jump(s), {s['flagged']} samples flagged",
-                     fontsize=9)
+        ax.set_title(
+            f"predictor {predictor}: {s['branch_jumps']} branch jump(s), {s['flagged']} samples flagged", fontsize=9
+        )
         ax.set_ylabel("abs. error (deg)")
         ax.legend(loc="lower right", fontsize=7, ncol=3)
         ax.grid(True, alpha=0.3)
     axes[1].set_xlabel("time (s)")
-    _save(fig, "3-6 preset, trajectory B at 1 kHz: worst angle error per 100 ms (seed 002 Figs. 9-10)", "track_B_three_six.png")
+    _save(
+        fig,
+        "3-6 preset, trajectory B at 1 kHz: worst angle error per 100 ms (seed 002 Figs. 9-10)",
+        "track_B_three_six.png",
+    )
 
 
 def singular_passage_figure() -> None:
@@ -114,14 +121,18 @@ def three_six_figure() -> None:
     for s in sols:
         chosen = np.allclose(s.pose, best.pose)
         A = s.points
-        style = dict(color="tab:blue" if chosen else "tab:gray", lw=2.0 if chosen else 0.8,
-                     alpha=1.0 if chosen else 0.6)
+        style = dict(
+            color="tab:blue" if chosen else "tab:gray", lw=2.0 if chosen else 0.8, alpha=1.0 if chosen else 0.6
+        )
         ax.plot(*np.vstack([A, A[:1]]).T, **style)
         for k in range(3):
             for j in (2 * k, 2 * k + 1):
                 ax.plot(*np.vstack([b[j], A[k]]).T, **style)
-    ax.set_title(f"3-6 sensor: {len(sols)} assemblies above the base for one set of readings\n"
-                 f"(blue: nearest home = the Newton solution; mirrors below the base not drawn)", fontsize=8)
+    ax.set_title(
+        f"3-6 sensor: {len(sols)} assemblies above the base for one set of readings\n"
+        f"(blue: nearest home = the Newton solution; mirrors below the base not drawn)",
+        fontsize=8,
+    )
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_zlabel("z (m)")
@@ -142,8 +153,13 @@ def main() -> None:
     three_six_division_figure()
     singular_passage_figure()
     three_six_figure()
-    for name in ("evaluate_seed002_model1", "track_B_reference", "track_B_three_six", "track_singular_passage",
-                 "three_six_assemblies"):
+    for name in (
+        "evaluate_seed002_model1",
+        "track_B_reference",
+        "track_B_three_six",
+        "track_singular_passage",
+        "three_six_assemblies",
+    ):
         p = IMG / f"{name}.png"
         print(f"{p}: {p.stat().st_size // 1024} kB")
 

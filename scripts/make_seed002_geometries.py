@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hexapod_model.geometry import HexapodGeometry, LegGeometry
-from hexapod_model.hexapod import Hexapod
+from hexapod_model.description.geometry import HexapodGeometry, LegGeometry
+from hexapod_model.kinematics.hexapod import Hexapod
 
 UNIT = 0.01  # metres per paper unit
 
@@ -34,19 +34,31 @@ def model1() -> HexapodGeometry:
     lmin, lmax, r1, r2 = 45.0, 85.0, 50.0, 25.0
     l0 = (lmin + lmax) / 2
     horiz = math.dist(_circle(r1, 0.0), _circle(r2, 60.0)) / UNIT
-    h = math.sqrt(l0 ** 2 - horiz ** 2)
-    legs = [LegGeometry(base_anchor=_circle(r1, 120.0 * k), platform_anchor=_circle(r2, 120.0 * k + s * 60.0),
-                        stroke=((lmin - l0) * UNIT, (lmax - l0) * UNIT))
-            for k in range(3) for s in (-1, 1)]
-    return HexapodGeometry(name="seed002_model1", joint_type="spherical", legs=tuple(legs), home_height=h * UNIT,
-                           cardan_limit=math.radians(45.0),
-                           description="seed 002 Table I model 1: 3-3 Stewart platform, struts 45-85 cm, r1 50 cm, r2 25 cm")
+    h = math.sqrt(l0**2 - horiz**2)
+    legs = [
+        LegGeometry(
+            base_anchor=_circle(r1, 120.0 * k),
+            platform_anchor=_circle(r2, 120.0 * k + s * 60.0),
+            stroke=((lmin - l0) * UNIT, (lmax - l0) * UNIT),
+        )
+        for k in range(3)
+        for s in (-1, 1)
+    ]
+    return HexapodGeometry(
+        name="seed002_model1",
+        joint_type="spherical",
+        legs=tuple(legs),
+        home_height=h * UNIT,
+        cardan_limit=math.radians(45.0),
+        description="seed 002 Table I model 1: 3-3 Stewart platform, struts 45-85 cm, r1 50 cm, r2 25 cm",
+    )
 
 
 def model2() -> HexapodGeometry:
     """Table I, model 2: fixed struts l = 70 on guideways from r1 = 75 (floor) up to r2 = 10 at
     height h = 20 (r1, r2 = the paper's r11, r12), pairs d = 3.5 apart; platform joints on
-    r_b2 = 30, beta = 0, phi_max = 45 deg."""
+    r_b2 = 30, beta = 0, phi_max = 45 deg.
+    """
     l, r_out, r_in, h, d, r2 = 70.0, 75.0, 10.0, 20.0, 3.5, 30.0
     rail_len = math.hypot(r_out - r_in, h)
     legs, heights = [], []
@@ -59,14 +71,24 @@ def model2() -> HexapodGeometry:
             mid = radial * (r_out + r_in) / 2 + s * d / 2 * tangent + np.array([0.0, 0.0, h / 2])
             top = np.array(_circle(r2, 120.0 * k + s * 60.0)) / UNIT
             horiz = float(np.linalg.norm(top[:2] - mid[:2]))
-            heights.append(mid[2] + math.sqrt(l ** 2 - horiz ** 2))
-            legs.append(dict(base_anchor=tuple(mid * UNIT), platform_anchor=tuple(top * UNIT),
-                             stroke=(-rail_len / 2 * UNIT * 0.999, rail_len / 2 * UNIT * 0.999), guideway=tuple(rail)))
+            heights.append(mid[2] + math.sqrt(l**2 - horiz**2))
+            legs.append(
+                dict(
+                    base_anchor=tuple(mid * UNIT),
+                    platform_anchor=tuple(top * UNIT),
+                    stroke=(-rail_len / 2 * UNIT * 0.999, rail_len / 2 * UNIT * 0.999),
+                    guideway=tuple(rail),
+                )
+            )
     assert max(heights) - min(heights) < 1e-9, heights
-    return HexapodGeometry(name="seed002_model2", joint_type="guideway",
-                           legs=tuple(LegGeometry(**leg) for leg in legs), home_height=heights[0] * UNIT,
-                           cardan_limit=math.radians(45.0),
-                           description="seed 002 Table I model 2: 70 cm struts on guideways r 75->10 cm, h 20 cm, platform r 30 cm")
+    return HexapodGeometry(
+        name="seed002_model2",
+        joint_type="guideway",
+        legs=tuple(LegGeometry(**leg) for leg in legs),
+        home_height=heights[0] * UNIT,
+        cardan_limit=math.radians(45.0),
+        description="seed 002 Table I model 2: 70 cm struts on guideways r 75->10 cm, h 20 cm, platform r 30 cm",
+    )
 
 
 def to_toml(g: HexapodGeometry, header: str) -> str:
@@ -77,11 +99,22 @@ def to_toml(g: HexapodGeometry, header: str) -> str:
         return "[" + ", ".join(num(x) for x in v) + "]"
 
     lines = [f"# {line}" if line else "#" for line in header.strip().splitlines()]
-    lines += ["", f'name = "{g.name}"', f'joint_type = "{g.joint_type}"', f'description = "{g.description}"',
-              f"home_height = {num(g.home_height)}", f"cardan_limit_deg = {num(math.degrees(g.cardan_limit))}"]
+    lines += [
+        "",
+        f'name = "{g.name}"',
+        f'joint_type = "{g.joint_type}"',
+        f'description = "{g.description}"',
+        f"home_height = {num(g.home_height)}",
+        f"cardan_limit_deg = {num(math.degrees(g.cardan_limit))}",
+    ]
     for leg in g.legs:
-        lines += ["", "[[legs]]", f"base_anchor = {vec(leg.base_anchor)}", f"platform_anchor = {vec(leg.platform_anchor)}",
-                  f"stroke = {vec(leg.stroke)}"]
+        lines += [
+            "",
+            "[[legs]]",
+            f"base_anchor = {vec(leg.base_anchor)}",
+            f"platform_anchor = {vec(leg.platform_anchor)}",
+            f"stroke = {vec(leg.stroke)}",
+        ]
         if leg.guideway is not None:
             lines.append(f"guideway = {vec(leg.guideway)}")
     return "\n".join(lines) + "\n"
@@ -93,8 +126,10 @@ def main(outdir: str = "docs/geometries") -> None:
     for factory in (model1, model2):
         g = factory()
         Hexapod.from_geometry(g)  # must load and assemble
-        header = (f"Generated by scripts/make_seed002_geometries.py. Units: metres (1 paper unit = 1 cm).\n"
-                  f"{factory.__doc__.strip()}\nSee docs/evaluate.md for the reading of the paper.")
+        header = (
+            f"Generated by scripts/make_seed002_geometries.py. Units: metres (1 paper unit = 1 cm).\n"
+            f"{factory.__doc__.strip()}\nSee docs/evaluate.md for the reading of the paper."
+        )
         path = out / f"{g.name}.toml"
         path.write_text(to_toml(g, header))
         print(f"wrote {path}")

@@ -13,9 +13,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from hexapod_model.cli import main as hexapod
-from hexapod_model.hexapod import Hexapod
-from hexapod_model.study import save_measured, simulate
+from hexapod_model.cli.main import main as hexapod
+from hexapod_model.kinematics.hexapod import Hexapod
+from hexapod_model.studies.reproduce import save_measured, simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -26,12 +26,12 @@ def main(argv=None) -> int:
     ap.add_argument("--img", type=Path, default=ROOT / "docs" / "img", help="figure directory")
     ap.add_argument("--examples", type=Path, default=ROOT / "docs" / "examples", help="measured.csv directory")
     args = ap.parse_args(argv)
-    data = simulate(Hexapod.from_preset("reference"), 40, seed=7, encoder_noise=10e-6, reference_noise=0.3e-3,
-                    show_progress=False)
+    data = simulate(Hexapod.from_preset("reference"), 40, seed=7, encoder_noise=10e-6, reference_noise=0.3e-3)
     args.examples.mkdir(parents=True, exist_ok=True)
     print("wrote", save_measured(args.examples / "measured.csv", data))
-    return hexapod(["reproduce", "--preset", "reference", "--poses", str(args.poses), "--seed", "0",
-                    "--out", str(args.img)])
+    return hexapod(
+        ["reproduce", "--preset", "reference", "--poses", str(args.poses), "--seed", "0", "--out", str(args.img)]
+    )
 
 
 if __name__ == "__main__":

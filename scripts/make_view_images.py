@@ -13,9 +13,9 @@ import tempfile
 from pathlib import Path
 
 from hexapod_model import Hexapod
-from hexapod_model.meshcat_scene import HexapodScene, solve_view_configuration, start_visualizer, stop_visualizer
-from hexapod_model.render import render_pngs, write_html
-from hexapod_model.view_cli import add_cell
+from hexapod_model.viz.meshcat_scene import HexapodScene, solve_view_configuration, start_visualizer, stop_visualizer
+from hexapod_model.viz.render import render_pngs, write_html
+from hexapod_model.viz.robot_cell import add_cell
 
 ROOT = Path(__file__).resolve().parent.parent
 POSE = (0.03, -0.02, 0.41, 12.0, -8.0, 20.0)  # x, y, z (m), roll, pitch, yaw (deg)

@@ -11,7 +11,7 @@ import hexapod_model as hm
 PRESET_NAMES = list(hm.PRESETS)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def hexapod(name: str) -> hm.Hexapod:
     """Cached Hexapod of preset ``name`` (solver buffers are reused across tests)."""
     return hm.Hexapod.from_preset(name)

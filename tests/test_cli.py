@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.cli import main
-from hexapod_model.trajectories import box_poses
+from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.cli.main import main
+from hexapod_model.kinematics.rotations import rpy_to_matrix
 
 from .conftest import PRESET_NAMES, hexapod
 
@@ -56,11 +57,25 @@ def test_fk_ik_files_round_trip(name, tmp_path):
     hm.write_urdf(hm.get_preset(name), urdf)
     assert main(["fk", str(urdf), str(inp), "-o", str(tmp_path / "poses.csv")]) == 0
     rows = read_rows(tmp_path / "poses.csv")
-    assert list(rows[0]) == ["x", "y", "z", "qx", "qy", "qz", "qw", "roll", "pitch", "yaw", "status", "iterations", "residual"]
+    assert list(rows[0]) == [
+        "x",
+        "y",
+        "z",
+        "qx",
+        "qy",
+        "qz",
+        "qw",
+        "roll",
+        "pitch",
+        "yaw",
+        "status",
+        "iterations",
+        "residual",
+    ]
     xyz = np.array([[float(r[c]) for c in "xyz"] for r in rows])
     np.testing.assert_allclose(xyz, poses[:, :3, 3], atol=1e-9)
     rpy = np.radians([[float(r[c]) for c in ("roll", "pitch", "yaw")] for r in rows])
-    np.testing.assert_allclose(hm.angles.rpy_to_matrix(*rpy.T), poses[:, :3, :3], atol=1e-9)
+    np.testing.assert_allclose(rpy_to_matrix(*rpy.T), poses[:, :3, :3], atol=1e-9)
     assert {r["status"] for r in rows} == {"ok"}
     # ik back from fk's own output, with the preset name in place of the file
     assert main(["ik", name, str(tmp_path / "poses.csv"), "-o", str(tmp_path / "back.csv")]) == 0
@@ -71,8 +86,15 @@ def test_fk_ik_files_round_trip(name, tmp_path):
 def test_fk_bad_rows_are_reported_and_the_rest_solved(tmp_path, capsys):
     hexa = hexapod("reference")
     good = [hexa.inverse(T).lengths for T in box_poses(hexa.home_pose, 3, seed=4)]
-    lines = ["l1,l2,l3,l4,l5,l6", ",".join(map(str, good[0])), "0.01,nan,0,0,0,0",
-             ",".join(map(str, good[1])), "0.9,0,0,0,0,0", "0.01,0.01,,0,0,0", ",".join(map(str, good[2]))]
+    lines = [
+        "l1,l2,l3,l4,l5,l6",
+        ",".join(map(str, good[0])),
+        "0.01,nan,0,0,0,0",
+        ",".join(map(str, good[1])),
+        "0.9,0,0,0,0,0",
+        "0.01,0.01,,0,0,0",
+        ",".join(map(str, good[2])),
+    ]
     (tmp_path / "in.csv").write_text("\n".join(lines) + "\n")
     code = main(["fk", "reference", str(tmp_path / "in.csv"), "-o", str(tmp_path / "out.csv")])
     err = capsys.readouterr().err

@@ -10,11 +10,11 @@ import pinocchio as pin
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.angles import rpy_to_matrix
-from hexapod_model.cli import main
-from hexapod_model.evaluate import Settings, load_spec, run_evaluation
-from hexapod_model.jacobian import evaluate_jacobian, kinematic_evaluation, leg_jacobian, textbook_jacobian
-from hexapod_model.workspace import compute_slice, cone_rotations
+from hexapod_model.analysis.jacobian import evaluate_jacobian, kinematic_evaluation, leg_jacobian, textbook_jacobian
+from hexapod_model.analysis.workspace import compute_slice, cone_rotations
+from hexapod_model.cli.main import main
+from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.studies.evaluate import Settings, run_evaluation
 
 ROOT = Path(__file__).resolve().parents[1]
 MODEL1 = ROOT / "docs" / "geometries" / "seed002_model1.toml"
@@ -58,7 +58,10 @@ def test_twist_convention_is_base_frame_velocity_of_platform_origin(case):
     readings change by J's columns 0 and 5."""
     hexa, sol = case
     J, eps = leg_jacobian(hexa, sol.q), 1e-6
-    for col, make in ((0, lambda e: (np.array([e, 0, 0]), np.eye(3))), (5, lambda e: (np.zeros(3), rpy_to_matrix(0, 0, e)))):
+    for col, make in (
+        (0, lambda e: (np.array([e, 0, 0]), np.eye(3))),
+        (5, lambda e: (np.zeros(3), rpy_to_matrix(0, 0, e))),
+    ):
         dl = []
         for s in (1.0, -1.0):
             d, Rz = make(s * eps)
@@ -121,7 +124,7 @@ def test_cone_rotations_tilt_the_tool_axis_by_the_cone_angle():
 
 
 def test_slice_contains_home_and_excludes_far_points():
-    hexa = load_spec(str(MODEL1))
+    hexa = hm.Hexapod.load(str(MODEL1))
     home = hexa.home_pose[:3, 3]
     xs = home[0] + np.array([-2.0, 0.0, 2.0])
     r = compute_slice(hexa, 0, home[2], xs, np.array([home[1]]), cone_rotations(10, 4), 0.25)
@@ -155,7 +158,20 @@ def test_model1_averages_near_paper_table2():
 
 def test_evaluate_command_writes_figure_and_resumes(tmp_path, capsys):
     out, js = tmp_path / "ev", tmp_path / "ev.json"
-    argv = ["evaluate", "3-6", "--grid", "5", "--cone-samples", "3", "--workers", "2", "--out", str(out), "--json", str(js)]
+    argv = [
+        "evaluate",
+        "3-6",
+        "--grid",
+        "5",
+        "--cone-samples",
+        "3",
+        "--workers",
+        "2",
+        "--out",
+        str(out),
+        "--json",
+        str(js),
+    ]
     assert main(argv) == 0
     first = json.loads(js.read_text())
     assert (out / "evaluate_sections.png").stat().st_size > 1000
@@ -164,16 +180,16 @@ def test_evaluate_command_writes_figure_and_resumes(tmp_path, capsys):
     second = json.loads(js.read_text())
     assert second["resumed_slices"] == second["grid"]["nz"]
     assert second["points_inside"] == first["points_inside"]
-    assert "seed 002" in capsys.readouterr().out
+    assert "paper" in capsys.readouterr().out
 
 
 def test_urdf_without_geometry_gets_its_sizes_from_the_model(tmp_path):
-    from hexapod_model.evaluate import platform_radius
-    from hexapod_model.tracking import characteristic_length
+    from hexapod_model.analysis.tracking import characteristic_length
+    from hexapod_model.studies.evaluate import platform_radius
 
     path = tmp_path / "ref.urdf"
     path.write_text(hm.geometry_to_urdf(hm.get_preset("reference")))
-    bare, preset = load_spec(str(path)), hm.Hexapod.from_preset("reference")
+    bare, preset = hm.Hexapod.load(str(path)), hm.Hexapod.from_preset("reference")
     assert bare.geometry is None
     assert platform_radius(bare) == pytest.approx(platform_radius(preset), rel=0.02)
     assert characteristic_length(bare) == pytest.approx(characteristic_length(preset), rel=0.02)

@@ -35,7 +35,7 @@ def test_main_job_of_the_setup_command(tmp_path):
     assert args[0] == "hexapod"
     args = [str(ROOT / a) if a.startswith("docs/") else a for a in args]
     args[args.index("-o") + 1] = str(tmp_path / "poses.csv")
-    out = subprocess.run([sys.executable, "-m", "hexapod_model.cli", *args[1:]], capture_output=True, text=True)
+    out = subprocess.run([sys.executable, "-m", "hexapod_model", *args[1:]], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     rows = (tmp_path / "poses.csv").read_text().strip().splitlines()
     assert len(rows) == 9 and all(r.split(",")[10] == "ok" for r in rows[1:])
@@ -53,14 +53,18 @@ def test_python_block_runs(monkeypatch):
 
 
 def test_cli_block_commands_run(tmp_path, monkeypatch):
-    from hexapod_model.cli import main
+    from hexapod_model.cli.main import main
 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "lengths.csv").write_text((ROOT / "docs/examples/lengths.csv").read_text())
     (tmp_path / "my_hexapod.toml").write_text(
-        'name = "mine"\njoint_type = "spherical"\nhome_height = 0.4\n' + "".join(
+        'name = "mine"\njoint_type = "spherical"\nhome_height = 0.4\n'
+        + "".join(
             f"[[legs]]\nbase_anchor = {list(leg.base_anchor)}\nplatform_anchor = {list(leg.platform_anchor)}\n"
-            f"stroke = [-0.1, 0.1]\n" for leg in hm.get_preset("spherical").legs))
+            f"stroke = [-0.1, 0.1]\n"
+            for leg in hm.get_preset("spherical").legs
+        )
+    )
     block = next(b for b in code_blocks("text") if b.startswith("hexapod urdf"))
     for line in block.strip().splitlines():
         cmd = shlex.split(line.split("#")[0])
@@ -72,7 +76,7 @@ def test_cli_block_commands_run(tmp_path, monkeypatch):
 
 def test_study_and_evaluation_commands_run(tmp_path, monkeypatch):
     """Every other `hexapod ...` line of the README runs, with smaller sizes where it is slow."""
-    from hexapod_model.cli import main
+    from hexapod_model.cli.main import main
 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "docs").symlink_to(ROOT / "docs")

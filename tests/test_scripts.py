@@ -16,9 +16,21 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_benchmark_script_runs(tmp_path):
-    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "run_benchmarks.py"), "reference", "3-6",
-                          "--samples", "10", "--json", str(tmp_path / "b.json")],
-                         capture_output=True, text=True, timeout=300)
+    out = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "benchmarks" / "run_benchmarks.py"),
+            "reference",
+            "3-6",
+            "--samples",
+            "10",
+            "--json",
+            str(tmp_path / "b.json"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert out.returncode == 0, out.stderr
     assert out.stdout.count("warm_fk") == 2 and "p99" in out.stdout
     assert (tmp_path / "b.json").stat().st_size > 100
@@ -30,22 +42,34 @@ def test_geometry_doc_example_loads():
     head, leg = block.split("[[legs]]")
     ref = hm.get_preset("reference").legs
     assert "[0.2445, -0.0520, 0.0]" in leg  # the example is reference leg 1
-    legs = "".join(("[[legs]]" + leg).replace("[0.2445, -0.0520, 0.0]", str(list(lg.base_anchor)))
-                   .replace("[0.1004, -0.1115, 0.0]", str(list(lg.platform_anchor))) for lg in ref)
+    legs = "".join(
+        ("[[legs]]" + leg)
+        .replace("[0.2445, -0.0520, 0.0]", str(list(lg.base_anchor)))
+        .replace("[0.1004, -0.1115, 0.0]", str(list(lg.platform_anchor)))
+        for lg in ref
+    )
     g = hm.geometry_from_dict(tomllib.loads(head + legs))
     assert g.name == "my_hexapod" and hm.Hexapod.from_geometry(g).forward([0.0] * 6).converged
 
 
 def test_view_images_script_runs(tmp_path):
-    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_view_images.py"), "--out", str(tmp_path)],
-                         capture_output=True, text=True, timeout=300)
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "make_view_images.py"), "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert out.returncode == 0, out.stderr
     assert (tmp_path / "reference.png").stat().st_size > 10_000 and (tmp_path / "cell.png").stat().st_size > 10_000
 
 
 def test_seed002_geometry_files_match_their_generator(tmp_path):
-    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_seed002_geometries.py"), str(tmp_path)],
-                         capture_output=True, text=True, timeout=300)
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "make_seed002_geometries.py"), str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert out.returncode == 0, out.stderr
     for made in tmp_path.glob("*.toml"):
         assert made.read_text() == (ROOT / "docs" / "geometries" / made.name).read_text(), made.name
@@ -53,29 +77,51 @@ def test_seed002_geometry_files_match_their_generator(tmp_path):
 
 
 def test_study_figures_script_runs_and_measured_example_matches(tmp_path):
-    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_study_figures.py"), "--poses", "40",
-                          "--img", str(tmp_path / "img"), "--examples", str(tmp_path)],
-                         capture_output=True, text=True, timeout=300)
+    out = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "scripts" / "make_study_figures.py"),
+            "--poses",
+            "40",
+            "--img",
+            str(tmp_path / "img"),
+            "--examples",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert out.returncode == 0, out.stderr
     # same rows and columns; values equal to 1e-9 (they are solver outputs printed to 12 digits,
     # whose last digit may move when the solver's iteration path changes)
-    made, kept = ([ln.split(",") for ln in (d / "measured.csv").read_text().splitlines()]
-                  for d in (tmp_path, ROOT / "docs" / "examples"))
+    made, kept = (
+        [ln.split(",") for ln in (d / "measured.csv").read_text().splitlines()]
+        for d in (tmp_path, ROOT / "docs" / "examples")
+    )
     assert made[0] == kept[0] and len(made) == len(kept)
     np.testing.assert_allclose(np.array(made[1:], float), np.array(kept[1:], float), rtol=0, atol=1e-9)
     assert len(list((tmp_path / "img").glob("reproduce_*.png"))) >= 4
 
 
 def test_eval_figures_script_runs(tmp_path):
-    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_eval_figures.py"), "--grid", "6",
-                          "--out", str(tmp_path)], capture_output=True, text=True, timeout=600)
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "make_eval_figures.py"), "--grid", "6", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert out.returncode == 0, out.stderr
     assert len(list(tmp_path.glob("*.png"))) == 5
 
 
 def test_baseline_benchmark_runs():
-    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "baseline_newton.py"), "spherical"],
-                         capture_output=True, text=True, timeout=300)
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "baseline_newton.py"), "spherical"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert out.returncode == 0, out.stderr
     lines = out.stdout.strip().splitlines()
     assert [ln.split()[0] for ln in lines] == ["baseline", "hexapod_model"]

@@ -9,28 +9,28 @@ import pinocchio as pin
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.angles import rotation_angle
-from hexapod_model.solver import NewtonSolver
-from hexapod_model.trajectories import box_poses, trajectory_poses
+from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
+from hexapod_model.kinematics.rotations import rotation_angle
+from hexapod_model.kinematics.solver import NewtonSolver
 
 from .conftest import PRESET_NAMES, hexapod
 
 
 def random_configuration(hexa: hm.Hexapod, rng) -> np.ndarray:
     """A random, generally *not* closed configuration near home."""
-    m = hexa.model
+    m = hexa.closed_loop
     q = hexa.q_home
     legs = np.array([m.model.joints[j].idx_q for leg in m.legs for j in leg.joints])
     q[legs] = rng.uniform(-0.4, 0.4, legs.size)
     i = m.platform_q
-    q[i: i + 7] = pin.SE3ToXYZQUAT(pin.exp6(rng.uniform(-0.2, 0.2, 6)))
+    q[i : i + 7] = pin.SE3ToXYZQUAT(pin.exp6(rng.uniform(-0.2, 0.2, 6)))
     return q
 
 
 @pytest.mark.parametrize("name", PRESET_NAMES)
 def test_jacobian_matches_finite_differences(name):
     hexa = hexapod(name)
-    solver = NewtonSolver(hexa.model, ())  # every joint free: the full closure Jacobian
+    solver = NewtonSolver(hexa.closed_loop, ())  # every joint free: the full closure Jacobian
     rng = np.random.default_rng(1)
     h = 1e-6
     for _ in range(5):
@@ -38,11 +38,11 @@ def test_jacobian_matches_finite_differences(name):
         r0, G = solver.evaluate(q)
         assert np.linalg.norm(r0) > 1e-3  # really off the constraint manifold
         fd = np.empty_like(G)
-        for k in range(hexa.model.nv):
-            dv = np.zeros(hexa.model.nv)
+        for k in range(hexa.closed_loop.nv):
+            dv = np.zeros(hexa.closed_loop.nv)
             dv[k] = h
-            rp, _ = solver.evaluate(pin.integrate(hexa.model.model, q, dv))
-            rm, _ = solver.evaluate(pin.integrate(hexa.model.model, q, -dv))
+            rp, _ = solver.evaluate(pin.integrate(hexa.model, q, dv))
+            rm, _ = solver.evaluate(pin.integrate(hexa.model, q, -dv))
             fd[:, k] = (rp - rm) / (2 * h)
         np.testing.assert_allclose(G, fd, atol=1e-7, rtol=0)
 
@@ -89,7 +89,7 @@ def test_hybrid_solve_holds_named_joints():
     T = box_poses(hexa.home_pose, 1, seed=11)[0]
     truth = hexa.inverse(T)
     names = list(hexa.prismatic_names[:5]) + ["leg6_cardan_base_1"]
-    iq = [hexa.model.model.joints[hexa.model.model.getJointId(n)].idx_q for n in names]
+    iq = [hexa.model.joints[hexa.model.getJointId(n)].idx_q for n in names]
     sol = hexa.solve(dict(zip(names, truth.q[iq])), guess=hexa.q_home)
     np.testing.assert_allclose(sol.pose, T, atol=1e-9)
     np.testing.assert_allclose(sol.lengths, truth.lengths, atol=1e-9)
@@ -102,13 +102,16 @@ def test_hybrid_solve_holds_named_joints():
         hexa.solve({"leg1_cardan_base_1": 3.0})
 
 
-@pytest.mark.parametrize("bad, error, pattern", [
-    ([0.0] * 5, hm.InputError, "expected 6 values, got 5"),
-    ([0.0, np.nan, 0, 0, 0, 0], hm.InputError, "finite"),
-    ([0.0, 0, np.inf, 0, 0, 0], hm.InputError, "finite"),
-    ([0.0, 0, 0, 0.5, 0, 0], hm.LimitError, r"stroke limit: leg4_prismatic = 0.5 m is outside \[-0.16, 0.2\] m"),
-    ("abc", hm.InputError, "expected 6"),
-])
+@pytest.mark.parametrize(
+    "bad, error, pattern",
+    [
+        ([0.0] * 5, hm.InputError, "expected 6 values, got 5"),
+        ([0.0, np.nan, 0, 0, 0, 0], hm.InputError, "finite"),
+        ([0.0, 0, np.inf, 0, 0, 0], hm.InputError, "finite"),
+        ([0.0, 0, 0, 0.5, 0, 0], hm.LimitError, r"stroke limit: leg4_prismatic = 0.5 m is outside \[-0.16, 0.2\] m"),
+        ("abc", hm.InputError, "expected 6"),
+    ],
+)
 def test_bad_readings_raise_clear_errors(bad, error, pattern):
     with pytest.raises(error, match=pattern):
         hexapod("reference").forward(bad)
@@ -150,9 +153,14 @@ def test_non_convergence_is_never_presented_as_converged():
 
 def test_singular_layout_is_reported():
     # all six legs vertical: the platform can rotate about z and slide sideways freely
-    legs = tuple(hm.LegGeometry(base_anchor=(0.2 * np.cos(a), 0.2 * np.sin(a), 0.0),
-                                platform_anchor=(0.2 * np.cos(a), 0.2 * np.sin(a), 0.0), stroke=(-0.1, 0.1))
-                 for a in np.linspace(0, 2 * np.pi, 6, endpoint=False))
+    legs = tuple(
+        hm.LegGeometry(
+            base_anchor=(0.2 * np.cos(a), 0.2 * np.sin(a), 0.0),
+            platform_anchor=(0.2 * np.cos(a), 0.2 * np.sin(a), 0.0),
+            stroke=(-0.1, 0.1),
+        )
+        for a in np.linspace(0, 2 * np.pi, 6, endpoint=False)
+    )
     g = dataclasses.replace(hm.get_preset("spherical"), name="vertical", legs=legs)
     hexa = hm.Hexapod.from_geometry(g)
     with pytest.raises(hm.SingularityError, match="singular"):
@@ -175,7 +183,7 @@ def test_structured_steps_equal_the_dense_step(name):
     hexa = hexapod(name)
     rng = np.random.default_rng(4)
     for held, attr in ((hexa._held_forward, "held_pos"), (hexa._held_inverse, "block_cols")):
-        solver = NewtonSolver(hexa.model, held)
+        solver = NewtonSolver(hexa.closed_loop, held)
         assert getattr(solver, attr) is not None
         q = random_configuration(hexa, rng)
         r, G = solver.evaluate(q)

@@ -10,14 +10,14 @@ import pinocchio as pin
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.cli import main
+from hexapod_model.analysis.full_formulation import ForwardComparison, FullFormulation
+from hexapod_model.analysis.standard import StandardModel, skew_exp
+from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.cli.main import main
+from hexapod_model.description.model import ClosedLoopModel
+from hexapod_model.description.urdf import geometry_to_urdf
 from hexapod_model.exceptions import InputError
-from hexapod_model.full_formulation import ForwardComparison, FullFormulation
-from hexapod_model.model import ClosedLoopModel
-from hexapod_model.standard import StandardModel, skew_exp
-from hexapod_model.study import load_measured, pose_errors, simulate
-from hexapod_model.trajectories import box_poses
-from hexapod_model.urdf import geometry_to_urdf
+from hexapod_model.studies.reproduce import load_measured, pose_errors, simulate
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "measured.csv"
 REPORT_KEYS = {"translation_mean_mm", "translation_std_mm", "rotation_mean_deg", "rotation_std_deg"}
@@ -118,8 +118,8 @@ def test_full_and_reduced_formulations_give_the_same_pose(reference):
 
 
 def test_full_jacobian_matches_finite_differences(reference):
-    ff = FullFormulation(reference.model, tuple(leg.prismatic for leg in reference.model.legs))
-    m = reference.model.model
+    ff = FullFormulation(reference.closed_loop, tuple(leg.prismatic for leg in reference.closed_loop.legs))
+    m = reference.model
     rng = np.random.default_rng(0)
     dv = np.zeros(m.nv)
     dv[ff.free_v] = rng.normal(0, 0.05, ff.free_v.size)
@@ -145,7 +145,7 @@ def test_full_formulation_on_ball_joint_closures():
 
 def test_reference_noise_shows_in_the_cardan_errors(reference):
     sigma = 1e-3
-    data = simulate(reference, 80, seed=1, encoder_noise=0.0, reference_noise=sigma, show_progress=False)
+    data = simulate(reference, 80, seed=1, encoder_noise=0.0, reference_noise=sigma)
     est = np.array([reference.forward(l).pose for l in data.readings])
     dp, dth = pose_errors(data.reference, est)
     # mean norm of a 3-D Gaussian is 1.596 sigma
@@ -160,8 +160,9 @@ def _reproduce(tmp_path, *extra):
 
 
 def test_reproduce_small_run_writes_json_and_figures(tmp_path, capsys):
-    code, report = _reproduce(tmp_path, "--poses", "60", "--seed", "2", "--convergence-poses", "8",
-                              "--out", str(tmp_path / "fig"))
+    code, report = _reproduce(
+        tmp_path, "--poses", "60", "--seed", "2", "--convergence-poses", "8", "--out", str(tmp_path / "fig")
+    )
     assert code == 0
     assert set(report) == {"poses", "cardan", "spherical", "t_test"}
     assert report["poses"] == 60
@@ -173,8 +174,13 @@ def test_reproduce_small_run_writes_json_and_figures(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "0.6205" in text and "3.1684" in text  # the paper's column
     names = sorted(p.name for p in (tmp_path / "fig").glob("*.png"))
-    assert names == ["reproduce_conditioning.png", "reproduce_convergence.png", "reproduce_errors_cardan.png",
-                     "reproduce_errors_standard.png", "reproduce_histograms.png"]
+    assert names == [
+        "reproduce_conditioning.png",
+        "reproduce_convergence.png",
+        "reproduce_errors_cardan.png",
+        "reproduce_errors_standard.png",
+        "reproduce_histograms.png",
+    ]
     assert all((tmp_path / "fig" / n).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for n in names)
 
 
@@ -185,13 +191,20 @@ def test_reproduce_on_the_measured_example(tmp_path):
     assert set(report["cardan"]) == REPORT_KEYS
 
 
-@pytest.mark.parametrize("content, words", [
-    ("l1,l2,l3,l4,l5,l6,x,y,z\n0,0,0,0,0,0,0,0,0.4\n", ["missing columns", "qx"]),
-    ("l1,l2,l3,l4,l5,l6,x,y,z,qx,qy,qz,qw\n0,0,0,0,0,0,0,0,0.4,0,0,0,1\n0,0,zz,0,0,0,0,0,0.4,0,0,0,1\n",
-     ["line 3"]),
-    ("l1,l2,l3,l4,l5,l6,x,y,z,qx,qy,qz,qw\n0,0,0,0,0,0,0,0,0.4,0,0,0,1\n0,0,0,0,0,0,0,0,0.4,0,0,0,2\n",
-     ["unit quaternion"]),
-])
+@pytest.mark.parametrize(
+    "content, words",
+    [
+        ("l1,l2,l3,l4,l5,l6,x,y,z\n0,0,0,0,0,0,0,0,0.4\n", ["missing columns", "qx"]),
+        (
+            "l1,l2,l3,l4,l5,l6,x,y,z,qx,qy,qz,qw\n0,0,0,0,0,0,0,0,0.4,0,0,0,1\n0,0,zz,0,0,0,0,0,0.4,0,0,0,1\n",
+            ["line 3"],
+        ),
+        (
+            "l1,l2,l3,l4,l5,l6,x,y,z,qx,qy,qz,qw\n0,0,0,0,0,0,0,0,0.4,0,0,0,1\n0,0,0,0,0,0,0,0,0.4,0,0,0,2\n",
+            ["unit quaternion"],
+        ),
+    ],
+)
 def test_reproduce_rejects_bad_data_files(tmp_path, capsys, content, words):
     bad = tmp_path / "bad.csv"
     bad.write_text(content)
@@ -223,7 +236,8 @@ def test_standard_model_benchmark_script_runs():
     import sys
 
     script = Path(__file__).resolve().parents[1] / "benchmarks" / "standard_model.py"
-    out = subprocess.run([sys.executable, str(script), "--poses", "2000", "--repeat", "1"],
-                         capture_output=True, text=True, timeout=300)
+    out = subprocess.run(
+        [sys.executable, str(script), "--poses", "2000", "--repeat", "1"], capture_output=True, text=True, timeout=300
+    )
     assert out.returncode == 0, out.stderr
     assert "batch IK" in out.stdout and "batch FK" in out.stdout and "100.0% converged" in out.stdout

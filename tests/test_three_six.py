@@ -6,10 +6,19 @@ import numpy as np
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.angles import (EULER_ORDERS, axis_rotation, euler_solutions, euler_to_matrix, matrix_to_euler,
-                                  matrix_to_rpy, matrix_to_ypr, rpy_to_matrix, ypr_to_matrix)
-from hexapod_model.three_six import ThreeSixFK
-from hexapod_model.trajectories import box_poses
+from hexapod_model.analysis.three_six import ThreeSixFK
+from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.kinematics.rotations import (
+    EULER_ORDERS,
+    axis_rotation,
+    euler_solutions,
+    euler_to_matrix,
+    matrix_to_euler,
+    matrix_to_rpy,
+    matrix_to_ypr,
+    rpy_to_matrix,
+    ypr_to_matrix,
+)
 
 
 @pytest.fixture(scope="module")
@@ -98,8 +107,11 @@ def test_euler_round_trip(order):
     a = rng.uniform(-np.pi, np.pi, (200, 3))
     a[:, 1] = rng.uniform(-np.pi / 2 + 1e-6, np.pi / 2 - 1e-6, 200)
     R = euler_to_matrix(order, a)
-    np.testing.assert_allclose(R, axis_rotation(order[0], a[:, 0]) @ axis_rotation(order[1], a[:, 1])
-                               @ axis_rotation(order[2], a[:, 2]), atol=1e-15)
+    np.testing.assert_allclose(
+        R,
+        axis_rotation(order[0], a[:, 0]) @ axis_rotation(order[1], a[:, 1]) @ axis_rotation(order[2], a[:, 2]),
+        atol=1e-15,
+    )
     np.testing.assert_allclose(matrix_to_euler(order, R), a, atol=1e-9)
     both = euler_solutions(order, R)
     for k in range(2):

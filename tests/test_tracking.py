@@ -9,10 +9,10 @@ import pinocchio as pin
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.angles import rpy_to_matrix
-from hexapod_model.cli import main
-from hexapod_model.track import run_table, simulate
-from hexapod_model.tracking import PREDICTORS, Tracker, pose_distance, predict
+from hexapod_model.analysis.tracking import PREDICTORS, Tracker, pose_distance, predict
+from hexapod_model.cli.main import main
+from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.studies.track import run_table, simulate
 
 
 @pytest.fixture(scope="module")
@@ -24,24 +24,24 @@ def reference():
 def test_predictors_are_exact_on_constant_twist_motion(reference, predictor):
     """P_k = q0 (+) k dv (a screw motion of the platform, linear leg joints): every linear
     extrapolation predicts the next sample exactly, and the quaternion stays unit."""
-    model = reference.model.model
+    model = reference.model
     rng = np.random.default_rng(3)
     dv = rng.normal(scale=0.01, size=model.nv)
     q0 = pin.integrate(model, reference.q_home, rng.normal(scale=0.05, size=model.nv))
     P = [pin.integrate(model, q0, k * dv) for k in range(4)]  # oldest first
     X = predict(model, [P[2], P[1], P[0]], predictor)
     assert np.abs(pin.difference(model, P[3], X)).max() < 1e-12
-    i = reference.model.platform_q
-    assert np.linalg.norm(X[i + 3: i + 7]) == pytest.approx(1.0, abs=1e-14)
+    i = reference.closed_loop.platform_q
+    assert np.linalg.norm(X[i + 3 : i + 7]) == pytest.approx(1.0, abs=1e-14)
 
 
 def test_predictors_differ_on_accelerated_motion_and_none_holds(reference):
-    model = reference.model.model
+    model = reference.model
     dv = np.zeros(model.nv)
-    dv[reference.model.platform_v] = 1e-3
+    dv[reference.closed_loop.platform_v] = 1e-3
     P = [pin.integrate(model, reference.q_home, (k * k) * dv) for k in range(3)]  # x = k^2 mm
     hist = [P[2], P[1], P[0]]
-    x = {p: predict(model, hist, p)[reference.model.platform_q] for p in PREDICTORS}
+    x = {p: predict(model, hist, p)[reference.closed_loop.platform_q] for p in PREDICTORS}
     assert x["none"] == pytest.approx(4e-3)
     assert x["eq22"] == pytest.approx(7e-3)  # 2*4 - 1
     assert x["eq23"] == pytest.approx(6e-3)  # 1.5*4 - 0.5*0
@@ -51,7 +51,7 @@ def test_predictors_differ_on_accelerated_motion_and_none_holds(reference):
 
 
 def test_short_history_falls_back(reference):
-    model = reference.model.model
+    model = reference.model
     q = reference.q_home
     np.testing.assert_array_equal(predict(model, [q], "eq24"), q)
 
@@ -126,8 +126,25 @@ def test_reading_outside_stroke_is_a_failed_sample_not_an_exception(reference):
 
 def test_track_command_writes_figure_and_summary(tmp_path, capsys):
     js = tmp_path / "t.json"
-    assert main(["track", "reference", "--trajectory", "B", "--speed", "8", "--predictor", "eq23",
-                 "--out", str(tmp_path), "--json", str(js)]) == 0
+    assert (
+        main(
+            [
+                "track",
+                "reference",
+                "--trajectory",
+                "B",
+                "--speed",
+                "8",
+                "--predictor",
+                "eq23",
+                "--out",
+                str(tmp_path),
+                "--json",
+                str(js),
+            ]
+        )
+        == 0
+    )
     s = json.loads(js.read_text())
     assert (tmp_path / "track_B_x8_eq23.png").stat().st_size > 1000
     assert s["samples"] == 501 and s["branch_jumps"] == 0

@@ -7,11 +7,19 @@ import shutil
 import numpy as np
 import pytest
 
-from hexapod_model import render, robot_cell
-from hexapod_model.cli import main
-from hexapod_model.trajectories import box_poses
-from hexapod_model.meshcat_scene import HexapodScene, ViewError, solve_view_configuration, start_visualizer, stop_visualizer
-from hexapod_model.view_cli import add_cell, pixels, play_frames
+from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.cli.main import main
+from hexapod_model.cli.view import play_frames
+from hexapod_model.viz import render, robot_cell
+from hexapod_model.viz.meshcat_scene import (
+    HexapodScene,
+    ViewError,
+    solve_view_configuration,
+    start_visualizer,
+    stop_visualizer,
+)
+from hexapod_model.viz.render import pixels
+from hexapod_model.viz.robot_cell import add_cell
 
 from .conftest import PRESET_NAMES, hexapod
 
@@ -124,8 +132,9 @@ def test_view_configuration_inputs():
 def test_play_csv_of_lengths_or_poses(tmp_path, capsys):
     hexa = hexapod("reference")
     sols = [hexa.inverse(T) for T in box_poses(hexa.home_pose, 4, seed=9)]
-    (tmp_path / "l.csv").write_text("l1,l2,l3,l4,l5,l6\n" + "\n".join(",".join(map(str, s.lengths)) for s in sols)
-                                    + "\n0,nan,0,0,0,0\n")
+    (tmp_path / "l.csv").write_text(
+        "l1,l2,l3,l4,l5,l6\n" + "\n".join(",".join(map(str, s.lengths)) for s in sols) + "\n0,nan,0,0,0,0\n"
+    )
     frames = play_frames(hexa, tmp_path / "l.csv")
     assert len(frames) == 4 and "row 5 skipped" in capsys.readouterr().err
     np.testing.assert_allclose(frames[2].pose, sols[2].pose, atol=1e-9)
@@ -138,10 +147,26 @@ def test_play_csv_of_lengths_or_poses(tmp_path, capsys):
 def test_cli_snapshot_and_view(tmp_path, capsys):
     assert main(["snapshot", "3-6", "--pose", "0.01", "0", "0.23", "5", "0", "0", "-o", str(tmp_path / "s.html")]) == 0
     assert (tmp_path / "s.html").read_text().count("handle_command_bytearray") >= 1
-    assert main(["snapshot", "reference", "-o", str(tmp_path / "s.html"), "--png", str(tmp_path / "s.png"),
-                 "--size", "640x480"]) == 2
+    assert (
+        main(
+            [
+                "snapshot",
+                "reference",
+                "-o",
+                str(tmp_path / "s.html"),
+                "--png",
+                str(tmp_path / "s.png"),
+                "--size",
+                "640x480",
+            ]
+        )
+        == 2
+    )
     assert "below the minimum" in capsys.readouterr().err
-    assert main(["snapshot", "reference", "--lengths", "0.5", "0", "0", "0", "0", "0", "-o", str(tmp_path / "x.html")]) == 2
+    assert (
+        main(["snapshot", "reference", "--lengths", "0.5", "0", "0", "0", "0", "0", "-o", str(tmp_path / "x.html")])
+        == 2
+    )
     assert "stroke limit" in capsys.readouterr().err
     (tmp_path / "p.csv").write_text("x,y,z,roll,pitch,yaw\n0,0,0.40,0,0,0\n0.01,0,0.41,3,0,0\n")
     assert main(["view", "reference", "--play", str(tmp_path / "p.csv"), "--rate", "1000", "--once"]) == 0

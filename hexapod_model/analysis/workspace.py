@@ -1,0 +1,118 @@
+"""Workspace for a cone of tool orientations and its kinematic figures (seed 002 §II-III).
+
+A platform position ``x`` (tool point = platform origin, seed 002's ``l_tool = 0``) belongs to
+the workspace when the inverse kinematics succeeds within the stroke and Cardan limits
+(``status == "converged"``) for EVERY orientation of a cone (seed 002 Fig. 4): the tool axis
+(platform z) upright and tilted by ``cone_deg`` towards ``cone_samples`` equally spaced
+azimuths, with no rotation about the tool axis. For ``spherical`` and ``guideway`` legs, whose
+platform ball joint has no limit in the model, the leg must also stay within ``cardan_limit``
+of its home direction as seen from the platform (the paper's joint cone ``phi_max``).
+
+At each workspace point the three figures of :mod:`hexapod_model.jacobian` (condition number,
+sigma_min, |det J|) are averaged over the orientations; their workspace averages are
+seed 002's Table II. Lengths are expressed in ``length_unit`` metres (see docs/evaluate.md).
+
+The grid is computed slice by slice (one z per task) so that the work spreads over processes
+and finished slices can be checkpointed (:func:`compute_slice` is the unit of work).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..analysis.jacobian import evaluate_jacobian, leg_jacobian
+from ..kinematics.hexapod import Hexapod
+
+
+def cone_rotations(cone_deg: float, samples: int) -> np.ndarray:
+    """(1 + samples, 3, 3) tool orientations: upright, then tilted by ``cone_deg`` about the
+    horizontal axes ``(-sin a, cos a, 0)`` for ``samples`` azimuths ``a`` (base frame).
+    """
+    out = [np.eye(3)]
+    th = np.radians(cone_deg)
+    if th > 0:
+        for a in np.linspace(0.0, 2 * np.pi, samples, endpoint=False):
+            k = np.array([-np.sin(a), np.cos(a), 0.0])
+            K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+            out.append(np.eye(3) + np.sin(th) * K + (1 - np.cos(th)) * K @ K)
+    return np.array(out)
+
+
+def platform_cone_ok(hexa: Hexapod, q: np.ndarray, pose: np.ndarray) -> bool:
+    """Leg directions seen from the platform within ``cardan_limit`` of their home direction
+    (only checked for ``spherical``/``guideway`` geometries; always True otherwise).
+    """
+    g = hexa.geometry
+    if g is None or g.joint_type == "cardan":
+        return True
+    b, p = g.base_points(), g.platform_points()
+    lengths = hexa.lengths_of(q)
+    if g.joint_type == "guideway":
+        b = b + lengths[:, None] * np.array([leg.guideway for leg in g.legs])
+    R, t = pose[:3, :3], pose[:3, 3]
+    d = (t + p @ R.T - b) @ R  # leg vectors in the platform frame
+    home = g.home_translation + p - g.base_points()
+    cosang = np.einsum("ij,ij->i", d, home) / (np.linalg.norm(d, axis=1) * np.linalg.norm(home, axis=1))
+    return bool(np.all(cosang >= np.cos(g.cardan_limit) - 1e-12))
+
+
+@dataclass(frozen=True)
+class SliceResult:
+    """One z-slice of the grid: arrays of shape (ny, nx); figures are orientation averages (NaN outside the workspace)."""
+
+    index: int
+    inside: np.ndarray
+    kappa: np.ndarray
+    sigma_min: np.ndarray
+    abs_det: np.ndarray
+
+
+def compute_slice(
+    hexa: Hexapod, index: int, z: float, xs: np.ndarray, ys: np.ndarray, rotations: np.ndarray, length_unit: float
+) -> SliceResult:
+    """Test every (x, y) of the slice at height ``z`` (m, base frame) for all ``rotations``."""
+    ny, nx = len(ys), len(xs)
+    inside = np.zeros((ny, nx), dtype=bool)
+    figs = np.full((3, ny, nx), np.nan)
+    guesses = [None] * len(rotations)
+    T = np.eye(4)
+    for iy, y in enumerate(ys):
+        for ix in range(nx) if iy % 2 == 0 else range(nx - 1, -1, -1):  # serpentine: warm starts stay near
+            T[:3, 3] = (xs[ix], y, z)
+            sols = []
+            for k, R in enumerate(rotations):
+                T[:3, :3] = R
+                sol = hexa.inverse(T, guess=guesses[k], check=False)
+                if sol.status != "converged" and guesses[k] is not None:
+                    sol = hexa.inverse(T, check=False)  # retry from home: the warm start may mislead
+                if sol.status == "converged":
+                    guesses[k] = sol
+                if sol.status != "converged" or not platform_cone_ok(hexa, sol.q, sol.pose):
+                    break
+                sols.append(sol)
+            if len(sols) != len(rotations):
+                continue
+            inside[iy, ix] = True
+            ev = [evaluate_jacobian(leg_jacobian(hexa, s.q), length_unit) for s in sols]
+            figs[:, iy, ix] = np.mean([[e.condition_number, e.sigma_min, e.abs_det] for e in ev], axis=0)
+    return SliceResult(index, inside, figs[0], figs[1], figs[2])
+
+
+def probe_extent(hexa: Hexapod, step: float, max_steps: int = 400) -> np.ndarray:
+    """(3, 2) box (m, base frame) around home reachable along +-x, +-y, +-z with the platform
+    upright, found by marching outward in ``step`` increments; used to size the grid.
+    """
+    home = hexa.home_pose
+    box = np.tile(home[:3, 3][:, None], (1, 2)).astype(float)
+    for axis in range(3):
+        for side, sign in ((0, -1.0), (1, 1.0)):
+            sol, T = None, home.copy()
+            for n in range(1, max_steps + 1):
+                T[axis, 3] = home[axis, 3] + sign * n * step
+                sol = hexa.inverse(T, guess=sol, check=False)
+                if sol.status != "converged":
+                    break
+                box[axis, side] = T[axis, 3]
+    return box

@@ -1,0 +1,47 @@
+"""What every sub-command shares: the HEXAPOD argument, progress bars, output files."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Iterable, Iterator
+from typing import TypeVar
+
+from ..description.presets import DEFAULT_PRESET
+from ..kinematics.hexapod import Hexapod, load_hexapod
+
+T = TypeVar("T")
+HEXAPOD_HELP = "preset name, URDF file or geometry file (.toml/.yaml/.json)"
+
+
+def add_hexapod_argument(p: argparse.ArgumentParser, optional: bool = False) -> None:
+    """The positional HEXAPOD argument (dest ``hexapod``) that every command takes."""
+    if optional:
+        p.add_argument(
+            "hexapod",
+            nargs="?",
+            default=DEFAULT_PRESET,
+            metavar="HEXAPOD",
+            help=f"{HEXAPOD_HELP} (default {DEFAULT_PRESET})",
+        )
+    else:
+        p.add_argument("hexapod", metavar="HEXAPOD", help=HEXAPOD_HELP)
+
+
+def hexapod_of(args: argparse.Namespace) -> Hexapod:
+    """The :class:`Hexapod` named by ``args.hexapod`` (preset, URDF or geometry file)."""
+    return load_hexapod(args.hexapod)
+
+
+def progress(iterable: Iterable[T], total: int, desc: str, unit: str = "row") -> Iterator[T]:
+    """A tqdm bar on stderr for inputs of 200 items or more; tqdm hides itself off a terminal."""
+    if total < 200:
+        return iter(iterable)
+    from tqdm import tqdm
+
+    return iter(tqdm(iterable, total=total, desc=desc, file=sys.stderr, unit=unit, disable=None))
+
+
+def note(command: str, text: str) -> None:
+    """One line on stderr, prefixed with the command."""
+    print(f"hexapod {command}: {text}", file=sys.stderr)

@@ -1,0 +1,159 @@
+"""``hexapod urdf``, ``fk``, ``ik`` and ``bench``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from ..description.geometry import load_geometry
+from ..description.presets import DEFAULT_PRESET, PRESETS, get_preset
+from ..description.urdf import geometry_to_urdf
+from ..exceptions import HexapodError
+from ..files import atomic_write_text, check_output_path
+from ..io.tables import (
+    LENGTH_COLUMNS,
+    POSE_COLUMNS,
+    SOLVER_COLUMNS,
+    column,
+    pose_row,
+    poses_from_table,
+    read_table,
+    write_table,
+)
+from ..kinematics.hexapod import Hexapod
+from ..studies.bench import run_benchmarks
+from ._common import add_hexapod_argument, hexapod_of, note, progress
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``urdf``, ``fk``, ``ik`` and ``bench``."""
+    p = sub.add_parser(
+        "urdf",
+        help="write the URDF of a preset or a geometry file",
+        description="Write the URDF (with its <loop_closure> elements) of a preset or geometry file.",
+    )
+    p.add_argument("-o", "--output", help="output file (default: stdout)")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--preset", default=DEFAULT_PRESET, help=f"preset name (default {DEFAULT_PRESET})")
+    src.add_argument("--geometry", help="geometry file (.toml, .yaml or .json), see docs/geometry.md")
+    src.add_argument("--list-presets", action="store_true", help="print 'NAME  description' per preset")
+    p.set_defaults(func=cmd_urdf)
+
+    for name, func, what, inp, out in (
+        ("fk", cmd_fk, "direct kinematics: leg readings -> poses", "LENGTHS.csv", "POSES.csv"),
+        ("ik", cmd_ik, "inverse kinematics: poses -> leg readings", "POSES.csv", "LENGTHS.csv"),
+    ):
+        p = sub.add_parser(
+            name, help=what, description=f"{what[0].upper()}{what[1:]} (CSV in, CSV out; '-' = stdin/stdout)."
+        )
+        add_hexapod_argument(p)
+        p.add_argument("input", metavar=inp, help="input CSV, or - for standard input")
+        p.add_argument("-o", "--output", metavar=out, help="output CSV (default, or -: standard output)")
+        p.set_defaults(func=func)
+
+    p = sub.add_parser(
+        "bench",
+        help="timing figures of the solvers (median, p95, p99)",
+        description="Time warm FK along trajectory A at 1 kHz, cold FK and IK over random box poses.",
+    )
+    add_hexapod_argument(p, optional=True)
+    p.add_argument("--samples", type=int, default=1000, help="random poses for the cold FK and IK figures")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--json", help="also write the figures as JSON")
+    p.set_defaults(func=cmd_bench)
+
+
+def cmd_urdf(args: argparse.Namespace) -> int:
+    """``hexapod urdf``."""
+    if args.list_presets:
+        for name, factory in PRESETS.items():
+            print(f"{name:14s}{factory().description}")
+        return 0
+    if args.output:
+        check_output_path(args.output, args.geometry)
+    geom = load_geometry(args.geometry) if args.geometry else get_preset(args.preset)
+    text = geometry_to_urdf(geom)
+    Hexapod.from_geometry(geom)  # refuse to write a URDF that does not load and assemble
+    if args.output:
+        atomic_write_text(args.output, text)
+        note("urdf", f"wrote {args.output} ({geom.name}, {geom.joint_type} legs)")
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def _solve_rows(args: argparse.Namespace, kind: str) -> int:
+    out_path = None if args.output in (None, "-") else check_output_path(args.output, args.input)
+    hexa = hexapod_of(args)
+    source = sys.stdin if args.input == "-" else args.input
+    if kind == "fk":
+        header, data = read_table(source, LENGTH_COLUMNS)
+        inputs = column(header, data, LENGTH_COLUMNS)
+        out_header = POSE_COLUMNS + SOLVER_COLUMNS
+    else:
+        header, data = read_table(source)
+        inputs = poses_from_table(header, data)
+        out_header = LENGTH_COLUMNS + SOLVER_COLUMNS
+    width = len(out_header) - len(SOLVER_COLUMNS)
+    rows, failures, guess = [], [], None
+    solve = hexa.forward if kind == "fk" else hexa.inverse
+    for k, x in enumerate(progress(inputs, len(inputs), kind)):
+        try:
+            sol = solve(x, guess=guess, check=False)
+            status, it, res = sol.status, sol.iterations, sol.residual
+        except HexapodError as exc:
+            sol, status, it, res = None, "invalid_input", 0, float("nan")
+            failures.append(f"row {k + 1}: {exc}")
+        if sol is not None and sol.converged:
+            guess = sol
+            values = pose_row(sol.pose) if kind == "fk" else list(sol.lengths)
+            rows.append([*map(float, values), "ok", it, float(res)])
+        else:
+            if sol is not None:
+                failures.append(f"row {k + 1}: {status}: {sol.message}")
+            rows.append([float("nan")] * width + [status, it, float(res)])
+    write_table(out_path, out_header, rows, out=sys.stdout)
+    if failures:
+        note(kind, f"{len(failures)} of {len(rows)} rows failed; first: {failures[0]}")
+        return 1
+    return 0
+
+
+def cmd_fk(args: argparse.Namespace) -> int:
+    """``hexapod fk``."""
+    return _solve_rows(args, "fk")
+
+
+def cmd_ik(args: argparse.Namespace) -> int:
+    """``hexapod ik``."""
+    return _solve_rows(args, "ik")
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    """``hexapod bench``."""
+    if args.json:
+        check_output_path(args.json)
+    report = run_benchmarks(hexapod_of(args), samples=args.samples, seed=args.seed)
+    report["hexapod"] = args.hexapod
+    print(format_bench(report))
+    if args.json:
+        atomic_write_text(args.json, json.dumps(report, indent=2) + "\n")
+    return 0
+
+
+def format_bench(report: dict) -> str:
+    """The ``hexapod bench`` table of a :func:`~hexapod_model.studies.bench.run_benchmarks` report."""
+    lines = [
+        f"hexapod {report['hexapod']} (nq = {report['nq']}); times per solve in microseconds",
+        f"{'case':10s}{'n':>7s}{'median':>10s}{'p95':>10s}{'p99':>10s}{'iter mean':>11s}{'iter max':>10s}"
+        f"{'target':>10s}",
+    ]
+    for key in ("warm_fk", "cold_fk", "ik"):
+        r = report[key]
+        lines.append(
+            f"{key:10s}{r['n']:7d}{r['median_us']:10.1f}{r['p95_us']:10.1f}{r['p99_us']:10.1f}"
+            f"{r['iterations_mean']:11.2f}{r['iterations_max']:10d}"
+            f"{'<= {:g}'.format(report['targets_median_us'][key]):>10s}"
+        )
+    return "\n".join(lines)

@@ -1,0 +1,107 @@
+"""``hexapod evaluate``: workspace for a cone of tool orientations and the kinematic figures over it."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from ..files import atomic_write_text, check_output_path
+from ..kinematics.hexapod import load_hexapod
+from ..studies.evaluate import Settings, run_evaluation
+from ._common import add_hexapod_argument, note
+
+DESCRIPTION = """\
+Map the workspace reachable for a whole cone of tool orientations (within stroke and Cardan
+limits) and the kinematic figures of Toz et al.'s evaluation (condition number, sigma_min,
+|det J|) over it, in parallel over all cores; resumable with --out."""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``evaluate``."""
+    p = sub.add_parser(
+        "evaluate", help="workspace for a cone of orientations and its kinematic figures", description=DESCRIPTION
+    )
+    add_hexapod_argument(p, optional=True)
+    p.add_argument(
+        "--grid", type=int, default=Settings.grid, help="grid points along the longest side (default %(default)s)"
+    )
+    p.add_argument("--cone-deg", type=float, default=Settings.cone_deg, help="tool cone half-angle (deg)")
+    p.add_argument("--cone-samples", type=int, default=Settings.cone_samples, help="tilted orientations on the cone")
+    p.add_argument(
+        "--length-unit",
+        type=float,
+        default=None,
+        help="m per length unit of the Jacobian figures (default: platform anchor radius)",
+    )
+    p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    p.add_argument("--out", default=None, help="directory for the PNG and the resumable checkpoint (created)")
+    p.add_argument("--json", help="write the report as JSON")
+    p.set_defaults(func=run)
+
+
+def format_report(r: dict) -> str:
+    """The table ``hexapod evaluate`` prints, the paper's figures beside ours."""
+    u = r["length_unit_m"]
+    lines = [
+        f"hexapod {r['hexapod']}: workspace for a {r['cone_deg']:g} deg cone ({r['orientations']} orientations), "
+        f"grid {r['grid']['nx']}x{r['grid']['ny']}x{r['grid']['nz']}, cell {r['cell_m'] * 1e3:.4g} mm",
+        f"  Jacobian figures with lengths in units of {u:g} m (dl = J [v; w], base frame)",
+        f"{'':24s}{'ours':>14s}{'paper':>12s}",
+    ]
+    p = r["paper"] or {}
+    rows = [
+        ("volume (cm^3)", r["volume_paper_units3"], p.get("volume")),
+        ("volume (m^3)", r["volume_m3"], None),
+        ("points inside", r["points_inside"], None),
+        ("mean kappa", r["average"]["kappa"], p.get("kappa")),
+        ("mean sigma_min", r["average"]["sigma_min"], p.get("sigma_min")),
+        ("mean |det J|", r["average"]["abs_det"], p.get("abs_det")),
+        ("home kappa", r["home"]["kappa"], None),
+        ("home sigma_min", r["home"]["sigma_min"], None),
+        ("home |det J|", r["home"]["abs_det"], None),
+    ]
+    for name, ours, paper in rows:
+        lines.append(f"  {name:22s}{ours:14.5g}{(f'{paper:12.5g}' if paper is not None else ''):>12s}")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """``hexapod evaluate``."""
+    if args.json:
+        check_output_path(args.json)
+    settings = Settings(args.grid, args.cone_deg, args.cone_samples, args.length_unit)
+    hexa = load_hexapod(args.hexapod)  # fails here, with one line, before any worker starts
+    bar = None
+    if sys.stderr.isatty():
+        from tqdm import tqdm
+
+        bar = tqdm(desc="evaluate (z slices)", file=sys.stderr, unit="slice")
+
+    def on_slice(done: int, total: int) -> None:
+        if bar is not None:
+            bar.total = total
+            bar.n = done
+            bar.refresh()
+
+    try:
+        r = run_evaluation(args.hexapod, settings, args.out, args.workers, on_slice)
+    except KeyboardInterrupt:
+        where = f"; rerun with --out {args.out} to resume" if args.out else ""
+        note("evaluate", f"interrupted; finished slices saved{where}")
+        return 130
+    finally:
+        if bar is not None:
+            bar.close()
+    r["home_z"] = float(hexa.home_pose[2, 3])
+    print(format_report(r))
+    if args.out:
+        from ..plots.evaluate import plot_sections
+
+        png = Path(args.out) / "evaluate_sections.png"
+        plot_sections(r, png)
+        print(f"  figure: {png}" + (f" (resumed {r['resumed_slices']} slices)" if r["resumed_slices"] else ""))
+    if args.json:
+        atomic_write_text(args.json, json.dumps({k: v for k, v in r.items() if not k.startswith("_")}, indent=2) + "\n")
+    return 0

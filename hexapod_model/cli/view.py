@@ -1,0 +1,147 @@
+"""``hexapod view`` (live meshcat server) and ``hexapod snapshot`` (static HTML and PNG)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from ..exceptions import HexapodError, ViewError
+from ..files import check_output_path
+from ..io.tables import LENGTH_COLUMNS, column, poses_from_table, read_table
+from ..kinematics.hexapod import Hexapod
+from ..kinematics.solver import Solution
+from ._common import add_hexapod_argument, hexapod_of
+
+
+def _pose_options(p: argparse.ArgumentParser) -> None:
+    add_hexapod_argument(p, optional=True)
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--lengths", nargs=6, type=float, metavar="L", help="six leg readings (m, zero at home): solve FK")
+    g.add_argument(
+        "--pose",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+        help="platform pose as `hexapod fk` writes it: metres and degrees, R = Rz(yaw) Ry(pitch) Rx(roll)",
+    )
+    p.add_argument("--cell", action="store_true", help="add the UR10 coupled to the top plate (seed 000 §5.5)")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``view`` and ``snapshot``."""
+    p = sub.add_parser("view", help="show the hexapod in a local meshcat server (prints the URL)")
+    _pose_options(p)
+    p.add_argument(
+        "--play",
+        metavar="CSV",
+        help="animate a CSV of poses (x,y,z + quaternion or roll,pitch,yaw) "
+        "or of leg readings (l1..l6), solving as it goes",
+    )
+    p.add_argument("--rate", type=float, default=50.0, help="animation rows per second (default 50)")
+    p.add_argument("--once", action="store_true", help="show (and play) then exit instead of serving until Ctrl-C")
+    p.set_defaults(func=run_view)
+
+    p = sub.add_parser("snapshot", help="write the scene as self-contained HTML and, with --png, a PNG")
+    _pose_options(p)
+    p.add_argument("-o", "--output", required=True, metavar="SCENE.html", help="static HTML (opens with no server)")
+    p.add_argument("--png", metavar="SCENE.png", help="also render a PNG with headless Chromium")
+    p.add_argument("--size", default="1280x960", help="PNG size WIDTHxHEIGHT in pixels (>= 1024x768)")
+    p.set_defaults(func=run_snapshot)
+
+
+def build(args: argparse.Namespace, vis):
+    """Scene of ``args`` (hexapod, pose, optional cell) in the visualizer ``vis``."""
+    from ..viz.meshcat_scene import HexapodScene, solve_view_configuration
+
+    hexa = hexapod_of(args)
+    sol = solve_view_configuration(hexa, args.lengths, args.pose)
+    scene = HexapodScene(hexa, vis)
+    scene.show(sol)
+    if args.cell:
+        from ..viz.robot_cell import add_cell
+
+        add_cell(scene, sol)
+    return scene, sol
+
+
+def play_frames(hexa: Hexapod, path: str | Path) -> list[Solution]:
+    """Solutions of every row of a pose or leg-reading CSV, each started from the previous good one.
+
+    Rows that do not solve (NaN, out of limits, ...) are skipped with a note on stderr.
+    """
+    header, data = read_table(path)
+    if all(c in header for c in LENGTH_COLUMNS):
+        inputs, solve = column(header, data, LENGTH_COLUMNS), hexa.forward
+    else:
+        inputs, solve = poses_from_table(header, data), hexa.inverse
+    frames, guess = [], None
+    for k, x in enumerate(inputs):
+        try:
+            guess = solve(x, guess=guess)
+            frames.append(guess)
+        except HexapodError as exc:
+            print(f"hexapod view: row {k + 1} skipped: {exc}", file=sys.stderr)
+    return frames
+
+
+def run_view(args: argparse.Namespace) -> int:
+    """``hexapod view``."""
+    from ..viz.meshcat_scene import start_visualizer, stop_visualizer
+
+    vis = start_visualizer()
+    try:
+        return _serve(args, vis)
+    finally:
+        stop_visualizer(vis)
+
+
+def _serve(args: argparse.Namespace, vis) -> int:
+    scene, _ = build(args, vis)
+    print(f"meshcat: {vis.url()}", flush=True)
+    if args.play:
+        frames = play_frames(scene.hexapod, args.play)
+        for sol in frames:
+            scene.show(sol)
+            time.sleep(1.0 / args.rate)
+        print(f"played {len(frames)} frames", file=sys.stderr)
+    if not args.once:
+        print("serving; press Ctrl-C to stop", file=sys.stderr)
+        try:
+            while True:
+                time.sleep(1.0)
+        except KeyboardInterrupt:
+            pass
+    return 0
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``WIDTHxHEIGHT`` in pixels."""
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise ViewError(f"--size {text!r}: expected WIDTHxHEIGHT, e.g. 1280x960") from None
+    return w, h
+
+
+def run_snapshot(args: argparse.Namespace) -> int:
+    """``hexapod snapshot``."""
+    from ..viz.meshcat_scene import start_visualizer, stop_visualizer
+    from ..viz.render import render_pngs, write_html
+
+    size = parse_size(args.size)
+    check_output_path(args.output, args.hexapod)
+    if args.png:
+        check_output_path(args.png, args.hexapod)
+    vis = start_visualizer()
+    try:
+        build(args, vis)
+        html = write_html(vis, args.output)
+    finally:
+        stop_visualizer(vis)
+    print(f"wrote {html}", file=sys.stderr)
+    if args.png:
+        render_pngs([html], [args.png], size=size)
+        print(f"wrote {args.png}", file=sys.stderr)
+    return 0

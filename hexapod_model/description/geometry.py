@@ -1,0 +1,289 @@
+"""Geometry description of a hexapod: frozen, validated values, loadable from TOML, YAML or JSON.
+
+Frames and units (SI throughout):
+
+* **base frame B**: fixed to the base plate, z up.
+* **platform frame P**: fixed to the top plate. At the *home pose* P is B translated by
+  ``(0, 0, home_height)``.
+* A leg's **base anchor** ``b_i`` (in B) and **platform anchor** ``p_i`` (in P) are the
+  joint centres: for a Cardan joint with offset axes, the midpoint of the common normal of
+  its two axes; for a ball joint, its centre; for a guideway leg, the slider's Cardan centre
+  at home.
+* The **leg reading** (the measured prismatic joint, metres) is zero at home and grows as
+  the leg extends; ``stroke`` bounds it.
+
+Joint types (``joint_type``):
+
+* ``"cardan"``: base Cardan (2 revolutes, axes offset by ``base_offset``) -> roll about the
+  leg axis -> prismatic (the encoder) -> platform Cardan (2 revolutes, offset
+  ``platform_offset``); closed by a 6-D frame constraint (seed 000).
+* ``"spherical"``: base Cardan -> prismatic -> ball joint at the platform (3-D point closure).
+* ``"guideway"``: prismatic slider on a fixed guideway (the measured joint) -> Cardan ->
+  fixed-length strut -> ball joint at the platform (seed 002, model 2).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import GeometryError
+
+JOINT_TYPES = ("cardan", "spherical", "guideway")
+Vec3 = tuple[float, float, float]
+
+
+def _vec3(name: str, value: Any, *, unit: bool = False) -> Vec3:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise GeometryError(name, value, "expected 3 numbers") from None
+    if arr.shape != (3,):
+        raise GeometryError(name, value, "expected 3 numbers")
+    if not np.all(np.isfinite(arr)):
+        raise GeometryError(name, value, "must be finite")
+    if unit:
+        norm = float(np.linalg.norm(arr))
+        if norm < 1e-9:
+            raise GeometryError(name, value, "direction must not be zero")
+        arr = arr / norm
+    return (float(arr[0]), float(arr[1]), float(arr[2]))
+
+
+def _number(name: str, value: Any, lo: float, hi: float, *, open_lo: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise GeometryError(name, value, "expected a number")
+    v = float(value)
+    if not math.isfinite(v) or v < lo or v > hi or (open_lo and v == lo):
+        bracket = "(" if open_lo else "["
+        raise GeometryError(name, value, f"must lie in {bracket}{lo:g}, {hi:g}]")
+    return v
+
+
+@dataclass(frozen=True)
+class LegGeometry:
+    """One leg. Vectors are tuples of 3 floats, in metres (points) or unit vectors (axes).
+
+    Attributes:
+        base_anchor: base joint centre ``b_i`` in the base frame (m).
+        platform_anchor: platform joint centre ``p_i`` in the platform frame (m).
+        stroke: ``(min, max)`` of the leg reading (m); 0 (home) must lie strictly inside.
+        base_axis: base-fixed Cardan axis in the base frame; ``None`` picks the horizontal
+            direction perpendicular to the home leg axis. Must be perpendicular to it.
+        platform_axis: platform-fixed Cardan axis in the platform frame (cardan legs only);
+            ``None`` picks the same direction as ``base_axis``.
+        guideway: unit direction of the slider's guideway in the base frame (guideway legs).
+    """
+
+    base_anchor: Vec3
+    platform_anchor: Vec3
+    stroke: tuple[float, float]
+    base_axis: Vec3 | None = None
+    platform_axis: Vec3 | None = None
+    guideway: Vec3 | None = None
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "base_anchor", _vec3("base_anchor", self.base_anchor))
+        set_(self, "platform_anchor", _vec3("platform_anchor", self.platform_anchor))
+        for name in ("base_axis", "platform_axis", "guideway"):
+            if getattr(self, name) is not None:
+                set_(self, name, _vec3(name, getattr(self, name), unit=True))
+        try:
+            lo, hi = (float(v) for v in self.stroke)
+        except (TypeError, ValueError):
+            raise GeometryError("stroke", self.stroke, "expected [min, max] in metres") from None
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < 0.0 < hi):
+            raise GeometryError("stroke", self.stroke, "need finite min < 0 < max (0 = home reading)")
+        set_(self, "stroke", (lo, hi))
+
+
+@dataclass(frozen=True)
+class HexapodGeometry:
+    """A whole hexapod. Lengths in metres, angles in radians.
+
+    Attributes:
+        name: identifier used for URDF robot and file names.
+        joint_type: ``"cardan"``, ``"spherical"`` or ``"guideway"`` (see module doc).
+        legs: exactly six :class:`LegGeometry`, in leg order 1..6.
+        home_height: z of the platform frame origin at home, in the base frame (m).
+        base_offset: distance between the two non-intersecting base Cardan axes (m).
+        platform_offset: same at the platform Cardan joint (m, cardan legs only).
+        cardan_limit: bound on ``|angle|`` of every Cardan revolute (rad), < pi/2.
+        roll_limit: bound on ``|angle|`` of the roll joint about the leg axis (rad).
+        description: one line for ``hexapod urdf --list-presets``.
+    """
+
+    name: str
+    joint_type: str
+    legs: tuple[LegGeometry, ...]
+    home_height: float
+    base_offset: float = 0.0
+    platform_offset: float = 0.0
+    cardan_limit: float = math.radians(45.0)
+    roll_limit: float = math.pi
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name.replace("-", "_").replace("_", "a").isalnum():
+            raise GeometryError("name", self.name, "use letters, digits, '-' and '_'")
+        if self.joint_type not in JOINT_TYPES:
+            raise GeometryError("joint_type", self.joint_type, f"must be one of {JOINT_TYPES}")
+        legs = tuple(self.legs)
+        if len(legs) != 6:
+            raise GeometryError("legs", len(legs), "a hexapod has exactly 6 legs")
+        object.__setattr__(self, "legs", legs)
+        _number("home_height", self.home_height, 0.0, 100.0, open_lo=True)
+        _number("base_offset", self.base_offset, 0.0, 10.0)
+        _number("platform_offset", self.platform_offset, 0.0, 10.0)
+        _number("cardan_limit", self.cardan_limit, 0.0, math.pi / 2 - 1e-3, open_lo=True)
+        _number("roll_limit", self.roll_limit, 0.0, math.pi, open_lo=True)
+        if self.joint_type != "cardan" and self.platform_offset != 0.0:
+            raise GeometryError(
+                "platform_offset", self.platform_offset, "only cardan legs have a platform Cardan joint"
+            )
+        for i, leg in enumerate(legs):
+            self._check_leg(i, leg)
+
+    def _check_leg(self, i: int, leg: LegGeometry) -> None:
+        where = f"legs[{i}]"
+        if not isinstance(leg, LegGeometry):
+            raise GeometryError(where, leg, "expected a LegGeometry")
+        w, length = self.home_leg_axis(i)
+        need = self.base_offset / 2 + self.platform_offset / 2
+        if length <= need + 1e-6:
+            raise GeometryError(
+                f"{where}.platform_anchor",
+                leg.platform_anchor,
+                f"home leg length {length:.6g} m must exceed the joint offsets {need:.6g} m",
+            )
+        for name, axis in (("base_axis", leg.base_axis), ("platform_axis", leg.platform_axis)):
+            if axis is not None and abs(float(np.dot(axis, w))) > 1e-6:
+                raise GeometryError(
+                    f"{where}.{name}", axis, f"must be perpendicular to the home leg axis {tuple(np.round(w, 6))}"
+                )
+        if self.joint_type == "guideway":
+            if leg.guideway is None:
+                raise GeometryError(f"{where}.guideway", None, "guideway legs need a guideway direction")
+            if abs(float(np.dot(leg.guideway, w))) > 1 - 1e-3:
+                raise GeometryError(f"{where}.guideway", leg.guideway, "must not be parallel to the strut")
+        elif leg.guideway is not None:
+            raise GeometryError(
+                f"{where}.guideway", leg.guideway, f"only guideway legs have one, not {self.joint_type}"
+            )
+
+    # ----- derived quantities (base frame, home pose) -----
+    @property
+    def home_translation(self) -> np.ndarray:
+        """Platform origin at home in the base frame (m)."""
+        return np.array([0.0, 0.0, self.home_height])
+
+    def home_leg_axis(self, i: int) -> tuple[np.ndarray, float]:
+        """Unit leg direction ``w_i`` (base frame) and anchor distance (m) at home."""
+        d = self.home_translation + np.asarray(self.legs[i].platform_anchor) - np.asarray(self.legs[i].base_anchor)
+        n = float(np.linalg.norm(d))
+        if n < 1e-9:
+            raise GeometryError(
+                f"legs[{i}].platform_anchor", self.legs[i].platform_anchor, "coincides with the base anchor at home"
+            )
+        return d / n, n
+
+    def base_points(self) -> np.ndarray:
+        """(6, 3) base anchors in the base frame (m)."""
+        return np.array([leg.base_anchor for leg in self.legs])
+
+    def platform_points(self) -> np.ndarray:
+        """(6, 3) platform anchors in the platform frame (m)."""
+        return np.array([leg.platform_anchor for leg in self.legs])
+
+    def to_dict(self) -> dict:
+        """Plain dict (the file format of :func:`geometry_from_dict`)."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name == "legs":
+                v = [
+                    {k: (list(x) if isinstance(x, tuple) else x) for k, x in vars(leg).items() if x is not None}
+                    for leg in v
+                ]
+            out[f.name] = v
+        return out
+
+
+def geometry_from_dict(data: dict, source: str = "<dict>") -> HexapodGeometry:
+    """Build a geometry from a plain dict, naming the bad field on error.
+
+    Keys are the fields of :class:`HexapodGeometry`; ``legs`` is a list of six tables with
+    the fields of :class:`LegGeometry`. Angles may be given in degrees with a ``_deg``
+    suffix (``cardan_limit_deg = 40``).
+    """
+    if not isinstance(data, dict):
+        raise GeometryError(source, type(data).__name__, "top level must be a table")
+    data = dict(data)
+    for key in ("cardan_limit", "roll_limit"):
+        if f"{key}_deg" in data:
+            data[key] = math.radians(_number(f"{key}_deg", data.pop(f"{key}_deg"), -1e9, 1e9))
+    known = {f.name for f in fields(HexapodGeometry)}
+    unknown = sorted(set(data) - known)
+    if unknown:
+        raise GeometryError(unknown[0], data[unknown[0]], f"unknown field (known: {sorted(known)})")
+    for req in ("name", "joint_type", "legs", "home_height"):
+        if req not in data:
+            raise GeometryError(req, None, "required field is missing")
+    legs_raw = data["legs"]
+    if not isinstance(legs_raw, list):
+        raise GeometryError("legs", legs_raw, "expected a list of 6 leg tables")
+    leg_fields = {f.name for f in fields(LegGeometry)}
+    legs = []
+    for i, raw in enumerate(legs_raw):
+        if not isinstance(raw, dict):
+            raise GeometryError(f"legs[{i}]", raw, "expected a table")
+        bad = sorted(set(raw) - leg_fields)
+        if bad:
+            raise GeometryError(f"legs[{i}].{bad[0]}", raw[bad[0]], f"unknown leg field (known: {sorted(leg_fields)})")
+        for req in ("base_anchor", "platform_anchor", "stroke"):
+            if req not in raw:
+                raise GeometryError(f"legs[{i}].{req}", None, "required field is missing")
+        try:
+            legs.append(LegGeometry(**raw))
+        except GeometryError as exc:
+            raise GeometryError(f"legs[{i}].{exc.field}", exc.value, exc.reason) from None
+    data["legs"] = tuple(legs)
+    return HexapodGeometry(**data)
+
+
+GEOMETRY_SUFFIXES = (".toml", ".yaml", ".yml", ".json")
+
+
+def load_geometry(path: str | Path) -> HexapodGeometry:
+    """Load a geometry file (``.toml``, ``.yaml`` or ``.json``); see ``docs/geometry.md`` for the format."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise GeometryError(str(path), None, f"cannot read file: {exc.strerror}") from None
+    suffix = path.suffix.lower()
+    try:
+        if suffix == ".json":
+            data = json.loads(text)
+        elif suffix == ".toml":
+            data = tomllib.loads(text)
+        elif suffix in (".yaml", ".yml"):
+            import yaml
+
+            data = yaml.safe_load(text)
+        else:
+            raise GeometryError(str(path), path.suffix, "geometry files are .toml, .yaml or .json")
+    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise GeometryError(str(path), None, f"not valid {suffix[1:].upper()}: {exc}") from None
+    except Exception as exc:  # yaml.YAMLError without importing yaml up front
+        if type(exc).__module__.startswith("yaml"):
+            raise GeometryError(str(path), None, f"not valid YAML: {exc}") from None
+        raise
+    return geometry_from_dict(data, source=str(path))

@@ -1,0 +1,196 @@
+"""Load a hexapod URDF into Pinocchio, check the contract, and index what the solver needs.
+
+:class:`ClosedLoopModel` holds
+
+* ``model`` / ``data``: the Pinocchio model of the URDF tree (``nq``, ``nv`` as Pinocchio
+  gives them; the platform is a free flyer whose configuration is relative to the home pose);
+* ``constraints``: one Pinocchio ``FrameAnchorConstraintModel`` (``6d`` closure) or
+  ``PointAnchorConstraintModel`` (``3d``) per leg, tip side first;
+* index arrays of each leg's joints and of the measured prismatic joints.
+
+For speed the solver works on an *augmented* copy (``solver_model``) in which a zero-motion
+free-flyer "probe" joint is attached at every closure frame: after one
+``pin.computeJointJacobians`` call, the probe's six Jacobian columns are the adjoint matrix of
+that frame's placement, so all twelve closure placements come out of one array view.
+The probes are always at identity and never move; they are invisible to the caller.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..description.urdf import Closure, read_closures
+from ..exceptions import UrdfError
+
+_REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
+_PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
+
+
+@dataclass(frozen=True)
+class Leg:
+    """Indices of one leg in the Pinocchio model (joint ids, and their q / v indices)."""
+
+    name: str
+    joints: tuple[int, ...]  # base -> tip
+    prismatic: int  # joint id of the measured joint
+    tip_frame: int
+    anchor_frame: int
+
+
+class ClosedLoopModel:
+    """A hexapod URDF loaded in Pinocchio with its six loop closures.
+
+    Args:
+        urdf_xml: the URDF text.
+        source: file name used in error messages.
+
+    Raises:
+        UrdfError: the URDF breaks the contract (no or several floating joints, a missing
+            closure link, a leg with zero or two prismatic joints, a continuous joint, a
+            zero configuration that is not assembled, ...).
+    """
+
+    def __init__(self, urdf_xml: str, source: str = "<string>"):
+        self.source = source
+        self.urdf_xml = urdf_xml
+        self.closures: list[Closure] = read_closures(urdf_xml, source)
+        try:
+            self.model = pin.buildModelFromXML(urdf_xml)
+        except (RuntimeError, ValueError) as exc:
+            raise UrdfError(source, str(exc).strip()[:200], "Pinocchio cannot parse the URDF") from None
+        self.data = self.model.createData()
+        m = self.model
+        ff = [j for j in range(1, m.njoints) if m.joints[j].shortname() == "JointModelFreeFlyer"]
+        if len(ff) != 1:
+            raise UrdfError(source, len(ff), "need exactly one floating joint carrying the platform")
+        self.platform_joint = ff[0]
+        if m.parents[self.platform_joint] != 0:
+            raise UrdfError(source, m.names[self.platform_joint], "the floating joint must hang from the root link")
+        for j in range(1, m.njoints):
+            kind = m.joints[j].shortname()
+            if j != self.platform_joint and kind not in _REVOLUTE + _PRISMATIC:
+                raise UrdfError(
+                    source, m.names[j], f"unsupported joint type {kind} (use revolute with limits or prismatic)"
+                )
+        if len(self.closures) != 6:
+            raise UrdfError(source, len(self.closures), "a hexapod needs exactly 6 loop_closure elements")
+        kinds = {c.kind for c in self.closures}
+        if len(kinds) != 1:
+            raise UrdfError(source, sorted(kinds), "all closures must have the same type")
+        self.kind = kinds.pop()
+        self.legs = tuple(self._leg(c) for c in self.closures)
+        used = [j for leg in self.legs for j in leg.joints]
+        if len(used) != len(set(used)):
+            raise UrdfError(source, "legs", "two legs share a joint; each leg must be its own chain")
+        self.constraints = [self._constraint(leg) for leg in self.legs]
+        self.constraint_datas = [c.createData() for c in self.constraints]
+        self.q_home = pin.neutral(m)
+        self.nq, self.nv = m.nq, m.nv
+        self.lower = m.lowerPositionLimit.copy()
+        self.upper = m.upperPositionLimit.copy()
+        self.prismatic_q = np.array([m.joints[leg.prismatic].idx_q for leg in self.legs])
+        self.prismatic_v = np.array([m.joints[leg.prismatic].idx_v for leg in self.legs])
+        self.platform_q = m.joints[self.platform_joint].idx_q
+        self.platform_v = m.joints[self.platform_joint].idx_v
+        self.home = m.jointPlacements[self.platform_joint].copy()
+        self._check_assembled()
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> ClosedLoopModel:
+        """Load the URDF file ``path``."""
+        path = Path(path)
+        try:
+            text = path.read_text()
+        except OSError as exc:
+            raise UrdfError(str(path), str(path), f"cannot read URDF: {exc.strerror}") from None
+        return cls(text, str(path))
+
+    # ----- construction helpers -----
+    def _leg(self, c: Closure) -> Leg:
+        m = self.model
+        tip, anchor = m.getFrameId(c.link1), m.getFrameId(c.link2)
+        if tip >= len(m.frames) or anchor >= len(m.frames):
+            raise UrdfError(
+                self.source,
+                c.link1 if tip >= len(m.frames) else c.link2,
+                f"closure {c.name}: link not found in the Pinocchio model",
+            )
+        if m.frames[anchor].parentJoint != self.platform_joint:
+            raise UrdfError(self.source, c.link2, f"closure {c.name}: link2 must be fixed to the platform")
+        chain = []
+        j = m.frames[tip].parentJoint
+        while j != 0:
+            if j == self.platform_joint:
+                raise UrdfError(self.source, c.link1, f"closure {c.name}: link1 must be a leg tip, not on the platform")
+            chain.append(j)
+            j = m.parents[j]
+        prismatic = [j for j in chain if m.joints[j].shortname() in _PRISMATIC]
+        if len(prismatic) != 1:
+            raise UrdfError(
+                self.source,
+                [m.names[j] for j in prismatic] or c.link1,
+                f"closure {c.name}: the leg chain must hold exactly one prismatic joint, found {len(prismatic)}",
+            )
+        return Leg(c.name, tuple(reversed(chain)), prismatic[0], tip, anchor)
+
+    def _constraint(self, leg: Leg):
+        m = self.model
+        f1, f2 = m.frames[leg.tip_frame], m.frames[leg.anchor_frame]
+        cls = pin.FrameAnchorConstraintModel if self.kind == "6d" else pin.PointAnchorConstraintModel
+        c = cls(m, f1.parentJoint, f1.placement, f2.parentJoint, f2.placement)
+        c.name = leg.name
+        return c
+
+    def _check_assembled(self) -> None:
+        err = self.closure_errors(self.q_home)
+        worst = int(np.argmax(err))
+        if err[worst] > 1e-9:
+            raise UrdfError(
+                self.source,
+                f"{self.legs[worst].name}: {err[worst]:.3g}",
+                "the zero configuration does not close the loop (contract: all leg joints at zero close every loop at home)",
+            )
+
+    # ----- queries -----
+    def closure_errors(self, q: np.ndarray) -> np.ndarray:
+        """Per-leg closure error norm (log6 for 6d, point distance for 3d) at ``q``, through
+        Pinocchio's constraint models (the slow, reference path).
+        """
+        pin.computeJointJacobians(self.model, self.data, q)
+        out = np.empty(6)
+        for i, (c, cd) in enumerate(zip(self.constraints, self.constraint_datas)):
+            c.calc(self.model, self.data, cd)
+            M = cd.c1Mc2
+            out[i] = np.linalg.norm(pin.log6(M).vector if self.kind == "6d" else M.translation)
+        return out
+
+    def joint_name_of_q(self, iq: int) -> str:
+        """URDF joint name owning configuration index ``iq``."""
+        m = self.model
+        for j in range(1, m.njoints):
+            if m.joints[j].idx_q <= iq < m.joints[j].idx_q + m.joints[j].nq:
+                return m.names[j]
+        raise IndexError(iq)
+
+    def limited_q(self) -> np.ndarray:
+        """Indices of q that carry finite joint limits (all leg joints)."""
+        return np.array([m_j.idx_q for leg in self.legs for m_j in (self.model.joints[j] for j in leg.joints)])
+
+    def solver_model(self) -> tuple[pin.Model, np.ndarray]:
+        """Augmented copy with a probe free flyer at each tip and anchor frame.
+
+        Returns the model and the (12, 6) array of probe velocity columns: rows 0-5 the leg
+        tips, rows 6-11 the platform anchors, in leg order.
+        """
+        aug = self.model.copy()
+        cols = []
+        for which in ("tip_frame", "anchor_frame"):
+            for leg in self.legs:
+                f = aug.frames[getattr(leg, which)]
+                j = aug.addJoint(f.parentJoint, pin.JointModelFreeFlyer(), f.placement, f"__probe_{leg.name}_{which}")
+                cols.append(np.arange(aug.joints[j].idx_v, aug.joints[j].idx_v + 6))
+        return aug, np.array(cols)

@@ -1,0 +1,169 @@
+"""Bundled hexapod geometries. ``PRESETS`` maps a name to a zero-argument factory.
+
+All dimensions are in metres and radians. The ``reference`` hexapod is our stand-in for the
+fixture of seed 000 (its paper gives no dimensions): anchors on a 0.25 m (base) and 0.15 m
+(platform) radius, 0.40 m between the anchor planes at home (0.45 m legs), 12 mm Cardan axis
+offsets (the order of the patented preloaded hub), 70 deg Cardan limits, +-90 deg roll and a
+-0.16 / +0.20 m leg stroke, so that the whole +-50 mm / +-25 deg test box of seed 000, corners
+included, lies inside the stroke and joint limits (the corners need up to 67 deg on the
+platform Cardan joints and -0.147 / +0.185 m of stroke).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from ..description.geometry import HexapodGeometry, LegGeometry
+from ..exceptions import GeometryError
+
+DEG = math.pi / 180.0
+
+
+def _circle(radius: float, angle_deg: float, z: float = 0.0) -> tuple[float, float, float]:
+    a = angle_deg * DEG
+    return (radius * math.cos(a), radius * math.sin(a), z)
+
+
+def symmetric_legs(
+    base_radius: float,
+    platform_radius: float,
+    base_spread_deg: float,
+    platform_spread_deg: float,
+    stroke: tuple[float, float],
+) -> tuple[LegGeometry, ...]:
+    """Six legs of the classic 6-6 layout with three-fold symmetry.
+
+    Base anchors sit in pairs around 0, 120, 240 deg (``base_spread_deg`` apart), platform
+    anchors in pairs around 60, 180, 300 deg; leg ``2k`` and ``2k+1`` leave base pair ``k``
+    towards the two neighbouring platform pairs. Radii in metres.
+    """
+    legs = []
+    for k in range(3):
+        c = 120.0 * k
+        for sign in (-1, 1):
+            legs.append(
+                LegGeometry(
+                    base_anchor=_circle(base_radius, c + sign * base_spread_deg / 2),
+                    platform_anchor=_circle(platform_radius, c + sign * (60.0 - platform_spread_deg / 2)),
+                    stroke=stroke,
+                )
+            )
+    return tuple(legs)
+
+
+def reference() -> HexapodGeometry:
+    """Offset-axis Cardan joints at both ends plus a cylindrical joint (seed 000)."""
+    return HexapodGeometry(
+        name="reference",
+        joint_type="cardan",
+        legs=symmetric_legs(0.25, 0.15, 24.0, 24.0, (-0.16, 0.20)),
+        home_height=0.40,
+        base_offset=0.012,
+        platform_offset=0.012,
+        cardan_limit=70 * DEG,
+        roll_limit=math.pi / 2,
+        description="seed 000 design: offset-axis Cardan joints (12 mm) at both ends, cylindrical joint",
+    )
+
+
+def intersecting() -> HexapodGeometry:
+    """The reference geometry with ideal universal joints (zero axis offsets)."""
+    return replace(
+        reference(),
+        name="intersecting",
+        base_offset=0.0,
+        platform_offset=0.0,
+        description="reference geometry with ideal (intersecting-axis) universal joints",
+    )
+
+
+def spherical() -> HexapodGeometry:
+    """Ideal universal joint at the base, ball joint at the platform: the textbook model."""
+    return replace(
+        reference(),
+        name="spherical",
+        joint_type="spherical",
+        base_offset=0.0,
+        platform_offset=0.0,
+        description="reference anchors, universal joint at the base, ball joint at the platform",
+    )
+
+
+def three_six() -> HexapodGeometry:
+    """Seed 003's 3-6 sensor: six base points on a regular hexagon, legs meeting in pairs
+    at three platform points (ball joints).
+    """
+    rb, ra = 0.20, 0.12
+    legs = []
+    for k in range(3):
+        top = _circle(ra, 120.0 * k + 30.0)
+        for j in (0, 1):
+            legs.append(
+                LegGeometry(base_anchor=_circle(rb, 120.0 * k + 60.0 * j), platform_anchor=top, stroke=(-0.18, 0.18))
+            )
+    return HexapodGeometry(
+        name="3-6",
+        joint_type="spherical",
+        legs=tuple(legs),
+        home_height=0.22,
+        cardan_limit=60 * DEG,
+        description="seed 003 3-6 sensor: ball joints, legs meet in pairs at three platform points",
+    )
+
+
+def guideway() -> HexapodGeometry:
+    """Seed 002's second model: fixed-length struts whose base ends slide on guideways.
+
+    Three pairs of parallel guideways, ``0.06 m`` apart, inclined like the line from radius
+    0.45 m on the floor to radius 0.15 m at 0.25 m height; the slider (the measured joint) is
+    on that line's midpoint at home and travels +-0.22 m along the rail; struts go to ball
+    joints on a 0.15 m platform.
+    """
+    r_lo, r_hi, h, d, rp = 0.45, 0.15, 0.25, 0.06, 0.15
+    legs = []
+    for k in range(3):
+        c = 120.0 * k
+        radial = np.array(_circle(1.0, c))
+        tangent = np.array(_circle(1.0, c + 90.0))
+        rail = np.array([-(r_lo - r_hi) * radial[0], -(r_lo - r_hi) * radial[1], h])
+        length = float(np.linalg.norm(rail))
+        for sign in (-1, 1):
+            mid = radial * (r_lo + r_hi) / 2 + sign * d / 2 * tangent + np.array([0, 0, h / 2])
+            legs.append(
+                LegGeometry(
+                    base_anchor=tuple(mid),
+                    platform_anchor=_circle(rp, c + sign * 75.0),
+                    stroke=(-0.22, 0.22),
+                    guideway=tuple(rail / length),
+                )
+            )
+    return HexapodGeometry(
+        name="guideway",
+        joint_type="guideway",
+        legs=tuple(legs),
+        home_height=0.50,
+        cardan_limit=60 * DEG,
+        description="seed 002 model 2: fixed struts, base ends slide on guideways (slider = measured joint)",
+    )
+
+
+PRESETS: dict[str, Callable[[], HexapodGeometry]] = {
+    "reference": reference,
+    "intersecting": intersecting,
+    "spherical": spherical,
+    "3-6": three_six,
+    "guideway": guideway,
+}
+DEFAULT_PRESET = "reference"
+
+
+def get_preset(name: str) -> HexapodGeometry:
+    """The preset geometry called ``name`` (see ``PRESETS``)."""
+    try:
+        return PRESETS[name]()
+    except KeyError:
+        raise GeometryError("preset", name, f"unknown preset; choose one of {sorted(PRESETS)}") from None

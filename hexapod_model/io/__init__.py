@@ -1,0 +1,1 @@
+"""File formats: CSV tables of leg readings and poses."""

@@ -1,0 +1,295 @@
+"""The user-facing :class:`Hexapod`: direct, inverse and hybrid kinematics in a few calls.
+
+>>> import hexapod_model as hm
+>>> hexa = hm.Hexapod.from_preset("reference")
+>>> sol = hexa.forward([0.01, 0.0, -0.01, 0.0, 0.01, 0.0])   # leg readings, metres
+>>> back = hexa.inverse(sol.pose)                           # back.lengths ~ the readings
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..description.geometry import GEOMETRY_SUFFIXES, HexapodGeometry, load_geometry
+from ..description.model import ClosedLoopModel
+from ..description.presets import PRESETS, get_preset
+from ..description.urdf import geometry_to_urdf
+from ..exceptions import ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
+from ..kinematics import kernels
+from ..kinematics.solver import NewtonSolver, Solution
+
+DEFAULT_TOL = 1e-12  # closure residual (m, rad): pose errors stay below 1e-9 on every preset
+DEFAULT_MAX_ITER = 20
+_LIMIT_SLACK = 1e-12
+POSE_TOLERANCE = 1e-6  # max deviation of a pose from a rigid transform
+
+
+class Hexapod:
+    """A hexapod loaded from a URDF that follows the contract of ``docs/urdf_contract.md``.
+
+    Construct with :meth:`from_urdf`, :meth:`from_preset` or :meth:`from_geometry`.
+    Leg readings (``lengths``) are the measured prismatic joints in metres, zero at home;
+    poses are 4x4 base -> platform transforms in metres.
+    """
+
+    def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None):
+        self.closed_loop = model
+        self.geometry = geometry
+        m = model.model
+        #: the Pinocchio model of the URDF tree (``RobotWrapper.model``)
+        self.model: pin.Model = m
+        #: its Pinocchio data (``RobotWrapper.data``); the solver uses buffers of its own
+        self.data: pin.Data = model.data
+        #: one Pinocchio constraint model per loop closure, leg order
+        self.constraint_models = list(model.constraints)
+        self.nq, self.nv = m.nq, m.nv
+        self.joint_names: tuple[str, ...] = tuple(m.names[1:])
+        self.stroke = np.array([[model.lower[i], model.upper[i]] for i in model.prismatic_q])
+        self.prismatic_names = tuple(m.names[leg.prismatic] for leg in model.legs)
+        self._limited = model.limited_q()
+        self._solvers: dict[tuple[int, ...], NewtonSolver] = {}
+        self._home_h = model.home.homogeneous
+        self._stroke_lo = np.ascontiguousarray(self.stroke[:, 0])
+        self._stroke_hi = np.ascontiguousarray(self.stroke[:, 1])
+        self._limited_lo = model.lower[self._limited].copy()
+        self._limited_hi = model.upper[self._limited].copy()
+        self._held_forward = tuple(leg.prismatic for leg in model.legs)
+        self._held_inverse = (model.platform_joint,)
+
+    # ----- construction -----
+    @classmethod
+    def from_urdf(cls, path: str | Path) -> Hexapod:
+        """Load a URDF file, or a preset when ``path`` is a preset name (see ``PRESETS``)."""
+        if str(path) in PRESETS:
+            return cls.from_preset(str(path))
+        return cls(ClosedLoopModel.from_file(path))
+
+    @classmethod
+    def load(cls, spec: str | Path) -> Hexapod:
+        """A preset name, a URDF file, or a geometry file (``.toml``, ``.yaml``, ``.yml``, ``.json``).
+
+        This is what every ``hexapod`` sub-command does with its HEXAPOD argument.
+        """
+        if str(spec).lower().endswith(GEOMETRY_SUFFIXES):
+            return cls.from_geometry(load_geometry(spec))
+        return cls.from_urdf(spec)
+
+    @classmethod
+    def from_preset(cls, name: str = "reference") -> Hexapod:
+        """One of the bundled geometries: ``reference``, ``intersecting``, ``spherical``, ``3-6``, ``guideway``."""
+        return cls.from_geometry(get_preset(name))
+
+    @classmethod
+    def from_geometry(cls, geometry: HexapodGeometry) -> Hexapod:
+        """Generate the URDF of ``geometry`` in memory and load it."""
+        return cls(ClosedLoopModel(geometry_to_urdf(geometry), f"<geometry {geometry.name}>"), geometry)
+
+    # ----- conversions -----
+    @property
+    def home_pose(self) -> np.ndarray:
+        """Platform pose at home (4x4, base frame, metres)."""
+        return self.closed_loop.home.homogeneous
+
+    @property
+    def q_home(self) -> np.ndarray:
+        """The zero configuration (assembled at home)."""
+        return self.closed_loop.q_home.copy()
+
+    @property
+    def q0(self) -> np.ndarray:
+        """The home configuration, under the name ``RobotWrapper`` users know."""
+        return self.q_home
+
+    def pose_of(self, q: np.ndarray) -> np.ndarray:
+        """Platform pose (4x4, base frame, metres) of configuration ``q``."""
+        i = self.closed_loop.platform_q
+        T = np.empty((4, 4))
+        kernels.xyzquat_to_pose(q[i : i + 7], self._home_h, T)
+        return T
+
+    def lengths_of(self, q: np.ndarray) -> np.ndarray:
+        """Leg readings (m) of configuration ``q``, leg order."""
+        return q[self.closed_loop.prismatic_q].copy()
+
+    def _set_pose(self, q: np.ndarray, pose) -> None:
+        T = check_pose(pose)
+        i = self.closed_loop.platform_q
+        kernels.pose_to_xyzquat(T, self._home_h, q[i : i + 7])
+
+    def _solver(self, held: tuple[int, ...]) -> NewtonSolver:
+        solver = self._solvers.get(held)
+        if solver is None:
+            solver = self._solvers[held] = NewtonSolver(self.closed_loop, held)
+        return solver
+
+    def _start(self, guess) -> np.ndarray:
+        if guess is None:
+            return self.closed_loop.q_home.copy()
+        if isinstance(guess, Solution):
+            return guess.q.copy()
+        q = guess
+        q = np.array(q, dtype=float)
+        if q.shape != (self.closed_loop.nq,) or not np.all(np.isfinite(q)):
+            raise InputError(
+                "guess", q, f"expected a finite configuration of {self.closed_loop.nq} values or a Solution"
+            )
+        return q
+
+    # ----- solves -----
+    def forward(
+        self,
+        lengths: Sequence[float],
+        guess=None,
+        *,
+        tol: float = DEFAULT_TOL,
+        max_iter: int = DEFAULT_MAX_ITER,
+        check: bool = True,
+    ) -> Solution:
+        """Direct kinematics: platform pose from the six leg readings (m).
+
+        Args:
+            lengths: six readings, leg order, metres (zero at home).
+            guess: previous :class:`Solution` or configuration to start from (default: home).
+            tol: closure residual to reach.
+            max_iter: Newton step limit.
+            check: raise on a result that is not ``converged`` (default). With
+                ``check=False`` the :class:`Solution` is returned and its ``status`` says why.
+
+        Raises:
+            InputError: wrong count, NaN or inf.
+            LimitError: a reading outside its stroke.
+            ConvergenceError, SingularityError, WorkspaceError: when ``check`` and the solve failed.
+        """
+        if not (isinstance(lengths, np.ndarray) and lengths.shape == (6,) and lengths.dtype == np.float64):
+            lengths = check_vector("lengths", lengths, 6)
+        k = kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, _LIMIT_SLACK)
+        if k >= 0:
+            check_vector("lengths", lengths, 6)  # names NaN / inf first
+            raise LimitError(self.prismatic_names[k], lengths[k], *self.stroke[k], what="stroke")
+        q = self._start(guess)
+        q[self.closed_loop.prismatic_q] = lengths
+        return self._finish(self._solver(self._held_forward), q, tol, max_iter, check)
+
+    def inverse(
+        self,
+        pose: np.ndarray,
+        guess=None,
+        *,
+        tol: float = DEFAULT_TOL,
+        max_iter: int = DEFAULT_MAX_ITER,
+        check: bool = True,
+    ) -> Solution:
+        """Inverse kinematics: leg readings (and all passive joints) for a platform pose.
+
+        A pose that needs a reading outside the stroke or a Cardan angle outside its limit is
+        outside the workspace: ``WorkspaceError`` (or status ``out_of_limits``).
+        """
+        q = self._start(guess)
+        self._set_pose(q, pose)
+        return self._finish(self._solver(self._held_inverse), q, tol, max_iter, check)
+
+    def solve(
+        self,
+        held: Mapping[str, object],
+        guess=None,
+        *,
+        tol: float = DEFAULT_TOL,
+        max_iter: int = DEFAULT_MAX_ITER,
+        check: bool = True,
+    ) -> Solution:
+        """Hybrid kinematics: hold the named joints at the given values, solve for the rest.
+
+        ``held`` maps URDF joint names to values: a float (m or rad) for a one-dof joint, a
+        4x4 pose for ``platform_joint`` (the floating joint). Example: hold three legs and
+        the platform height is not possible (whole joints only), but holding five prismatic
+        joints and one Cardan angle is.
+        """
+        if not isinstance(held, Mapping) or not held:
+            raise InputError("held", held, "expected a non-empty mapping of joint name -> value")
+        q = self._start(guess)
+        m = self.closed_loop.model
+        ids = []
+        for name, value in held.items():
+            if name not in self.joint_names:
+                raise InputError("held joint", name, f"not a joint of this URDF ({len(self.joint_names)} joints)")
+            j = m.getJointId(name)
+            if j == self.closed_loop.platform_joint:
+                self._set_pose(q, np.asarray(value, dtype=float))
+            else:
+                v = check_vector(name, [value], 1)[0]
+                iq = m.joints[j].idx_q
+                lo, hi = self.closed_loop.lower[iq], self.closed_loop.upper[iq]
+                if not lo - _LIMIT_SLACK <= v <= hi + _LIMIT_SLACK:
+                    raise self._limit_error(iq, v)
+                q[iq] = v
+            ids.append(j)
+        return self._finish(self._solver(tuple(sorted(ids))), q, tol, max_iter, check)
+
+    def _limit_error(self, iq: int, value: float) -> LimitError:
+        """The error for configuration entry ``iq`` at ``value`` outside its limits."""
+        what = "stroke" if iq in self.closed_loop.prismatic_q else "joint"
+        return LimitError(
+            self.closed_loop.joint_name_of_q(iq), value, self.closed_loop.lower[iq], self.closed_loop.upper[iq], what
+        )
+
+    def _finish(self, solver: NewtonSolver, q0: np.ndarray, tol: float, max_iter: int, check: bool) -> Solution:
+        q, status, it, res, jac, msg = solver.run(q0, tol, max_iter)
+        if status == "converged":
+            bad = kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, _LIMIT_SLACK)
+            if bad >= 0:
+                k = int(self._limited[bad])
+                status, msg = "out_of_limits", str(self._limit_error(k, q[k]))
+        sol = Solution(self.pose_of(q), q, q[self.closed_loop.prismatic_q], status, it, res, jac, msg)
+        if check and status != "converged":
+            raise {"singular": SingularityError, "out_of_limits": WorkspaceError}.get(status, ConvergenceError)(
+                sol, f"{status}: {msg}"
+            )
+        return sol
+
+    def closure_residual(self, q: np.ndarray) -> np.ndarray:
+        """Per-leg closure error at ``q`` computed by Pinocchio's constraint models."""
+        return self.closed_loop.closure_errors(np.asarray(q, dtype=float))
+
+
+def check_vector(name: str, values, n: int) -> np.ndarray:
+    """``values`` as a finite float array of length ``n``, or :class:`InputError`."""
+    try:
+        arr = np.asarray(values, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(name, values, f"expected {n} numbers") from None
+    if arr.size != n:
+        raise InputError(name, values, f"expected {n} values, got {arr.size}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(name, values, "values must be finite (found NaN or inf)")
+    return arr
+
+
+def load_hexapod(spec: str | Path) -> Hexapod:
+    """:meth:`Hexapod.load`: a preset name, URDF file or geometry file as a :class:`Hexapod`."""
+    return Hexapod.load(spec)
+
+
+def check_pose(pose) -> np.ndarray:
+    """``pose`` (4x4 array or ``pin.SE3``) as a valid 4x4 rigid transform, or :class:`InputError`."""
+    if isinstance(pose, pin.SE3):
+        return np.array(pose.homogeneous)
+    try:
+        T = np.asarray(pose, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError("pose", pose, "expected a 4x4 matrix") from None
+    if T.shape != (4, 4):
+        raise InputError("pose", pose, f"expected a 4x4 matrix, got shape {T.shape}")
+    err = kernels.rigid_error(T)
+    if not err <= POSE_TOLERANCE:
+        if not np.all(np.isfinite(T)):
+            raise InputError("pose", pose, "values must be finite (found NaN or inf)")
+        raise InputError(
+            "pose",
+            pose,
+            f"not a rigid transform: orthonormality/det/bottom-row error {err:.2g} exceeds {POSE_TOLERANCE:g}",
+        )
+    return T

@@ -1,0 +1,215 @@
+"""Numba kernels of the Newton solver's hot path (no allocation, no Python loop per call).
+
+Inputs come from one ``pin.computeJointJacobians`` call on the augmented solver model (see
+:mod:`hexapod_model.model`): ``J`` is Pinocchio's ``data.J`` (6 x nv, WORLD convention:
+column ``c`` is the spatial motion of velocity ``c`` expressed at the world origin).
+
+Residual of closure ``i`` (seed 000 eqs. 10-14, written in the base/world frame):
+
+* translation ``e_t = p_tip - p_anchor`` (m);
+* rotation ``e_R = vex(skew(E))`` with ``E = R_tip R_anchor^T`` (rad near closure), only for
+  ``6d`` closures. ``e_R = 0`` also at a 180 deg flip: callers check ``trace(E) > 1``.
+
+Its exact derivative along a velocity ``v`` (rows ``[d e_t; d e_R]``):
+
+* ``d e_t = (v_o - p_tip x w)_tip - (v_o - p_anchor x w)_anchor``;
+* ``d e_R = H_tip w_tip - H_anchor w_anchor``, ``H_tip = (tr(E) I - E)/2``,
+  ``H_anchor = (tr(E) I - E^T)/2``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def placements(J, probe_cols, R, p):
+    """Rotation ``R[k]`` and position ``p[k]`` of every probe frame from its adjoint columns."""
+    for k in range(probe_cols.shape[0]):
+        c3, c4, c5 = probe_cols[k, 3], probe_cols[k, 4], probe_cols[k, 5]
+        for a in range(3):
+            R[k, a, 0] = J[3 + a, c3]
+            R[k, a, 1] = J[3 + a, c4]
+            R[k, a, 2] = J[3 + a, c5]
+        # [p] R = top-right block  =>  [p] = block @ R^T
+        p[k, 0] = J[2, c3] * R[k, 1, 0] + J[2, c4] * R[k, 1, 1] + J[2, c5] * R[k, 1, 2]
+        p[k, 1] = J[0, c3] * R[k, 2, 0] + J[0, c4] * R[k, 2, 1] + J[0, c5] * R[k, 2, 2]
+        p[k, 2] = J[1, c3] * R[k, 0, 0] + J[1, c4] * R[k, 0, 1] + J[1, c5] * R[k, 0, 2]
+
+
+@njit(cache=True)
+def residual(J, probe_cols, rows, R, p, E, r):
+    """Fill ``r`` (6*rows) and ``E`` (6, 3, 3); return ``(norm(r), min trace(E))``."""
+    placements(J, probe_cols, R, p)
+    min_trace = 3.0
+    for i in range(6):
+        o = i * rows
+        for a in range(3):
+            r[o + a] = p[i, a] - p[6 + i, a]
+        if rows == 6:
+            for a in range(3):
+                for b in range(3):
+                    E[i, a, b] = R[i, a, 0] * R[6 + i, b, 0] + R[i, a, 1] * R[6 + i, b, 1] + R[i, a, 2] * R[6 + i, b, 2]
+            r[o + 3] = 0.5 * (E[i, 2, 1] - E[i, 1, 2])
+            r[o + 4] = 0.5 * (E[i, 0, 2] - E[i, 2, 0])
+            r[o + 5] = 0.5 * (E[i, 1, 0] - E[i, 0, 1])
+            tr = E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2]
+            if tr < min_trace:
+                min_trace = tr
+    s = 0.0
+    for k in range(r.shape[0]):
+        s += r[k] * r[k]
+    return np.sqrt(s), min_trace
+
+
+@njit(cache=True)
+def _column(J, c, rows, point, H, sign, out, row, col):
+    """Write ``sign`` times the residual derivative along velocity ``c`` into ``out[row:row+rows, col]``:
+    linear velocity of ``point`` and, for 6-row closures, ``H`` times the angular velocity.
+    """
+    wx, wy, wz = J[3, c], J[4, c], J[5, c]
+    out[row + 0, col] += sign * (J[0, c] - (point[1] * wz - point[2] * wy))
+    out[row + 1, col] += sign * (J[1, c] - (point[2] * wx - point[0] * wz))
+    out[row + 2, col] += sign * (J[2, c] - (point[0] * wy - point[1] * wx))
+    if rows == 6:
+        for a in range(3):
+            out[row + 3 + a, col] += sign * (H[a, 0] * wx + H[a, 1] * wy + H[a, 2] * wz)
+
+
+@njit(cache=True)
+def _add_columns(J, G, o, rows, cols, colmap, point, H, sign):
+    for c in cols:
+        if c >= 0 and colmap[c] >= 0:
+            _column(J, c, rows, point, H, sign, G, o, colmap[c])
+
+
+@njit(cache=True)
+def _rotation_weights(E, i, Ht, Ha):
+    """``H_tip = (tr(E) I - E)/2`` and ``H_anchor = (tr(E) I - E^T)/2`` of closure ``i``."""
+    tr = E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2]
+    for a in range(3):
+        for b in range(3):
+            Ht[a, b] = -0.5 * E[i, a, b]
+            Ha[a, b] = -0.5 * E[i, b, a]
+        Ht[a, a] += 0.5 * tr
+        Ha[a, a] += 0.5 * tr
+
+
+@njit(cache=True)
+def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
+    """Fill ``G`` (6*rows x n_free): derivative of the residual w.r.t. the free velocities.
+
+    ``colmap[v]`` is the column of velocity index ``v`` in ``G`` or -1 when that joint is held.
+    """
+    G[:, :] = 0.0
+    Ht = np.empty((3, 3))
+    Ha = np.empty((3, 3))
+    for i in range(6):
+        o = i * rows
+        if rows == 6:
+            _rotation_weights(E, i, Ht, Ha)
+        _add_columns(J, G, o, rows, leg_cols[i], colmap, p[i], Ht, 1.0)
+        _add_columns(J, G, o, rows, ff_cols, colmap, p[6 + i], Ha, -1.0)
+
+
+@njit(cache=True)
+def scatter_step(x, free_v, dv, max_step):
+    """``dv[free_v] = -x`` (the Newton step in the full velocity space; held entries stay 0),
+    scaled down, direction kept, so that no entry exceeds ``max_step`` (rad or m).
+    """
+    biggest = 0.0
+    for k in range(x.shape[0]):
+        biggest = max(biggest, abs(x[k]))
+    scale = 1.0 if biggest <= max_step else max_step / biggest
+    for k in range(free_v.shape[0]):
+        dv[free_v[k]] = -scale * x[k]
+
+
+@njit(cache=True)
+def first_outside(values, lower, upper, slack):
+    """Index of the first entry that is NaN/inf or outside ``[lower - slack, upper + slack]``, or -1 when all are fine."""
+    for k in range(values.shape[0]):
+        v = values[k]
+        if not (lower[k] - slack <= v <= upper[k] + slack):
+            return k
+    return -1
+
+
+@njit(cache=True)
+def first_outside_at(q, idx, lower, upper, slack):
+    """Like :func:`first_outside` on ``q[idx]``; returns the position in ``idx`` or -1."""
+    for k in range(idx.shape[0]):
+        v = q[idx[k]]
+        if not (lower[k] - slack <= v <= upper[k] + slack):
+            return k
+    return -1
+
+
+@njit(cache=True)
+def rigid_error(T):
+    """How far the 4x4 ``T`` is from a rigid transform: ``max |R^T R - I|``, ``det R - 1``
+    and the bottom row, folded into one number (``inf`` for NaN/inf entries).
+    """
+    err = 0.0
+    for a in range(4):
+        for b in range(4):
+            if not np.isfinite(T[a, b]):
+                return np.inf
+    for a in range(3):
+        for b in range(3):
+            s = T[0, a] * T[0, b] + T[1, a] * T[1, b] + T[2, a] * T[2, b]
+            err = max(err, abs(s - (1.0 if a == b else 0.0)))
+    det = (
+        T[0, 0] * (T[1, 1] * T[2, 2] - T[1, 2] * T[2, 1])
+        - T[0, 1] * (T[1, 0] * T[2, 2] - T[1, 2] * T[2, 0])
+        + T[0, 2] * (T[1, 0] * T[2, 1] - T[1, 1] * T[2, 0])
+    )
+    err = max(err, abs(det - 1.0))
+    err = max(err, abs(T[3, 0]), abs(T[3, 1]), abs(T[3, 2]), abs(T[3, 3] - 1.0))
+    return err
+
+
+@njit(cache=True)
+def pose_to_xyzquat(T, H, out):
+    """Free-flyer configuration ``(x, y, z, qx, qy, qz, qw)`` of pose ``T`` relative to the
+    home placement ``H`` (both 4x4): ``H^-1 T``.
+    """
+    M = np.empty((3, 3))
+    for a in range(3):
+        out[a] = H[0, a] * (T[0, 3] - H[0, 3]) + H[1, a] * (T[1, 3] - H[1, 3]) + H[2, a] * (T[2, 3] - H[2, 3])
+        for b in range(3):
+            M[a, b] = H[0, a] * T[0, b] + H[1, a] * T[1, b] + H[2, a] * T[2, b]
+    tr = M[0, 0] + M[1, 1] + M[2, 2]
+    if tr > 0.0:
+        s = 2.0 * np.sqrt(1.0 + tr)
+        qw, qx, qy, qz = 0.25 * s, (M[2, 1] - M[1, 2]) / s, (M[0, 2] - M[2, 0]) / s, (M[1, 0] - M[0, 1]) / s
+    elif M[0, 0] > M[1, 1] and M[0, 0] > M[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + M[0, 0] - M[1, 1] - M[2, 2])
+        qw, qx, qy, qz = (M[2, 1] - M[1, 2]) / s, 0.25 * s, (M[0, 1] + M[1, 0]) / s, (M[0, 2] + M[2, 0]) / s
+    elif M[1, 1] > M[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + M[1, 1] - M[0, 0] - M[2, 2])
+        qw, qx, qy, qz = (M[0, 2] - M[2, 0]) / s, (M[0, 1] + M[1, 0]) / s, 0.25 * s, (M[1, 2] + M[2, 1]) / s
+    else:
+        s = 2.0 * np.sqrt(1.0 + M[2, 2] - M[0, 0] - M[1, 1])
+        qw, qx, qy, qz = (M[1, 0] - M[0, 1]) / s, (M[0, 2] + M[2, 0]) / s, (M[1, 2] + M[2, 1]) / s, 0.25 * s
+    n = np.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+    out[3], out[4], out[5], out[6] = qx / n, qy / n, qz / n, qw / n
+
+
+@njit(cache=True)
+def xyzquat_to_pose(x, H, T):
+    """Pose ``T = H * X`` (4x4) of the free-flyer configuration ``x`` relative to ``H``."""
+    qx, qy, qz, qw = x[3], x[4], x[5], x[6]
+    n = np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+    qx, qy, qz, qw = qx / n, qy / n, qz / n, qw / n
+    X = np.empty((3, 3))
+    X[0, 0], X[0, 1], X[0, 2] = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)
+    X[1, 0], X[1, 1], X[1, 2] = 2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)
+    X[2, 0], X[2, 1], X[2, 2] = 2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)
+    for a in range(3):
+        for b in range(3):
+            T[a, b] = H[a, 0] * X[0, b] + H[a, 1] * X[1, b] + H[a, 2] * X[2, b]
+        T[a, 3] = H[a, 0] * x[0] + H[a, 1] * x[1] + H[a, 2] * x[2] + H[a, 3]
+        T[3, a] = 0.0
+    T[3, 3] = 1.0

@@ -1,0 +1,179 @@
+"""Numba linear algebra of the Newton step: small dense LU and the structured solves.
+
+* :func:`lu_factor` / :func:`lu_apply`: LU with partial pivoting, reporting the pivot ratio
+  (smallest / largest pivot magnitude) that the solver uses to detect singularities.
+* :func:`block_solve`: inverse kinematics, where the closure Jacobian is block diagonal.
+* :func:`schur_solve`: direct kinematics, where each leg's block is eliminated and only a
+  6x6 system in the platform step remains.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..kinematics.kernels import _column, _rotation_weights
+
+
+@njit(cache=True)
+def lu_factor(A, LU, piv):
+    """LU factorisation with partial pivoting of the square ``A`` into ``LU`` / ``piv``.
+
+    Returns the ratio of the smallest to the largest pivot magnitude: 0 when ``A`` is
+    singular (then ``LU`` is unusable), tiny near a singularity.
+    """
+    n = A.shape[0]
+    LU[:, :] = A
+    pmax = 0.0
+    pmin = np.inf
+    for k in range(n):
+        p = k
+        best = abs(LU[k, k])
+        for i in range(k + 1, n):
+            v = abs(LU[i, k])
+            if v > best:
+                best, p = v, i
+        piv[k] = p
+        if not best > 0.0:  # zero pivot, or NaN entries
+            return 0.0
+        if p != k:
+            for j in range(n):
+                LU[k, j], LU[p, j] = LU[p, j], LU[k, j]
+        pmax = max(pmax, best)
+        pmin = min(pmin, best)
+        inv = 1.0 / LU[k, k]
+        for i in range(k + 1, n):
+            f = LU[i, k] * inv
+            LU[i, k] = f
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    LU[i, j] -= f * LU[k, j]
+    return pmin / pmax
+
+
+@njit(cache=True)
+def lu_apply(LU, piv, b, x):
+    """Solve ``A x = b`` with the factors of :func:`lu_factor`."""
+    n = LU.shape[0]
+    x[:] = b
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            x[k], x[p] = x[p], x[k]
+    for i in range(n):
+        s = x[i]
+        for j in range(i):
+            s -= LU[i, j] * x[j]
+        x[i] = s
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for j in range(i + 1, n):
+            s -= LU[i, j] * x[j]
+        x[i] = s / LU[i, i]
+
+
+@njit(cache=True)
+def block_solve(G, r, rows, block_cols, LUb, piv, rb, xb, x):
+    """Solve ``G x = r`` when ``G`` is block diagonal: closure ``i``'s rows touch only the
+    columns ``block_cols[i]`` (inverse kinematics: the platform is held). Six small LUs
+    instead of one large one. Returns the smallest per-block pivot ratio (0 = singular).
+    """
+    worst = 1.0
+    for i in range(block_cols.shape[0]):
+        o = i * rows
+        for a in range(rows):
+            rb[a] = r[o + a]
+            for b in range(rows):
+                LUb[a, b] = G[o + a, block_cols[i, b]]
+        ratio = lu_factor(LUb, LUb, piv)  # in place: LU[:, :] = A is a no-op
+        if ratio == 0.0:
+            return 0.0
+        worst = min(worst, ratio)
+        lu_apply(LUb, piv, rb, xb)
+        for b in range(rows):
+            x[block_cols[i, b]] = xb[b]
+    return worst
+
+
+@njit(cache=True)
+def lu_apply_transposed(LU, piv, b, x):
+    """Solve ``A^T x = b`` with the factors of :func:`lu_factor` (``P A = L U``)."""
+    n = LU.shape[0]
+    x[:] = b
+    for i in range(n):  # U^T y = b
+        s = x[i]
+        for j in range(i):
+            s -= LU[j, i] * x[j]
+        x[i] = s / LU[i, i]
+    for i in range(n - 1, -1, -1):  # L^T z = y
+        s = x[i]
+        for j in range(i + 1, n):
+            s -= LU[j, i] * x[j]
+        x[i] = s
+    for k in range(n - 1, -1, -1):  # x = P^T z
+        p = piv[k]
+        if p != k:
+            x[k], x[p] = x[p], x[k]
+
+
+@njit(cache=True)
+def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w):
+    """Newton step when the platform is free and each leg has ``rows`` joints, one held.
+
+    Per leg the square block ``L_i`` (all its joints) is factored once; ``n_i`` with
+    ``L_i^T n_i = e_held`` eliminates the leg's free joints, leaving a 6x6 system
+    ``(n_i^T A_i) v = -n_i^T r_i`` for the platform step ``v``; the leg steps follow from
+    ``L_i dq_i = -(r_i + A_i v)`` (whose held entry is then zero). Writes ``x`` (``G x = r``,
+    the step is ``-x``) and returns the smallest pivot ratio (0 = singular).
+    """
+    Ht = np.empty((3, 3))
+    Ha = np.empty((3, 3))
+    worst = 1.0
+    rhs = np.empty(6)
+    for i in range(6):
+        o = i * rows
+        if rows == 6:
+            _rotation_weights(E, i, Ht, Ha)
+        LB[i, :, :] = 0.0
+        A[i, :, :] = 0.0
+        for k in range(rows):
+            _column(J, leg_cols[i, k], rows, p[i], Ht, 1.0, LB[i], 0, k)
+        for k in range(6):
+            _column(J, ff_cols[k], rows, p[6 + i], Ha, -1.0, A[i], 0, k)
+        ratio = lu_factor(LB[i], LB[i], PB[i])
+        if ratio == 0.0:
+            return 0.0
+        worst = min(worst, ratio)
+        w[:rows] = 0.0
+        w[held_pos[i]] = 1.0
+        lu_apply_transposed(LB[i], PB[i], w[:rows], n[:rows])
+        s = 0.0
+        for a in range(rows):
+            s += n[a] * r[o + a]
+        rhs[i] = -s
+        for k in range(6):
+            s = 0.0
+            for a in range(rows):
+                s += n[a] * A[i, a, k]
+            M[i, k] = s
+    ratio = lu_factor(M, M, pm)
+    if ratio == 0.0:
+        return 0.0
+    worst = min(worst, ratio)
+    v = np.empty(6)
+    lu_apply(M, pm, rhs, v)
+    for k in range(6):
+        x[colmap[ff_cols[k]]] = -v[k]
+    for i in range(6):
+        o = i * rows
+        for a in range(rows):
+            s = r[o + a]
+            for k in range(6):
+                s += A[i, a, k] * v[k]
+            w[a] = -s
+        lu_apply(LB[i], PB[i], w[:rows], n[:rows])
+        for k in range(rows):
+            c = colmap[leg_cols[i, k]]
+            if c >= 0:
+                x[c] = -n[k]
+    return worst

@@ -1,0 +1,246 @@
+"""Newton solver on the constraint manifold, for any set of held joints.
+
+Unknowns are the velocities of the free joints; each step solves the reduced closure system
+``G dq = -r`` (36 rows for 6-D closures, 18 for 3-D ones) and moves along the manifold with
+``pin.integrate``. Direct kinematics holds the six measured prismatic joints, inverse
+kinematics holds the platform's floating joint, a hybrid problem holds any joints named.
+
+The stopping rule is on the closure residual itself (``tol``, mixed metres/radians), checked
+after every step (a warm start 1 ms away takes two steps to 1e-10). A step with an entry
+larger than ``MAX_STEP`` is shortened along its direction: cold starts far from home
+otherwise overshoot into a spurious 180-degree-flipped closure.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from ..description.model import ClosedLoopModel
+from . import kernels, linalg
+
+STATUSES = ("converged", "max_iterations", "singular", "out_of_limits", "invalid_input")
+SINGULAR_PIVOT_RATIO = 1e-13
+MAX_STEP = 0.5  # rad or m: largest entry of one Newton step (cold starts far from the solution)
+
+
+@dataclass(frozen=True)
+class Solution:
+    """Result of one solve. Check :attr:`converged` before using :attr:`pose`.
+
+    Attributes:
+        pose: (4, 4) homogeneous transform base -> platform (metres).
+        q: Pinocchio configuration of the URDF model (``nq``), free-flyer part relative to home.
+        lengths: (6,) measured-joint readings, leg order (metres, zero at home).
+        status: one of ``STATUSES``.
+        iterations: Newton steps taken.
+        residual: final closure residual norm (metres and radians mixed).
+        jacobian: reduced constraint Jacobian at the final configuration (rows: closures,
+            columns: free velocities), or ``None`` if the input was rejected.
+        message: human-readable detail when ``status != "converged"``.
+    """
+
+    pose: np.ndarray
+    q: np.ndarray
+    lengths: np.ndarray
+    status: str
+    iterations: int
+    residual: float
+    jacobian: np.ndarray | None = field(default=None, repr=False)
+    message: str = ""
+
+    @property
+    def converged(self) -> bool:
+        """True when the pose is a valid closed configuration within all joint limits."""
+        return self.status == "converged"
+
+    @property
+    def condition_number(self) -> float:
+        """2-norm condition number of :attr:`jacobian` (``inf`` when singular, ``nan`` if none)."""
+        if self.jacobian is None:
+            return float("nan")
+        s = np.linalg.svd(self.jacobian, compute_uv=False)
+        return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
+
+    @property
+    def position(self) -> np.ndarray:
+        """Platform origin in the base frame (m)."""
+        return self.pose[:3, 3]
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """Platform orientation in the base frame (3x3)."""
+        return self.pose[:3, :3]
+
+    @property
+    def placement(self) -> pin.SE3:
+        """:attr:`pose` as a Pinocchio ``SE3`` (base -> platform, metres)."""
+        return pin.SE3(self.pose)
+
+
+class NewtonSolver:
+    """Newton iteration for one choice of held joints on a :class:`ClosedLoopModel`.
+
+    Args:
+        clm: the loaded hexapod.
+        held_joints: Pinocchio joint ids whose values stay as given.
+
+    Buffers are allocated once here; :meth:`run` allocates only the new configuration
+    returned by ``pin.integrate``.
+    """
+
+    def __init__(self, clm: ClosedLoopModel, held_joints: tuple[int, ...]):
+        self.clm = clm
+        self.model, probe_cols = clm.solver_model()
+        self.data = self.model.createData()
+        self.J = self.data.J  # a view on Pinocchio's buffer, refreshed by computeJointJacobians
+        self.probe_cols = np.ascontiguousarray(probe_cols, dtype=np.int64)
+        m = clm.model
+        held_v = np.zeros(clm.nv, dtype=bool)
+        for j in held_joints:
+            held_v[m.joints[j].idx_v : m.joints[j].idx_v + m.joints[j].nv] = True
+        self.held_joints = tuple(held_joints)
+        self.free_v = np.flatnonzero(~held_v).astype(np.int64)
+        self.colmap = np.full(self.model.nv, -1, dtype=np.int64)
+        self.colmap[self.free_v] = np.arange(self.free_v.size)
+        nmax = max(len(leg.joints) for leg in clm.legs)
+        self.leg_cols = np.full((6, nmax), -1, dtype=np.int64)
+        for i, leg in enumerate(clm.legs):
+            cols = [m.joints[j].idx_v for j in leg.joints]
+            self.leg_cols[i, : len(cols)] = cols
+        self.ff_cols = np.arange(clm.platform_v, clm.platform_v + 6, dtype=np.int64)
+        self.rows = 6 if clm.kind == "6d" else 3
+        n_res, n_free = 6 * self.rows, self.free_v.size
+        self.square = n_res == n_free
+        self.R = np.zeros((12, 3, 3))
+        self.p = np.zeros((12, 3))
+        self.E = np.zeros((6, 3, 3))
+        self.r = np.zeros(n_res)
+        self.G = np.zeros((n_res, n_free))
+        self.x = np.zeros(n_free)
+        self.LU = np.zeros((n_res, n_free))
+        self.piv = np.zeros(n_free, dtype=np.int64)
+        self.block_cols = self._blocks(held_v)
+        self.held_pos = self._schur(held_v)
+        if self.held_pos is not None:
+            self.LB = np.zeros((6, self.rows, self.rows))
+            self.PB = np.zeros((6, self.rows), dtype=np.int64)
+            self.A = np.zeros((6, self.rows, 6))
+            self.M = np.zeros((6, 6))
+            self.pm = np.zeros(6, dtype=np.int64)
+            self.nb, self.wb = np.zeros(6), np.zeros(6)
+        if self.block_cols is not None:
+            self.LUb = np.zeros((self.rows, self.rows))
+            self.rb, self.xb = np.zeros(self.rows), np.zeros(self.rows)
+        self.dv = np.zeros(self.model.nv)
+        self.q_aug = pin.neutral(self.model)
+        self._jac_args = (self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
+
+    def _blocks(self, held_v: np.ndarray) -> np.ndarray | None:
+        """(6, rows) columns of G per closure when G is block diagonal and square per block
+        (platform held, every leg with as many free joints as closure rows), else None.
+        """
+        if not held_v[self.clm.platform_v]:
+            return None
+        blocks = []
+        for row in self.leg_cols:
+            cols = [int(self.colmap[c]) for c in row if c >= 0 and self.colmap[c] >= 0]
+            if len(cols) != self.rows:
+                return None
+            blocks.append(cols)
+        return np.array(blocks, dtype=np.int64)
+
+    def _schur(self, held_v: np.ndarray) -> np.ndarray | None:
+        """Position of the held joint in each leg when the Schur path applies (platform free,
+        every leg with ``rows`` one-dof joints of which exactly one is held), else None.
+        """
+        if held_v[self.clm.platform_v] or not self.square:
+            return None
+        pos = []
+        for row in self.leg_cols:
+            cols = [int(c) for c in row if c >= 0]
+            held = [k for k, c in enumerate(cols) if self.colmap[c] < 0]
+            if len(cols) != self.rows or len(held) != 1:
+                return None
+            pos.append(held[0])
+        return np.array(pos, dtype=np.int64)
+
+    def _solve_step(self) -> float:
+        """Fill ``self.x`` with the solution of ``G x = r``; return the smallest pivot ratio
+        (0 when singular, 1 for the least-squares path of non-square hybrid problems).
+        """
+        if self.held_pos is not None:
+            return linalg.schur_solve(
+                self.J,
+                self.leg_cols,
+                self.held_pos,
+                self.ff_cols,
+                self.colmap,
+                self.rows,
+                self.p,
+                self.E,
+                self.r,
+                self.x,
+                self.LB,
+                self.PB,
+                self.A,
+                self.M,
+                self.pm,
+                self.nb,
+                self.wb,
+            )
+        kernels.jacobian(*self._jac_args)
+        if not self.square:
+            self.x[:] = np.linalg.lstsq(self.G, self.r, rcond=None)[0]
+            return 1.0
+        if self.block_cols is not None:
+            return linalg.block_solve(
+                self.G, self.r, self.rows, self.block_cols, self.LUb, self.piv, self.rb, self.xb, self.x
+            )
+        ratio = linalg.lu_factor(self.G, self.LU, self.piv)
+        if ratio >= SINGULAR_PIVOT_RATIO:
+            linalg.lu_apply(self.LU, self.piv, self.r, self.x)
+        return ratio
+
+    def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``."""
+        self.q_aug[: self.clm.nq] = q
+        pin.computeJointJacobians(self.model, self.data, self.q_aug)
+        kernels.residual(self.J, self.probe_cols, self.rows, self.R, self.p, self.E, self.r)
+        kernels.jacobian(*self._jac_args)
+        return self.r.copy(), self.G.copy()
+
+    def run(self, q0: np.ndarray, tol: float, max_iter: int) -> tuple[np.ndarray, str, int, float, np.ndarray, str]:
+        """Iterate from URDF configuration ``q0`` (held joints already set).
+
+        Returns ``(q, status, iterations, residual, jacobian, message)``.
+        """
+        model, data, J = self.model, self.data, self.J
+        probe_cols, rows, R, p, E, r = self.probe_cols, self.rows, self.R, self.p, self.E, self.r
+        q = self.q_aug
+        q[: self.clm.nq] = q0
+        status, message, it = "max_iterations", "", 0
+        while True:
+            pin.computeJointJacobians(model, data, q)
+            norm, min_trace = kernels.residual(J, probe_cols, rows, R, p, E, r)
+            if norm <= tol:
+                status = "converged"
+                if min_trace < 1.0:
+                    status, message = "max_iterations", "converged to a spurious closure flipped by 180 deg"
+                break
+            if it >= max_iter or not norm < np.inf:  # also stops on NaN
+                message = f"no convergence to {tol:g} in {it} iterations (residual {norm:.3g})"
+                break
+            ratio = self._solve_step()
+            if ratio < SINGULAR_PIVOT_RATIO:
+                status = "singular"
+                message = f"constraint Jacobian singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g})"
+                break
+            kernels.scatter_step(self.x, self.free_v, self.dv, MAX_STEP)
+            q = pin.integrate(model, q, self.dv)
+            it += 1
+        kernels.jacobian(*self._jac_args)
+        self.q_aug = q
+        return q[: self.clm.nq].copy(), status, it, float(norm), self.G.copy(), message

@@ -1,0 +1,1 @@
+"""The papers' studies (accuracy, workspace evaluation, tracking, timing): functions that return results."""

@@ -1,0 +1,337 @@
+"""``hexapod reproduce``: seed 000's accuracy study (§5.2, Table 1, Figs.
+
+4-7) in simulation or on measured data.
+
+Simulation: poses are drawn as in seed 000 §5.2 (home +- 50 mm, roll/pitch/yaw +- 25 deg,
+:func:`~hexapod_model.trajectories.box_poses`); a pose whose inverse kinematics leaves a stroke
+or a Cardan angle limit is discarded and redrawn. The ground truth is the Cardan-aware model
+(the URDF with its loop closures); the simulated encoder readings are the true prismatic values
+plus Gaussian noise (default sigma 10 um, the order of the LinACE encoder accuracy); the
+"measured" reference pose (motion capture) is the true pose, optionally with Gaussian noise
+(``--reference-noise`` sigma in metres on each position coordinate, and sigma / r radians on
+each rotation-vector component, with r the RMS platform anchor radius).
+
+Every set of readings is solved with the Cardan-aware model (``Hexapod.forward``, cold start
+from home, retried from the standard model's pose if needed) and with the standard spherical
+model (:mod:`hexapod_model.standard`, batch). Errors are eqs. 26-27: ``||p_ref - p_est||`` and
+the rotation angle of ``R_ref^T R_est``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..analysis.full_formulation import ForwardComparison
+from ..analysis.standard import StandardModel, skew_exp
+from ..analysis.trajectories import box_poses
+from ..exceptions import HexapodError, InputError
+from ..io.tables import LENGTH_COLUMNS, column, read_table, write_table
+from ..kinematics.hexapod import Hexapod
+from ..kinematics.rotations import matrix_to_quaternion, quaternion_to_matrix, rotation_angle
+
+DEFAULT_ENCODER_NOISE = 10e-6  # m, Gaussian sigma on each reading
+DATA_COLUMNS = LENGTH_COLUMNS + ["x", "y", "z", "qx", "qy", "qz", "qw"]
+PAPER = {  # seed 000, Table 1 (3000 measured poses)
+    "cardan": {
+        "translation_mean_mm": 0.6205,
+        "translation_std_mm": 0.2609,
+        "rotation_mean_deg": 0.4657,
+        "rotation_std_deg": 0.2417,
+    },
+    "spherical": {
+        "translation_mean_mm": 3.1684,
+        "translation_std_mm": 0.9094,
+        "rotation_mean_deg": 1.0037,
+        "rotation_std_deg": 0.5117,
+    },
+    "t_test": {"translation": {"t": -131.997, "p": "< 0.001"}, "rotation": {"t": -43.974, "p": "< 0.001"}},
+}
+
+
+@dataclass(frozen=True)
+class StudyInput:
+    """Readings (N, 6) (m, zero at home) and reference poses (N, 4, 4) to compare against."""
+
+    readings: np.ndarray
+    reference: np.ndarray
+    source: str
+
+
+Progress = Callable[[Iterable, int, str], Iterable]
+
+
+def _no_progress(iterable: Iterable, total: int, desc: str) -> Iterable:
+    return iterable
+
+
+def simulate(
+    hexa: Hexapod, n: int, seed: int = 0, encoder_noise: float = DEFAULT_ENCODER_NOISE, reference_noise: float = 0.0
+) -> StudyInput:
+    """``n`` feasible box poses, their noisy readings and (noisy) reference poses.
+
+    Args:
+        hexa: the true hexapod.
+        n: poses to draw (at least 2).
+        seed: random seed.
+        encoder_noise: Gaussian sigma added to each reading (m).
+        reference_noise: Gaussian sigma on each reference position coordinate (m), and
+            ``reference_noise / r`` rad on each rotation-vector component.
+    """
+    if n < 2:
+        raise InputError("poses", n, "need at least 2 poses for statistics")
+    for name, v in (("encoder noise", encoder_noise), ("reference noise", reference_noise)):
+        if not (np.isfinite(v) and v >= 0):
+            raise InputError(name, v, "must be a finite standard deviation >= 0 (metres)")
+    rng = np.random.default_rng(seed)
+    poses, lengths, drawn = [], [], 0
+    while len(poses) < n:
+        batch = box_poses(hexa.home_pose, max(16, int(1.3 * (n - len(poses)))), seed=int(rng.integers(2**63)))
+        for T in batch:
+            drawn += 1
+            sol = hexa.inverse(T, check=False)
+            if sol.converged:
+                poses.append(T)
+                lengths.append(sol.lengths)
+                if len(poses) == n:
+                    break
+        if drawn > 50 * n:
+            raise InputError("poses", n, f"only {len(poses)} of {drawn} drawn poses lie inside the limits")
+    truth = np.array(poses)
+    readings = np.array(lengths) + rng.normal(0.0, encoder_noise, (n, 6)) if encoder_noise else np.array(lengths)
+    reference = truth.copy()
+    if reference_noise:
+        sm = StandardModel.from_hexapod(hexa)
+        radius = float(np.sqrt(np.mean(np.sum(sm.platform_points[:, :2] ** 2, axis=1))))
+        reference[:, :3, 3] += rng.normal(0.0, reference_noise, (n, 3))
+        reference[:, :3, :3] = skew_exp(rng.normal(0.0, reference_noise / radius, (n, 3))) @ reference[:, :3, :3]
+    return StudyInput(readings, reference, f"simulation ({drawn - n} of {drawn} drawn poses rejected)")
+
+
+def load_measured(path: str | Path) -> StudyInput:
+    """Read a measured data set: columns ``l1..l6`` (m) and ``x,y,z,qx,qy,qz,qw`` (reference)."""
+    header, data = read_table(path, DATA_COLUMNS)
+    if len(data) < 2:
+        raise InputError("data rows", len(data), f"{path}: need at least 2 measured poses")
+    values = column(header, data, DATA_COLUMNS)
+    bad = np.flatnonzero(~np.all(np.isfinite(values), axis=1))
+    if bad.size:
+        raise InputError("data row", int(bad[0]) + 2, f"{path}: line {bad[0] + 2} has a missing or non-numeric value")
+    q = values[:, 9:13]
+    if np.any(np.abs(np.linalg.norm(q, axis=1) - 1.0) > 1e-3):
+        k = int(np.argmax(np.abs(np.linalg.norm(q, axis=1) - 1.0)))
+        raise InputError("quaternion", q[k].tolist(), f"{path}: line {k + 2}: qx,qy,qz,qw must be a unit quaternion")
+    reference = np.tile(np.eye(4), (len(values), 1, 1))
+    reference[:, :3, 3] = values[:, 6:9]
+    reference[:, :3, :3] = quaternion_to_matrix(q)
+    return StudyInput(values[:, :6], reference, f"measured data {path}")
+
+
+def save_measured(path: str | Path, data: StudyInput) -> Path:
+    """Write ``data`` in the ``--data`` format (inverse of :func:`load_measured`)."""
+    q = matrix_to_quaternion(data.reference[:, :3, :3])
+    rows = [
+        [*map(float, data.readings[k]), *map(float, data.reference[k, :3, 3]), *map(float, q[k])]
+        for k in range(len(data.readings))
+    ]
+    write_table(path, DATA_COLUMNS, rows)
+    return Path(path)
+
+
+def solve_cardan(
+    hexa: Hexapod, readings: np.ndarray, fallback: np.ndarray, progress: Progress = _no_progress
+) -> tuple[np.ndarray, np.ndarray]:
+    """Cardan-aware direct kinematics of every row; returns (N, 4, 4) poses and an ok mask.
+
+    Starts from home; a row that fails is retried from the IK configuration of ``fallback[k]``
+    (the standard model's pose).
+    """
+    out, ok = np.full((len(readings), 4, 4), np.nan), np.zeros(len(readings), bool)
+    for k in progress(range(len(readings)), len(readings), "Cardan-aware FK"):
+        for attempt in range(2):
+            try:
+                guess = None if attempt == 0 else hexa.inverse(fallback[k], check=False).q
+                sol = hexa.forward(readings[k], guess=guess, check=False)
+            except HexapodError:
+                continue
+            if sol.converged:
+                out[k], ok[k] = sol.pose, True
+                break
+    return out, ok
+
+
+def pose_errors(reference: np.ndarray, estimate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eqs. 26-27: translation error (mm) and rotation error (deg) per pose."""
+    dp = np.linalg.norm(reference[:, :3, 3] - estimate[:, :3, 3], axis=1) * 1e3
+    return dp, np.degrees(rotation_angle(reference[:, :3, :3], estimate[:, :3, :3]))
+
+
+def summarise(err_c: tuple[np.ndarray, np.ndarray], err_s: tuple[np.ndarray, np.ndarray]) -> dict:
+    """The JSON report: statistics of both models and paired t-tests (Cardan minus spherical)."""
+    from scipy.stats import ttest_rel
+
+    def stats(e):
+        return {
+            "translation_mean_mm": float(np.mean(e[0])),
+            "translation_std_mm": float(np.std(e[0], ddof=1)),
+            "rotation_mean_deg": float(np.mean(e[1])),
+            "rotation_std_deg": float(np.std(e[1], ddof=1)),
+        }
+
+    def test(a, b):
+        with np.errstate(all="ignore"):
+            r = ttest_rel(a, b)
+        return {k: (float(v) if np.isfinite(v) else None) for k, v in (("t", r.statistic), ("p", r.pvalue))}
+
+    return {
+        "poses": int(err_c[0].size),
+        "cardan": stats(err_c),
+        "spherical": stats(err_s),
+        "t_test": {"translation": test(err_c[0], err_s[0]), "rotation": test(err_c[1], err_s[1])},
+    }
+
+
+def _num(v: float) -> str:
+    return f"{v:.4f}" if abs(v) >= 1e-3 or v == 0 else f"{v:.3g}"
+
+
+def format_table(report: dict) -> str:
+    """Seed 000 Table 1 layout, our numbers beside the paper's."""
+    rows = [
+        ("Mean translation error mu [mm]", "translation_mean_mm"),
+        ("Std. dev. translation error sigma [mm]", "translation_std_mm"),
+        ("Mean rotation error mu [deg]", "rotation_mean_deg"),
+        ("Std. dev. rotation error sigma [deg]", "rotation_std_deg"),
+    ]
+    w = 40
+    lines = [
+        f"{'Metric':{w}s}{'Cardan-aware':>14s}{'Standard':>12s}   |{'paper: Cardan':>15s}{'Standard':>10s}",
+        "-" * (w + 26) + "   +" + "-" * 25,
+    ]
+    for label, key in rows:
+        lines.append(
+            f"{label:{w}s}{_num(report['cardan'][key]):>14s}{_num(report['spherical'][key]):>12s}   |"
+            f"{PAPER['cardan'][key]:15.4f}{PAPER['spherical'][key]:10.4f}"
+        )
+    for name in ("translation", "rotation"):
+        t, p = report["t_test"][name]["t"], report["t_test"][name]["p"]
+        ours = (
+            "n/a (identical errors)" if t is None else f"t = {t:.3f}, " + ("p < 1e-300" if p == 0 else f"p = {p:.3g}")
+        )
+        lines.append(
+            f"{'Paired t-test (' + name + ')':{w}s}{ours:>26s}   |"
+            f"{'t = ' + format(PAPER['t_test'][name]['t'], '.3f') + ', p < 0.001':>25s}"
+        )
+    lines.append(f"({report['poses']} poses; negative t = Cardan-aware errors smaller)")
+    return "\n".join(lines)
+
+
+def standard_traces(sm: StandardModel, readings: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(times s, ||dx||) per Newton step of the standard model, one pose at a time."""
+    out = []
+    for lm in readings:
+        times, norms = [], []
+        start = time.perf_counter()
+
+        def record(k, idx, step, times=times, norms=norms, start=start):
+            times.append(time.perf_counter() - start)
+            norms.append(float(np.linalg.norm(step[0])))
+
+        sm.forward(lm, callback=record)
+        out.append((np.array(times), np.array(norms)))
+    return out
+
+
+@dataclass(frozen=True)
+class StudyResult:
+    """What :func:`run_study` measured.
+
+    Attributes:
+        report: the Table 1 numbers (see :func:`summarise`).
+        solved: (N,) rows solved by both models (the others are left out of the statistics).
+        errors_cardan, errors_standard: (translation mm, rotation deg) of the solved rows.
+        positions_m: (M, 3) reference positions of the solved rows relative to home (m).
+        seconds_per_pose: {"cardan": s, "standard": s} mean solve times.
+        traces: convergence traces for Figs. 6-7 (``None`` when skipped), with per-formulation
+            summaries under ``"summary"``.
+    """
+
+    report: dict
+    solved: np.ndarray
+    errors_cardan: tuple[np.ndarray, np.ndarray]
+    errors_standard: tuple[np.ndarray, np.ndarray]
+    positions_m: np.ndarray
+    seconds_per_pose: dict
+    traces: dict | None
+
+
+def run_study(
+    hexa: Hexapod, data: StudyInput, convergence_poses: int | None = None, progress: Progress = _no_progress
+) -> StudyResult:
+    """Solve ``data`` with both models and compare with its reference poses (Table 1, Figs. 4-7).
+
+    Args:
+        hexa: the Cardan-aware model (the standard model is derived from it).
+        data: readings and reference poses (from :func:`simulate` or :func:`load_measured`).
+        convergence_poses: rows used for the convergence and conditioning traces (Figs. 6-7;
+            ``None``: all, 0: none).
+        progress: ``progress(iterable, total, description)`` wrapper for long loops.
+
+    Raises:
+        InputError: fewer than 2 rows solved by both models.
+    """
+    sm = StandardModel.from_hexapod(hexa)
+    sm.forward(data.readings[:2])  # compile / load the numba kernels before timing
+    hexa.forward(np.zeros(6), check=False)
+    t0 = time.perf_counter()
+    std = sm.forward(data.readings)
+    t_std = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    card, ok = solve_cardan(
+        hexa, data.readings, np.where(std.converged[:, None, None], std.poses, hexa.home_pose), progress
+    )
+    t_card = time.perf_counter() - t0
+    ok &= std.converged
+    if ok.sum() < 2:
+        raise InputError("poses", int(ok.sum()), "fewer than 2 rows were solved by both models")
+    err_c, err_s = pose_errors(data.reference[ok], card[ok]), pose_errors(data.reference[ok], std.poses[ok])
+    n = len(data.readings)
+    k = n if convergence_poses is None else min(convergence_poses, n)
+    traces = None
+    if k > 0:
+        fc = ForwardComparison(hexa)
+        full, red = [], []
+        for j in progress(range(k), k, "full vs reduced"):
+            f, r = fc.traces(data.readings[j])
+            full.append(f)
+            red.append(r)
+        rows = {"full": fc.full.G.shape[0], "reduced": fc.reduced.G.shape[0], "standard": 6}
+        summary = {
+            name: {
+                "rows": rows[name],
+                "iterations": float(np.mean([t.iterations for t in tr])),
+                "ms": 1e3 * float(np.mean([t.times[-1] for t in tr if t.times.size])),
+                "condition_number": float(np.mean([t.conditions.mean() for t in tr if t.conditions.size])),
+            }
+            for name, tr in (("full", full), ("reduced", red))
+        }
+        traces = {
+            "full": full,
+            "reduced": red,
+            "standard": standard_traces(sm, data.readings[: min(k, 200)]),
+            "rows": rows,
+            "summary": summary,
+        }
+    return StudyResult(
+        summarise(err_c, err_s),
+        ok,
+        err_c,
+        err_s,
+        data.reference[ok, :3, 3] - hexa.home_pose[:3, 3],
+        {"cardan": t_card / n, "standard": t_std / n},
+        traces,
+    )

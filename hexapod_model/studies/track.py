@@ -1,0 +1,161 @@
+"""``hexapod track``: seed 002's 1 kHz tracking experiment (trajectories A/B, predictors, speeds).
+
+True poses follow trajectory A or B (seed 002 eqs. 20-21; positions scaled by
+``base radius / 50`` m per paper unit, as :mod:`hexapod_model.bench`), leg readings come from
+the model's inverse kinematics (offset-Cardan model for the ``reference`` preset), and the
+:class:`~hexapod_model.tracking.Tracker` solves them at 1 kHz. Errors are absolute differences
+of the roll/pitch/yaw angles (deg) and of x, y, z (m) between solved and true poses; the
+figures show their worst value over each 100 ms window (seed 002 Figs. 7-10).
+
+A sample is *off the true branch* when its pose error exceeds ``1e-5`` (m with rotations
+scaled by the base radius); a *branch jump* is a transition onto a wrong branch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..analysis.tracking import PREDICTORS, Tracker, characteristic_length, pose_distance
+from ..analysis.trajectories import trajectory_poses
+from ..kinematics.hexapod import Hexapod
+from ..kinematics.rotations import matrix_to_rpy
+
+SPEEDS = (1, 2, 4, 8)
+OFF_BRANCH = 1e-5
+WINDOW_S = 0.1
+
+
+@dataclass(frozen=True)
+class TrackingRun:
+    """One simulated run. Arrays have one row per 1 kHz sample.
+
+    Attributes:
+        t: times (s). errors: (n, 6) |d roll|, |d pitch|, |d yaw| (deg), |dx|, |dy|, |dz| (m).
+        distance: (n,) pose error (m, rotations x base radius). off_branch: (n,) bool.
+        status: (n,) tracker status (``ok``/``flagged``/``failed``). flags: counts per flag.
+        truth_status: counts of the inverse-kinematics statuses of the true poses.
+    """
+
+    trajectory: str
+    predictor: str
+    speed: float
+    t: np.ndarray
+    errors: np.ndarray
+    distance: np.ndarray
+    off_branch: np.ndarray
+    status: np.ndarray
+    solve_times: np.ndarray
+    flags: dict = field(default_factory=dict)
+    truth_status: dict = field(default_factory=dict)
+
+    @property
+    def branch_jumps(self) -> int:
+        """Transitions from the true branch onto another one."""
+        ob = self.off_branch.astype(int)
+        return int(np.sum(np.diff(np.r_[0, ob]) == 1))
+
+    @property
+    def unflagged_off_branch(self) -> int:
+        """Samples off the true branch that the tracker returned as ``ok`` (should be 0)."""
+        return int(np.sum(self.off_branch & (self.status == "ok")))
+
+    def summary(self) -> dict:
+        """The run's figures as a JSON-ready dict."""
+        return {
+            "trajectory": self.trajectory,
+            "predictor": self.predictor,
+            "speed": self.speed,
+            "samples": int(self.t.size),
+            "max_angle_error_deg": float(self.errors[:, :3].max()),
+            "max_position_error_m": float(self.errors[:, 3:].max()),
+            "branch_jumps": self.branch_jumps,
+            "off_branch_samples": int(self.off_branch.sum()),
+            "unflagged_off_branch": self.unflagged_off_branch,
+            "flagged": int(np.sum(self.status == "flagged")),
+            "failed": int(np.sum(self.status == "failed")),
+            "flags": self.flags,
+            "truth_ik_status": self.truth_status,
+            "median_solve_us": float(np.median(self.solve_times) * 1e6),
+        }
+
+    def window_max(self) -> tuple[np.ndarray, np.ndarray]:
+        """Window end times and (m, 6) worst errors per 100 ms window."""
+        n = max(1, int(round(WINDOW_S / (self.t[1] - self.t[0])))) if self.t.size > 1 else 1
+        k = int(np.ceil(self.t.size / n))
+        out = np.array([self.errors[i * n : (i + 1) * n].max(axis=0) for i in range(k)])
+        ends = np.array([self.t[min((i + 1) * n, self.t.size) - 1] for i in range(k)])
+        return ends, out
+
+
+def true_readings(hexa: Hexapod, poses: np.ndarray) -> tuple[np.ndarray, dict]:
+    """Readings (n, 6) of the true poses by warm-started inverse kinematics (``check=False``),
+    and the count of each IK status (``out_of_limits`` = a Cardan angle or the stroke exceeded).
+    """
+    sol, out, counts = None, np.empty((len(poses), 6)), {}
+    for k, T in enumerate(poses):
+        sol = hexa.inverse(T, guess=sol, check=False)
+        counts[sol.status] = counts.get(sol.status, 0) + 1
+        out[k] = sol.lengths
+    return out, counts
+
+
+def simulate(
+    hexa: Hexapod,
+    trajectory: str = "A",
+    speed: float = 1.0,
+    predictor: str = "none",
+    rate_hz: float = 1000.0,
+    readings=None,
+    **tracker_options,
+) -> TrackingRun:
+    """Run the seed 002 experiment once (see module doc)."""
+    length = characteristic_length(hexa)
+    t, poses = trajectory_poses(trajectory, hexa.home_pose, length / 50.0, rate_hz, speed)
+    if readings is None:
+        readings = true_readings(hexa, poses)
+    lengths, truth_status = readings
+    first = hexa.inverse(poses[0], check=False)
+    tracker = Tracker(hexa, predictor, initial=first, length=length, **tracker_options)
+    n = len(t)
+    errors, dist = np.zeros((n, 6)), np.zeros(n)
+    status, times, flags = np.empty(n, dtype=object), np.zeros(n), {}
+    for k in range(n):
+        res = tracker.step(lengths[k])
+        T = res.pose
+        d = np.abs(matrix_to_rpy(T[:3, :3]) - matrix_to_rpy(poses[k][:3, :3]))
+        errors[k, :3] = np.degrees(np.minimum(d, 2 * np.pi - d))
+        errors[k, 3:] = np.abs(T[:3, 3] - poses[k][:3, 3])
+        dist[k] = pose_distance(poses[k], T, length)
+        status[k], times[k] = res.status, res.solve_time
+        for f in res.flags:
+            flags[f] = flags.get(f, 0) + 1
+    return TrackingRun(
+        trajectory,
+        predictor,
+        float(speed),
+        t,
+        errors,
+        dist,
+        dist > OFF_BRANCH * max(length, 1.0),
+        status.astype(str),
+        times,
+        flags,
+        truth_status,
+    )
+
+
+def run_table(
+    hexa: Hexapod, trajectories=("A", "B"), predictors=PREDICTORS, speeds=SPEEDS, progress=None
+) -> list[dict]:
+    """Trajectory x predictor x speed -> summary dicts (readings computed once per trajectory/speed)."""
+    rows = []
+    combos = [(tr, sp) for tr in trajectories for sp in speeds]
+    for tr, sp in progress(combos, len(combos), "track") if progress else combos:
+        length = characteristic_length(hexa)
+        _, poses = trajectory_poses(tr, hexa.home_pose, length / 50.0, 1000.0, sp)
+        readings = true_readings(hexa, poses)
+        for pr in predictors:
+            rows.append(simulate(hexa, tr, sp, pr, readings=readings).summary())
+    return rows
