@@ -87,7 +87,7 @@ def test_study_and_evaluation_commands_run(tmp_path, monkeypatch):
     for line in lines:
         cmd = shlex.split(line.split("#")[0])
         if "--table" in cmd:
-            continue  # 32 tracking runs: covered by tests/test_tracking.py
+            continue  # 32 tracking runs: covered by tests/analysis/test_tracking.py
         args = []
         skip = False
         for a in cmd[1:]:

@@ -16,9 +16,9 @@ import yourdfpy
 import hexapod_model as hm
 from hexapod_model.description.model import ClosedLoopModel
 
-from .conftest import PRESET_NAMES, hexapod
+from ..conftest import PRESET_NAMES, hexapod
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.parametrize("name", PRESET_NAMES)

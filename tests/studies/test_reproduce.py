@@ -19,7 +19,7 @@ from hexapod_model.description.urdf import geometry_to_urdf
 from hexapod_model.exceptions import InputError
 from hexapod_model.studies.reproduce import load_measured, pose_errors, simulate
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "measured.csv"
+EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "measured.csv"
 REPORT_KEYS = {"translation_mean_mm", "translation_std_mm", "rotation_mean_deg", "rotation_std_deg"}
 
 
@@ -235,7 +235,7 @@ def test_standard_model_benchmark_script_runs():
     import subprocess
     import sys
 
-    script = Path(__file__).resolve().parents[1] / "benchmarks" / "standard_model.py"
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "standard_model.py"
     out = subprocess.run(
         [sys.executable, str(script), "--poses", "2000", "--repeat", "1"], capture_output=True, text=True, timeout=300
     )

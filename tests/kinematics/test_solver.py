@@ -13,7 +13,7 @@ from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
 from hexapod_model.kinematics.rotations import rotation_angle
 from hexapod_model.kinematics.solver import NewtonSolver
 
-from .conftest import PRESET_NAMES, hexapod
+from ..conftest import PRESET_NAMES, hexapod
 
 
 def random_configuration(hexa: hm.Hexapod, rng) -> np.ndarray:

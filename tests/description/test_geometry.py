@@ -12,7 +12,7 @@ import pytest
 import hexapod_model as hm
 from hexapod_model.description.geometry import geometry_from_dict, load_geometry
 
-from .conftest import PRESET_NAMES, hexapod
+from ..conftest import PRESET_NAMES, hexapod
 
 
 def _dict(name="reference"):

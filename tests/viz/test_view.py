@@ -21,7 +21,7 @@ from hexapod_model.viz.meshcat_scene import (
 from hexapod_model.viz.render import pixels
 from hexapod_model.viz.robot_cell import add_cell
 
-from .conftest import PRESET_NAMES, hexapod
+from ..conftest import PRESET_NAMES, hexapod
 
 MOVED = (0.03, -0.02, 0.0, 12.0, -8.0, 20.0)  # x, y, dz (m) and roll, pitch, yaw (deg) from home
 

@@ -14,9 +14,9 @@ from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.cli.main import main
 from hexapod_model.kinematics.rotations import rpy_to_matrix
 
-from .conftest import PRESET_NAMES, hexapod
+from ..conftest import PRESET_NAMES, hexapod
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def read_rows(path):

@@ -16,7 +16,7 @@ from hexapod_model.cli.main import main
 from hexapod_model.kinematics.rotations import rpy_to_matrix
 from hexapod_model.studies.evaluate import Settings, run_evaluation
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MODEL1 = ROOT / "docs" / "geometries" / "seed002_model1.toml"
 MODEL2 = ROOT / "docs" / "geometries" / "seed002_model2.toml"
 
