@@ -14,7 +14,8 @@ from ._common import add_hexapod_argument, note
 
 DESCRIPTION = """\
 Map the workspace reachable for a whole cone of tool orientations (within stroke and Cardan
-limits) and the kinematic figures of Toz et al.'s evaluation (condition number, sigma_min,
+limits) and the kinematic figures of Jakobović and Jelenković (2002), "Kinematic evaluation and
+forward kinematic problem for Stewart platform based manipulators" (condition number, sigma_min,
 |det J|) over it, in parallel over all cores; resumable with --out."""
 
 

@@ -14,7 +14,8 @@ from ..studies.reproduce import DEFAULT_ENCODER_NOISE, format_table, load_measur
 from ._common import note, progress
 
 DESCRIPTION = """\
-Re-run the accuracy study of Table 1 in Schappler et al.'s offset-Cardan hexapod paper: the
+Re-run the accuracy study of Table 1 of Bem, Ude and Nemec (2026), "Experimental Validation of the
+Direct Kinematics of a Passive Stewart-Gough Platform with Modified Cardan Joints ...": the
 Cardan-aware model against the textbook spherical-joint (standard Stewart-Gough) model, on
 simulated poses within +-50 mm / +-25 deg or on your measured data (--data)."""
 
@@ -78,9 +79,10 @@ def run(args: argparse.Namespace) -> int:
     result = run_study(hexa, data, args.convergence_poses, progress)
     print(f"Table 1 re-run on {name}: {data.source}")
     if not args.data:
+        enc = DEFAULT_ENCODER_NOISE if args.encoder_noise is None else args.encoder_noise
         print(
-            f"encoder noise sigma = {1e6 * (DEFAULT_ENCODER_NOISE if args.encoder_noise is None else args.encoder_noise):g}"
-            f" um, reference noise sigma = {1e3 * (args.reference_noise or 0.0):g} mm"
+            f"encoder noise sigma = {1e6 * enc:g} um, "
+            f"reference noise sigma = {1e3 * (args.reference_noise or 0.0):g} mm"
         )
     left_out = int((~result.solved).sum())
     if left_out:

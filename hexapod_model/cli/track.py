@@ -12,7 +12,8 @@ from ..studies.track import SPEEDS, run_table, simulate
 from ._common import add_hexapod_argument, hexapod_of, progress
 
 DESCRIPTION = """\
-Track trajectory A or B of Kizir et al.'s 1 kHz experiment with the stream tracker (warm
+Track trajectory A or B of the 1 kHz experiment of Jakobović and Jelenković (2002) with the
+stream tracker (warm
 starts, eq. 22-24 predictors, flags for doubtful samples) and report the errors against the
 true poses; --table runs every trajectory x predictor x speed."""
 
