@@ -55,7 +55,9 @@ def model1() -> HexapodGeometry:
 
 
 def model2() -> HexapodGeometry:
-    """Table I, model 2: fixed struts l = 70 on guideways from r1 = 75 (floor) up to r2 = 10 at
+    """Table I, model 2.
+
+    Table I, model 2: fixed struts l = 70 on guideways from r1 = 75 (floor) up to r2 = 10 at
     height h = 20 (r1, r2 = the paper's r11, r12), pairs d = 3.5 apart; platform joints on
     r_b2 = 30, beta = 0, phi_max = 45 deg.
     """

@@ -71,7 +71,9 @@ def free_velocities(clm: ClosedLoopModel, held_joints: tuple[int, ...]) -> np.nd
 
 @njit(cache=True)
 def _assemble(Jf, masks, R, p, rot, r, G):
-    """Fill ``r`` and ``G`` (tip minus anchor, per leg: 9 rotation rows if ``rot``, then 3
+    """Residual and Jacobian of the full formulation.
+
+    Fill ``r`` and ``G`` (tip minus anchor, per leg: 9 rotation rows if ``rot``, then 3
     translation rows) from WORLD Jacobian columns ``Jf`` (6, n), the (2, 6, n) support masks
     and the (2, 6, 3, 3) / (2, 6, 3) frame placements (tips first, then anchors).
     """
@@ -207,7 +209,9 @@ class ForwardComparison:
         self.reduced = NewtonSolver(self.clm, held)
 
     def traces(self, lengths: np.ndarray, q0: np.ndarray | None = None, **kwargs) -> tuple[Trace, Trace]:
-        """Solve ``lengths`` (m) with the full (72-row) and the reduced (36-row) formulation
+        """Newton traces of the full and the reduced formulation.
+
+        Solve ``lengths`` (m) with the full (72-row) and the reduced (36-row) formulation
         from the same start (default: home); returns ``(full, reduced)``. Keywords go to
         :func:`pinv_newton`.
         """

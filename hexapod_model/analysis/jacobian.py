@@ -62,7 +62,9 @@ def _solver(hexa: Hexapod) -> NewtonSolver:
 
 
 def leg_jacobian_local(hexa: Hexapod, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(J_local, null_ratio)``: ``dl = J_local @ xi`` with ``xi`` the free-flyer velocity in the
+    """Eliminated leg Jacobian in the platform frame, and a per-leg singularity ratio.
+
+    ``(J_local, null_ratio)``: ``dl = J_local @ xi`` with ``xi`` the free-flyer velocity in the
     platform (LOCAL) frame, and per leg ``|n^T c| / |c|`` (0 when the reading cannot move with
     the platform held, i.e. the leg itself is at a singular configuration).
     """

@@ -106,7 +106,9 @@ class StandardModel:
     # ----- construction -----
     @classmethod
     def from_geometry(cls, geom: HexapodGeometry) -> StandardModel:
-        """Equivalent spherical centres of a geometry: its anchors (for Cardan joints the
+        """Equivalent spherical centres of a geometry.
+
+        Equivalent spherical centres of a geometry: its anchors (for Cardan joints the
         midpoint of the common normal of the two axes) and their distances at home.
         """
         if geom.joint_type == "guideway":
@@ -120,7 +122,9 @@ class StandardModel:
 
     @classmethod
     def from_hexapod(cls, hexa) -> StandardModel:
-        """From a loaded :class:`~hexapod_model.hexapod.Hexapod`: its geometry when it has one,
+        """Standard model of a loaded hexapod.
+
+        From a loaded :class:`~hexapod_model.hexapod.Hexapod`: its geometry when it has one,
         otherwise centres read off the URDF at home (common-normal midpoints of the first two
         and, for 6-D closures, the last two revolute axes of each leg; the anchor origin for
         3-D closures).
@@ -274,7 +278,9 @@ class StandardModel:
 
 @njit(cache=True)
 def _newton_steps(Rp, v, dist, f, step, R, t):
-    """Newton steps ``step[n] = -J[n]^-1 f[n]`` with ``J`` the rows ``[u_i, (R p_i) x u_i]``
+    """Newton steps of the standard model, applied in place.
+
+    Newton steps ``step[n] = -J[n]^-1 f[n]`` with ``J`` the rows ``[u_i, (R p_i) x u_i]``
     assembled from (N, 3, 6) ``Rp``, ``v`` and (N, 6) ``dist``; applies them in place:
     ``t += dt``, ``R <- exp([dtheta]) R`` (Rodrigues).
     """
@@ -325,7 +331,9 @@ def _poses(poses: np.ndarray) -> np.ndarray:
 
 
 def _centre(col_a: np.ndarray, col_b: np.ndarray) -> np.ndarray:
-    """Midpoint of the common normal of two revolute axes given by their WORLD Jacobian
+    """Midpoint of the common normal of two revolute axes.
+
+    Midpoint of the common normal of two revolute axes given by their WORLD Jacobian
     columns ``[v_o; w]`` (a point on the axis is ``w x v_o / |w|^2``).
     """
     lines = []

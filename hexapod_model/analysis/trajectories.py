@@ -50,7 +50,9 @@ def trajectory_poses(
 def box_poses(
     home: np.ndarray, n: int, seed: int = 0, translation: float = 0.05, angle_deg: float = 25.0
 ) -> np.ndarray:
-    """(n, 4, 4) random poses: home + uniform translation in +-``translation`` (m) and
+    """Random poses in a box around home.
+
+    (n, 4, 4) random poses: home + uniform translation in +-``translation`` (m) and
     roll/pitch/yaw uniform in +-``angle_deg`` (seed 000 §5.2).
     """
     rng = np.random.default_rng(seed)

@@ -27,7 +27,9 @@ from ..kinematics.hexapod import Hexapod
 
 
 def cone_rotations(cone_deg: float, samples: int) -> np.ndarray:
-    """(1 + samples, 3, 3) tool orientations: upright, then tilted by ``cone_deg`` about the
+    """Tool orientations of a cone.
+
+    (1 + samples, 3, 3) tool orientations: upright, then tilted by ``cone_deg`` about the
     horizontal axes ``(-sin a, cos a, 0)`` for ``samples`` azimuths ``a`` (base frame).
     """
     out = [np.eye(3)]
@@ -41,7 +43,9 @@ def cone_rotations(cone_deg: float, samples: int) -> np.ndarray:
 
 
 def platform_cone_ok(hexa: Hexapod, q: np.ndarray, pose: np.ndarray) -> bool:
-    """Leg directions seen from the platform within ``cardan_limit`` of their home direction
+    """Whether the leg directions stay within the Cardan limit.
+
+    Leg directions seen from the platform within ``cardan_limit`` of their home direction
     (only checked for ``spherical``/``guideway`` geometries; always True otherwise).
     """
     g = hexa.geometry
@@ -60,7 +64,10 @@ def platform_cone_ok(hexa: Hexapod, q: np.ndarray, pose: np.ndarray) -> bool:
 
 @dataclass(frozen=True)
 class SliceResult:
-    """One z-slice of the grid: arrays of shape (ny, nx); figures are orientation averages (NaN outside the workspace)."""
+    """One z-slice of the grid.
+
+    Arrays of shape (ny, nx); figures are orientation averages (NaN outside the workspace).
+    """
 
     index: int
     inside: np.ndarray
@@ -101,7 +108,9 @@ def compute_slice(
 
 
 def probe_extent(hexa: Hexapod, step: float, max_steps: int = 400) -> np.ndarray:
-    """(3, 2) box (m, base frame) around home reachable along +-x, +-y, +-z with the platform
+    """Box around home reachable along the axes.
+
+    (3, 2) box (m, base frame) around home reachable along +-x, +-y, +-z with the platform
     upright, found by marching outward in ``step`` increments; used to size the grid.
     """
     home = hexa.home_pose

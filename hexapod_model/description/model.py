@@ -152,12 +152,15 @@ class ClosedLoopModel:
             raise UrdfError(
                 self.source,
                 f"{self.legs[worst].name}: {err[worst]:.3g}",
-                "the zero configuration does not close the loop (contract: all leg joints at zero close every loop at home)",
+                "the zero configuration does not close the loop "
+                "(contract: all leg joints at zero close every loop at home)",
             )
 
     # ----- queries -----
     def closure_errors(self, q: np.ndarray) -> np.ndarray:
-        """Per-leg closure error norm (log6 for 6d, point distance for 3d) at ``q``, through
+        """Per-leg closure error through Pinocchio's constraint models.
+
+        Per-leg closure error norm (log6 for 6d, point distance for 3d) at ``q``, through
         Pinocchio's constraint models (the slow, reference path).
         """
         pin.computeJointJacobians(self.model, self.data, q)

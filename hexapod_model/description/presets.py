@@ -94,7 +94,9 @@ def spherical() -> HexapodGeometry:
 
 
 def three_six() -> HexapodGeometry:
-    """Seed 003's 3-6 sensor: six base points on a regular hexagon, legs meeting in pairs
+    """The 3-6 sensor.
+
+    Seed 003's 3-6 sensor: six base points on a regular hexagon, legs meeting in pairs
     at three platform points (ball joints).
     """
     rb, ra = 0.20, 0.12

@@ -65,7 +65,9 @@ def residual(J, probe_cols, rows, R, p, E, r):
 
 @njit(cache=True)
 def _column(J, c, rows, point, H, sign, out, row, col):
-    """Write ``sign`` times the residual derivative along velocity ``c`` into ``out[row:row+rows, col]``:
+    """Add one column of the closure Jacobian.
+
+    Write ``sign`` times the residual derivative along velocity ``c`` into ``out[row:row+rows, col]``:
     linear velocity of ``point`` and, for 6-row closures, ``H`` times the angular velocity.
     """
     wx, wy, wz = J[3, c], J[4, c], J[5, c]
@@ -115,7 +117,9 @@ def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
 
 @njit(cache=True)
 def scatter_step(x, free_v, dv, max_step):
-    """``dv[free_v] = -x`` (the Newton step in the full velocity space; held entries stay 0),
+    """Scatter a Newton step into the full velocity space, limited in size.
+
+    ``dv[free_v] = -x`` (the Newton step in the full velocity space; held entries stay 0),
     scaled down, direction kept, so that no entry exceeds ``max_step`` (rad or m).
     """
     biggest = 0.0
@@ -128,7 +132,7 @@ def scatter_step(x, free_v, dv, max_step):
 
 @njit(cache=True)
 def first_outside(values, lower, upper, slack):
-    """Index of the first entry that is NaN/inf or outside ``[lower - slack, upper + slack]``, or -1 when all are fine."""
+    """Index of the first entry that is NaN/inf or outside ``[lower - slack, upper + slack]``; -1 if none."""
     for k in range(values.shape[0]):
         v = values[k]
         if not (lower[k] - slack <= v <= upper[k] + slack):
@@ -148,7 +152,9 @@ def first_outside_at(q, idx, lower, upper, slack):
 
 @njit(cache=True)
 def rigid_error(T):
-    """How far the 4x4 ``T`` is from a rigid transform: ``max |R^T R - I|``, ``det R - 1``
+    """Distance of a 4x4 matrix from a rigid transform.
+
+    How far the 4x4 ``T`` is from a rigid transform: ``max |R^T R - I|``, ``det R - 1``
     and the bottom row, folded into one number (``inf`` for NaN/inf entries).
     """
     err = 0.0
@@ -172,7 +178,9 @@ def rigid_error(T):
 
 @njit(cache=True)
 def pose_to_xyzquat(T, H, out):
-    """Free-flyer configuration ``(x, y, z, qx, qy, qz, qw)`` of pose ``T`` relative to the
+    """Free-flyer configuration of a pose relative to home.
+
+    Free-flyer configuration ``(x, y, z, qx, qy, qz, qw)`` of pose ``T`` relative to the
     home placement ``H`` (both 4x4): ``H^-1 T``.
     """
     M = np.empty((3, 3))

@@ -74,7 +74,9 @@ def lu_apply(LU, piv, b, x):
 
 @njit(cache=True)
 def block_solve(G, r, rows, block_cols, LUb, piv, rb, xb, x):
-    """Solve ``G x = r`` when ``G`` is block diagonal: closure ``i``'s rows touch only the
+    """Solve a block-diagonal system by blocks.
+
+    Solve ``G x = r`` when ``G`` is block diagonal: closure ``i``'s rows touch only the
     columns ``block_cols[i]`` (inverse kinematics: the platform is held). Six small LUs
     instead of one large one. Returns the smallest per-block pivot ratio (0 = singular).
     """

@@ -120,7 +120,9 @@ def euler_to_matrix(order: str, angles) -> np.ndarray:
 
 
 def matrix_to_euler(order: str, R) -> np.ndarray:
-    """(..., 3) angles ``t1, t2, t3`` (rad) of :func:`euler_to_matrix`, ``t2`` in [-pi/2, pi/2],
+    """Euler angles of rotation matrices.
+
+    (..., 3) angles ``t1, t2, t3`` (rad) of :func:`euler_to_matrix`, ``t2`` in [-pi/2, pi/2],
     ``t1``, ``t3`` in (-pi, pi]. At gimbal lock (``|t2| = pi/2``) ``t3 = 0`` is chosen.
     """
     i, j, k, s = _check_order(order)
@@ -133,7 +135,9 @@ def matrix_to_euler(order: str, R) -> np.ndarray:
 
 
 def euler_solutions(order: str, R) -> np.ndarray:
-    """(..., 2, 3) both angle triples of ``R`` for ``order``: :func:`matrix_to_euler` and
+    """Both Euler angle triples of rotation matrices.
+
+    (..., 2, 3) both angle triples of ``R`` for ``order``: :func:`matrix_to_euler` and
     ``(t1 + pi, pi - t2, t3 + pi)`` (wrapped to (-pi, pi]); seed 003 notes this ambiguity.
     """
     a = matrix_to_euler(order, R)

@@ -139,7 +139,9 @@ class NewtonSolver:
         self._jac_args = (self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
 
     def _blocks(self, held_v: np.ndarray) -> np.ndarray | None:
-        """(6, rows) columns of G per closure when G is block diagonal and square per block
+        """Columns of each block when the closure Jacobian is block diagonal.
+
+        (6, rows) columns of G per closure when G is block diagonal and square per block
         (platform held, every leg with as many free joints as closure rows), else None.
         """
         if not held_v[self.clm.platform_v]:
@@ -153,7 +155,9 @@ class NewtonSolver:
         return np.array(blocks, dtype=np.int64)
 
     def _schur(self, held_v: np.ndarray) -> np.ndarray | None:
-        """Position of the held joint in each leg when the Schur path applies (platform free,
+        """Held joint of each leg when the Schur path applies.
+
+        Position of the held joint in each leg when the Schur path applies (platform free,
         every leg with ``rows`` one-dof joints of which exactly one is held), else None.
         """
         if held_v[self.clm.platform_v] or not self.square:
@@ -168,7 +172,9 @@ class NewtonSolver:
         return np.array(pos, dtype=np.int64)
 
     def _solve_step(self) -> float:
-        """Fill ``self.x`` with the solution of ``G x = r``; return the smallest pivot ratio
+        """Solve the Newton system into ``self.x``.
+
+        Fill ``self.x`` with the solution of ``G x = r``; return the smallest pivot ratio
         (0 when singular, 1 for the least-squares path of non-square hybrid problems).
         """
         if self.held_pos is not None:

@@ -35,7 +35,9 @@ def _stats(times_s: list[float], iterations: list[int]) -> dict:
 
 
 def trajectory_readings(hexa: Hexapod, name: str = "A") -> tuple[np.ndarray, np.ndarray]:
-    """Seed 002's trajectory ``name`` at 1 kHz scaled to the hexapod (paper unit = base
+    """Trajectory readings at 1 kHz.
+
+    Seed 002's trajectory ``name`` at 1 kHz scaled to the hexapod (paper unit = base
     radius / 50): the (n, 4, 4) true poses and the (n, 6) leg readings (m) that produce them.
     """
     _, poses = trajectory_poses(name, hexa.home_pose, characteristic_length(hexa) / 50.0)

@@ -90,7 +90,9 @@ class TrackingRun:
 
 
 def true_readings(hexa: Hexapod, poses: np.ndarray) -> tuple[np.ndarray, dict]:
-    """Readings (n, 6) of the true poses by warm-started inverse kinematics (``check=False``),
+    """Readings of the true poses.
+
+    Readings (n, 6) of the true poses by warm-started inverse kinematics (``check=False``),
     and the count of each IK status (``out_of_limits`` = a Cardan angle or the stroke exceeded).
     """
     sol, out, counts = None, np.empty((len(poses), 6)), {}

@@ -122,7 +122,9 @@ def style_scene(vis, camera=DEFAULT_CAMERA) -> None:
 
 
 def solve_view_configuration(hexa: Hexapod, lengths=None, pose_xyz_rpy=None) -> Solution:
-    """The configuration to show: FK of ``lengths`` (m), IK of ``pose_xyz_rpy`` =
+    """The configuration to show.
+
+    The configuration to show: FK of ``lengths`` (m), IK of ``pose_xyz_rpy`` =
     ``(x, y, z, roll, pitch, yaw)`` in metres and degrees as ``hexapod fk`` writes it
     (``R = Rz(yaw) Ry(pitch) Rx(roll)``), or home when both are None.
     """

@@ -125,7 +125,9 @@ def couple_to_plate(platform_pose: np.ndarray, tol: float = 1e-6, max_iter: int 
 
 
 def add_ur10(vis, cell: CellPose, world: np.ndarray | None = None):
-    """Draw the UR10 at ``cell.q`` in the meshcat visualizer ``vis`` (node ``/ur10``);
+    """Draw the UR10.
+
+    Draw the UR10 at ``cell.q`` in the meshcat visualizer ``vis`` (node ``/ur10``);
     ``world`` is the placement of the hexapod base frame in the meshcat world (default identity).
     """
     from pinocchio.visualize import MeshcatVisualizer
