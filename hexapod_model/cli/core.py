@@ -6,6 +6,8 @@ import argparse
 import json
 import sys
 
+import numpy as np
+
 from ..description.geometry import load_geometry
 from ..description.presets import DEFAULT_PRESET, PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
@@ -16,7 +18,7 @@ from ..io.tables import (
     POSE_COLUMNS,
     SOLVER_COLUMNS,
     column,
-    pose_row,
+    pose_columns,
     poses_from_table,
     read_table,
     write_table,
@@ -107,12 +109,18 @@ def _solve_rows(args: argparse.Namespace, kind: str) -> int:
             failures.append(f"row {k + 1}: {exc}")
         if sol is not None and sol.converged:
             guess = sol
-            values = pose_row(sol.pose) if kind == "fk" else list(sol.lengths)
-            rows.append([*map(float, values), "ok", it, float(res)])
+            values = sol.pose if kind == "fk" else list(map(float, sol.lengths))
+            rows.append([values, "ok", it, float(res)])
         else:
             if sol is not None:
                 failures.append(f"row {k + 1}: {status}: {sol.message}")
-            rows.append([float("nan")] * width + [status, it, float(res)])
+            rows.append([None, status, it, float(res)])
+    if kind == "fk":  # pose -> quaternion and angles for all rows at once
+        good = [r for r in rows if r[0] is not None]
+        if good:
+            for r, values in zip(good, pose_columns(np.array([r[0] for r in good])).tolist()):
+                r[0] = values
+    rows = [[*(r[0] if r[0] is not None else [float("nan")] * width), *r[1:]] for r in rows]
     write_table(out_path, out_header, rows, out=sys.stdout)
     if failures:
         note(kind, f"{len(failures)} of {len(rows)} rows failed; first: {failures[0]}")

@@ -75,7 +75,17 @@ def poses_from_table(header: list[str], data: np.ndarray) -> np.ndarray:
 
 def pose_row(pose: np.ndarray) -> list[float]:
     """``x,y,z,qx,qy,qz,qw,roll,pitch,yaw`` (m, unit quaternion, degrees) of a 4x4 pose."""
-    return [*pose[:3, 3], *matrix_to_quaternion(pose[:3, :3]), *np.degrees(matrix_to_rpy(pose[:3, :3]))]
+    return pose_columns(np.asarray(pose)[None])[0].tolist()
+
+
+def pose_columns(poses: np.ndarray) -> np.ndarray:
+    """(n, 10) ``x,y,z,qx,qy,qz,qw,roll,pitch,yaw`` (m, unit quaternion, degrees) of (n, 4, 4) poses.
+
+    Converts all rows in one call: per-row conversions cost ~100x more per pose.
+    """
+    poses = np.asarray(poses, dtype=float)
+    R = poses[:, :3, :3]
+    return np.hstack([poses[:, :3, 3], matrix_to_quaternion(R), np.degrees(matrix_to_rpy(R))])
 
 
 def write_table(path: str | Path | None, header: list[str], rows: list[list], out=None) -> None:

@@ -1,78 +1,58 @@
-"""Rotation matrix <-> angles and quaternions, vectorised over leading axes.
+"""Rotation matrix <-> angles and quaternions, vectorised over leading axes (scipy ``Rotation``).
 
 Convention used for printing and parsing everywhere (CLI, CSV): ``roll, pitch, yaw`` with
-``R = Rz(yaw) Ry(pitch) Rx(roll)`` (rotations about the fixed x, y, z axes, in that order).
-Quaternions are ``(qx, qy, qz, qw)``, as in Pinocchio and ROS.
+``R = Rz(yaw) Ry(pitch) Rx(roll)`` (rotations about the fixed x, y, z axes, in that order; the
+same as Pinocchio's ``pin.rpy``). Quaternions are ``(qx, qy, qz, qw)``, as in Pinocchio's
+``XYZQUAT`` and ROS. These conversions are outside the solver's hot path; the solver's own
+pose <-> free-flyer conversions are compiled kernels (:mod:`hexapod_model.kinematics.kernels`).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
+from scipy.spatial.transform import Rotation
 
 from ..exceptions import InputError
 
+EULER_ORDERS = ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx")
 
-def rpy_to_matrix(roll, pitch, yaw) -> np.ndarray:
+
+def _matrices(R: ArrayLike) -> tuple[Rotation, tuple[int, ...]]:
+    R = np.asarray(R, dtype=float)
+    return Rotation.from_matrix(R.reshape(-1, 3, 3)), R.shape[:-2]
+
+
+def rpy_to_matrix(roll: ArrayLike, pitch: ArrayLike, yaw: ArrayLike) -> np.ndarray:
     """(..., 3, 3) rotation ``Rz(yaw) Ry(pitch) Rx(roll)``; angles in radians."""
-    roll, pitch, yaw = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (roll, pitch, yaw)))
-    cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
-    return np.stack(
-        [
-            np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], -1),
-            np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], -1),
-            np.stack([-sp, cp * sr, cp * cr], -1),
-        ],
-        -2,
-    )
+    angles = np.stack(np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (roll, pitch, yaw))), -1)
+    return Rotation.from_euler("xyz", angles.reshape(-1, 3)).as_matrix().reshape(angles.shape[:-1] + (3, 3))
 
 
-def matrix_to_rpy(R) -> np.ndarray:
+def matrix_to_rpy(R: ArrayLike) -> np.ndarray:
     """(..., 3) ``roll, pitch, yaw`` (rad) of rotation matrices; pitch in [-pi/2, pi/2]."""
-    R = np.asarray(R, dtype=float)
-    pitch = np.arctan2(-R[..., 2, 0], np.hypot(R[..., 0, 0], R[..., 1, 0]))
-    roll = np.arctan2(R[..., 2, 1], R[..., 2, 2])
-    yaw = np.arctan2(R[..., 1, 0], R[..., 0, 0])
-    return np.stack([roll, pitch, yaw], -1)
+    rot, shape = _matrices(R)
+    return _euler(rot, "xyz").reshape(shape + (3,))
 
 
-def quaternion_to_matrix(q) -> np.ndarray:
-    """(..., 3, 3) rotation of quaternions ``(qx, qy, qz, qw)`` (normalised here)."""
+def quaternion_to_matrix(q: ArrayLike) -> np.ndarray:
+    """(..., 3, 3) rotation of quaternions ``(qx, qy, qz, qw)``.
+
+    The quaternion is divided by its norm: callers that must not accept a non-unit
+    quaternion check its norm first.
+    """
     q = np.asarray(q, dtype=float)
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        -2,
-    )
+    return Rotation.from_quat(q.reshape(-1, 4)).as_matrix().reshape(q.shape[:-1] + (3, 3))
 
 
-def matrix_to_quaternion(R) -> np.ndarray:
-    """(..., 4) unit quaternions ``(qx, qy, qz, qw)`` with ``qw >= 0`` (Shepperd's method)."""
-    R = np.asarray(R, dtype=float)
-    flat = R.reshape(-1, 3, 3)
-    out = np.empty((flat.shape[0], 4))
-    for k, M in enumerate(flat):
-        tr = M[0, 0] + M[1, 1] + M[2, 2]
-        i = int(np.argmax([M[0, 0], M[1, 1], M[2, 2], tr]))
-        if i == 3:
-            s = 2.0 * np.sqrt(1.0 + tr)
-            q = [(M[2, 1] - M[1, 2]) / s, (M[0, 2] - M[2, 0]) / s, (M[1, 0] - M[0, 1]) / s, s / 4]
-        else:
-            j, l = (i + 1) % 3, (i + 2) % 3
-            s = 2.0 * np.sqrt(1.0 + M[i, i] - M[j, j] - M[l, l])
-            q = [0.0, 0.0, 0.0, (M[l, j] - M[j, l]) / s]
-            q[i], q[j], q[l] = s / 4, (M[j, i] + M[i, j]) / s, (M[l, i] + M[i, l]) / s
-        q = np.asarray(q)
-        out[k] = -q if q[3] < 0 else q
-    return out.reshape(R.shape[:-2] + (4,))
+def matrix_to_quaternion(R: ArrayLike) -> np.ndarray:
+    """(..., 4) unit quaternions ``(qx, qy, qz, qw)`` with ``qw >= 0``."""
+    rot, shape = _matrices(R)
+    return rot.as_quat(canonical=True).reshape(shape + (4,))
 
 
-def rotation_angle(Ra, Rb) -> np.ndarray:
-    """Angle (rad) of ``Ra^T Rb``: the minimal rotation between two orientations (seed 000 eq. 27)."""
+def rotation_angle(Ra: ArrayLike, Rb: ArrayLike) -> np.ndarray:
+    """Angle (rad) of ``Ra^T Rb``: the minimal rotation between two orientations (eq. 27 of Bem et al.)."""
     E = np.swapaxes(np.asarray(Ra, dtype=float), -1, -2) @ np.asarray(Rb, dtype=float)
     c = (E[..., 0, 0] + E[..., 1, 1] + E[..., 2, 2] - 1.0) / 2.0
     s = 0.5 * np.sqrt(
@@ -81,64 +61,56 @@ def rotation_angle(Ra, Rb) -> np.ndarray:
     return np.arctan2(s, c)  # accurate near 0, unlike arccos of the trace
 
 
-# ----- all six Tait-Bryan orders (seed 003 eq. 12) and yaw-pitch-roll (eqs. 13-15) -----
-EULER_ORDERS = ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx")
-_AXIS = {"x": 0, "y": 1, "z": 2}
-
-
-def axis_rotation(axis: str, angle) -> np.ndarray:
+def axis_rotation(axis: str, angle: ArrayLike) -> np.ndarray:
     """(..., 3, 3) rotation by ``angle`` (rad) about the fixed ``axis`` (``"x"``, ``"y"`` or ``"z"``)."""
+    if axis not in ("x", "y", "z"):
+        raise InputError("rotation axis", axis, "choose x, y or z")
     a = np.asarray(angle, dtype=float)
-    c, s = np.cos(a), np.sin(a)
-    i = _AXIS[axis]
-    j, k = (i + 1) % 3, (i + 2) % 3
-    R = np.zeros(a.shape + (3, 3))
-    R[..., i, i] = 1.0
-    R[..., j, j] = c
-    R[..., k, k] = c
-    R[..., k, j] = s
-    R[..., j, k] = -s
-    return R
+    return Rotation.from_euler(axis, a.reshape(-1, 1)).as_matrix().reshape(a.shape + (3, 3))
 
 
-def _check_order(order: str) -> tuple[int, int, int, float]:
+def _check_order(order: str) -> str:
     if order not in EULER_ORDERS:
         raise InputError("rotation order", order, f"choose one of {EULER_ORDERS}")
-    i, j, k = (_AXIS[c] for c in order)
-    return i, j, k, (1.0 if (j - i) % 3 == 1 else -1.0)
+    return order.upper()  # scipy: upper case = intrinsic = the product R_a(t1) R_b(t2) R_c(t3)
 
 
-def euler_to_matrix(order: str, angles) -> np.ndarray:
-    """(..., 3, 3) ``R = R_a(t1) R_b(t2) R_c(t3)`` for ``order = "abc"`` (seed 003 eq. 12).
+def _euler(rot: Rotation, seq: str) -> np.ndarray:
+    """Euler angles without scipy's gimbal-lock warning (the third angle is 0 there)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return rot.as_euler(seq)
+
+
+def euler_to_matrix(order: str, angles: ArrayLike) -> np.ndarray:
+    """(..., 3, 3) ``R = R_a(t1) R_b(t2) R_c(t3)`` for ``order = "abc"`` (eq. 12 of Shi, She and Duan).
 
     ``angles[..., 0:3]`` are ``t1, t2, t3`` in radians, in the order of the factors; e.g.
     ``euler_to_matrix("zyx", [yaw, pitch, roll])`` equals ``rpy_to_matrix(roll, pitch, yaw)``.
     """
-    _check_order(order)
+    seq = _check_order(order)
     a = np.asarray(angles, dtype=float)
-    return axis_rotation(order[0], a[..., 0]) @ axis_rotation(order[1], a[..., 1]) @ axis_rotation(order[2], a[..., 2])
+    return Rotation.from_euler(seq, a.reshape(-1, 3)).as_matrix().reshape(a.shape[:-1] + (3, 3))
 
 
-def matrix_to_euler(order: str, R) -> np.ndarray:
-    """Euler angles of rotation matrices.
+def matrix_to_euler(order: str, R: ArrayLike) -> np.ndarray:
+    """(..., 3) angles ``t1, t2, t3`` (rad) of :func:`euler_to_matrix`.
 
-    (..., 3) angles ``t1, t2, t3`` (rad) of :func:`euler_to_matrix`, ``t2`` in [-pi/2, pi/2],
-    ``t1``, ``t3`` in (-pi, pi]. At gimbal lock (``|t2| = pi/2``) ``t3 = 0`` is chosen.
+    ``t2`` in [-pi/2, pi/2], ``t1``, ``t3`` in (-pi, pi]. At gimbal lock (``|t2| = pi/2``)
+    ``t3 = 0`` is chosen.
     """
-    i, j, k, s = _check_order(order)
-    R = np.asarray(R, dtype=float)
-    t2 = np.arcsin(np.clip(s * R[..., i, k], -1.0, 1.0))
-    lock = np.hypot(R[..., k, k], R[..., j, k]) < 1e-12
-    t1 = np.where(lock, np.arctan2(s * R[..., k, j], R[..., j, j]), np.arctan2(-s * R[..., j, k], R[..., k, k]))
-    t3 = np.where(lock, 0.0, np.arctan2(-s * R[..., i, j], R[..., i, i]))
-    return np.stack([t1, t2, t3], -1)
+    seq = _check_order(order)
+    rot, shape = _matrices(R)
+    return _euler(rot, seq).reshape(shape + (3,))
 
 
-def euler_solutions(order: str, R) -> np.ndarray:
-    """Both Euler angle triples of rotation matrices.
+def euler_solutions(order: str, R: ArrayLike) -> np.ndarray:
+    """(..., 2, 3) both angle triples of ``R`` for ``order``.
 
-    (..., 2, 3) both angle triples of ``R`` for ``order``: :func:`matrix_to_euler` and
-    ``(t1 + pi, pi - t2, t3 + pi)`` (wrapped to (-pi, pi]); seed 003 notes this ambiguity.
+    :func:`matrix_to_euler` and ``(t1 + pi, pi - t2, t3 + pi)`` (wrapped to (-pi, pi]), the
+    ambiguity Shi, She and Duan note.
     """
     a = matrix_to_euler(order, R)
     b = np.stack([a[..., 0] + np.pi, np.pi - a[..., 1], a[..., 2] + np.pi], -1)
@@ -146,15 +118,15 @@ def euler_solutions(order: str, R) -> np.ndarray:
     return np.stack([a, b], -2)
 
 
-def ypr_to_matrix(yaw, pitch, roll) -> np.ndarray:
+def ypr_to_matrix(yaw: ArrayLike, pitch: ArrayLike, roll: ArrayLike) -> np.ndarray:
     """(..., 3, 3) yaw-pitch-roll (Tait-Bryan z-y'-x''): ``Rz(yaw) Ry(pitch) Rx(roll)``, radians.
 
-    Seed 003 eq. 14 (``a11 = cos yaw, a22 = cos pitch, a33 = cos roll``) holds only for a
-    rotation about a single axis; this is the standard definition it approximates.
+    Eq. 14 of Shi, She and Duan (``a11 = cos yaw, a22 = cos pitch, a33 = cos roll``) holds only
+    for a rotation about a single axis; this is the standard definition it approximates.
     """
     return rpy_to_matrix(roll, pitch, yaw)
 
 
-def matrix_to_ypr(R) -> np.ndarray:
+def matrix_to_ypr(R: ArrayLike) -> np.ndarray:
     """(..., 3) ``yaw, pitch, roll`` (rad) of :func:`ypr_to_matrix`, pitch in [-pi/2, pi/2]."""
     return matrix_to_euler("zyx", R)
