@@ -39,6 +39,7 @@ class GeometryError(_BadValue):
     """
 
     _where = "field"
+    field: str
     _format = "geometry field {where!r} = {value!r}: {reason}"
 
 
@@ -51,6 +52,7 @@ class UrdfError(_BadValue):
     """
 
     _where = "path"
+    path: str
 
 
 class InputError(_BadValue):
@@ -62,6 +64,7 @@ class InputError(_BadValue):
     """
 
     _where = "name"
+    name: str
     _format = "invalid {where} {value!r}: {reason}"
 
 

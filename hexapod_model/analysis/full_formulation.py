@@ -175,7 +175,10 @@ def pinv_newton(
     """
     q = np.array(q0, dtype=float)
     dv = np.zeros(model.nv)
-    times, norms, conds, res = [], [], [], []
+    times: list[float] = []
+    norms: list[float] = []
+    conds: list[float] = []
+    res: list[float] = []
     start = time.perf_counter()
     for _ in range(max_iter + 1):
         f, J = evaluate(q)

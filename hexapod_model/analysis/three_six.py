@@ -32,9 +32,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from ..analysis.tracking import pose_distance
 from ..description.geometry import HexapodGeometry
 from ..exceptions import GeometryError, InputError, WorkspaceError
+from .tracking import pose_distance
 
 _SCAN = 720
 

@@ -22,8 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.jacobian import evaluate_jacobian, leg_jacobian
 from ..kinematics.hexapod import Hexapod
+from ..kinematics.solver import Solution
+from .jacobian import evaluate_jacobian, leg_jacobian
 
 
 def cone_rotations(cone_deg: float, samples: int) -> np.ndarray:
@@ -83,7 +84,7 @@ def compute_slice(
     ny, nx = len(ys), len(xs)
     inside = np.zeros((ny, nx), dtype=bool)
     figs = np.full((3, ny, nx), np.nan)
-    guesses = [None] * len(rotations)
+    guesses: list[Solution | None] = [None] * len(rotations)
     T = np.eye(4)
     for iy, y in enumerate(ys):
         for ix in range(nx) if iy % 2 == 0 else range(nx - 1, -1, -1):  # serpentine: warm starts stay near

@@ -98,29 +98,33 @@ def _solve_rows(args: argparse.Namespace, kind: str) -> int:
         inputs = poses_from_table(header, data)
         out_header = LENGTH_COLUMNS + SOLVER_COLUMNS
     width = len(out_header) - len(SOLVER_COLUMNS)
-    rows, failures, guess = [], [], None
+    values: list[np.ndarray | None] = []  # per row: the pose (fk) or the readings (ik), None when failed
+    tails: list[list] = []  # per row: status, iterations, residual
+    failures: list[str] = []
+    guess = None
     solve = hexa.forward if kind == "fk" else hexa.inverse
     for k, x in enumerate(progress(inputs, len(inputs), kind)):
         try:
             sol = solve(x, guess=guess, check=False)
-            status, it, res = sol.status, sol.iterations, sol.residual
         except HexapodError as exc:
-            sol, status, it, res = None, "invalid_input", 0, float("nan")
             failures.append(f"row {k + 1}: {exc}")
-        if sol is not None and sol.converged:
+            values.append(None)
+            tails.append(["invalid_input", 0, float("nan")])
+            continue
+        if sol.converged:
             guess = sol
-            values = sol.pose if kind == "fk" else list(map(float, sol.lengths))
-            rows.append([values, "ok", it, float(res)])
+            values.append(sol.pose if kind == "fk" else sol.lengths)
+            tails.append(["ok", sol.iterations, float(sol.residual)])
         else:
-            if sol is not None:
-                failures.append(f"row {k + 1}: {status}: {sol.message}")
-            rows.append([None, status, it, float(res)])
-    if kind == "fk":  # pose -> quaternion and angles for all rows at once
-        good = [r for r in rows if r[0] is not None]
-        if good:
-            for r, values in zip(good, pose_columns(np.array([r[0] for r in good])).tolist()):
-                r[0] = values
-    rows = [[*(r[0] if r[0] is not None else [float("nan")] * width), *r[1:]] for r in rows]
+            failures.append(f"row {k + 1}: {sol.status}: {sol.message}")
+            values.append(None)
+            tails.append([sol.status, sol.iterations, float(sol.residual)])
+    good = [k for k, v in enumerate(values) if v is not None]
+    table = np.full((len(values), width), np.nan)
+    if good:  # fk: pose -> quaternion and angles for all rows at once
+        stacked = np.array([values[k] for k in good])
+        table[good] = pose_columns(stacked) if kind == "fk" else stacked
+    rows = [[*map(float, table[k]), *tails[k]] for k in range(len(values))]
     write_table(out_path, out_header, rows, out=sys.stdout)
     if failures:
         note(kind, f"{len(failures)} of {len(rows)} rows failed; first: {failures[0]}")

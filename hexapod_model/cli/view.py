@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from ..exceptions import HexapodError, ViewError
@@ -72,6 +73,7 @@ def play_frames(hexa: Hexapod, path: str | Path) -> list[Solution]:
     Rows that do not solve (NaN, out of limits, ...) are skipped with a note on stderr.
     """
     header, data = read_table(path)
+    solve: Callable[..., Solution]
     if all(c in header for c in LENGTH_COLUMNS):
         inputs, solve = column(header, data, LENGTH_COLUMNS), hexa.forward
     else:

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..description.urdf import Closure, read_closures
 from ..exceptions import UrdfError
+from .urdf import Closure, read_closures
 
 _REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
 _PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")

@@ -17,8 +17,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..description.geometry import HexapodGeometry, LegGeometry
 from ..exceptions import GeometryError
+from .geometry import HexapodGeometry, LegGeometry
 
 DEG = math.pi / 180.0
 

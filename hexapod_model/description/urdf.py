@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..description.geometry import HexapodGeometry
 from ..exceptions import UrdfError
+from .geometry import HexapodGeometry, LegGeometry
 
 COLOURS = {
     "base": (0.25, 0.27, 0.30, 1.0),
@@ -82,15 +82,23 @@ def _rpy(R: np.ndarray) -> str:
     return _xyz((roll, pitch, yaw))
 
 
+def _guideway(leg: LegGeometry) -> tuple[float, float, float]:
+    if leg.guideway is None:
+        raise UrdfError("geometry", leg, "a guideway leg needs its guideway direction")
+    return leg.guideway
+
+
 def leg_frame(geom: HexapodGeometry, i: int) -> np.ndarray:
     """Rotation (base frame) of leg ``i``'s home frame: z along the leg, x the base Cardan axis."""
     w, _ = geom.home_leg_axis(i)
-    a = geom.legs[i].base_axis
-    if a is None:
+    axis = geom.legs[i].base_axis
+    if axis is None:
         a = np.cross([0.0, 0.0, 1.0], w)
         if np.linalg.norm(a) < 1e-9:
             a = np.array([1.0, 0.0, 0.0])
-    a = np.asarray(a, float) - np.dot(a, w) * w
+    else:
+        a = np.asarray(axis, float)
+    a = a - np.dot(a, w) * w
     a /= np.linalg.norm(a)
     return np.column_stack([a, np.cross(w, a), w])
 
@@ -135,7 +143,7 @@ def geometry_to_urdf(geom: HexapodGeometry) -> str:
     plat_r = float(np.max(np.linalg.norm(geom.platform_points()[:, :2], axis=1)))
     zb = float(np.min(geom.base_points()[:, 2]))
     if geom.joint_type == "guideway":  # the plate goes under the lowest end of the rails
-        zb = min(zb, min(leg.base_anchor[2] + min(s * leg.guideway[2] for s in leg.stroke) for leg in geom.legs))
+        zb = min(zb, min(leg.base_anchor[2] + min(s * _guideway(leg)[2] for s in leg.stroke) for leg in geom.legs))
     zp = float(np.max(geom.platform_points()[:, 2]))
     w_.link("base_link", [("cyl", (base_r + 0.04, 0.02), (0, 0, zb - 0.03), (0, 0, 0), "base")])
     top, half = zp + 0.035, TRIAD_LENGTH / 2
@@ -301,7 +309,7 @@ def read_closures(urdf_xml: str, source: str = "<string>") -> list[Closure]:
         for key in ("link1", "link2"):
             if attrs[key] not in links:
                 raise UrdfError(source, attrs[key], f"loop_closure {attrs['name']!r} names a missing {key}")
-        out.append(Closure(attrs["name"], attrs["type"], attrs["link1"], attrs["link2"]))
+        out.append(Closure(str(attrs["name"]), str(attrs["type"]), str(attrs["link1"]), str(attrs["link2"])))
     if not out:
         raise UrdfError(source, "loop_closure", "the URDF declares no <loop_closure> element")
     return out

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
+from typing import TextIO
 
 import numpy as np
 
@@ -22,18 +23,22 @@ POSE_COLUMNS = ["x", "y", "z", "qx", "qy", "qz", "qw", "roll", "pitch", "yaw"]
 SOLVER_COLUMNS = ["status", "iterations", "residual"]
 
 
-def read_table(path: str | Path, required: list[str] | None = None) -> tuple[list[str], np.ndarray]:
-    """Header and (n, k) float array of a CSV file; unparsable cells become NaN.
+def read_table(path: str | Path | TextIO, required: list[str] | None = None) -> tuple[list[str], np.ndarray]:
+    """Header and (n, k) float array of a CSV file or text stream; unparsable cells become NaN.
 
     Raises:
         InputError: missing file or missing required columns.
     """
-    path = Path(path)
-    try:
-        with path.open(newline="") as fh:
-            rows = list(csv.reader(fh))
-    except OSError as exc:
-        raise InputError("CSV file", str(path), exc.strerror or "cannot read") from None
+    if not isinstance(path, (str, Path)):
+        rows = list(csv.reader(path))
+        path = getattr(path, "name", "<stream>")
+    else:
+        path = Path(path)
+        try:
+            with path.open(newline="") as fh:
+                rows = list(csv.reader(fh))
+        except OSError as exc:
+            raise InputError("CSV file", str(path), exc.strerror or "cannot read") from None
     if not rows:
         raise InputError("CSV file", str(path), "empty file (expected a header line)")
     header = [h.strip() for h in rows[0]]

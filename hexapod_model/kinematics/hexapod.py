@@ -8,19 +8,20 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ..description.geometry import GEOMETRY_SUFFIXES, HexapodGeometry, load_geometry
 from ..description.model import ClosedLoopModel
 from ..description.presets import PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
 from ..exceptions import ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
-from ..kinematics import kernels
-from ..kinematics.solver import NewtonSolver, Solution
+from . import kernels
+from .solver import NewtonSolver, Solution
 
 DEFAULT_TOL = 1e-12  # closure residual (m, rad): pose errors stay below 1e-9 on every preset
 DEFAULT_MAX_ITER = 20
@@ -142,7 +143,7 @@ class Hexapod:
     # ----- solves -----
     def forward(
         self,
-        lengths: Sequence[float],
+        lengths: ArrayLike,
         guess=None,
         *,
         tol: float = DEFAULT_TOL,
@@ -169,7 +170,7 @@ class Hexapod:
         k = kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, _LIMIT_SLACK)
         if k >= 0:
             check_vector("lengths", lengths, 6)  # names NaN / inf first
-            raise LimitError(self.prismatic_names[k], lengths[k], *self.stroke[k], what="stroke")
+            raise LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
         q = self._start(guess)
         q[self.closed_loop.prismatic_q] = lengths
         return self._finish(self._solver(self._held_forward), q, tol, max_iter, check)

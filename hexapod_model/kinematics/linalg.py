@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..kinematics.kernels import _column, _rotation_weights
+from .kernels import _column, _rotation_weights
 
 
 @njit(cache=True)

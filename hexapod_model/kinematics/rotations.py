@@ -42,7 +42,12 @@ def quaternion_to_matrix(q: ArrayLike) -> np.ndarray:
     quaternion check its norm first.
     """
     q = np.asarray(q, dtype=float)
-    return Rotation.from_quat(q.reshape(-1, 4)).as_matrix().reshape(q.shape[:-1] + (3, 3))
+    flat = q.reshape(-1, 4)
+    with np.errstate(invalid="ignore", over="ignore"):
+        bad = ~(np.isfinite(np.linalg.norm(flat, axis=1)) & np.any(flat != 0, axis=1))
+    R = Rotation.from_quat(np.where(bad[:, None], [0.0, 0.0, 0.0, 1.0], flat)).as_matrix()
+    R[bad] = np.nan  # zero, NaN or infinite quaternions have no rotation: NaN, rejected downstream
+    return R.reshape(q.shape[:-1] + (3, 3))
 
 
 def matrix_to_quaternion(R: ArrayLike) -> np.ndarray:

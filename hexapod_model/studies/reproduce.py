@@ -36,7 +36,7 @@ from ..kinematics.rotations import matrix_to_quaternion, quaternion_to_matrix, r
 
 DEFAULT_ENCODER_NOISE = 10e-6  # m, Gaussian sigma on each reading
 DATA_COLUMNS = LENGTH_COLUMNS + ["x", "y", "z", "qx", "qy", "qz", "qw"]
-PAPER = {  # seed 000, Table 1 (3000 measured poses)
+PAPER: dict[str, dict] = {  # Bem et al. (2026), Table 1 (3000 measured poses)
     "cardan": {
         "translation_mean_mm": 0.6205,
         "translation_std_mm": 0.2609,
@@ -88,7 +88,9 @@ def simulate(
         if not (np.isfinite(v) and v >= 0):
             raise InputError(name, v, "must be a finite standard deviation >= 0 (metres)")
     rng = np.random.default_rng(seed)
-    poses, lengths, drawn = [], [], 0
+    poses: list[np.ndarray] = []
+    lengths: list[np.ndarray] = []
+    drawn = 0
     while len(poses) < n:
         batch = box_poses(hexa.home_pose, max(16, int(1.3 * (n - len(poses)))), seed=int(rng.integers(2**63)))
         for T in batch:
@@ -234,7 +236,8 @@ def standard_traces(sm: StandardModel, readings: np.ndarray) -> list[tuple[np.nd
     """(times s, ||dx||) per Newton step of the standard model, one pose at a time."""
     out = []
     for lm in readings:
-        times, norms = [], []
+        times: list[float] = []
+        norms: list[float] = []
         start = time.perf_counter()
 
         def record(k, idx, step, times=times, norms=norms, start=start):

@@ -95,7 +95,8 @@ def true_readings(hexa: Hexapod, poses: np.ndarray) -> tuple[np.ndarray, dict]:
     Readings (n, 6) of the true poses by warm-started inverse kinematics (``check=False``),
     and the count of each IK status (``out_of_limits`` = a Cardan angle or the stroke exceeded).
     """
-    sol, out, counts = None, np.empty((len(poses), 6)), {}
+    sol, out = None, np.empty((len(poses), 6))
+    counts: dict[str, int] = {}
     for k, T in enumerate(poses):
         sol = hexa.inverse(T, guess=sol, check=False)
         counts[sol.status] = counts.get(sol.status, 0) + 1
@@ -122,7 +123,8 @@ def simulate(
     tracker = Tracker(hexa, predictor, initial=first, length=length, **tracker_options)
     n = len(t)
     errors, dist = np.zeros((n, 6)), np.zeros(n)
-    status, times, flags = np.empty(n, dtype=object), np.zeros(n), {}
+    status, times = np.empty(n, dtype=object), np.zeros(n)
+    flags: dict[str, int] = {}
     for k in range(n):
         res = tracker.step(lengths[k])
         T = res.pose

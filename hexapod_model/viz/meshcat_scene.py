@@ -19,6 +19,7 @@ In a notebook::
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -51,7 +52,7 @@ class HexapodScene:
     """
 
     hexapod: Hexapod
-    vis: object
+    vis: Any
     camera: tuple[float, float, float] = DEFAULT_CAMERA
     centre: tuple[float, float, float] = SCENE_CENTRE
 
@@ -78,7 +79,8 @@ class HexapodScene:
 
     def recentre(self, centre) -> None:
         """Show the base-frame point ``centre`` (m) at the centre of the view."""
-        self.centre = tuple(float(c) for c in centre)
+        x, y, z = (float(c) for c in centre)
+        self.centre = (x, y, z)
         self.vis["hexapod"].set_transform(self.world)
 
     def show(self, configuration: Solution | np.ndarray) -> None:

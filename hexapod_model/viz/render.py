@@ -65,8 +65,8 @@ def render_pngs(
     if w < MIN_SIZE[0] or h < MIN_SIZE[1]:
         raise RenderError(f"snapshot size {w}x{h} is below the minimum {MIN_SIZE[0]}x{MIN_SIZE[1]}")
     chromium = find_chromium()
-    with tempfile.TemporaryDirectory(prefix="hexapod_render_") as tmp:
-        tmp = Path(tmp)
+    with tempfile.TemporaryDirectory(prefix="hexapod_render_") as tmp_name:
+        tmp = Path(tmp_name)
         frames = "".join(f'<iframe src="{Path(f).resolve().as_uri()}"></iframe>' for f in html_files)
         page = tmp / "grid.html"
         page.write_text(

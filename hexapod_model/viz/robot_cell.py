@@ -56,7 +56,7 @@ def ur10_files() -> tuple[Path, Path]:
         raise HexapodError("the robot cell needs example-robot-data: pip install example-robot-data") from None
     for f in dist.files or ():
         if str(f).endswith("robots/ur_description/urdf/ur10_robot.urdf"):
-            urdf = Path(dist.locate_file(f))
+            urdf = Path(str(dist.locate_file(f)))
             return urdf, urdf.parents[3]  # .../share/example-robot-data/robots
     raise HexapodError("example-robot-data is installed but has no ur_description/urdf/ur10_robot.urdf")
 

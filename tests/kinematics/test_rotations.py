@@ -67,7 +67,8 @@ def test_euler_orders_are_the_product_of_axis_rotations(order):
     axis = {"x": np.array([1.0, 0, 0]), "y": np.array([0, 1.0, 0]), "z": np.array([0, 0, 1.0])}
     R = euler_to_matrix(order, a)
     for k in range(len(a)):
-        ref = pin.exp3(axis[order[0]] * a[k, 0]) @ pin.exp3(axis[order[1]] * a[k, 1]) @ pin.exp3(axis[order[2]] * a[k, 2])
+        f = [pin.exp3(axis[c] * a[k, i]) for i, c in enumerate(order)]
+        ref = f[0] @ f[1] @ f[2]
         np.testing.assert_allclose(R[k], ref, atol=1e-14)
     np.testing.assert_allclose(matrix_to_euler(order, R), a, atol=1e-11)
 
@@ -75,3 +76,8 @@ def test_euler_orders_are_the_product_of_axis_rotations(order):
 def test_unknown_order_is_an_input_error():
     with pytest.raises(InputError, match="rotation order"):
         matrix_to_euler("xxz", np.eye(3))
+
+
+def test_quaternions_without_a_rotation_give_nan():
+    R = quaternion_to_matrix([[0, 0, 0, 0], [np.nan, 0, 0, 1], [0, 0, 0, 1]])
+    assert np.isnan(R[:2]).all() and np.array_equal(R[2], np.eye(3))
