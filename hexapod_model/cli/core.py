@@ -10,7 +10,7 @@ import numpy as np
 
 from ..description.geometry import load_geometry
 from ..description.presets import DEFAULT_PRESET, PRESETS, get_preset
-from ..description.urdf import geometry_to_urdf
+from ..description.urdf import geometry_to_urdf, validate_urdf
 from ..exceptions import HexapodError
 from ..files import atomic_write_text, check_output_path
 from ..io.tables import (
@@ -76,7 +76,8 @@ def cmd_urdf(args: argparse.Namespace) -> int:
         check_output_path(args.output, args.geometry)
     geom = load_geometry(args.geometry) if args.geometry else get_preset(args.preset)
     text = geometry_to_urdf(geom)
-    Hexapod.from_geometry(geom)  # refuse to write a URDF that does not load and assemble
+    validate_urdf(text, geom.name)  # an independent parser (yourdfpy) accepts it
+    Hexapod.from_geometry(geom)  # and it loads and assembles in Pinocchio
     if args.output:
         atomic_write_text(args.output, text)
         note("urdf", f"wrote {args.output} ({geom.name}, {geom.joint_type} legs)")

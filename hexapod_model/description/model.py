@@ -24,7 +24,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import UrdfError
-from .urdf import Closure, read_closures
+from .urdf import Closure, read_closures, validate_urdf
 
 _REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
 _PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
@@ -61,6 +61,7 @@ class ClosedLoopModel:
         try:
             self.model = pin.buildModelFromXML(urdf_xml)
         except (RuntimeError, ValueError) as exc:
+            validate_urdf(urdf_xml, source)  # a clearer message when the file breaks the URDF format
             raise UrdfError(source, str(exc).strip()[:200], "Pinocchio cannot parse the URDF") from None
         self.data = self.model.createData()
         m = self.model

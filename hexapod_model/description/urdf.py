@@ -286,6 +286,34 @@ def write_urdf(geom: HexapodGeometry, path: str | Path) -> Path:
     return path
 
 
+def validate_urdf(urdf_xml: str, source: str = "<string>") -> None:
+    """Check a URDF against the format's rules with yourdfpy (an independent parser).
+
+    Used on every URDF ``hexapod urdf`` writes, and to explain a URDF that Pinocchio rejects.
+    It imports yourdfpy (about a second), so the solver's loading path does not call it.
+
+    Raises:
+        UrdfError: naming the first problem yourdfpy reports.
+    """
+    import io
+
+    import yourdfpy
+
+    problems: list[str] = []
+
+    def collect(errors: list) -> bool:
+        problems.extend(str(e) for e in errors)
+        return not errors
+
+    try:
+        robot = yourdfpy.URDF.load(io.StringIO(urdf_xml), build_scene_graph=False, load_meshes=False)
+        valid = robot.validate(validation_fn=collect)
+    except Exception as exc:  # yourdfpy raises assorted errors on malformed files
+        raise UrdfError(source, str(exc).strip()[:200], "not a valid URDF (yourdfpy)") from None
+    if not valid:
+        raise UrdfError(source, problems[0] if problems else "validate() failed", "not a valid URDF (yourdfpy)")
+
+
 def read_closures(urdf_xml: str, source: str = "<string>") -> list[Closure]:
     """The ``<loop_closure>`` elements of a URDF, in file order, validated.
 

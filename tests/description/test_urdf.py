@@ -138,3 +138,15 @@ def test_numbers_are_written_with_fixed_precision():
         for value in " ".join(numbers).split():
             assert "e" not in value and value != "-0", value
             assert len(value.partition(".")[2]) <= DECIMALS, value
+
+
+def test_validate_urdf_names_the_problem_yourdfpy_finds():
+    from hexapod_model.description.urdf import validate_urdf
+
+    text = (ROOT / "urdf" / "reference.urdf").read_text()
+    validate_urdf(text)  # the generated files pass
+    bad = text.replace('type="revolute"', 'type="revolut"', 1)
+    with pytest.raises(hm.UrdfError, match="revolut"):
+        validate_urdf(bad, "bad.urdf")
+    with pytest.raises(hm.UrdfError, match="not a valid URDF"):
+        ClosedLoopModel(bad, "bad.urdf")  # Pinocchio's rejection is explained by yourdfpy's finding
