@@ -12,20 +12,14 @@ import numpy as np
 
 import hexapod_model as hm
 
+from .conftest import HAVE_CHROMIUM
+
 ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text()
 
 
 def code_blocks(lang: str) -> list[str]:
     return re.findall(rf"```{lang}\n(.*?)```", README, re.S)
-
-
-def test_setup_has_two_commands_and_ci_runs_the_test_one():
-    setup = code_blocks("bash")
-    install, tests = setup[0].strip(), setup[1].strip()
-    assert install.startswith("python -m pip install -e") and "hexapod fk reference" in install
-    assert tests == "python -m pytest -q"
-    assert tests in (ROOT / ".ci" / "run").read_text().splitlines()
 
 
 def test_main_job_of_the_setup_command(tmp_path):
@@ -69,7 +63,7 @@ def test_cli_block_commands_run(tmp_path, monkeypatch):
     for line in block.strip().splitlines():
         cmd = shlex.split(line.split("#")[0])
         if cmd[1] == "bench":
-            cmd += ["--samples", "10"]
+            continue  # the same benchmark runs in tests/cli/test_cli.py
         assert main(cmd[1:]) == 0, line
     assert (tmp_path / "lengths.csv").exists() and (tmp_path / "mine.urdf").exists()
 
@@ -101,6 +95,9 @@ def test_study_and_evaluation_commands_run(tmp_path, monkeypatch):
                 args.append(a)
         if args[0] == "evaluate":
             args += ["--grid", "6", "--workers", "1"]
+        if "--png" in args and not HAVE_CHROMIUM:  # the HTML part still runs
+            k = args.index("--png")
+            del args[k : k + 2]
         if args[0] == "view":
             args += ["--once", "--rate", "1000"]  # show, then exit instead of serving until Ctrl-C
         assert main(args) == 0, line

@@ -130,6 +130,5 @@ def test_bench_runs_and_writes_json(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "warm_fk" in out and "median" in out
     report = json.loads((tmp_path / "b.json").read_text())
-    for key in ("warm_fk", "cold_fk", "ik"):
-        assert report[key]["median_us"] > 0 and report[key]["n"] > 0
+    assert report["hexapod"] == "reference" and report["warm_fk"]["n"] >= 1000  # trajectory A, 1 kHz
     assert report["warm_fk"]["iterations_max"] <= 3 and report["cold_fk"]["iterations_max"] <= 8

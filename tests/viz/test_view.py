@@ -58,6 +58,7 @@ def snapshots(tmp_path_factory):
     return html, dict(zip(names, pngs))
 
 
+@pytest.mark.chromium
 def test_html_is_a_self_contained_meshcat_scene(snapshots):
     html, _ = snapshots
     for name, path in html.items():
@@ -67,6 +68,7 @@ def test_html_is_a_self_contained_meshcat_scene(snapshots):
     assert html["reference-cell"].stat().st_size > 3 * html["reference"].stat().st_size  # UR10 meshes inside
 
 
+@pytest.mark.chromium
 @pytest.mark.parametrize("name", [*PRESET_NAMES, "reference-cell"])
 def test_png_shows_something(snapshots, name):
     img = pixels(snapshots[1][name])
@@ -79,6 +81,7 @@ def test_png_shows_something(snapshots, name):
     assert blue.mean() > 0.002  # the top plate (a few thousand pixels even in the wide cell view)
 
 
+@pytest.mark.chromium
 def test_png_changes_with_the_pose(snapshots):
     home = pixels(snapshots[1]["reference"]).astype(float)
     moved = pixels(snapshots[1]["reference-moved"]).astype(float)
