@@ -21,11 +21,22 @@ geometry file (.toml, .yaml, .json); every sub-command accepts the three.
 EPILOG = "exit codes: " + "; ".join(f"{k} {v}" for k, v in EXIT_CODES.items())
 
 
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    """``hexapod --help`` with one line per sub-command (argparse wraps long names otherwise)."""
+
+    def __init__(self, prog: str):
+        super().__init__(prog, max_help_position=24, width=110)
+
+    def add_argument(self, action: argparse.Action) -> None:
+        super().add_argument(action)
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action._get_subactions():
+                self._action_max_length = max(self._action_max_length, len(sub.metavar or sub.dest) + 8)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``hexapod`` parser with every sub-command."""
-    parser = argparse.ArgumentParser(
-        prog="hexapod", description=DESCRIPTION, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(prog="hexapod", description=DESCRIPTION, epilog=EPILOG, formatter_class=_Formatter)
     parser.add_argument("--version", action="version", version=f"hexapod_model {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module in COMMANDS:

@@ -219,7 +219,7 @@ class Hexapod:
                 raise InputError("held joint", name, f"not a joint of this URDF ({len(self.joint_names)} joints)")
             j = m.getJointId(name)
             if j == self.closed_loop.platform_joint:
-                self._set_pose(q, np.asarray(value, dtype=float))
+                self._set_pose(q, value)
             else:
                 v = check_vector(name, [value], 1)[0]
                 iq = m.joints[j].idx_q

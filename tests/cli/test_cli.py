@@ -132,3 +132,43 @@ def test_bench_runs_and_writes_json(tmp_path, capsys):
     report = json.loads((tmp_path / "b.json").read_text())
     assert report["hexapod"] == "reference" and report["warm_fk"]["n"] >= 1000  # trajectory A, 1 kHz
     assert report["warm_fk"]["iterations_max"] <= 3 and report["cold_fk"]["iterations_max"] <= 8
+
+
+def test_top_level_conventions(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0 and capsys.readouterr().out.strip() == f"hexapod_model {hm.__version__}"
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    text = capsys.readouterr().out
+    commands = [ln.split()[0] for ln in text.splitlines() if ln.startswith("    ") and len(ln.split()) > 1]
+    assert {"urdf", "fk", "ik", "bench", "reproduce", "evaluate", "track", "view", "snapshot"} <= set(commands)
+    assert "exit codes: 0" in text
+
+
+def test_python_m_and_stdin_stdout(tmp_path):
+    import subprocess
+    import sys
+
+    lengths = (ROOT / "docs" / "examples" / "lengths.csv").read_text()
+    out = subprocess.run(
+        [sys.executable, "-m", "hexapod_model", "fk", "reference", "-", "-o", "-"],
+        input=lengths,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 0, out.stderr
+    rows = out.stdout.strip().splitlines()
+    assert rows[0].startswith("x,y,z,qx") and len(rows) == len(lengths.strip().splitlines())
+
+
+def test_every_command_accepts_the_three_hexapod_spellings(tmp_path):
+    geometry = tmp_path / "g.json"
+    geometry.write_text(json.dumps(hm.get_preset("spherical").to_dict()))
+    urdf = tmp_path / "g.urdf"
+    hm.write_urdf(hm.get_preset("spherical"), urdf)
+    lengths = ROOT / "docs" / "examples" / "lengths.csv"
+    for spec in ("spherical", str(urdf), str(geometry)):
+        assert main(["fk", spec, str(lengths), "-o", str(tmp_path / "p.csv")]) == 0, spec
+        assert hm.Hexapod.load(spec).forward(np.zeros(6)).converged

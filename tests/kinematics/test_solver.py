@@ -203,3 +203,17 @@ def test_cold_starts_far_from_home_converge_or_say_why():
             np.testing.assert_allclose(sol.pose, T, atol=1e-9)
             assert np.abs(hexa.forward(sol.lengths).pose - T).max() < 1e-9
     assert statuses <= {"converged", "out_of_limits"} and "converged" in statuses
+
+
+def test_pinocchio_habits():
+    """RobotWrapper names, pin.SE3 in and out."""
+    hexa = hexapod("reference")
+    assert isinstance(hexa.model, pin.Model) and isinstance(hexa.data, pin.Data)
+    assert hexa.nq == hexa.model.nq and np.array_equal(hexa.q0, pin.neutral(hexa.model))
+    assert len(hexa.constraint_models) == 6
+    sol = hexa.forward([0.01, 0.0, -0.01, 0.0, 0.01, 0.0])
+    assert isinstance(sol.placement, pin.SE3) and np.allclose(sol.placement.homogeneous, sol.pose)
+    back = hexa.inverse(sol.placement)
+    np.testing.assert_allclose(back.lengths, sol.lengths, atol=1e-10)
+    hybrid = hexa.solve({"platform_joint": sol.placement})
+    np.testing.assert_allclose(hybrid.lengths, sol.lengths, atol=1e-10)
