@@ -55,6 +55,13 @@ class UrdfError(_BadValue):
     path: str
 
 
+class MjcfError(UrdfError):
+    """An MJCF file does not follow the hexapod contract (see docs/mjcf.md).
+
+    A :class:`UrdfError` too: both say that the model file cannot be used.
+    """
+
+
 class InputError(_BadValue):
     """A solver input is invalid: NaN/inf, wrong count, unknown joint name, bad pose matrix.
 

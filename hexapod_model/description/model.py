@@ -17,6 +17,7 @@ The probes are always at identity and never move; they are invisible to the call
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -56,13 +57,53 @@ class ClosedLoopModel:
 
     def __init__(self, urdf_xml: str, source: str = "<string>"):
         self.source = source
-        self.urdf_xml = urdf_xml
-        self.closures: list[Closure] = read_closures(urdf_xml, source)
+        self.urdf_xml: str | None = urdf_xml
+        self.mjcf_xml: str | None = None
+        closures = read_closures(urdf_xml, source)
         try:
-            self.model = pin.buildModelFromXML(urdf_xml)
+            model = pin.buildModelFromXML(urdf_xml)
         except (RuntimeError, ValueError) as exc:
             validate_urdf(urdf_xml, source)  # a clearer message when the file breaks the URDF format
             raise UrdfError(source, str(exc).strip()[:200], "Pinocchio cannot parse the URDF") from None
+        self._setup(model, closures)
+
+    @classmethod
+    def from_pinocchio(
+        cls,
+        model: pin.Model,
+        closures: Sequence[Closure],
+        constraints: Sequence | None = None,
+        source: str = "<model>",
+    ) -> ClosedLoopModel:
+        """A hexapod from a Pinocchio model built elsewhere (e.g. by Pinocchio's MJCF parser).
+
+        The model must follow the URDF contract's rules: one free flyer from the root whose
+        joint placement is the home pose (its configuration relative to home), six legs of
+        revolute and prismatic joints, and a zero configuration that closes every loop.
+
+        Args:
+            model: the Pinocchio model (kept, not copied).
+            closures: one per leg, in leg order; ``link1``/``link2`` name the tip and anchor frames.
+            constraints: Pinocchio's constraint models of the closures, same order (e.g. those
+                its MJCF parser returns); ``None`` builds them from the frames. They must join
+                the frames' joints.
+            source: file name used in error messages.
+
+        Raises:
+            UrdfError: the model breaks the contract, or a constraint joins other joints than
+                its closure's frames.
+        """
+        self = cls.__new__(cls)
+        self.source = source
+        self.urdf_xml = self.mjcf_xml = None
+        self._setup(model, list(closures), constraints)
+        return self
+
+    def _setup(self, model: pin.Model, closures: list[Closure], constraints: Sequence | None = None) -> None:
+        """Check the contract on ``model`` and index legs, limits and closures."""
+        source = self.source
+        self.closures: list[Closure] = closures
+        self.model = model
         self.data = self.model.createData()
         m = self.model
         ff = [j for j in range(1, m.njoints) if m.joints[j].shortname() == "JointModelFreeFlyer"]
@@ -87,7 +128,10 @@ class ClosedLoopModel:
         used = [j for leg in self.legs for j in leg.joints]
         if len(used) != len(set(used)):
             raise UrdfError(source, "legs", "two legs share a joint; each leg must be its own chain")
-        self.constraints = [self._constraint(leg) for leg in self.legs]
+        if constraints is None:
+            self.constraints = [self._constraint(leg) for leg in self.legs]
+        else:
+            self.constraints = self._given_constraints(constraints)
         self.constraint_datas = [c.createData() for c in self.constraints]
         self.q_home = pin.neutral(m)
         self.nq, self.nv = m.nq, m.nv
@@ -146,6 +190,27 @@ class ClosedLoopModel:
         c.name = leg.name
         return c
 
+    def _given_constraints(self, constraints: Sequence) -> list:
+        """``constraints`` checked against the legs: one per leg, of the closure kind, joining its frames."""
+        cls = pin.FrameAnchorConstraintModel if self.kind == "6d" else pin.PointAnchorConstraintModel
+        out = list(constraints)
+        if len(out) != len(self.legs):
+            raise UrdfError(self.source, len(out), f"need one constraint model per closure ({len(self.legs)})")
+        m = self.model
+        for c, leg in zip(out, self.legs):
+            f1, f2 = m.frames[leg.tip_frame], m.frames[leg.anchor_frame]
+            if not (
+                isinstance(c, cls)
+                and (c.joint1_id, c.joint2_id) == (f1.parentJoint, f2.parentJoint)
+                and c.joint1_placement.isApprox(f1.placement, 1e-12)
+                and c.joint2_placement.isApprox(f2.placement, 1e-12)
+            ):
+                raise UrdfError(
+                    self.source, leg.name, f"the constraint model is not a {cls.__name__} joining the closure frames"
+                )
+            c.name = leg.name
+        return out
+
     def _check_assembled(self) -> None:
         err = self.closure_errors(self.q_home)
         worst = int(np.argmax(err))
@@ -179,6 +244,19 @@ class ClosedLoopModel:
             if m.joints[j].idx_q <= iq < m.joints[j].idx_q + m.joints[j].nq:
                 return m.names[j]
         raise IndexError(iq)
+
+    def visual_model(self) -> pin.GeometryModel:
+        """Pinocchio's visual geometry of the hexapod, from its URDF or MJCF text."""
+        if self.urdf_xml is not None:
+            return pin.buildGeomFromUrdfString(self.model, self.urdf_xml, pin.GeometryType.VISUAL)
+        if self.mjcf_xml is None:
+            return pin.GeometryModel()
+        import tempfile
+
+        with tempfile.TemporaryDirectory() as tmp:  # Pinocchio reads MJCF from files only
+            path = Path(tmp) / "hexapod.xml"
+            path.write_text(self.mjcf_xml)
+            return pin.buildGeomFromMJCF(self.model, str(path), pin.GeometryType.VISUAL)
 
     def limited_q(self) -> np.ndarray:
         """Indices of q that carry finite joint limits (all leg joints)."""

@@ -58,11 +58,10 @@ class HexapodScene:
 
     def __post_init__(self) -> None:
         _require_meshcat()
-        import pinocchio as pin
         from pinocchio.visualize import MeshcatVisualizer
 
         m = self.hexapod.model
-        visual = pin.buildGeomFromUrdfString(m, self.hexapod.closed_loop.urdf_xml, pin.GeometryType.VISUAL)
+        visual = self.hexapod.closed_loop.visual_model()  # from its URDF or MJCF
         self.viz = MeshcatVisualizer(m, visual, visual)
         self.viz.initViewer(viewer=self.vis)
         self.viz.loadViewerModel(rootNodeName="hexapod")
