@@ -11,7 +11,7 @@ from ..description.presets import DEFAULT_PRESET
 from ..kinematics.hexapod import Hexapod, load_hexapod
 
 T = TypeVar("T")
-HEXAPOD_HELP = "preset name, URDF file or geometry file (.toml/.yaml/.json)"
+HEXAPOD_HELP = "preset name, URDF file, geometry file (.toml/.yaml/.json) or MJCF file (.xml)"
 
 
 def add_hexapod_argument(p: argparse.ArgumentParser, optional: bool = False) -> None:
@@ -29,7 +29,7 @@ def add_hexapod_argument(p: argparse.ArgumentParser, optional: bool = False) -> 
 
 
 def hexapod_of(args: argparse.Namespace) -> Hexapod:
-    """The :class:`Hexapod` named by ``args.hexapod`` (preset, URDF or geometry file)."""
+    """The :class:`Hexapod` named by ``args.hexapod`` (preset, URDF, geometry or MJCF file)."""
     return load_hexapod(args.hexapod)
 
 

@@ -15,8 +15,9 @@ COMMANDS = (core, reproduce, evaluate, track, view)
 DESCRIPTION = """\
 Leg readings <-> platform pose for Stewart-Gough hexapods with offset-axis Cardan joints.
 
-HEXAPOD arguments are a preset name (see `hexapod urdf --list-presets`), a URDF file or a
-geometry file (.toml, .yaml, .json); every sub-command accepts the three.
+HEXAPOD arguments are a preset name (see `hexapod urdf --list-presets`), a URDF file, a
+geometry file (.toml, .yaml, .json) or an MJCF file (.xml, `hexapod mjcf`); every sub-command
+accepts the four.
 """
 EPILOG = "exit codes: " + "; ".join(f"{k} {v}" for k, v in EXIT_CODES.items())
 

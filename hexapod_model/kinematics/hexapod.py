@@ -16,6 +16,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..description.geometry import GEOMETRY_SUFFIXES, HexapodGeometry, load_geometry
+from ..description.mjcf_loader import MJCF_SUFFIXES, load_mjcf
 from ..description.model import ClosedLoopModel
 from ..description.presets import PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
@@ -32,7 +33,7 @@ POSE_TOLERANCE = 1e-6  # max deviation of a pose from a rigid transform
 class Hexapod:
     """A hexapod loaded from a URDF that follows the contract of ``docs/urdf_contract.md``.
 
-    Construct with :meth:`from_urdf`, :meth:`from_preset` or :meth:`from_geometry`.
+    Construct with :meth:`from_urdf`, :meth:`from_preset`, :meth:`from_geometry` or :meth:`from_mjcf`.
     Leg readings (``lengths``) are the measured prismatic joints in metres, zero at home;
     poses are 4x4 base -> platform transforms in metres.
     """
@@ -71,13 +72,20 @@ class Hexapod:
 
     @classmethod
     def load(cls, spec: str | Path) -> Hexapod:
-        """A preset name, a URDF file, or a geometry file (``.toml``, ``.yaml``, ``.yml``, ``.json``).
+        """A preset name, or a URDF, geometry (``.toml``, ``.yaml``, ``.yml``, ``.json``) or MJCF (``.xml``) file.
 
         This is what every ``hexapod`` sub-command does with its HEXAPOD argument.
         """
         if str(spec).lower().endswith(GEOMETRY_SUFFIXES):
             return cls.from_geometry(load_geometry(spec))
+        if str(spec).lower().endswith(MJCF_SUFFIXES):
+            return cls.from_mjcf(spec)
         return cls.from_urdf(spec)
+
+    @classmethod
+    def from_mjcf(cls, path: str | Path) -> Hexapod:
+        """Load an MJCF file (``hexapod mjcf``, docs/mjcf.md) through Pinocchio's MJCF parser and constraint models."""
+        return cls(load_mjcf(path))
 
     @classmethod
     def from_preset(cls, name: str = "reference") -> Hexapod:

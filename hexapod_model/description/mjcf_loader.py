@@ -1,0 +1,131 @@
+"""Load a hexapod MJCF through Pinocchio's MJCF parser and the constraint models it returns.
+
+``pin.buildModelAndConstraintsFromMJCF`` gives the kinematic tree and one Pinocchio constraint
+model per ``<equality>`` (``FrameAnchorConstraintModel`` for ``weld``, ``PointAnchorConstraintModel``
+for ``connect``). :func:`load_mjcf` matches them to the equalities of the file by the sites they
+join and hands both to :meth:`ClosedLoopModel.from_pinocchio`, after two adjustments:
+
+* MuJoCo's free joint holds the platform's pose in the world frame, so Pinocchio's configuration
+  of the MJCF model is absolute and its zero is not assembled. The home pose (MuJoCo's ``qpos0``,
+  the platform body's ``pos``/``quat``) becomes the free flyer's joint placement instead, as for a
+  URDF ``floating`` joint: configurations of both loaders then mean the same thing.
+* Pinocchio 4.1 places that free flyer at ``(I, p - R p)`` for a platform body at ``(R, p)``
+  instead of the identity; the identity is restored first (files of ``hexapod mjcf`` have
+  ``R = I``, where both agree).
+
+The file must follow docs/mjcf.md: the whole tree in the first body under ``<worldbody>``, the
+platform on the only free joint, six ``weld`` or ``connect`` equalities naming ``site1`` (leg
+tip) and ``site2`` (platform anchor), and all leg joints at zero in the body poses as written.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..description.model import ClosedLoopModel
+from ..description.urdf import Closure
+from ..exceptions import MjcfError, UrdfError
+
+MJCF_SUFFIXES = (".xml", ".mjcf")  # file names that Hexapod.load reads as MJCF
+_KINDS = {"weld": "6d", "connect": "3d"}
+
+
+def read_equalities(mjcf_xml: str, source: str = "<string>") -> list[Closure]:
+    """The ``weld``/``connect`` equalities of an MJCF, in file order, as closures between sites.
+
+    ``link1``/``link2`` of each :class:`~hexapod_model.description.urdf.Closure` are the names of
+    ``site1``/``site2``.
+
+    Raises:
+        MjcfError: malformed XML, not an MJCF, an equality without name or sites, another type
+            of equality, or an inactive one.
+    """
+    try:
+        root = ET.fromstring(mjcf_xml)
+    except ET.ParseError as exc:
+        raise MjcfError(source, str(exc), "not well-formed XML") from None
+    if root.tag != "mujoco":
+        raise MjcfError(source, root.tag, "an MJCF file has <mujoco> as its root element")
+    out = []
+    for eq in root.iter("equality"):
+        for el in eq:
+            if not isinstance(el.tag, str):
+                continue  # a comment
+            if el.tag not in _KINDS:
+                raise MjcfError(source, el.tag, "only weld and connect equalities close hexapod legs")
+            attrs = {k: el.get(k) for k in ("name", "site1", "site2")}
+            missing = [k for k, v in attrs.items() if not v]
+            if missing:
+                raise MjcfError(source, ET.tostring(el, encoding="unicode").strip()[:120], f"equality lacks {missing}")
+            if el.get("active", "true") != "true":
+                raise MjcfError(source, attrs["name"], "an inactive equality does not close a leg")
+            out.append(Closure(str(attrs["name"]), _KINDS[el.tag], str(attrs["site1"]), str(attrs["site2"])))
+    if not out:
+        raise MjcfError(source, "equality", "the MJCF declares no weld or connect equality")
+    return out
+
+
+def load_mjcf(path: str | Path) -> ClosedLoopModel:
+    """A :class:`ClosedLoopModel` of the MJCF file ``path`` (see the module docstring).
+
+    Raises:
+        MjcfError: unreadable file, or a file that breaks the contract of docs/mjcf.md (the
+            message names the element, joint or closure).
+    """
+    path = Path(path)
+    source = str(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise MjcfError(source, source, f"cannot read MJCF: {exc.strerror}") from None
+    closures = read_equalities(text, source)
+    try:
+        model, points, frames = pin.buildModelAndConstraintsFromMJCF(source)
+    except (RuntimeError, ValueError) as exc:
+        raise MjcfError(source, str(exc).strip()[:200], "Pinocchio cannot parse the MJCF") from None
+    _place_home(model, source)
+    constraints = [_constraint_of(model, c, list(frames) + list(points), source) for c in closures]
+    try:
+        clm = ClosedLoopModel.from_pinocchio(model, closures, constraints, source)
+    except UrdfError as exc:
+        raise MjcfError(source, exc.value, exc.reason) from None
+    clm.mjcf_xml = text
+    return clm
+
+
+def _place_home(model: pin.Model, source: str) -> None:
+    """Move the free flyer's ``qpos0`` (the home pose, world frame) into its joint placement."""
+    ff = [j for j in range(1, model.njoints) if model.joints[j].shortname() == "JointModelFreeFlyer"]
+    q0 = np.asarray(model.referenceConfigurations["qpos0"]) if "qpos0" in model.referenceConfigurations else None
+    if len(ff) != 1 or model.parents[ff[0]] != 0 or q0 is None:
+        return  # ClosedLoopModel names what is wrong
+    for j in range(1, model.njoints):
+        jm = model.joints[j]
+        if j != ff[0] and np.any(q0[jm.idx_q : jm.idx_q + jm.nq] != 0.0):
+            raise MjcfError(source, model.names[j], "leg joints must be zero in the model as written (no joint 'ref')")
+    jm = model.joints[ff[0]]
+    model.jointPlacements[ff[0]] = pin.XYZQUATToSE3(q0[jm.idx_q : jm.idx_q + 7])
+    model.referenceConfigurations["qpos0"] = pin.neutral(model)
+
+
+def _constraint_of(model: pin.Model, closure: Closure, candidates: list, source: str):
+    """The Pinocchio constraint model that joins the two sites of ``closure``."""
+    sites = []
+    for name in (closure.link1, closure.link2):
+        if not model.existFrame(name, pin.FrameType.OP_FRAME):
+            raise MjcfError(source, name, f"equality {closure.name!r} names a site that Pinocchio did not load")
+        sites.append(model.frames[model.getFrameId(name, pin.FrameType.OP_FRAME)])
+    kind = pin.FrameAnchorConstraintModel if closure.kind == "6d" else pin.PointAnchorConstraintModel
+    for c in candidates:
+        if (
+            isinstance(c, kind)
+            and (c.joint1_id, c.joint2_id) == (sites[0].parentJoint, sites[1].parentJoint)
+            and c.joint1_placement.isApprox(sites[0].placement, 1e-12)
+            and c.joint2_placement.isApprox(sites[1].placement, 1e-12)
+        ):
+            return c
+    raise MjcfError(source, closure.name, "Pinocchio's MJCF parser returned no constraint model joining its sites")
