@@ -20,6 +20,7 @@ tip) and ``site2`` (platform anchor), and all leg joints at zero in the body pos
 
 from __future__ import annotations
 
+import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -77,14 +78,25 @@ def load_mjcf(path: str | Path) -> ClosedLoopModel:
             message names the element, joint or closure).
     """
     path = Path(path)
-    source = str(path)
     try:
         text = path.read_text()
     except OSError as exc:
-        raise MjcfError(source, source, f"cannot read MJCF: {exc.strerror}") from None
+        raise MjcfError(str(path), str(path), f"cannot read MJCF: {exc.strerror}") from None
+    return _load(text, path, str(path))
+
+
+def load_mjcf_text(mjcf_xml: str, source: str = "<string>") -> ClosedLoopModel:
+    """:func:`load_mjcf` of MJCF text (Pinocchio's parser reads files: through a temporary one)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "hexapod.xml"
+        path.write_text(mjcf_xml)
+        return _load(mjcf_xml, path, source)
+
+
+def _load(text: str, path: Path, source: str) -> ClosedLoopModel:
     closures = read_equalities(text, source)
     try:
-        model, points, frames = pin.buildModelAndConstraintsFromMJCF(source)
+        model, points, frames = pin.buildModelAndConstraintsFromMJCF(str(path))
     except (RuntimeError, ValueError) as exc:
         raise MjcfError(source, str(exc).strip()[:200], "Pinocchio cannot parse the MJCF") from None
     _place_home(model, source)
