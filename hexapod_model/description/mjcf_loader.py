@@ -10,8 +10,9 @@ join and hands both to :meth:`ClosedLoopModel.from_pinocchio`, after two adjustm
   the platform body's ``pos``/``quat``) becomes the free flyer's joint placement instead, as for a
   URDF ``floating`` joint: configurations of both loaders then mean the same thing.
 * Pinocchio 4.1 places that free flyer at ``(I, p - R p)`` for a platform body at ``(R, p)``
-  instead of the identity; the identity is restored first (files of ``hexapod mjcf`` have
-  ``R = I``, where both agree).
+  instead of the identity (files of ``hexapod mjcf`` have ``R = I``, where both agree), and
+  bounds its position to +-1.01 m; the placement becomes the home pose whatever Pinocchio gave,
+  and the position is unbounded as with a URDF ``floating`` joint.
 
 The file must follow docs/mjcf.md: the whole tree in the first body under ``<worldbody>``, the
 platform on the only free joint, six ``weld`` or ``connect`` equalities naming ``site1`` (leg
@@ -27,7 +28,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..description.model import ClosedLoopModel
+from ..description.model import ClosedLoopModel, same_placement
 from ..description.urdf import Closure
 from ..exceptions import MjcfError, UrdfError
 
@@ -121,6 +122,8 @@ def _place_home(model: pin.Model, source: str) -> None:
             raise MjcfError(source, model.names[j], "leg joints must be zero in the model as written (no joint 'ref')")
     jm = model.joints[ff[0]]
     model.jointPlacements[ff[0]] = pin.XYZQUATToSE3(q0[jm.idx_q : jm.idx_q + 7])
+    model.lowerPositionLimit[jm.idx_q : jm.idx_q + 3] = -np.inf  # a free joint has no limits (Pinocchio: +-1.01 m)
+    model.upperPositionLimit[jm.idx_q : jm.idx_q + 3] = np.inf
     model.referenceConfigurations["qpos0"] = pin.neutral(model)
 
 
@@ -136,8 +139,49 @@ def _constraint_of(model: pin.Model, closure: Closure, candidates: list, source:
         if (
             isinstance(c, kind)
             and (c.joint1_id, c.joint2_id) == (sites[0].parentJoint, sites[1].parentJoint)
-            and c.joint1_placement.isApprox(sites[0].placement, 1e-12)
-            and c.joint2_placement.isApprox(sites[1].placement, 1e-12)
+            and same_placement(c.joint1_placement, sites[0].placement)
+            and same_placement(c.joint2_placement, sites[1].placement)
         ):
             return c
     raise MjcfError(source, closure.name, "Pinocchio's MJCF parser returned no constraint model joining its sites")
+
+
+def mujoco_qpos(clm: ClosedLoopModel, q: np.ndarray, mj_model) -> np.ndarray:
+    """MuJoCo's ``qpos`` for configuration ``q`` of ``clm``, for ``mj_model`` built from the same MJCF.
+
+    Joints are matched by name. ``q`` holds the platform relative to home with a quaternion
+    ``x, y, z, w`` (Pinocchio); MuJoCo's free joint holds it in the world (base) frame, position
+    in metres then the quaternion ``w, x, y, z``.
+
+    Args:
+        clm: the hexapod (from :func:`load_mjcf`, or from the URDF the MJCF was written from).
+        q: its configuration (``clm.nq``).
+        mj_model: a ``mujoco.MjModel`` (only ``qpos0`` and ``joint(name).qposadr`` are used).
+    """
+    q = np.asarray(q, dtype=float)
+    out = np.array(mj_model.qpos0, dtype=float)
+    m = clm.model
+    for j in range(1, m.njoints):
+        jm, a = m.joints[j], int(mj_model.joint(m.names[j]).qposadr[0])
+        if j == clm.platform_joint:
+            x, y, z, qx, qy, qz, qw = pin.SE3ToXYZQUAT(clm.home * pin.XYZQUATToSE3(q[jm.idx_q : jm.idx_q + 7]))
+            out[a : a + 7] = (x, y, z, qw, qx, qy, qz)
+        else:
+            out[a : a + jm.nq] = q[jm.idx_q : jm.idx_q + jm.nq]
+    return out
+
+
+def q_of_mujoco_qpos(clm: ClosedLoopModel, qpos: np.ndarray, mj_model) -> np.ndarray:
+    """The inverse of :func:`mujoco_qpos`: configuration of ``clm`` for MuJoCo's ``qpos``."""
+    qpos = np.asarray(qpos, dtype=float)
+    q = np.empty(clm.nq)
+    m = clm.model
+    for j in range(1, m.njoints):
+        jm, a = m.joints[j], int(mj_model.joint(m.names[j]).qposadr[0])
+        if j == clm.platform_joint:
+            quat = qpos[a + 3 : a + 7] / np.linalg.norm(qpos[a + 3 : a + 7])  # w, x, y, z
+            world = pin.XYZQUATToSE3(np.r_[qpos[a : a + 3], quat[1:], quat[0]])
+            q[jm.idx_q : jm.idx_q + 7] = pin.SE3ToXYZQUAT(clm.home.inverse() * world)
+        else:
+            q[jm.idx_q : jm.idx_q + jm.nq] = qpos[a : a + jm.nq]
+    return q

@@ -31,6 +31,11 @@ _REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevolute
 _PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
 
 
+def same_placement(a: pin.SE3, b: pin.SE3, tol: float = 1e-12) -> bool:
+    """Whether two placements agree entry by entry to ``tol`` (m and rotation-matrix entries)."""
+    return bool(np.max(np.abs(a.homogeneous - b.homogeneous)) <= tol)
+
+
 @dataclass(frozen=True)
 class Leg:
     """Indices of one leg in the Pinocchio model (joint ids, and their q / v indices)."""
@@ -202,8 +207,8 @@ class ClosedLoopModel:
             if not (
                 isinstance(c, cls)
                 and (c.joint1_id, c.joint2_id) == (f1.parentJoint, f2.parentJoint)
-                and c.joint1_placement.isApprox(f1.placement, 1e-12)
-                and c.joint2_placement.isApprox(f2.placement, 1e-12)
+                and same_placement(c.joint1_placement, f1.placement)
+                and same_placement(c.joint2_placement, f2.placement)
             ):
                 raise UrdfError(
                     self.source, leg.name, f"the constraint model is not a {cls.__name__} joining the closure frames"

@@ -1,0 +1,254 @@
+"""MJCF export and Pinocchio's MJCF loader: same tree as the URDF, same kinematics, round trips, bad files."""
+
+from __future__ import annotations
+
+import functools
+import re
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import hexapod_model as hm
+from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.description.mjcf import geometry_to_mjcf, rpy_to_quat, urdf_to_mjcf
+from hexapod_model.description.mjcf_loader import load_mjcf, load_mjcf_text, read_equalities
+from hexapod_model.description.model import ClosedLoopModel, same_placement
+from hexapod_model.description.urdf import DECIMALS, leg_frame
+from hexapod_model.exceptions import MjcfError
+
+from ..conftest import PRESET_NAMES, hexapod
+
+
+@functools.cache
+def mjcf_hexapod(name: str) -> hm.Hexapod:
+    """Cached Hexapod of preset ``name`` loaded from its MJCF through Pinocchio's parser."""
+    return hm.Hexapod(load_mjcf_text(geometry_to_mjcf(hm.get_preset(name)), f"{name}.xml"))
+
+
+def per_leg_geometry() -> hm.HexapodGeometry:
+    """A user geometry with per-leg strokes and Cardan axes (not the preset defaults)."""
+    d = hm.get_preset("reference").to_dict()
+    d["name"] = "per_leg"
+    g = hm.get_preset("reference")
+    for i, leg in enumerate(d["legs"]):
+        leg["stroke"] = [-0.10 - 0.01 * i, 0.12 + 0.005 * i]
+        w, _ = g.home_leg_axis(i)
+        a = leg_frame(g, i)[:, 0]
+        tilt = np.cos(0.1 * (i + 1)) * a + np.sin(0.1 * (i + 1)) * np.cross(w, a)  # base axis turned about the leg
+        leg["base_axis"] = tilt.tolist()
+        leg["platform_axis"] = (np.cos(0.2 * i) * a - np.sin(0.2 * i) * np.cross(w, a)).tolist()
+    return hm.geometry_from_dict(d)
+
+
+def assert_same_model(a: hm.Hexapod, b: hm.Hexapod) -> None:
+    """Joint names and order, placements, limits, closures and home of two loaded hexapods agree."""
+    ma, mb = a.model, b.model
+    assert a.joint_names == b.joint_names and a.prismatic_names == b.prismatic_names
+    assert [ma.joints[j].shortname() for j in range(ma.njoints)] == [
+        mb.joints[j].shortname() for j in range(mb.njoints)
+    ]
+    for j in range(1, ma.njoints):
+        assert same_placement(ma.jointPlacements[j], mb.jointPlacements[j]), ma.names[j]
+    np.testing.assert_allclose(ma.lowerPositionLimit, mb.lowerPositionLimit, atol=1e-12)
+    np.testing.assert_allclose(ma.upperPositionLimit, mb.upperPositionLimit, atol=1e-12)
+    np.testing.assert_allclose(a.home_pose, b.home_pose, atol=1e-12)
+    np.testing.assert_allclose(a.stroke, b.stroke, atol=1e-12)
+    assert a.closed_loop.kind == b.closed_loop.kind
+    for ca, cb in zip(a.constraint_models, b.constraint_models):
+        assert type(ca) is type(cb) and ca.name == cb.name
+        assert (ca.joint1_id, ca.joint2_id) == (cb.joint1_id, cb.joint2_id)
+        assert same_placement(ca.joint1_placement, cb.joint1_placement)
+        assert same_placement(ca.joint2_placement, cb.joint2_placement)
+    assert b.closure_residual(b.q_home).max() < 1e-12
+
+
+def worst_disagreement(name: str, n: int, seed: int) -> tuple[int, dict[str, float]]:
+    """IK and FK of ``n`` random box poses through the URDF and the MJCF path: solves, worst gaps."""
+    urdf, mjcf = hexapod(name), mjcf_hexapod(name)
+    worst = dict.fromkeys(("ik lengths", "ik q", "fk pose", "fk q"), 0.0)
+    solved = 0
+    for T in box_poses(urdf.home_pose, n, seed=seed):
+        a, b = urdf.inverse(T, check=False), mjcf.inverse(T, check=False)
+        assert a.status == b.status
+        if not a.converged:
+            continue
+        fa, fb = urdf.forward(a.lengths), mjcf.forward(a.lengths)
+        solved += 1
+        for key, x, y in (
+            ("ik lengths", a.lengths, b.lengths),
+            ("ik q", a.q, b.q),
+            ("fk pose", fa.pose, fb.pose),
+            ("fk q", fa.q, fb.q),
+        ):
+            worst[key] = max(worst[key], float(np.abs(x - y).max()))
+    return solved, worst
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_pinocchio_mjcf_loader_gives_the_urdf_kinematics(name):
+    solved, worst = worst_disagreement(name, 200, seed=11)
+    assert solved >= 190, solved  # the box is inside every preset's workspace but for a few corners
+    assert max(worst.values()) < 1e-12, worst
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_pinocchio_mjcf_loader_on_1000_poses(name):
+    solved, worst = worst_disagreement(name, 1000, seed=12)
+    assert solved >= 950, solved
+    assert max(worst.values()) < 1e-12, worst
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_round_trip_of_every_preset(name):
+    assert_same_model(hexapod(name), mjcf_hexapod(name))
+
+
+def test_round_trip_of_a_per_leg_geometry_file(tmp_path):
+    geom = per_leg_geometry()
+    path = tmp_path / "per_leg.json"
+    import json
+
+    path.write_text(json.dumps(geom.to_dict()))
+    from_file = hm.Hexapod.load(path)
+    (tmp_path / "per_leg.xml").write_text(geometry_to_mjcf(hm.load_geometry(path)))
+    back = hm.Hexapod.load(tmp_path / "per_leg.xml")
+    assert_same_model(from_file, back)
+    assert len({tuple(s) for s in back.stroke}) == 6  # the per-leg values made it through
+    lengths = np.array([0.01, -0.02, 0.015, 0.0, -0.005, 0.02])
+    np.testing.assert_allclose(back.forward(lengths).pose, from_file.forward(lengths).pose, atol=1e-12)
+
+
+def _rotated_home_urdf(angle: float) -> str:
+    """The reference URDF with its platform frame turned by ``angle`` (rad) about z at home."""
+    from hexapod_model.description.urdf import _rpy, format_number
+
+    root = ET.fromstring(hm.geometry_to_urdf(hm.get_preset("reference")))
+    Rz = pin.rpy.rpyToMatrix(0.0, 0.0, angle)
+    for j in root.findall("joint"):
+        origin = j.find("origin")
+        if j.get("name") == "platform_joint":
+            origin.set("rpy", f"0 0 {format_number(angle)}")
+        elif j.find("parent").get("link") == "platform":
+            xyz = np.array([float(v) for v in origin.get("xyz").split()])
+            R = pin.rpy.rpyToMatrix(*[float(v) for v in origin.get("rpy").split()])
+            origin.set("xyz", " ".join(format_number(v) for v in Rz.T @ xyz))
+            origin.set("rpy", _rpy(Rz.T @ R))
+    return ET.tostring(root, encoding="unicode")
+
+
+def test_rotated_home_pose_survives_pinocchio_free_flyer_placement():
+    """Pinocchio 4.1 places a rotated free body at (I, p - R p); the loader puts it back at home."""
+    text = _rotated_home_urdf(0.4)
+    urdf = hm.Hexapod(ClosedLoopModel(text))
+    mjcf = hm.Hexapod(load_mjcf_text(urdf_to_mjcf(text)))
+    assert_same_model(urdf, mjcf)
+    assert abs(np.arctan2(mjcf.home_pose[1, 0], mjcf.home_pose[0, 0]) - 0.4) < 1e-12
+    lengths = np.array([0.02, 0.0, -0.01, 0.01, 0.0, -0.02])
+    np.testing.assert_allclose(mjcf.forward(lengths).pose, urdf.forward(lengths).pose, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_mjcf_holds_the_urdf_tree_closures_and_actuators(name):
+    urdf_root = ET.fromstring(hm.geometry_to_urdf(hm.get_preset(name)))
+    text = geometry_to_mjcf(hm.get_preset(name), actuated=True)
+    root = ET.fromstring(text)
+    kinds = {"revolute": "hinge", "prismatic": "slide"}
+    joints = {j.get("name"): j for j in root.iter("joint") if j.get("name")}
+    for uj in urdf_root.findall("joint"):
+        if uj.get("type") in kinds:
+            mj = joints.pop(uj.get("name"))
+            assert mj.get("type") == kinds[uj.get("type")]
+            assert mj.get("axis") == uj.find("axis").get("xyz")
+            assert mj.get("range") == f"{uj.find('limit').get('lower')} {uj.find('limit').get('upper')}"
+    assert not joints  # nothing else, and one free joint for the platform
+    assert [f.get("name") for f in root.iter("freejoint")] == ["platform_joint"]
+    assert [b.get("name") for b in root.find("worldbody")] == ["base_link"]  # the one tree Pinocchio reads
+    closures = hm.read_closures(hm.geometry_to_urdf(hm.get_preset(name)))
+    tag = "weld" if closures[0].kind == "6d" else "connect"
+    eq = [el for el in root.find("equality") if el.tag == tag]
+    assert [(e.get("name"), e.get("site1"), e.get("site2")) for e in eq] == [
+        (c.name, f"{c.link1}_site", f"{c.link2}_site") for c in closures
+    ]
+    for k in range(1, 7):  # a comment says which closure is which leg
+        assert re.search(rf"<!-- leg{k}: the tip of the leg of leg{k}_prismatic \(leg{k}_tip\)", text)
+    acts = root.find("actuator").findall("position")
+    assert [a.get("joint") for a in acts] == list(hexapod(name).prismatic_names)
+    for a, (lo, hi) in zip(acts, hexapod(name).stroke):
+        assert [float(v) for v in a.get("ctrlrange").split()] == [lo, hi]
+    assert geometry_to_mjcf(hm.get_preset(name)).count("<position") == 0
+
+
+def test_numbers_are_written_with_fixed_precision():
+    """The bytes do not depend on the machine: fixed decimals, no exponent, no -0."""
+    for name in PRESET_NAMES:
+        text = geometry_to_mjcf(hm.get_preset(name), actuated=True)
+        for attr in ("pos", "quat", "size", "range", "axis", "rgba", "diaginertia", "mass", "solref", "solimp", "kp"):
+            for value in " ".join(re.findall(rf' {attr}="([^"]*)"', text)).split():
+                assert "e" not in value and value != "-0", (attr, value)
+                assert len(value.partition(".")[2]) <= DECIMALS, (attr, value)
+    w, x, y, z = rpy_to_quat((0.3, -0.2, 1.1))
+    R = pin.Quaternion(w, x, y, z).toRotationMatrix()
+    np.testing.assert_allclose(R, pin.rpy.rpyToMatrix(0.3, -0.2, 1.1), atol=1e-15)
+    assert rpy_to_quat((0.0, 0.0, 3.0))[0] >= 0 and rpy_to_quat((0.0, 0.0, -3.5))[0] >= 0
+
+
+def test_visuals_that_cannot_be_translated_are_named_in_the_file():
+    text = hm.geometry_to_urdf(hm.get_preset("spherical"))
+    text = text.replace('<cylinder radius="0.02"', '<mesh filename="package://x/leg.stl"', 1)
+    text = re.sub(r'(<mesh filename="package://x/leg.stl")[^/]*/>', r"\1/>", text)
+    out = urdf_to_mjcf(text)
+    assert re.search(r"<!-- visuals left out .*leg1_base_cross_visual1 \(mesh\)", out)
+    assert load_mjcf_text(out).kind == "3d"
+
+
+def _reference_mjcf() -> str:
+    return geometry_to_mjcf(hm.get_preset("reference"))
+
+
+@pytest.mark.parametrize(
+    "edit, pattern",
+    [
+        (lambda t: re.sub(r"<weld [^>]*/>", "", t), "declares no weld or connect"),
+        (lambda t: t.replace('site1="leg2_tip_site"', 'body1="leg2_tip"'), r"equality lacks \['site1'\]"),
+        (lambda t: t.replace('<weld name="leg3"', '<weld active="false" name="leg3"'), "inactive equality"),
+        (lambda t: t.replace('site2="leg4_anchor_site"', 'site2="leg4_nowhere"'), "names a site that Pinocchio"),
+        (lambda t: t.replace("</equality>", '<joint joint1="leg1_roll" /></equality>'), "only weld and connect"),
+        (
+            lambda t: t.replace('name="leg1_roll" type="hinge"', 'name="leg1_roll" ref="0.1" type="hinge"'),
+            r"must be zero.*'leg1_roll'",
+        ),
+        (lambda t: t.replace('<weld name="leg5"', '<connect name="leg5"'), "same type"),
+        (
+            lambda t: t.replace(
+                'site1="leg1_tip_site" site2="leg1_anchor_site"', 'site1="leg1_anchor_site" site2="leg1_tip_site"'
+            ),
+            "must be fixed to the platform",
+        ),
+        (lambda t: re.sub(r'(<body name="leg2_anchor" pos=")([^ ]+)', r"\g<1>0.3", t), "does not close the loop"),
+        (lambda t: t.replace("<mujoco ", "<robot ").replace("</mujoco>", "</robot>"), "root element"),
+        (lambda t: t.replace("</mujoco>", ""), "not well-formed"),
+    ],
+)
+def test_malformed_mjcf_is_rejected(edit, pattern, tmp_path):
+    path = tmp_path / "bad.xml"
+    path.write_text(edit(_reference_mjcf()))
+    with pytest.raises(MjcfError, match=pattern) as err:
+        hm.Hexapod.load(path)
+    assert str(path) in str(err.value) and isinstance(err.value, hm.UrdfError)
+
+
+def test_missing_file_and_equalities_in_file_order(tmp_path):
+    with pytest.raises(MjcfError, match="cannot read MJCF"):
+        load_mjcf(tmp_path / "nope.xml")
+    closures = read_equalities(_reference_mjcf())
+    assert [(c.name, c.kind, c.link1) for c in closures] == [(f"leg{i}", "6d", f"leg{i}_tip_site") for i in range(1, 7)]
+
+
+def test_viewer_geometry_of_an_mjcf_hexapod():
+    visual = mjcf_hexapod("reference").closed_loop.visual_model()
+    names = {g.name for g in visual.geometryObjects}
+    assert len(names) == len(hexapod("reference").closed_loop.visual_model().geometryObjects)
+    assert {"base_link_visual0", "leg1_cylinder_visual0", "platform_visual0"} <= names
