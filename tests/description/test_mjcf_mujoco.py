@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import functools
+import re
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -18,6 +22,7 @@ from .test_mjcf import _rotated_home_urdf
 
 mujoco = pytest.importorskip("mujoco", reason="MuJoCo is a test dependency: pip install -e '.[test]'")
 
+ROOT = Path(__file__).resolve().parents[2]
 CLOSED_TOL = 1e-10  # m and rad: equality violations of solved configurations
 REST_TOL = 1e-9  # m and rad: platform pose at rest against forward kinematics
 
@@ -137,3 +142,32 @@ def test_rotated_home_pose_in_mujoco():
     assert max(np.abs(x).max() for x in equality_violations(m, d)) < CLOSED_TOL
     clm = load_mjcf_text(text)
     np.testing.assert_allclose(mujoco_qpos(clm, clm.q_home, m), m.qpos0, atol=1e-13)
+
+
+def test_benchmark_script_reports_every_check(tmp_path):
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "mjcf_checks.py"), "3-6", "--poses", "5", "--rest", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 0, out.stderr
+    assert "solref (0.005, 1.0)" in out.stdout and "pin (5 poses)" in out.stdout and "rest (1 poses)" in out.stdout
+
+
+def test_picture_script_renders_headless(tmp_path):
+    png = tmp_path / "mjcf.png"
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "make_mjcf_image.py"), "--out", str(png)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    if out.returncode != 0 and re.search(r"EGL|OpenGL|gladLoadGL|MUJOCO_GL", out.stderr):
+        pytest.skip(f"no headless OpenGL here (libegl1 or libosmesa6): {out.stderr.strip().splitlines()[-1]}")
+    assert out.returncode == 0, out.stderr
+    assert re.search(r"at rest after .* s of simulation: platform .* m from forward kinematics", out.stdout)
+    from PIL import Image
+
+    image = np.asarray(Image.open(png).convert("RGB"), dtype=float)
+    assert image.shape == (720, 960, 3) and image.std() > 20  # a scene, not a blank frame
