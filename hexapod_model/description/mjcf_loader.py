@@ -43,8 +43,9 @@ def read_equalities(mjcf_xml: str, source: str = "<string>") -> list[Closure]:
     ``site1``/``site2``.
 
     Raises:
-        MjcfError: malformed XML, not an MJCF, an equality without name or sites, another type
-            of equality, or an inactive one.
+        MjcfError: malformed XML, not an MJCF, an equality without name or sites, a site that
+            the first body under ``<worldbody>`` (the tree Pinocchio reads) does not hold
+            (Pinocchio 4.1's parser crashes on one), another type of equality, an inactive one.
     """
     try:
         root = ET.fromstring(mjcf_xml)
@@ -52,6 +53,11 @@ def read_equalities(mjcf_xml: str, source: str = "<string>") -> list[Closure]:
         raise MjcfError(source, str(exc), "not well-formed XML") from None
     if root.tag != "mujoco":
         raise MjcfError(source, root.tag, "an MJCF file has <mujoco> as its root element")
+    world = root.find("worldbody")
+    tree = world.find("body") if world is not None else None
+    if tree is None:
+        raise MjcfError(source, "worldbody", "the MJCF has no <body> under <worldbody>")
+    sites = {el.get("name") for el in tree.iter("site")}  # Pinocchio reads the first body only
     out = []
     for eq in root.iter("equality"):
         for el in eq:
@@ -65,6 +71,13 @@ def read_equalities(mjcf_xml: str, source: str = "<string>") -> list[Closure]:
                 raise MjcfError(source, ET.tostring(el, encoding="unicode").strip()[:120], f"equality lacks {missing}")
             if el.get("active", "true") != "true":
                 raise MjcfError(source, attrs["name"], "an inactive equality does not close a leg")
+            for key in ("site1", "site2"):
+                if attrs[key] not in sites:
+                    raise MjcfError(
+                        source,
+                        attrs[key],
+                        f"equality {attrs['name']!r} names a site missing from the first body under <worldbody>",
+                    )
             out.append(Closure(str(attrs["name"]), _KINDS[el.tag], str(attrs["site1"]), str(attrs["site2"])))
     if not out:
         raise MjcfError(source, "equality", "the MJCF declares no weld or connect equality")

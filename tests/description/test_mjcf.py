@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import functools
+import json
 import re
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -19,6 +21,8 @@ from hexapod_model.description.urdf import DECIMALS, leg_frame
 from hexapod_model.exceptions import MjcfError
 
 from ..conftest import PRESET_NAMES, hexapod
+
+README = (Path(__file__).resolve().parents[2] / "README.md").read_text()
 
 
 @functools.cache
@@ -104,13 +108,13 @@ def test_pinocchio_mjcf_loader_on_1000_poses(name):
 @pytest.mark.parametrize("name", PRESET_NAMES)
 def test_round_trip_of_every_preset(name):
     assert_same_model(hexapod(name), mjcf_hexapod(name))
+    names = [f.name for f in mjcf_hexapod(name).model.frames]
+    assert len(set(names)) == len(names)  # model.getFrameId(name) works for every frame
 
 
 def test_round_trip_of_a_per_leg_geometry_file(tmp_path):
     geom = per_leg_geometry()
     path = tmp_path / "per_leg.json"
-    import json
-
     path.write_text(json.dumps(geom.to_dict()))
     from_file = hm.Hexapod.load(path)
     (tmp_path / "per_leg.xml").write_text(geometry_to_mjcf(hm.load_geometry(path)))
@@ -214,7 +218,14 @@ def _reference_mjcf() -> str:
         (lambda t: re.sub(r"<weld [^>]*/>", "", t), "declares no weld or connect"),
         (lambda t: t.replace('site1="leg2_tip_site"', 'body1="leg2_tip"'), r"equality lacks \['site1'\]"),
         (lambda t: t.replace('<weld name="leg3"', '<weld active="false" name="leg3"'), "inactive equality"),
-        (lambda t: t.replace('site2="leg4_anchor_site"', 'site2="leg4_nowhere"'), "names a site that Pinocchio"),
+        (lambda t: t.replace('site2="leg4_anchor_site"', 'site2="leg4_nowhere"'), "names a site missing from"),
+        (
+            lambda t: t.replace('site2="leg4_anchor_site"', 'site2="s"').replace(
+                "</worldbody>", '<body name="b"><site name="s"/></body></worldbody>'
+            ),
+            "names a site missing from the first body",
+        ),
+        (lambda t: re.sub(r"<worldbody>.*</worldbody>", "<worldbody/>", t, flags=re.S), "no <body> under"),
         (lambda t: t.replace("</equality>", '<joint joint1="leg1_roll" /></equality>'), "only weld and connect"),
         (
             lambda t: t.replace('name="leg1_roll" type="hinge"', 'name="leg1_roll" ref="0.1" type="hinge"'),
@@ -252,3 +263,17 @@ def test_viewer_geometry_of_an_mjcf_hexapod():
     names = {g.name for g in visual.geometryObjects}
     assert len(names) == len(hexapod("reference").closed_loop.visual_model().geometryObjects)
     assert {"base_link_visual0", "leg1_cylinder_visual0", "platform_visual0"} <= names
+
+
+def python_block(text: str, marker: str) -> str:
+    """The ```python block of ``text`` that contains ``marker``."""
+    return next(b for b in re.findall(r"```python\n(.*?)```", text, re.S) if marker in b)
+
+
+def test_readme_mjcf_python_block_runs(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "reference.xml").write_text(geometry_to_mjcf(hm.get_preset("reference"), actuated=True))
+    env: dict = {}
+    exec(compile(python_block(README, "buildModelAndConstraintsFromMJCF"), "README", "exec"), env)
+    assert len(env["welds"]) == 6 and len(env["connects"]) == 0 and env["model"].nq == env["hexa"].nq
+    assert env["hexa"].forward(np.full(6, 0.01)).converged

@@ -171,3 +171,14 @@ def test_picture_script_renders_headless(tmp_path):
 
     image = np.asarray(Image.open(png).convert("RGB"), dtype=float)
     assert image.shape == (720, 960, 3) and image.std() > 20  # a scene, not a blank frame
+
+
+def test_docs_qpos_example_runs(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "reference.xml").write_text(geometry_to_mjcf(hm.get_preset("reference")))
+    block = re.search(r"```python\n(.*?)```", (ROOT / "docs" / "mjcf.md").read_text(), re.S).group(1)
+    env: dict = {}
+    exec(compile(block, "docs/mjcf.md", "exec"), env)
+    rows = env["d"].efc_type[: env["d"].nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY
+    assert rows.sum() == 36 and np.abs(env["d"].efc_pos[: env["d"].nefc][rows]).max() < CLOSED_TOL
+    np.testing.assert_allclose(env["q"], env["sol"].q, atol=1e-14)
