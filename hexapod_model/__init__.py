@@ -10,6 +10,7 @@ Quick start::
 
 from ._version import __version__
 from .description.geometry import HexapodGeometry, LegGeometry, geometry_from_dict, load_geometry
+from .description.mjcf import geometry_to_mjcf, urdf_to_mjcf
 from .description.presets import DEFAULT_PRESET, PRESETS, get_preset
 from .description.urdf import geometry_to_urdf, read_closures, write_urdf
 from .exceptions import (
@@ -18,6 +19,7 @@ from .exceptions import (
     HexapodError,
     InputError,
     LimitError,
+    MjcfError,
     RenderError,
     SingularityError,
     SolverError,
@@ -35,6 +37,7 @@ __all__ = [
     "HexapodError",
     "InputError",
     "LimitError",
+    "MjcfError",
     "RenderError",
     "SingularityError",
     "SolverError",
@@ -56,5 +59,7 @@ __all__ = [
     "geometry_to_urdf",
     "read_closures",
     "write_urdf",
+    "geometry_to_mjcf",
+    "urdf_to_mjcf",
     "__version__",
 ]

@@ -12,10 +12,10 @@ and Pinocchio's MJCF parser both read. The writer translates a URDF that follows
   ``<worldbody>``, still finds the whole tree in it;
 * children are sorted by joint name, as Pinocchio's URDF parser orders them: both loaders give
   the same configuration layout;
-* a closure ``link1``/``link2`` becomes a site of the same name at the link origin, and a
-  ``weld`` (``6d``: the site frames coincide) or ``connect`` (``3d``: their origins coincide)
-  between the two sites, named after the closure, with :data:`EQUALITY_SOLREF` /
-  :data:`EQUALITY_SOLIMP`;
+* a closure's ``link1``/``link2`` get a site ``<link>_site`` at their origin, and a ``weld``
+  (``6d``: the site frames coincide) or ``connect`` (``3d``: their origins coincide) joins the
+  two sites, named after the closure, with :data:`EQUALITY_SOLREF` / :data:`EQUALITY_SOLIMP`
+  and a comment naming the leg;
 * with ``actuated``, one ``position`` actuator per measured (prismatic) joint, its control
   range the stroke (m).
 
@@ -82,7 +82,7 @@ def rpy_to_quat(rpy: tuple[float, ...]) -> tuple[float, float, float, float]:
 
 
 def _place(body: ET.Element, origin: ET.Element | None, what: str, source: str) -> None:
-    """``pos`` and ``quat`` attributes of ``body`` from a URDF ``<origin>`` (left out at zero)."""
+    """``pos`` and ``quat`` attributes of an MJCF element from a URDF ``<origin>`` (left out at zero)."""
     xyz = _numbers(origin.get("xyz") if origin is not None else None, (0.0, 0.0, 0.0), f"{what} xyz", source)
     rpy = _numbers(origin.get("rpy") if origin is not None else None, (0.0, 0.0, 0.0), f"{what} rpy", source)
     if any(_f(v) != "0" for v in xyz):
