@@ -14,20 +14,27 @@ class HexapodError(Exception):
     """Base class of every error raised by hexapod_model."""
 
 
+def brief_repr(value: Any, limit: int = 200) -> str:
+    """``repr(value)`` on one line (arrays print on several), shortened to ``limit`` characters."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 class _BadValue(HexapodError, ValueError):
-    """A value that cannot be used, with where it was found and why.
+    """A value that cannot be used, with where it was found and why; the message is one line.
 
     Subclasses name the location attribute (``_where``) and the message format.
     """
 
     _where = "where"
-    _format = "{where}: {reason} ({value!r})"
+    _format = "{where}: {reason} ({value})"
 
     def __init__(self, where: str, value: Any, reason: str):
         setattr(self, self._where, where)
         self.value = value
         self.reason = reason
-        super().__init__(self._format.format(where=where, value=value, reason=reason))
+        one_line = " ".join(str(reason).splitlines())
+        super().__init__(self._format.format(where=where, value=brief_repr(value), reason=one_line))
 
 
 class GeometryError(_BadValue):
@@ -40,7 +47,7 @@ class GeometryError(_BadValue):
 
     _where = "field"
     field: str
-    _format = "geometry field {where!r} = {value!r}: {reason}"
+    _format = "geometry field {where!r} = {value}: {reason}"
 
 
 class UrdfError(_BadValue):
@@ -72,7 +79,7 @@ class InputError(_BadValue):
 
     _where = "name"
     name: str
-    _format = "invalid {where} {value!r}: {reason}"
+    _format = "invalid {where} {value}: {reason}"
 
 
 class LimitError(HexapodError, ValueError):
