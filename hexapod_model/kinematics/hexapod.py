@@ -22,12 +22,29 @@ from ..description.presets import PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
 from ..exceptions import ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
 from . import kernels
+from .checks import (
+    MAX_TOL,
+    POSE_TOLERANCE,
+    check_guess,
+    check_held_set,
+    check_home_conditioning,
+    check_max_iter,
+    check_pose,
+    check_tolerance,
+    check_vector,
+    free_directions,
+)
 from .solver import NewtonSolver, Solution
 
 DEFAULT_TOL = 1e-12  # closure residual (m, rad): pose errors stay below 1e-9 on every preset
 DEFAULT_MAX_ITER = 20
 _LIMIT_SLACK = 1e-12
-POSE_TOLERANCE = 1e-6  # max deviation of a pose from a rigid transform
+#: largest 2-norm condition number of the direct-kinematics constraint Jacobian at home
+#: (metres and radians; the presets have 9-67, a 20x smaller hexapod about 700, a singular
+#: layout with parallel, coplanar or coincident legs 1e13 and more)
+HOME_CONDITION_LIMIT = 1e6
+
+__all__ = ["Hexapod", "POSE_TOLERANCE", "check_pose", "check_vector", "load_hexapod"]
 
 
 class Hexapod:
@@ -61,6 +78,9 @@ class Hexapod:
         self._limited_hi = model.upper[self._limited].copy()
         self._held_forward = tuple(leg.prismatic for leg in model.legs)
         self._held_inverse = (model.platform_joint,)
+        self._free_directions: dict[tuple[int, ...], tuple[int, int]] = {}  # held set -> (free, rank)
+        #: 2-norm condition number of the direct-kinematics constraint Jacobian at home
+        self.home_condition_number = self._check_home_conditioning()
 
     # ----- construction -----
     @classmethod
@@ -135,18 +155,17 @@ class Hexapod:
             solver = self._solvers[held] = NewtonSolver(self.closed_loop, held)
         return solver
 
+    def _check_home_conditioning(self) -> float:
+        """Condition number of the direct-kinematics Jacobian at home; GeometryError above the limit."""
+        _, G = self._solver(self._held_forward).evaluate(self.closed_loop.q_home)
+        return check_home_conditioning(G, self.closed_loop.source, HOME_CONDITION_LIMIT)
+
     def _start(self, guess) -> np.ndarray:
         if guess is None:
             return self.closed_loop.q_home.copy()
-        if isinstance(guess, Solution):
+        if isinstance(guess, Solution) and isinstance(guess.q, np.ndarray) and guess.q.shape == (self.nq,):
             return guess.q.copy()
-        q = guess
-        q = np.array(q, dtype=float)
-        if q.shape != (self.closed_loop.nq,) or not np.all(np.isfinite(q)):
-            raise InputError(
-                "guess", q, f"expected a finite configuration of {self.closed_loop.nq} values or a Solution"
-            )
-        return q
+        return check_guess(guess, self.nq, self.closed_loop.platform_q)
 
     # ----- solves -----
     def forward(
@@ -163,13 +182,14 @@ class Hexapod:
         Args:
             lengths: six readings, leg order, metres (zero at home).
             guess: previous :class:`Solution` or configuration to start from (default: home).
-            tol: closure residual to reach.
-            max_iter: Newton step limit.
+            tol: closure residual to reach, in (0, 1e-6] (metres and radians).
+            max_iter: Newton step limit (an int >= 0).
             check: raise on a result that is not ``converged`` (default). With
                 ``check=False`` the :class:`Solution` is returned and its ``status`` says why.
 
         Raises:
-            InputError: wrong count, NaN or inf.
+            InputError: wrong count or shape, NaN or inf, complex or text values, a bad
+                ``guess``, ``tol`` or ``max_iter``.
             LimitError: a reading outside its stroke.
             ConvergenceError, SingularityError, WorkspaceError: when ``check`` and the solve failed.
         """
@@ -216,6 +236,12 @@ class Hexapod:
         4x4 pose for ``platform_joint`` (the floating joint). Example: hold three legs and
         the platform height is not possible (whole joints only), but holding five prismatic
         joints and one Cardan angle is.
+
+        Raises:
+            InputError: an unknown joint, a bad value, or a held set that leaves the other
+                joints free to move (under-determined: the message gives the count of free
+                directions). Over-determined sets are solved in the least-squares sense and
+                converge when the held values are consistent.
         """
         if not isinstance(held, Mapping) or not held:
             raise InputError("held", held, "expected a non-empty mapping of joint name -> value")
@@ -236,7 +262,16 @@ class Hexapod:
                     raise self._limit_error(iq, v)
                 q[iq] = v
             ids.append(j)
-        return self._finish(self._solver(tuple(sorted(ids))), q, tol, max_iter, check)
+        held_ids = tuple(sorted(ids))
+        if held_ids not in self._free_directions:  # rank at a generic configuration within the limits
+            rng = np.random.default_rng(12345)
+            qg = self.closed_loop.q_home.copy()
+            qg[self._limited] = rng.uniform(0.5 * self._limited_lo, 0.5 * self._limited_hi)
+            i = self.closed_loop.platform_q
+            qg[i : i + 7] = pin.SE3ToXYZQUAT(pin.exp6(rng.uniform(-0.05, 0.05, 6)))
+            self._free_directions[held_ids] = free_directions(self._solver(held_ids).evaluate(qg)[1])
+        check_held_set(sorted(held), *self._free_directions[held_ids])
+        return self._finish(self._solver(held_ids), q, tol, max_iter, check)
 
     def _limit_error(self, iq: int, value: float) -> LimitError:
         """The error for configuration entry ``iq`` at ``value`` outside its limits."""
@@ -246,6 +281,10 @@ class Hexapod:
         )
 
     def _finish(self, solver: NewtonSolver, q0: np.ndarray, tol: float, max_iter: int, check: bool) -> Solution:
+        if type(tol) is not float or not 0.0 < tol <= MAX_TOL:  # one comparison on the hot path
+            tol = check_tolerance(tol)
+        if type(max_iter) is not int or max_iter < 0:
+            max_iter = check_max_iter(max_iter)
         q, status, it, res, jac, msg = solver.run(q0, tol, max_iter)
         if status == "converged":
             bad = kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, _LIMIT_SLACK)
@@ -264,41 +303,6 @@ class Hexapod:
         return self.closed_loop.closure_errors(np.asarray(q, dtype=float))
 
 
-def check_vector(name: str, values, n: int) -> np.ndarray:
-    """``values`` as a finite float array of length ``n``, or :class:`InputError`."""
-    try:
-        arr = np.asarray(values, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InputError(name, values, f"expected {n} numbers") from None
-    if arr.size != n:
-        raise InputError(name, values, f"expected {n} values, got {arr.size}")
-    if not np.all(np.isfinite(arr)):
-        raise InputError(name, values, "values must be finite (found NaN or inf)")
-    return arr
-
-
 def load_hexapod(spec: str | Path) -> Hexapod:
     """:meth:`Hexapod.load`: a preset name, URDF file or geometry file as a :class:`Hexapod`."""
     return Hexapod.load(spec)
-
-
-def check_pose(pose) -> np.ndarray:
-    """``pose`` (4x4 array or ``pin.SE3``) as a valid 4x4 rigid transform, or :class:`InputError`."""
-    if isinstance(pose, pin.SE3):
-        return np.array(pose.homogeneous)
-    try:
-        T = np.asarray(pose, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError("pose", pose, "expected a 4x4 matrix") from None
-    if T.shape != (4, 4):
-        raise InputError("pose", pose, f"expected a 4x4 matrix, got shape {T.shape}")
-    err = kernels.rigid_error(T)
-    if not err <= POSE_TOLERANCE:
-        if not np.all(np.isfinite(T)):
-            raise InputError("pose", pose, "values must be finite (found NaN or inf)")
-        raise InputError(
-            "pose",
-            pose,
-            f"not a rigid transform: orthonormality/det/bottom-row error {err:.2g} exceeds {POSE_TOLERANCE:g}",
-        )
-    return T

@@ -235,6 +235,10 @@ class NewtonSolver:
                 status = "converged"
                 if min_trace < 1.0:
                     status, message = "max_iterations", "converged to a spurious closure flipped by 180 deg"
+                elif it == 0 and (ratio := self._solve_step()) < SINGULAR_PIVOT_RATIO:
+                    # no step factored the Jacobian: check the start itself is not singular
+                    status = "singular"
+                    message = f"start is singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g}), no step taken"
                 break
             if it >= max_iter or not norm < np.inf:  # also stops on NaN
                 message = f"no convergence to {tol:g} in {it} iterations (residual {norm:.3g})"

@@ -10,6 +10,7 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
+from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.kinematics.rotations import rotation_angle
 from hexapod_model.kinematics.solver import NewtonSolver
 
@@ -162,10 +163,17 @@ def test_singular_layout_is_reported():
         for a in np.linspace(0, 2 * np.pi, 6, endpoint=False)
     )
     g = dataclasses.replace(hm.get_preset("spherical"), name="vertical", legs=legs)
-    hexa = hm.Hexapod.from_geometry(g)
-    with pytest.raises(hm.SingularityError, match="singular"):
-        hexa.forward([0.01] * 6)
-    assert hexa.forward([0.0] * 6, check=False).condition_number > 1e12
+    with pytest.raises(hm.GeometryError, match=r"home condition number' = \S+e\+\d+: .* exceeds the limit 1e\+06"):
+        hm.Hexapod.from_geometry(g)  # refused on load: no solve on it is ever reported as good
+    # the solver itself, on the same model: singular after a step, and at home where no step is taken
+    clm = ClosedLoopModel(hm.geometry_to_urdf(g))
+    solver = NewtonSolver(clm, tuple(leg.prismatic for leg in clm.legs))
+    q = clm.q_home.copy()
+    q[clm.prismatic_q] = 0.01
+    assert solver.run(q, 1e-12, 20)[1] == "singular"
+    _, status, iterations, residual, jac, message = solver.run(clm.q_home, 1e-12, 20)
+    assert (status, iterations) == ("singular", 0) and residual <= 1e-12, message
+    assert "no step taken" in message and np.linalg.cond(jac) > 1e12
 
 
 def test_solution_reports_everything():
