@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import UrdfError
+from ..files import atomic_write_text
 from .geometry import HexapodGeometry, LegGeometry
 
 COLOURS = {
@@ -280,10 +281,8 @@ def _anchor(w_: _Writer, geom: HexapodGeometry, i: int, rot: np.ndarray, kind: s
 
 
 def write_urdf(geom: HexapodGeometry, path: str | Path) -> Path:
-    """Write ``geometry_to_urdf(geom)`` to ``path``; returns the path."""
-    path = Path(path)
-    path.write_text(geometry_to_urdf(geom))
-    return path
+    """Write ``geometry_to_urdf(geom)`` to ``path`` atomically; returns the path."""
+    return atomic_write_text(path, geometry_to_urdf(geom))
 
 
 def validate_urdf(urdf_xml: str, source: str = "<string>") -> None:

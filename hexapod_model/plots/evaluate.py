@@ -7,6 +7,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..files import atomic_save_figure
+
 
 def plot_sections(r: dict, path: str | Path) -> None:
     """Seed 002 Fig.
@@ -50,4 +52,4 @@ def plot_sections(r: dict, path: str | Path) -> None:
             ax.tick_params(labelsize=7)
     fig.suptitle(f"{r['name']}: mean over a {r['cone_deg']:g} deg orientation cone (seed 002 Fig. 5)", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    atomic_save_figure(fig, path, dpi=80)

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..files import atomic_save_figure
 from ..studies.reproduce import PAPER
 
 COLOURS = {"full": "#d62728", "reduced": "#1f77b4", "standard": "#2ca02c"}
@@ -60,7 +61,7 @@ def error_clouds(path: Path, positions_mm: np.ndarray, err: tuple[np.ndarray, np
         fig.colorbar(sc, ax=ax, shrink=0.65, pad=0.1, extend="max").ax.tick_params(labelsize=7)
     fig.suptitle(title, fontsize=11)
     fig.subplots_adjust(left=0.0, right=0.95, bottom=0.04, top=0.86, wspace=0.15)
-    fig.savefig(path)
+    atomic_save_figure(fig, path)
     return path
 
 
@@ -93,7 +94,7 @@ def histograms(path: Path, err_cardan, err_standard) -> Path:
         ax.legend(fontsize=7, loc="upper left")
     fig.suptitle(f"Pose errors over {len(err_cardan[0])} poses (dashed: seed 000 Table 1 means, measured)", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path)
+    atomic_save_figure(fig, path)
     return path
 
 
@@ -127,7 +128,7 @@ def convergence(path: Path, traces: dict) -> Path:
     ax.grid(True, which="major", alpha=0.3)
     ax.legend(fontsize=8, loc="lower left")
     fig.tight_layout()
-    fig.savefig(path)
+    atomic_save_figure(fig, path)
     return path
 
 
@@ -149,7 +150,7 @@ def conditioning(path: Path, full: list, reduced: list, rows: dict | None = None
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
+    atomic_save_figure(fig, path)
     return path
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..files import atomic_save_figure
 from ..studies.track import TrackingRun
 
 
@@ -30,4 +31,4 @@ def plot_run(run: TrackingRun, path: str | Path) -> None:
         fontsize=9,
     )
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    atomic_save_figure(fig, path, dpi=80)

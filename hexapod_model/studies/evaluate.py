@@ -9,6 +9,7 @@ where it stopped; changing a setting starts afresh.
 
 from __future__ import annotations
 
+import io
 import json
 import os
 from collections.abc import Callable
@@ -20,6 +21,7 @@ import numpy as np
 
 from ..analysis.jacobian import kinematic_evaluation
 from ..analysis.workspace import SliceResult, compute_slice, cone_rotations, probe_extent
+from ..files import atomic_write_bytes, atomic_write_text
 from ..kinematics.hexapod import Hexapod
 
 # seed 002 Tables I (volume) and II, in the paper's units (read as cm)
@@ -137,7 +139,7 @@ def run_evaluation(
         else:
             for f in ckpt.glob("slice_*.npz"):
                 f.unlink()
-            meta_path.write_text(json.dumps(meta, indent=1))
+            atomic_write_text(meta_path, json.dumps(meta, indent=1))
     todo = [k for k in range(len(zs)) if k not in done]
     resumed = len(done)
     workers = workers or os.cpu_count() or 1
@@ -153,14 +155,16 @@ def run_evaluation(
                     r = fut.result()
                     done[r.index] = r
                     if ckpt is not None:
+                        buf = io.BytesIO()  # atomic: an interrupted write must not leave a broken slice
                         np.savez_compressed(
-                            ckpt / f"slice_{r.index:03d}.npz",
+                            buf,
                             index=r.index,
                             inside=r.inside,
                             kappa=r.kappa,
                             sigma_min=r.sigma_min,
                             abs_det=r.abs_det,
                         )
+                        atomic_write_bytes(ckpt / f"slice_{r.index:03d}.npz", buf.getvalue())
                     if on_slice is not None:
                         on_slice(len(done), len(zs))
             except KeyboardInterrupt:

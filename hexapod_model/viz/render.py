@@ -7,6 +7,7 @@ screenshot, and Pillow cuts it into tiles.
 
 from __future__ import annotations
 
+import io
 import shutil
 import subprocess
 import tempfile
@@ -16,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import RenderError
+from ..files import atomic_write_bytes, atomic_write_text
 
 CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")
 HIDE_CONTROLS = "<style>.dg{display:none!important}</style>"  # meshcat's control panel (dat.GUI)
@@ -41,10 +43,8 @@ def static_html(vis) -> str:
 
 
 def write_html(vis, path: str | Path) -> Path:
-    """Write :func:`static_html` to ``path``."""
-    path = Path(path)
-    path.write_text(static_html(vis))
-    return path
+    """Write :func:`static_html` to ``path`` atomically."""
+    return atomic_write_text(path, static_html(vis))
 
 
 def render_pngs(
@@ -103,9 +103,9 @@ def render_pngs(
         grid = Image.open(shot).convert("RGB")
         out = []
         for k, png in enumerate(png_files):
-            png = Path(png)
-            grid.crop((0, k * h, w, (k + 1) * h)).save(png)
-            out.append(png)
+            buf = io.BytesIO()
+            grid.crop((0, k * h, w, (k + 1) * h)).save(buf, format="PNG")
+            out.append(atomic_write_bytes(png, buf.getvalue()))
         return out
 
 
