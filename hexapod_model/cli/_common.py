@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Iterable, Iterator
-from typing import TypeVar
+from typing import Any, TypeVar
 
 from ..description.presets import DEFAULT_PRESET
 from ..kinematics.hexapod import Hexapod, load_hexapod
@@ -40,6 +40,16 @@ def progress(iterable: Iterable[T], total: int, desc: str, unit: str = "row") ->
     from tqdm import tqdm
 
     return iter(tqdm(iterable, total=total, desc=desc, file=sys.stderr, unit=unit, disable=None))
+
+
+def stream_bar(desc: str, unit: str = "row") -> Any:
+    """A tqdm counter on stderr for a stream of unknown length: on a terminal only, after 1 s.
+
+    Use as a context manager and call ``update(n)``.
+    """
+    from tqdm import tqdm
+
+    return tqdm(desc=desc, file=sys.stderr, unit=unit, disable=None, delay=1.0)
 
 
 def note(command: str, text: str) -> None:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from contextlib import nullcontext
+from typing import IO, Any
 
 import numpy as np
 
@@ -12,20 +14,21 @@ from ..description.geometry import load_geometry
 from ..description.presets import DEFAULT_PRESET, PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf, validate_urdf
 from ..exceptions import HexapodError
-from ..files import atomic_write_text, check_output_path
+from ..files import atomic_write_text, atomic_writer, check_output_path
 from ..io.tables import (
     LENGTH_COLUMNS,
     POSE_COLUMNS,
     SOLVER_COLUMNS,
-    column,
+    TableReader,
+    TableWriter,
+    open_table,
     pose_columns,
+    pose_input_columns,
     poses_from_table,
-    read_table,
-    write_table,
 )
 from ..kinematics.hexapod import Hexapod
 from ..studies.bench import run_benchmarks
-from ._common import add_hexapod_argument, hexapod_of, note, progress
+from ._common import add_hexapod_argument, hexapod_of, note, stream_bar
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -87,50 +90,69 @@ def cmd_urdf(args: argparse.Namespace) -> int:
 
 
 def _solve_rows(args: argparse.Namespace, kind: str) -> int:
-    out_path = None if args.output in (None, "-") else check_output_path(args.output, args.input)
+    """Stream the rows of ``args.input`` through FK or IK into the output, a chunk at a time."""
+    out_path = None if args.output in (None, "-") else check_output_path(args.output, args.input, args.hexapod)
     hexa = hexapod_of(args)
-    source = sys.stdin if args.input == "-" else args.input
-    if kind == "fk":
-        header, data = read_table(source, LENGTH_COLUMNS)
-        inputs = column(header, data, LENGTH_COLUMNS)
-        out_header = POSE_COLUMNS + SOLVER_COLUMNS
-    else:
-        header, data = read_table(source)
-        inputs = poses_from_table(header, data)
-        out_header = LENGTH_COLUMNS + SOLVER_COLUMNS
-    width = len(out_header) - len(SOLVER_COLUMNS)
-    values: list[np.ndarray | None] = []  # per row: the pose (fk) or the readings (ik), None when failed
-    tails: list[list] = []  # per row: status, iterations, residual
-    failures: list[str] = []
-    guess = None
-    solve = hexa.forward if kind == "fk" else hexa.inverse
-    for k, x in enumerate(progress(inputs, len(inputs), kind)):
-        try:
-            sol = solve(x, guess=guess, check=False)
-        except HexapodError as exc:
-            failures.append(f"row {k + 1}: {exc}")
-            values.append(None)
-            tails.append(["invalid_input", 0, float("nan")])
-            continue
-        if sol.converged:
-            guess = sol
-            values.append(sol.pose if kind == "fk" else sol.lengths)
-            tails.append(["ok", sol.iterations, float(sol.residual)])
-        else:
-            failures.append(f"row {k + 1}: {sol.status}: {sol.message}")
-            values.append(None)
-            tails.append([sol.status, sol.iterations, float(sol.residual)])
-    good = [k for k, v in enumerate(values) if v is not None]
-    table = np.full((len(values), width), np.nan)
-    if good:  # fk: pose -> quaternion and angles for all rows at once
-        stacked = np.array([values[k] for k in good])
-        table[good] = pose_columns(stacked) if kind == "fk" else stacked
-    rows = [[*map(float, table[k]), *tails[k]] for k in range(len(values))]
-    write_table(out_path, out_header, rows, out=sys.stdout)
-    if failures:
-        note(kind, f"{len(failures)} of {len(rows)} rows failed; first: {failures[0]}")
+    source: Any = getattr(sys.stdin, "buffer", sys.stdin) if args.input == "-" else args.input
+    with open_table(source, LENGTH_COLUMNS if kind == "fk" else (), "<stdin>" if args.input == "-" else None) as table:
+        columns = LENGTH_COLUMNS if kind == "fk" else pose_input_columns(table.header)
+        out_header = (POSE_COLUMNS if kind == "fk" else LENGTH_COLUMNS) + SOLVER_COLUMNS
+        with atomic_writer(out_path) if out_path is not None else nullcontext(sys.stdout) as out:
+            total, failed, first = _stream(hexa, table, columns, kind, out, out_header)
+    if failed:
+        note(kind, f"{failed} of {total} rows failed; first: {first}")
         return 1
     return 0
+
+
+def _stream(
+    hexa: Hexapod, table: TableReader, columns: list[str], kind: str, out: IO[str], out_header: list[str]
+) -> tuple[int, int, str]:
+    """Solve and write every row, each from the previous good solution, a chunk at a time.
+
+    Returns (rows, failed rows, the first failure as one line).
+    """
+    writer = TableWriter(out, out_header)
+    solve = hexa.forward if kind == "fk" else hexa.inverse
+    width = len(out_header) - len(SOLVER_COLUMNS)
+    total, failed, first, guess = 0, 0, "", None
+    with stream_bar(kind) as bar:
+        for rows in table.chunks(columns):
+            if kind == "fk":
+                inputs, errors = rows.values, rows.errors
+            else:
+                inputs, pose_errors = poses_from_table(columns, rows.values)
+                errors = [a or b for a, b in zip(rows.errors, pose_errors)]
+            good: list[int] = []
+            solved: list[np.ndarray] = []  # the pose (fk) or the readings (ik) of the good rows
+            tails: list[list] = []  # per row: status, iterations, residual
+            for k in range(len(rows)):
+                sol, why = None, errors[k]
+                if not why:
+                    try:
+                        sol = solve(inputs[k], guess=guess, check=False)
+                        why = sol.message
+                    except HexapodError as exc:
+                        why = str(exc)
+                if sol is not None and sol.converged:
+                    guess = sol
+                    good.append(k)
+                    solved.append(sol.pose if kind == "fk" else sol.lengths)
+                    tails.append(["ok", sol.iterations, float(sol.residual)])
+                    continue
+                status = "invalid_input" if sol is None else sol.status
+                failed += 1
+                first = first or f"row {total + k + 1} (line {rows.lines[k]}): {status}: {why}"
+                tails.append([status, 0, float("nan")] if sol is None else [status, sol.iterations, float(sol.residual)])
+            table_values = np.full((len(rows), width), np.nan)
+            if good:  # fk: pose -> quaternion and angles for the whole chunk in one call
+                table_values[good] = pose_columns(np.array(solved)) if kind == "fk" else np.array(solved)
+            for k in range(len(rows)):
+                writer.write([*map(float, table_values[k]), *tails[k]])
+            total += len(rows)
+            bar.update(len(rows))
+            out.flush()
+    return total, failed, first
 
 
 def cmd_fk(args: argparse.Namespace) -> int:
@@ -146,7 +168,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     """``hexapod bench``."""
     if args.json:
-        check_output_path(args.json)
+        check_output_path(args.json, args.hexapod)
     report = run_benchmarks(hexapod_of(args), samples=args.samples, seed=args.seed)
     report["hexapod"] = args.hexapod
     print(format_bench(report))

@@ -71,7 +71,7 @@ def format_report(r: dict) -> str:
 def run(args: argparse.Namespace) -> int:
     """``hexapod evaluate``."""
     if args.json:
-        check_output_path(args.json)
+        check_output_path(args.json, args.hexapod)
     settings = Settings(args.grid, args.cone_deg, args.cone_samples, args.length_unit)
     hexa = load_hexapod(args.hexapod)  # fails here, with one line, before any worker starts
     bar = None

@@ -3,13 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from .. import __version__
 from ..exceptions import HexapodError, SolverError
 from . import core, evaluate, mjcf, reproduce, track, view
 
-EXIT_CODES = {0: "all good", 1: "some rows or the solve failed", 2: "usage error or unreadable input"}
+EXIT_CODES = {
+    0: "all good",
+    1: "some rows or the solve failed",
+    2: "usage error or unreadable input",
+    130: "interrupted (Ctrl-C)",
+    141: "standard output closed early (e.g. piped into head)",
+}
 COMMANDS = (core, mjcf, reproduce, evaluate, track, view)
 
 DESCRIPTION = """\
@@ -59,3 +66,6 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"hexapod {args.command}: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader of stdout went away: stop quietly, as Unix tools do
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error when Python flushes
+        return 141

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
 
 import numpy as np
 
@@ -61,13 +62,25 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def _check_outputs(args: argparse.Namespace, hexapod: str) -> None:
+    """Refuse unusable outputs before any work; ``--json`` may name a file in the ``--out`` folder
+    that is yet to be created.
+    """
+    out = Path(args.out) if args.out else None
+    if out is not None and out.exists() and not out.is_dir():
+        raise InputError("--out", args.out, "is a file; name a folder (created if missing)")
+    if args.json:
+        parent = Path(args.json).parent
+        if out is None or out.exists() or parent.resolve() != out.resolve():
+            check_output_path(args.json, args.data, hexapod)
+
+
 def run(args: argparse.Namespace) -> int:
     """``hexapod reproduce``."""
     if args.poses < 2:
         raise InputError("--poses", args.poses, "need at least 2 poses")
-    if args.json:
-        check_output_path(args.json, args.data)
     name = args.urdf or args.preset or "reference"
+    _check_outputs(args, name)
     hexa = load_hexapod(name)
     if args.data:
         if args.encoder_noise is not None or args.reference_noise is not None:
@@ -76,6 +89,11 @@ def run(args: argparse.Namespace) -> int:
     else:
         enc = DEFAULT_ENCODER_NOISE if args.encoder_noise is None else args.encoder_noise
         data = simulate(hexa, args.poses, args.seed, enc, args.reference_noise or 0.0)
+    if args.out:
+        try:
+            Path(args.out).mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError("--out", args.out, f"cannot create the folder: {exc.strerror}") from None
     result = run_study(hexa, data, args.convergence_poses, progress)
     print(f"Table 1 re-run on {name}: {data.source}")
     if not args.data:

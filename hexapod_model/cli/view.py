@@ -8,9 +8,9 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from ..exceptions import HexapodError, ViewError
+from ..exceptions import HexapodError, InputError, ViewError
 from ..files import check_output_path
-from ..io.tables import LENGTH_COLUMNS, column, poses_from_table, read_table
+from ..io.tables import LENGTH_COLUMNS, open_table, pose_input_columns, poses_from_table
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.solver import Solution
 from ._common import add_hexapod_argument, hexapod_of
@@ -70,21 +70,29 @@ def build(args: argparse.Namespace, vis):
 def play_frames(hexa: Hexapod, path: str | Path) -> list[Solution]:
     """Solutions of every row of a pose or leg-reading CSV, each started from the previous good one.
 
-    Rows that do not solve (NaN, out of limits, ...) are skipped with a note on stderr.
+    Rows that are invalid or do not solve (NaN, out of limits, ...) are skipped with a note on stderr.
     """
-    header, data = read_table(path)
     solve: Callable[..., Solution]
-    if all(c in header for c in LENGTH_COLUMNS):
-        inputs, solve = column(header, data, LENGTH_COLUMNS), hexa.forward
-    else:
-        inputs, solve = poses_from_table(header, data), hexa.inverse
+    with open_table(path) as table:
+        if all(c in table.header for c in LENGTH_COLUMNS):
+            rows = table.read(LENGTH_COLUMNS)
+            inputs, errors, solve = rows.values, rows.errors, hexa.forward
+        else:
+            columns = pose_input_columns(table.header)
+            rows = table.read(columns)
+            inputs, pose_errors = poses_from_table(columns, rows.values)
+            errors, solve = [a or b for a, b in zip(rows.errors, pose_errors)], hexa.inverse
     frames, guess = [], None
     for k, x in enumerate(inputs):
-        try:
-            guess = solve(x, guess=guess)
-            frames.append(guess)
-        except HexapodError as exc:
-            print(f"hexapod view: row {k + 1} skipped: {exc}", file=sys.stderr)
+        why = errors[k]
+        if not why:
+            try:
+                guess = solve(x, guess=guess)
+                frames.append(guess)
+                continue
+            except HexapodError as exc:
+                why = str(exc)
+        print(f"hexapod view: row {k + 1} (line {rows.lines[k]}) skipped: {why}", file=sys.stderr)
     return frames
 
 
@@ -135,7 +143,9 @@ def run_snapshot(args: argparse.Namespace) -> int:
     size = parse_size(args.size)
     check_output_path(args.output, args.hexapod)
     if args.png:
-        check_output_path(args.png, args.hexapod)
+        check_output_path(args.png, args.hexapod, args.output)
+        if Path(args.png).resolve() == Path(args.output).resolve():
+            raise InputError("--png", args.png, "is the HTML output too; name another file")
     vis = start_visualizer()
     try:
         build(args, vis)

@@ -30,9 +30,9 @@ from ..analysis.full_formulation import ForwardComparison
 from ..analysis.standard import StandardModel, skew_exp
 from ..analysis.trajectories import box_poses
 from ..exceptions import HexapodError, InputError
-from ..io.tables import LENGTH_COLUMNS, column, read_table, write_table
+from ..io.tables import LENGTH_COLUMNS, open_table, poses_from_table, write_table
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.rotations import matrix_to_quaternion, quaternion_to_matrix, rotation_angle
+from ..kinematics.rotations import matrix_to_quaternion, rotation_angle
 
 DEFAULT_ENCODER_NOISE = 10e-6  # m, Gaussian sigma on each reading
 DATA_COLUMNS = LENGTH_COLUMNS + ["x", "y", "z", "qx", "qy", "qz", "qw"]
@@ -115,22 +115,22 @@ def simulate(
 
 
 def load_measured(path: str | Path) -> StudyInput:
-    """Read a measured data set: columns ``l1..l6`` (m) and ``x,y,z,qx,qy,qz,qw`` (reference)."""
-    header, data = read_table(path, DATA_COLUMNS)
-    if len(data) < 2:
-        raise InputError("data rows", len(data), f"{path}: need at least 2 measured poses")
-    values = column(header, data, DATA_COLUMNS)
-    bad = np.flatnonzero(~np.all(np.isfinite(values), axis=1))
-    if bad.size:
-        raise InputError("data row", int(bad[0]) + 2, f"{path}: line {bad[0] + 2} has a missing or non-numeric value")
-    q = values[:, 9:13]
-    if np.any(np.abs(np.linalg.norm(q, axis=1) - 1.0) > 1e-3):
-        k = int(np.argmax(np.abs(np.linalg.norm(q, axis=1) - 1.0)))
-        raise InputError("quaternion", q[k].tolist(), f"{path}: line {k + 2}: qx,qy,qz,qw must be a unit quaternion")
-    reference = np.tile(np.eye(4), (len(values), 1, 1))
-    reference[:, :3, 3] = values[:, 6:9]
-    reference[:, :3, :3] = quaternion_to_matrix(q)
-    return StudyInput(values[:, :6], reference, f"measured data {path}")
+    """Read a measured data set: columns ``l1..l6`` (m) and ``x,y,z,qx,qy,qz,qw`` (reference).
+
+    Every row must be valid under the line rules of :mod:`hexapod_model.io.tables` (the cell
+    count of the header, finite numbers within its magnitude limit, a unit quaternion within
+    its tolerance): the first row that is not raises :class:`InputError` naming its line.
+    """
+    with open_table(path, DATA_COLUMNS) as table:
+        rows = table.read(DATA_COLUMNS)
+    if len(rows) < 2:
+        raise InputError("data rows", len(rows), f"{path}: need at least 2 measured poses")
+    reference, pose_errors = poses_from_table(DATA_COLUMNS[6:], rows.values[:, 6:])
+    for k in range(len(rows)):
+        why = rows.errors[k] or pose_errors[k]
+        if why:
+            raise InputError("data row", k + 1, f"{path}: line {rows.lines[k]}: {why}")
+    return StudyInput(rows.values[:, :6], reference, f"measured data {path}")
 
 
 def save_measured(path: str | Path, data: StudyInput) -> Path:
