@@ -143,7 +143,9 @@ def _stream(
                 status = "invalid_input" if sol is None else sol.status
                 failed += 1
                 first = first or f"row {total + k + 1} (line {rows.lines[k]}): {status}: {why}"
-                tails.append([status, 0, float("nan")] if sol is None else [status, sol.iterations, float(sol.residual)])
+                tails.append(
+                    [status, 0, float("nan")] if sol is None else [status, sol.iterations, float(sol.residual)]
+                )
             table_values = np.full((len(rows), width), np.nan)
             if good:  # fk: pose -> quaternion and angles for the whole chunk in one call
                 table_values[good] = pose_columns(np.array(solved)) if kind == "fk" else np.array(solved)

@@ -63,8 +63,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _check_outputs(args: argparse.Namespace, hexapod: str) -> None:
-    """Refuse unusable outputs before any work; ``--json`` may name a file in the ``--out`` folder
-    that is yet to be created.
+    """Refuse unusable outputs before any work.
+
+    ``--json`` may name a file in the ``--out`` folder that is yet to be created.
     """
     out = Path(args.out) if args.out else None
     if out is not None and out.exists() and not out.is_dir():

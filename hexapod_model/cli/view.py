@@ -92,7 +92,7 @@ def play_frames(hexa: Hexapod, path: str | Path) -> list[Solution]:
                 continue
             except HexapodError as exc:
                 why = str(exc)
-        print(f"hexapod view: row {k + 1} (line {rows.lines[k]}) skipped: {why}", file=sys.stderr)
+        print(f"hexapod view: row {k + 1} skipped (line {rows.lines[k]}): {why}", file=sys.stderr)
     return frames
 
 

@@ -30,6 +30,26 @@ from ..kinematics.rotations import (
 )
 from .csv_rows import Rows, TableReader
 
+__all__ = [
+    "LENGTH_COLUMNS",
+    "POSE_COLUMNS",
+    "SOLVER_COLUMNS",
+    "MAX_MAGNITUDE",
+    "QUATERNION_TOLERANCE",
+    "ROTATION_AGREEMENT",
+    "Rows",
+    "TableReader",
+    "TableWriter",
+    "column",
+    "open_table",
+    "pose_columns",
+    "pose_input_columns",
+    "pose_row",
+    "poses_from_table",
+    "read_table",
+    "write_table",
+]
+
 LENGTH_COLUMNS = [f"l{i}" for i in range(1, 7)]
 POSE_COLUMNS = ["x", "y", "z", "qx", "qy", "qz", "qw", "roll", "pitch", "yaw"]
 SOLVER_COLUMNS = ["status", "iterations", "residual"]
@@ -154,9 +174,10 @@ def _cell(v: Any) -> str:
 
 
 class TableWriter:
-    """Rows to a text stream with the ``csv`` module: floats with 12 significant digits
-    (sub-nanometre for metre-scale values), NaN as an empty cell, ``\\n`` line ends; the
-    header goes first.
+    """Rows to a text stream, through the ``csv`` module; the header goes first.
+
+    Floats are written with 12 significant digits (sub-nanometre for metre-scale values), NaN
+    as an empty cell; lines end with a line feed.
     """
 
     def __init__(self, stream: IO[str], header: Sequence[str]):

@@ -17,7 +17,7 @@ from ..exceptions import GeometryError, InputError
 from . import kernels
 from .solver import Solution
 
-POSE_TOLERANCE = 1e-6  # max deviation of a pose from a rigid transform, and of a configuration quaternion from unit norm
+POSE_TOLERANCE = 1e-6  # max deviation of a pose from a rigid transform, of a start quaternion from unit norm
 MAX_POSITION = 1e6  # m: largest platform position coordinate accepted (beyond it the residual loses every digit)
 MAX_TOL = 1e-6  # largest closure residual (m, rad) a caller may accept as converged
 RANK_TOL = 1e-9  # singular values below this fraction of the largest count as zero (held sets)
@@ -116,8 +116,10 @@ def check_guess(guess: Any, nq: int, platform_q: int) -> np.ndarray:
 
 
 def check_home_conditioning(G: np.ndarray, source: str, limit: float) -> float:
-    """2-norm condition number of ``G`` (the direct-kinematics Jacobian at home), or
-    :class:`GeometryError` when it exceeds ``limit``.
+    """2-norm condition number of ``G``, the direct-kinematics Jacobian at home.
+
+    Raises:
+        GeometryError: the condition number exceeds ``limit`` (or ``G`` is singular).
     """
     s = np.linalg.svd(G, compute_uv=False)
     kappa = float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
