@@ -169,7 +169,7 @@ def pose_columns(poses: np.ndarray) -> np.ndarray:
 
 def _cell(v: Any) -> str:
     if isinstance(v, float):
-        return "" if np.isnan(v) else f"{v:.12g}"
+        return "" if v != v else f"{v:.12g}"  # v != v: NaN, without a numpy call per cell
     return str(v)
 
 
