@@ -132,3 +132,16 @@ def test_baseline_benchmark_runs():
     lines = out.stdout.strip().splitlines()
     assert [ln.split()[0] for ln in lines] == ["baseline", "hexapod_model"]
     assert all(float(ln.rsplit("error", 1)[1]) < 1e-9 for ln in lines)  # both reach the true pose
+
+
+def test_stream_memory_benchmark_runs():
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "stream_memory.py"), "--rows", "300"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 0, out.stderr
+    rows = [ln.split() for ln in out.stdout.strip().splitlines()[2:]]
+    assert [(r[0], r[1], r[-1]) for r in rows] == [("fk", "300", "0"), ("ik", "300", "0")]  # both exit 0
+    assert all(float(r[3]) > 10 for r in rows)  # max RSS in MB
