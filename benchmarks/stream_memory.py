@@ -32,10 +32,14 @@ def write_readings(path: Path, n: int) -> None:
             np.savetxt(fh, lengths[start : start + 10000], fmt="%.12g", delimiter=",")
 
 
-def measure(argv: list[str], env: dict) -> tuple[float, float, int]:
-    """(seconds, max RSS in MB, exit code) of ``python -m hexapod_model *argv``."""
+def measure(argv: list[str], env: dict, cwd: str) -> tuple[float, float, int]:
+    """(seconds, max RSS in MB, exit code) of ``python -m hexapod_model *argv`` run in ``cwd``.
+
+    ``cwd`` must not be a checkout: ``python -m`` imports from the working folder first.
+    """
     t0 = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "hexapod_model", *argv], env=env, stderr=subprocess.DEVNULL)
+    cmd = [sys.executable, "-m", "hexapod_model", *argv]
+    proc = subprocess.Popen(cmd, env=env, cwd=cwd, stderr=subprocess.DEVNULL)
     _, status, usage = os.wait4(proc.pid, 0)
     proc.returncode = os.waitstatus_to_exitcode(status)
     return time.perf_counter() - t0, usage.ru_maxrss / 1024.0, proc.returncode
@@ -56,7 +60,7 @@ def main() -> None:
             lengths, poses, back = (Path(tmp) / f"{name}_{n}.csv" for name in ("lengths", "poses", "back"))
             write_readings(lengths, n)
             for cmd, src, dst in (("fk", lengths, poses), ("ik", poses, back)):
-                seconds, rss, code = measure([cmd, args.hexapod, str(src), "-o", str(dst)], env)
+                seconds, rss, code = measure([cmd, args.hexapod, str(src), "-o", str(dst)], env, tmp)
                 print(f"{cmd:8s}{n:9d}{seconds:10.1f}{rss:12.1f}{code:6d}", flush=True)
 
 
