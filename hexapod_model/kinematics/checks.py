@@ -63,24 +63,27 @@ def check_pose(pose: Any) -> np.ndarray:
     The rotation must be orthonormal and the bottom row ``0 0 0 1`` within
     :data:`POSE_TOLERANCE`; the position coordinates at most :data:`MAX_POSITION` metres.
     """
-    if isinstance(pose, pin.SE3):
+    if type(pose) is np.ndarray and pose.dtype == np.float64 and pose.shape == (4, 4):
+        T = pose  # the common case: no conversion
+    elif isinstance(pose, pin.SE3):
         T = np.array(pose.homogeneous)
     else:
         T = real_array("pose", pose, "expected a 4x4 matrix of real numbers")
         if T.shape != (4, 4):
             raise InputError("pose", pose, f"expected a 4x4 matrix, got shape {T.shape}")
+    err = kernels.rigid_error(T)  # inf when an entry is NaN or inf
+    if err <= POSE_TOLERANCE and abs(T[0, 3]) <= MAX_POSITION and abs(T[1, 3]) <= MAX_POSITION:
+        if abs(T[2, 3]) <= MAX_POSITION:
+            return T
     if not np.all(np.isfinite(T)):
         raise InputError("pose", pose, "values must be finite (found NaN or inf)")
-    if not np.all(np.abs(T[:3, 3]) <= MAX_POSITION):
-        raise InputError("pose", pose, f"position coordinates must be at most {MAX_POSITION:g} m in magnitude")
-    err = kernels.rigid_error(T)
     if not err <= POSE_TOLERANCE:
         raise InputError(
             "pose",
             pose,
             f"not a rigid transform: orthonormality/det/bottom-row error {err:.2g} exceeds {POSE_TOLERANCE:g}",
         )
-    return T
+    raise InputError("pose", pose, f"position coordinates must be at most {MAX_POSITION:g} m in magnitude")
 
 
 def check_configuration(name: str, q: Any, nq: int, platform_q: int) -> np.ndarray:
