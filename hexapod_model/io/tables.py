@@ -58,7 +58,7 @@ RPY_COLUMNS = ["roll", "pitch", "yaw"]
 #: largest |value| of a cell in l1..l6 or a pose column (m, deg or quaternion component):
 #: no hexapod pose is that far out, and bounded inputs keep every derived number finite
 MAX_MAGNITUDE = 1e6
-#: largest | |q| - 1 | of a quaternion: a unit quaternion written with 5 or more decimals
+#: largest | |q| - 1 | of a quaternion: a unit quaternion written with 6 or more decimals
 #: passes (it is then divided by its norm, which undoes the rounding); anything else is invalid
 QUATERNION_TOLERANCE = 1e-5
 #: largest angle (rad) between qx..qw and roll,pitch,yaw when a row gives both
