@@ -34,7 +34,8 @@ class TrackingRun:
     Attributes:
         t: times (s). errors: (n, 6) |d roll|, |d pitch|, |d yaw| (deg), |dx|, |dy|, |dz| (m).
         distance: (n,) pose error (m, rotations x base radius). off_branch: (n,) bool.
-        status: (n,) tracker status (``ok``/``flagged``/``failed``). flags: counts per flag.
+        status: (n,) ``ok`` (no flag), ``flagged`` (a pose with flags) or ``failed`` (no pose).
+        flags: counts per flag.
         truth_status: counts of the inverse-kinematics statuses of the true poses.
     """
 
@@ -132,7 +133,8 @@ def simulate(
         errors[k, :3] = np.degrees(np.minimum(d, 2 * np.pi - d))
         errors[k, 3:] = np.abs(T[:3, 3] - poses[k][:3, 3])
         dist[k] = pose_distance(poses[k], T, length)
-        status[k], times[k] = res.status, res.solve_time
+        status[k] = "ok" if res.ok else ("failed" if res.failed else "flagged")
+        times[k] = res.solve_time
         for f in res.flags:
             flags[f] = flags.get(f, 0) + 1
     return TrackingRun(
