@@ -43,6 +43,8 @@ from .tracker_types import (
     predict,
 )
 
+_SCALE_RATE = 0.02  # weight of a sample in the observed innovation scale (~50 samples)
+_SCALE_FLOOR = 1e-3  # the branch check never assumes readings better than 1e-3 noise
 _STUCK_LOOKBACK = 8  # readings kept beyond stuck_samples to see the other legs move
 
 __all__ = [
@@ -121,6 +123,7 @@ class Tracker:
         self._stuck = np.zeros(6, dtype=bool)
         self._lost = False
         self._sign, self._near = self._sens.evaluate(q).det_sign, False  # of the newest trusted sample
+        self._z2, self._scale = 1.0, 1.0  # observed / stated noise (mean square, root), <= 1
 
     def _restart(self, q: np.ndarray, trusted: bool) -> None:
         """History = ``q`` only (``trusted``: ``q`` is a sample of the stream)."""
@@ -164,6 +167,9 @@ class Tracker:
             w, spread = self._motion.weights(tuple(self._ages[:n].tolist()))
             lhat = w @ self._L[:n]
             z = np.abs(l - lhat) / (s.noise * spread)
+            if not np.any(z > s.jump_sigmas):  # observed noise scale, for the branch check
+                self._z2 += _SCALE_RATE * (min(float(z @ z) / 6.0, 1.0) - self._z2)
+                self._scale = max(math.sqrt(self._z2), _SCALE_FLOOR)
         stuck = stuck_legs(self._frozen, z, self._moved(), s) | self._stuck
         self._stuck = stuck & (self._frozen > 0)
         jump = z > s.jump_sigmas
@@ -230,7 +236,12 @@ class Tracker:
         for j in range(1, w.size):
             dv += w[j] * pin.difference(model, q0, self._hist[j])
         q_model = pin.integrate(model, q0, dv)
-        bound = self.settings.branch_sigmas * self.settings.noise * spread
+        if self.settings.recover and sens.condition_number > self.cond_limit:
+            # near a singularity assemblies meet: keep the one the motion continues to
+            alt = self._solve(l, q_model)
+            if alt.status in ("converged", "out_of_limits") and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
+                sol, sens = alt, self._sens.evaluate(alt.q)
+        bound = self.settings.branch_sigmas * self.settings.noise * self._scale * spread
 
         def consistent(sol, sens) -> bool:
             near = self._near or sens.condition_number > self.cond_limit

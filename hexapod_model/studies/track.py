@@ -121,6 +121,7 @@ def simulate(
         readings = true_readings(hexa, poses)
     lengths, truth_status = readings
     first = hexa.inverse(poses[0], check=False)
+    tracker_options.setdefault("recover", False)  # the paper's tracker: the predictor alone decides
     tracker = Tracker(hexa, predictor, initial=first, length=length, **tracker_options)
     n = len(t)
     errors, dist = np.zeros((n, 6)), np.zeros(n)
