@@ -120,7 +120,7 @@ def test_passage_with_recovery_keeps_the_moving_assembly_even_without_prediction
     assert err.max() < 1e-5 and not any(r.failed for r in res)
     # only properties of the configurations (the exactly singular sample cannot be checked)
     assert not any(set(r.flags) - {"near_singular", "imprecise"} for r in res[3:] if r.condition_number < np.inf)
-    assert any(r.ok for r in res[:500])
+    assert all(0 < r.sigma_translation < np.inf for r in res if r.condition_number < np.inf)
 
 
 def test_reset_reanchors_a_tracker_that_left_the_branch(passage):
