@@ -170,8 +170,8 @@ class Tracker:
             if not np.any(z > s.jump_sigmas):  # observed noise scale, for the branch check
                 self._z2 += _SCALE_RATE * (min(float(z @ z) / 6.0, 1.0) - self._z2)
                 self._scale = max(math.sqrt(self._z2), _SCALE_FLOOR)
-        stuck = stuck_legs(self._frozen, z, self._moved(), s) | self._stuck
-        self._stuck = stuck & (self._frozen > 0)
+        stuck = stuck_legs(self._frozen, z, self._moved(), s) | (self._stuck & (self._frozen > 0))
+        self._stuck = stuck  # latched while the reading stays unchanged
         jump = z > s.jump_sigmas
         flags: list[str] = []
         legs = tuple(int(i) for i in np.flatnonzero(jump | stuck))
@@ -264,17 +264,18 @@ class Tracker:
         return sol, sens, False
 
     def _reanchor(self, l: np.ndarray, flags: list[str], legs: tuple, t0: float) -> TrackResult:
-        """Continuation from the last trusted configuration to ``l``; restart the history."""
+        """Continuation to ``l`` from the last trusted configuration (in finer steps if needed,
+        then from the newest solved one); restart the history there."""
         s = self.settings
-        q0 = self._hist[0]
-        l0 = q0[self._prism_q]
-        steps = max(1, math.ceil(float(np.max(np.abs(l - l0))) / s.continuation_step))
-        q, sol = q0, None
-        for k in range(1, steps + 1):
-            sol = self._solve(l0 + (l - l0) * (k / steps), q)
-            if sol.status not in ("converged", "out_of_limits"):
-                return self._failure(l, sol.status, f"re-anchoring: {sol.message}", tuple(flags), legs, t0, sol)
-            q = sol.q
+        sol = None
+        for q0, step in ((self._hist[0], s.continuation_step), (self._hist[0], s.continuation_step / 8)) + (
+            (self._last_q, s.continuation_step),
+        ):
+            sol = self._continue(q0, l, step)
+            if sol.status in ("converged", "out_of_limits"):
+                break
+        else:
+            return self._failure(l, sol.status, f"re-anchoring: {sol.message}", tuple(flags), legs, t0, sol)
         assert sol is not None
         sens = self._sens.evaluate(sol.q)
         # poses that kept failing the branch check: the last trusted one may be on another
@@ -284,6 +285,19 @@ class Tracker:
         self._sign, self._near = sens.det_sign, sens.condition_number > self.cond_limit
         out = [*flags] + (["branch_uncertain"] if self._lost else []) + ["settling"]
         return self._finish(sol, sens, out, legs, np.full(6, np.nan), trusted=None, t0=t0)
+
+    def _continue(self, q0: np.ndarray, l: np.ndarray, step: float) -> Solution:
+        """Newton along the straight reading path from ``q0``'s readings to ``l``."""
+        l0 = q0[self._prism_q]
+        n = max(1, math.ceil(float(np.max(np.abs(l - l0))) / step))
+        q, sol = q0, None
+        for k in range(1, n + 1):
+            sol = self._solve(l0 + (l - l0) * (k / n), q)
+            if sol.status not in ("converged", "out_of_limits"):
+                return sol
+            q = sol.q
+        assert sol is not None
+        return sol
 
     def _finish(self, sol, sens, flags, legs, z, trusted, t0) -> TrackResult:
         s = self.settings

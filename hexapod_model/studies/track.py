@@ -19,6 +19,8 @@ import numpy as np
 
 from ..analysis.tracking import PREDICTORS, Tracker, characteristic_length, pose_distance
 from ..analysis.trajectories import trajectory_poses
+from ..exceptions import InputError
+from ..io.tables import POSE_COLUMNS, pose_row
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.rotations import matrix_to_rpy
 
@@ -166,3 +168,31 @@ def run_table(
         for pr in predictors:
             rows.append(simulate(hexa, tr, sp, pr, readings=readings).summary())
     return rows
+
+
+TRACK_LOG_COLUMNS = ["t", *POSE_COLUMNS, "status", "flags", "iterations"]
+
+
+def track_log(
+    hexa: Hexapod, times: np.ndarray, readings: np.ndarray, predictor: str = "eq22", progress=None, **options
+) -> tuple[list[list], dict]:
+    """Track a recorded stream: rows of :data:`TRACK_LOG_COLUMNS` and counts per flag/status.
+
+    ``times`` (s) must increase strictly (the checks assume one sample per period); a row of
+    readings with NaN (an unreadable cell) is that sample's ``invalid_input``. A failed
+    sample's pose cells are NaN (written empty), never the previous pose.
+    """
+    times = np.asarray(times, dtype=float)
+    if times.size > 1 and not np.all(np.diff(times) > 0):
+        k = int(np.flatnonzero(~(np.diff(times) > 0))[0])
+        raise InputError("t", float(times[k + 1]), f"row {k + 2}: times must increase strictly")
+    tracker = Tracker(hexa, predictor, **options)
+    rows, counts = [], {}
+    items = zip(times, readings)
+    for t, lengths in progress(items, len(times), "track") if progress else items:
+        r = tracker.step(lengths)
+        pose = pose_row(r.pose) if not r.failed else [float("nan")] * len(POSE_COLUMNS)
+        rows.append([float(t), *map(float, pose), r.status, ";".join(r.flags), r.iterations])
+        for key in (r.status,) if r.failed else r.flags:
+            counts[key] = counts.get(key, 0) + 1
+    return rows, counts
