@@ -153,12 +153,12 @@ class Tracker:
         or a failed solve: see ``status`` and ``flags``."""
         t0 = time.perf_counter()
         s = self.settings
+        self._ages += 1  # every sample, readable or not, is one period
         l = np.asarray(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
         if l.shape != (6,) or not np.all(np.isfinite(l)):
             msg = f"expected 6 finite readings, got {lengths!r}"
             return self._failure(l if l.shape == (6,) else np.full(6, np.nan), "invalid_input", msg, (), (), t0)
         self._update_frozen(l)
-        self._ages += 1
         n, m = self._n, self._gap + 1
         checked = n >= s.settle_samples and m <= s.max_gap + 1
         z = np.full(6, np.nan)

@@ -189,3 +189,37 @@ def test_three_six_trajectory_b_division_without_prediction():
     assert none["unflagged_off_branch"] == 0 and none["flags"].get("branch_uncertain", 0) >= 1
     assert eq22["branch_jumps"] == 0 and eq22["off_branch_samples"] == 0
     assert eq22["flags"].get("near_singular", 0) > 0
+
+
+@pytest.mark.parametrize("name", ["reference", "3-6", "guideway"])
+def test_compiled_sensitivity_matches_the_jacobian_module(name):
+    """The tracker's compiled elimination gives the same 6x6 Jacobian, condition number and
+    propagated uncertainty as the SVD route of hexapod_model.analysis.jacobian."""
+    from hexapod_model.analysis.jacobian import evaluate_jacobian, leg_jacobian, leg_jacobian_local
+    from hexapod_model.analysis.sensitivity import SensitivityEvaluator
+    from hexapod_model.analysis.trajectories import box_poses
+
+    hexa = hm.Hexapod.from_preset(name)
+    ev = SensitivityEvaluator(hexa, 0.25)
+    for T in box_poses(hexa.home_pose, 5, seed=4):
+        q = hexa.inverse(T).q
+        s = ev.evaluate(q)
+        J = leg_jacobian_local(hexa, q)[0]
+        np.testing.assert_allclose(ev.J, J, rtol=0, atol=1e-12 * np.abs(J).max())
+        assert s.condition_number == pytest.approx(evaluate_jacobian(leg_jacobian(hexa, q), 0.25).condition_number)
+        Ji = np.linalg.inv(leg_jacobian(hexa, q))  # base frame: traces are frame-invariant
+        assert s.translation == pytest.approx(np.sqrt(np.sum(Ji[:3] ** 2)))
+        assert s.rotation == pytest.approx(np.sqrt(np.sum(Ji[3:] ** 2)))
+        assert s.det_sign == np.sign(np.linalg.det(J))
+
+
+def test_motion_model_weights_extrapolate_quadratics_exactly():
+    from hexapod_model.analysis.tracker_checks import MotionModel
+
+    mm = MotionModel()
+    for ages in [(1, 2, 3), (1, 2, 3, 4, 5, 6), (2, 3, 5, 6), (4, 5, 6, 7, 8, 9)]:
+        w, spread = mm.weights(ages)
+        a = -np.asarray(ages, dtype=float)
+        assert w @ (3.0 - 2.0 * a + 0.5 * a**2) == pytest.approx(3.0)
+        assert spread == pytest.approx(np.sqrt(1 + w @ w)) and w.sum() == pytest.approx(1.0)
+    assert mm.weights((1, 2, 3))[1] == pytest.approx(np.sqrt(20.0))  # l^ = 3 l0 - 3 l1 + l2
