@@ -217,8 +217,15 @@ class SensitivityEvaluator:
             tt, tr, cond, det = np.inf, np.inf, np.inf, 0.0
             if np.all(np.isfinite(self.J)):
                 tt, tr, cond, det = _invert_and_measure(
-                    self.J, self.length, self._mats[1], self._piv[1], self._vecs[2], self._vecs[3],
-                    self.Jinv, self._mats[2], self._vecs[4],
+                    self.J,
+                    self.length,
+                    self._mats[1],
+                    self._piv[1],
+                    self._vecs[2],
+                    self._vecs[3],
+                    self.Jinv,
+                    self._mats[2],
+                    self._vecs[4],
                 )
         if cond == math.inf:
             self.Jinv[:] = np.nan

@@ -135,9 +135,7 @@ class MotionModel:
         return hit
 
 
-def stuck_legs(
-    frozen: np.ndarray, z: np.ndarray, moved: np.ndarray, settings: TrackerSettings
-) -> np.ndarray:
+def stuck_legs(frozen: np.ndarray, z: np.ndarray, moved: np.ndarray, settings: TrackerSettings) -> np.ndarray:
     """Boolean (6,): legs frozen for ``stuck_samples`` while the motion implies they move.
 
     Args:

@@ -306,7 +306,10 @@ class Tracker:
         if sol.status == "out_of_limits":
             flags.append("out_of_limits")
         sig_t, sig_r = s.noise * sens.translation, s.noise * sens.rotation
-        if s.max_sigma_factor is not None and not math.hypot(sig_t, self.length * sig_r) <= s.max_sigma_factor * s.noise:
+        if (
+            s.max_sigma_factor is not None
+            and not math.hypot(sig_t, self.length * sig_r) <= s.max_sigma_factor * s.noise
+        ):
             flags.append("imprecise")
         if trusted:
             self._push_trusted(sol.q)
@@ -317,7 +320,15 @@ class Tracker:
         innovation = float(np.nanmax(z)) if np.any(np.isfinite(z)) else math.nan
         margin = self.home_condition / sens.condition_number
         return TrackResult(
-            sol, "ok", tuple(flags), legs, innovation, sig_t, sig_r, sens.condition_number, margin,
+            sol,
+            "ok",
+            tuple(flags),
+            legs,
+            innovation,
+            sig_t,
+            sig_r,
+            sens.condition_number,
+            margin,
             time.perf_counter() - t0,
         )
 

@@ -110,7 +110,9 @@ def run_faults(
     lengths = (readings or true_readings(hexa, poses))[0]
     rng = np.random.default_rng(seed)
     noisy = inject(lengths + rng.normal(0.0, noise, lengths.shape), fault)
-    tracker = Tracker(hexa, predictor, initial=hexa.inverse(poses[0], check=False), length=length, noise=noise, **options)
+    tracker = Tracker(
+        hexa, predictor, initial=hexa.inverse(poses[0], check=False), length=length, noise=noise, **options
+    )
     res = [tracker.step(x) for x in noisy]
     settle = tracker.settings.settle_samples
     return FaultRun(
