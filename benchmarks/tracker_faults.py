@@ -86,7 +86,7 @@ def timing(hexa: Hexapod) -> dict:
     svd, elim = [], []
     for r in res[::10]:
         t0 = time.perf_counter()
-        r.solution.condition_number
+        _ = r.solution.condition_number
         t1 = time.perf_counter()
         ev.evaluate(r.solution.q)
         svd.append(t1 - t0)

@@ -1,6 +1,7 @@
-"""Per-sample sensitivity of the pose to the readings, compiled: the tracker's uncertainty and
-singularity figures without an SVD of the 36-column constraint Jacobian.
+"""Per-sample sensitivity of the pose to the readings, compiled (the tracker's figures).
 
+The tracker's uncertainty and singularity figures come without an SVD of the 36-column
+constraint Jacobian.
 From the closure Jacobian ``G`` of all joints at a solved configuration (one
 ``pin.computeJointJacobians`` call), each leg's joints are eliminated exactly as in the
 solver's Schur step (:func:`hexapod_model.kinematics.linalg.schur_solve`): with ``L_i`` the
@@ -93,8 +94,9 @@ def _sym_eigvals(S, out):
 
 @njit(cache=True)
 def _invert_and_measure(J, length, LU, piv, e, col, Jinv, S, eig):
-    """``Jinv = J^-1`` and ``(trace_t, trace_r, cond, det)``: the translation (m^2) and
-    rotation (rad^2) traces of ``J^-1 J^-T`` per unit reading variance, the 2-norm condition
+    """``Jinv = J^-1`` and ``(trace_t, trace_r, cond, det)``.
+
+    The translation (m^2) and rotation (rad^2) traces of ``J^-1 J^-T`` per unit reading variance, the 2-norm condition
     number of ``J`` with rotation columns divided by ``length``, and ``det J``.
     ``(inf, inf, inf, 0)`` when singular.
     """

@@ -102,8 +102,10 @@ class TrackerSettings:
 
     @classmethod
     def with_options(cls, base: TrackerSettings | None, options: dict) -> TrackerSettings:
-        """``base`` (default settings) with the keyword ``options`` replaced; unknown names are
-        an :class:`InputError`."""
+        """``base`` (default settings) with the keyword ``options`` replaced.
+
+        Unknown names are an :class:`InputError`.
+        """
         known = {f.name for f in fields(cls)}
         unknown = sorted(set(options) - known)
         if unknown:

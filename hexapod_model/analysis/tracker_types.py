@@ -1,5 +1,7 @@
-"""The stream tracker's vocabulary: predictors (seed 002 eqs. 22-24), pose distances, and
-the per-sample result :class:`TrackResult` that clients (the CLI, the fixture service) read.
+"""The stream tracker's vocabulary: predictors, pose distances, the per-sample result.
+
+Predictors are seed 002's eqs. 22-24; :class:`TrackResult` is what clients (the CLI, the
+fixture service) read.
 """
 
 from __future__ import annotations

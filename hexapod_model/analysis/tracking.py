@@ -149,8 +149,10 @@ class Tracker:
 
     # ----- the per-sample work -----
     def step(self, lengths) -> TrackResult:
-        """Solve and check one sample (readings in m, leg order). Never raises on bad readings
-        or a failed solve: see ``status`` and ``flags``."""
+        """Solve and check one sample (readings in m, leg order).
+
+        Never raises on bad readings or a failed solve: see ``status`` and ``flags``.
+        """
         t0 = time.perf_counter()
         s = self.settings
         self._ages += 1  # every sample, readable or not, is one period
@@ -205,8 +207,11 @@ class Tracker:
         self._raw.append(l)
 
     def _moved(self) -> np.ndarray:
-        """Per leg frozen long enough to be tested, the largest change of the other legs over
-        its frozen run (at most the readings kept); 0 for the other legs."""
+        """Largest change of the other legs over each leg's frozen run (m).
+
+        Only for legs frozen long enough to be tested (0 for the others); the run is limited
+        to the readings kept.
+        """
         moved = np.zeros(6)
         for i in np.flatnonzero(self._frozen >= self.settings.stuck_samples):
             back = min(int(self._frozen[i]), len(self._raw) - 1)
@@ -228,8 +233,10 @@ class Tracker:
             return Solution(self.hexa.pose_of(q), q.copy(), l.copy(), "invalid_input", 0, math.nan, None, str(exc))
 
     def _branch_check(self, sol, sens, l, lhat, w, spread):
-        """Compare the pose with the motion model's pose plus ``J^-1`` (reading innovation);
-        on a mismatch re-solve from the motion model's configuration (``recover``)."""
+        """Compare the pose with the motion model's pose plus ``J^-1`` (reading innovation).
+
+        On a mismatch re-solve from the motion model's configuration (``recover``).
+        """
         model = self.hexa.model
         q0 = self._hist[0]
         dv = np.zeros(model.nv)
@@ -264,10 +271,12 @@ class Tracker:
         return sol, sens, False
 
     def _reanchor(self, l: np.ndarray, flags: list[str], legs: tuple, t0: float) -> TrackResult:
-        """Continuation to ``l`` from the last trusted configuration (in finer steps if needed,
-        then from the newest solved one); restart the history there."""
+        """Continuation to ``l`` from the last trusted configuration; restart the history there.
+
+        In finer steps if needed, then from the newest solved configuration.
+        """
         s = self.settings
-        sol = None
+        sol: Solution | None = None
         for q0, step in ((self._hist[0], s.continuation_step), (self._hist[0], s.continuation_step / 8)) + (
             (self._last_q, s.continuation_step),
         ):
@@ -275,6 +284,7 @@ class Tracker:
             if sol.status in ("converged", "out_of_limits"):
                 break
         else:
+            assert sol is not None
             return self._failure(l, sol.status, f"re-anchoring: {sol.message}", tuple(flags), legs, t0, sol)
         assert sol is not None
         sens = self._sens.evaluate(sol.q)

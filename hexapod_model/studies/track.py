@@ -187,7 +187,8 @@ def track_log(
         k = int(np.flatnonzero(~(np.diff(times) > 0))[0])
         raise InputError("t", float(times[k + 1]), f"row {k + 2}: times must increase strictly")
     tracker = Tracker(hexa, predictor, **options)
-    rows, counts = [], {}
+    rows: list[list] = []
+    counts: dict[str, int] = {}
     items = zip(times, readings)
     for t, lengths in progress(items, len(times), "track") if progress else items:
         r = tracker.step(lengths)

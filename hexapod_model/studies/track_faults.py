@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.tracking import TrackResult, Tracker, characteristic_length, pose_distance
+from ..analysis.tracking import Tracker, TrackResult, characteristic_length, pose_distance
 from ..analysis.trajectories import trajectory_poses
 from ..exceptions import InputError
 from ..kinematics.hexapod import Hexapod
