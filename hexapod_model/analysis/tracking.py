@@ -43,6 +43,8 @@ from .tracker_types import (
     predict,
 )
 
+_NO_Z = np.full(6, np.nan)  # innovations when the motion model is not available (read-only)
+_NO_Z.flags.writeable = False
 _SCALE_RATE = 0.02  # weight of a sample in the observed innovation scale (~50 samples)
 _SCALE_FLOOR = 1e-3  # the branch check never assumes readings better than 1e-3 noise
 _STUCK_LOOKBACK = 8  # readings kept beyond stuck_samples to see the other legs move
@@ -163,26 +165,30 @@ class Tracker:
         self._update_frozen(l)
         n, m = self._n, self._gap + 1
         checked = n >= s.settle_samples and m <= s.max_gap + 1
-        z = np.full(6, np.nan)
+        z, zmax = _NO_Z, math.nan
         lhat, w, spread = None, None, 0.0
         if checked:
             w, spread = self._motion.weights(tuple(self._ages[:n].tolist()))
             lhat = w @ self._L[:n]
             z = np.abs(l - lhat) / (s.noise * spread)
-            if not np.any(z > s.jump_sigmas):  # observed noise scale, for the branch check
+            zmax = float(z.max())
+            if zmax <= s.jump_sigmas:  # observed noise scale, for the branch check
                 self._z2 += _SCALE_RATE * (min(float(z @ z) / 6.0, 1.0) - self._z2)
                 self._scale = max(math.sqrt(self._z2), _SCALE_FLOOR)
-        stuck = stuck_legs(self._frozen, z, self._moved(), s) | (self._stuck & (self._frozen > 0))
-        self._stuck = stuck  # latched while the reading stays unchanged
-        jump = z > s.jump_sigmas
         flags: list[str] = []
-        legs = tuple(int(i) for i in np.flatnonzero(jump | stuck))
-        if jump.any():
-            flags.append("jump")
-        if stuck.any():
-            flags.append("stuck")
-        suspect = bool(flags) or bool(np.any((self._frozen > 0) & (z > s.stuck_sigmas)))
-        if self._gap > s.max_gap and not stuck.any():
+        legs: tuple[int, ...] = ()
+        frozen = int(self._frozen.max())
+        suspect = False
+        if zmax > s.jump_sigmas or frozen >= s.stuck_samples or self._stuck.any():
+            stuck = stuck_legs(self._frozen, z, self._moved(), s) | (self._stuck & (self._frozen > 0))
+            self._stuck = stuck  # latched while the reading stays unchanged
+            jump = z > s.jump_sigmas
+            legs = tuple(int(i) for i in np.flatnonzero(jump | stuck))
+            flags += ["jump"] * bool(jump.any()) + ["stuck"] * bool(stuck.any())
+            suspect = bool(flags)
+        elif frozen > 0 and checked:  # a frozen leg the motion says moves: do not learn from it
+            suspect = bool(np.any((self._frozen > 0) & (z > s.stuck_sigmas)))
+        if self._gap > s.max_gap and "stuck" not in flags:
             return self._reanchor(l, flags, legs, t0)
         sol = self._solve(l, self._guess())
         if sol.status not in ("converged", "out_of_limits"):
@@ -198,7 +204,7 @@ class Tracker:
             flags.append("branch_uncertain")
         if not checked and m <= s.max_gap + 1:
             flags.append("settling")
-        return self._finish(sol, sens, flags, legs, z, trusted=not suspect, t0=t0)
+        return self._finish(sol, sens, flags, legs, zmax, trusted=not suspect, t0=t0)
 
     def _update_frozen(self, l: np.ndarray) -> None:
         if self._raw:
@@ -294,7 +300,7 @@ class Tracker:
         self._restart(sol.q, trusted=True)
         self._sign, self._near = sens.det_sign, sens.condition_number > self.cond_limit
         out = [*flags] + (["branch_uncertain"] if self._lost else []) + ["settling"]
-        return self._finish(sol, sens, out, legs, np.full(6, np.nan), trusted=None, t0=t0)
+        return self._finish(sol, sens, out, legs, math.nan, trusted=None, t0=t0)
 
     def _continue(self, q0: np.ndarray, l: np.ndarray, step: float) -> Solution:
         """Newton along the straight reading path from ``q0``'s readings to ``l``."""
@@ -309,7 +315,7 @@ class Tracker:
         assert sol is not None
         return sol
 
-    def _finish(self, sol, sens, flags, legs, z, trusted, t0) -> TrackResult:
+    def _finish(self, sol, sens, flags, legs, innovation, trusted, t0) -> TrackResult:
         s = self.settings
         if sens.condition_number > self.cond_limit:
             flags.append("near_singular")
@@ -327,7 +333,6 @@ class Tracker:
         elif trusted is not None:
             self._gap += 1
         self._last_q = sol.q
-        innovation = float(np.nanmax(z)) if np.any(np.isfinite(z)) else math.nan
         margin = self.home_condition / sens.condition_number
         return TrackResult(
             sol,
