@@ -14,10 +14,11 @@ Per leg, ``z = |nu| / (noise * spread)``:
 
 * ``jump``: ``z > jump_sigmas`` (default 5: 6e-7 per leg and sample under the model);
 * ``stuck``: the reading has not changed (by more than ``stuck_tolerance``, default 0: a
-  frozen value) for ``stuck_samples`` samples while the motion implies it must move: its own
-  prediction (``z > stuck_sigmas``) or another leg moved by more than ``stuck_sigmas *
-  sqrt(2) * noise`` over the same samples. A working encoder with noise repeats its value
-  with probability ~ resolution / noise per sample; at rest (no motion) nothing is flagged.
+  frozen value) while the motion implies it must move: its own prediction moved by more than
+  ``stuck_sigmas`` (default 3), or, after ``stuck_samples`` (default 3) unchanged samples,
+  another leg moved by more than ``stuck_sigmas * sqrt(2) * noise`` meanwhile. A working
+  encoder with noise repeats its value with probability ~ resolution / noise per sample; at
+  rest (no motion) nothing is flagged. The flag stays while the reading stays unchanged.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ class TrackerSettings:
         noise: standard deviation of the Gaussian reading noise (m).
         jump_sigmas: a reading farther than this many innovation sigmas from the motion
             model's prediction is a ``jump``.
-        stuck_samples: consecutive unchanged readings before ``stuck`` can be raised.
+        stuck_samples: unchanged readings before the other legs' motion can raise ``stuck``.
         stuck_sigmas: how clearly the motion must imply that a frozen leg moves.
         stuck_tolerance: largest change (m) that counts as "unchanged" (0: identical value).
         window: trusted samples in the least-squares quadratic (>= 3).
@@ -138,7 +139,11 @@ class MotionModel:
 
 
 def stuck_legs(frozen: np.ndarray, z: np.ndarray, moved: np.ndarray, settings: TrackerSettings) -> np.ndarray:
-    """Boolean (6,): legs frozen for ``stuck_samples`` while the motion implies they move.
+    """Boolean (6,): frozen legs that the motion implies move.
+
+    A leg is stuck when its reading is unchanged while its own prediction moves by more than
+    ``stuck_sigmas`` innovation sigmas, or when it has been unchanged for ``stuck_samples``
+    while another leg moved by more than ``stuck_sigmas * sqrt(2) * noise``.
 
     Args:
         frozen: consecutive samples each leg's reading has stayed unchanged.
@@ -146,7 +151,6 @@ def stuck_legs(frozen: np.ndarray, z: np.ndarray, moved: np.ndarray, settings: T
         moved: largest change of the *other* legs' readings over each leg's frozen run (m).
         settings: the tracker's settings.
     """
-    long_enough = frozen >= settings.stuck_samples
-    predicted = np.nan_to_num(z, nan=0.0) > settings.stuck_sigmas
-    others = moved > settings.stuck_sigmas * math.sqrt(2.0) * settings.noise
-    return long_enough & (predicted | others)
+    predicted = (frozen > 0) & (np.nan_to_num(z, nan=0.0) > settings.stuck_sigmas)
+    others = (frozen >= settings.stuck_samples) & (moved > settings.stuck_sigmas * math.sqrt(2.0) * settings.noise)
+    return predicted | others

@@ -123,7 +123,8 @@ class Tracker:
         self._raw.clear()
         self._frozen = np.zeros(6, dtype=np.int64)
         self._stuck = np.zeros(6, dtype=bool)
-        self._lost = False
+        self._lost = False  # recover=False: a failed branch check latches branch_uncertain
+        self._uncertified = False  # passed near a singularity since the anchor
         self._sign, self._near = self._sens.evaluate(q).det_sign, False  # of the newest trusted sample
         self._z2, self._scale = 1.0, 1.0  # observed / stated noise (mean square, root), <= 1
 
@@ -179,15 +180,13 @@ class Tracker:
         legs: tuple[int, ...] = ()
         frozen = int(self._frozen.max())
         suspect = False
-        if zmax > s.jump_sigmas or frozen >= s.stuck_samples or self._stuck.any():
+        if zmax > s.jump_sigmas or frozen > 0 or self._stuck.any():
             stuck = stuck_legs(self._frozen, z, self._moved(), s) | (self._stuck & (self._frozen > 0))
             self._stuck = stuck  # latched while the reading stays unchanged
             jump = z > s.jump_sigmas
             legs = tuple(int(i) for i in np.flatnonzero(jump | stuck))
             flags += ["jump"] * bool(jump.any()) + ["stuck"] * bool(stuck.any())
             suspect = bool(flags)
-        elif frozen > 0 and checked:  # a frozen leg the motion says moves: do not learn from it
-            suspect = bool(np.any((self._frozen > 0) & (z > s.stuck_sigmas)))
         if self._gap > s.max_gap and "stuck" not in flags:
             return self._reanchor(l, flags, legs, t0)
         sol = self._solve(l, self._guess())
@@ -200,7 +199,7 @@ class Tracker:
                 flags.append("branch_uncertain")
                 self._lost = not s.recover
                 self._doubt = suspect = s.recover
-        if self._lost and "branch_uncertain" not in flags:
+        if (self._lost or self._uncertified) and "branch_uncertain" not in flags:
             flags.append("branch_uncertain")
         if not checked and m <= s.max_gap + 1:
             flags.append("settling")
@@ -299,7 +298,7 @@ class Tracker:
         self._lost = self._lost or self._doubt
         self._restart(sol.q, trusted=True)
         self._sign, self._near = sens.det_sign, sens.condition_number > self.cond_limit
-        out = [*flags] + (["branch_uncertain"] if self._lost else []) + ["settling"]
+        out = [*flags] + (["branch_uncertain"] if self._lost or self._uncertified else []) + ["settling"]
         return self._finish(sol, sens, out, legs, math.nan, trusted=None, t0=t0)
 
     def _continue(self, q0: np.ndarray, l: np.ndarray, step: float) -> Solution:
@@ -319,6 +318,9 @@ class Tracker:
         s = self.settings
         if sens.condition_number > self.cond_limit:
             flags.append("near_singular")
+            # assemblies meet here: which one the platform leaves on cannot be certified
+            # from the readings, so every later pose is branch_uncertain until reset()
+            self._uncertified = True
         if sol.status == "out_of_limits":
             flags.append("out_of_limits")
         sig_t, sig_r = s.noise * sens.translation, s.noise * sens.rotation

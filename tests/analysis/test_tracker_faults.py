@@ -65,7 +65,9 @@ def test_stuck_encoder_on_three_six_is_flagged_not_ok():
     good = np.array([r.ok for r in res])
     assert not np.any(good & (err > 1e-4)), "a sample off by more than 0.1 mm was returned as good"
     assert any("stuck" in r.flags for r in res[200:205])
-    assert not any(alarm(r, k) for k, r in enumerate(res[305:], 305)) and err[305:].max() < 1e-6
+    assert err[305:].max() < 1e-6  # tracking again after the release
+    # B passed a singularity of the 3-6 preset at t ~ 0.7 s (sample 87): no later pose is certified
+    assert all("branch_uncertain" in r.flags for r in res[100:])
 
 
 def test_a_one_sample_spike_is_flagged_and_clears_at_once():

@@ -118,8 +118,10 @@ def test_passage_with_recovery_keeps_the_moving_assembly_even_without_prediction
     res = [tracker.step(l) for l in lengths]
     err = np.array([pose_distance(T, r.pose, 0.25) for T, r in zip(poses, res)])
     assert err.max() < 1e-5 and not any(r.failed for r in res)
-    # only properties of the configurations (the exactly singular sample cannot be checked)
-    assert not any(set(r.flags) - {"near_singular", "imprecise"} for r in res[3:] if r.condition_number < np.inf)
+    # no stream alarm; from the first near-singular sample on the assembly is not certified
+    first = next(k for k, r in enumerate(res) if "near_singular" in r.flags)
+    assert 500 < first < 1000 and not any(set(r.flags) - {"imprecise"} for r in res[3:first])
+    assert all(set(r.flags) - {"near_singular", "imprecise"} == {"branch_uncertain"} for r in res[first + 1 :])
     assert all(0 < r.sigma_translation < np.inf for r in res if r.condition_number < np.inf)
 
 
