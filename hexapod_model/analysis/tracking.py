@@ -320,7 +320,8 @@ class Tracker:
             flags.append("near_singular")
             # assemblies meet here: which one the platform leaves on cannot be certified
             # from the readings, so every later pose is branch_uncertain until reset()
-            self._uncertified = True
+            # (not for a faulty sample: its pose is not where the platform is)
+            self._uncertified = self._uncertified or trusted is not False
         if sol.status == "out_of_limits":
             flags.append("out_of_limits")
         sig_t, sig_r = s.noise * sens.translation, s.noise * sens.rotation
