@@ -1,41 +1,29 @@
-"""Tracking a stream of leg readings (seed 002 §V): warm starts, predictors, branch safety.
+"""Tracking a stream of leg readings (seed 002 §V): predictors, statistical checks, recovery.
 
-Each sample is solved by Newton from a *predicted* configuration built from the last
-solutions ``P0`` (newest), ``P1``, ``P2``:
+Each sample is solved by Newton from a *predicted* configuration built from the last trusted
+solutions ``P0`` (newest), ``P1``, ``P2``: ``none`` (``P0``), ``eq22`` (``2 P0 - P1``),
+``eq23`` (``1.5 P0 - 0.5 P2``), ``eq24`` (``T1 = (P0 + P1)/2, T2 = (P1 + P2)/2,
+X = 2.5 T1 - 1.5 T2``), applied to the whole Pinocchio configuration in the tangent space at
+``P0`` (``X = P0 (+) sum_k a_k (P_k (-) P0)``), so a constant-twist motion is predicted exactly.
 
-* ``none``: ``X = P0``;
-* ``eq22``: ``X = 2 P0 - P1``;
-* ``eq23``: ``X = 1.5 P0 - 0.5 P2``;
-* ``eq24``: ``T1 = (P0 + P1)/2, T2 = (P1 + P2)/2, X = 2.5 T1 - 1.5 T2``.
-
-The seed applies them to pose coordinates; here they act on the whole Pinocchio configuration
-(platform free flyer and every leg joint) in the tangent space at ``P0``:
-``X = P0 (+) sum_k a_k (P_k (-) P0)`` with ``pin.integrate`` / ``pin.difference``, so the
-quaternion stays a unit quaternion and a constant-twist motion is predicted exactly.
-
-Branch safety without the truth: a sample is *flagged* (never silently returned as fine) when
-
-* ``jump``: the solution is farther from the linear extrapolation ``2 P0 - P1`` than
-  ``jump_ratio`` times the last step plus ``jump_floor`` (a velocity discontinuity, the
-  signature of a switch to another assembly branch at a bifurcation);
-* ``near_singular``: the condition number of the direct-kinematics constraint Jacobian exceeds
-  ``cond_limit`` (by default ``cond_factor`` times its value at home): a bifurcation is near and
-  the solution may be the wrong one even if no jump is visible;
-* ``branch_uncertain``: every sample after a ``jump``, until :meth:`Tracker.reset` re-anchors
-  the tracker on a known configuration (a wrong branch is smooth and self-consistent once
-  taken, so the doubt must persist);
-* ``out_of_limits``: converged, but a joint is outside its limits (``Solution.status``);
-* ``not_converged``: the solve failed (status ``failed``; the history is not updated).
-
-Pose distances use metres with rotations scaled by a characteristic length ``length`` (m per
-rad; default: the largest base anchor radius).
+Every sample is then checked (statistics in :mod:`~hexapod_model.analysis.tracker_checks`):
+its readings against the motion model (``jump``, ``stuck``), its pose against the motion
+model's pose plus the reading innovation mapped through the inverse of the eliminated 6x6
+Jacobian (``branch_uncertain``), and its configuration (``near_singular``, ``out_of_limits``,
+``imprecise``). A sample with ``jump``, ``stuck`` or ``branch_uncertain``, or whose solve
+failed, is *untrusted*: it never enters the history. After more than ``max_gap`` untrusted
+samples the history is reset: the next sample with no stuck leg is solved by continuation
+(readings moved in steps of at most ``continuation_step``) from the last trusted
+configuration, and the next ``settle_samples`` samples, unchecked, are flagged ``settling``
+(also at the start and after :meth:`Tracker.reset`). Each sample carries its 1-sigma pose
+uncertainty propagated from the reading noise and its condition number.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections import deque
-from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -43,84 +31,35 @@ import pinocchio as pin
 from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.solver import Solution
+from .sensitivity import SensitivityEvaluator
+from .tracker_checks import MotionModel, TrackerSettings, stuck_legs
+from .tracker_types import (
+    FAILED_STATUSES,
+    FLAGS,
+    PREDICTORS,
+    TrackResult,
+    characteristic_length,
+    pose_distance,
+    predict,
+)
 
-PREDICTORS = ("none", "eq22", "eq23", "eq24")
-# X - P0 = sum_k a_k (P_k - P0), k = 1, 2
-_COEFFS = {"none": (0.0, 0.0), "eq22": (-1.0, 0.0), "eq23": (0.0, -0.5), "eq24": (0.5, -0.75)}
+_NO_Z = np.full(6, np.nan)  # innovations when the motion model is not available (read-only)
+_NO_Z.flags.writeable = False
+_SCALE_RATE = 0.02  # weight of a sample in the observed innovation scale (~50 samples)
+_SCALE_FLOOR = 1e-3  # the branch check never assumes readings better than 1e-3 noise
+_STUCK_LOOKBACK = 8  # readings kept beyond stuck_samples to see the other legs move
 
-
-def characteristic_length(hexa: Hexapod) -> float:
-    """Largest horizontal base anchor radius (m); for a URDF, of the legs' first joints."""
-    g = hexa.geometry
-    if g is not None:
-        return float(np.max(np.linalg.norm(g.base_points()[:, :2], axis=1)))
-    m = hexa.model
-    pts = np.array([m.jointPlacements[leg.joints[0]].translation for leg in hexa.closed_loop.legs])
-    return float(np.max(np.linalg.norm(pts[:, :2], axis=1))) or 0.25
-
-
-def predict(model: pin.Model, history, predictor: str) -> np.ndarray:
-    """Predicted configuration from ``history = [P0, P1, P2, ...]`` (newest first).
-
-    With fewer samples than the predictor needs, the highest-order predictor the history
-    allows is used (``eq24``/``eq23`` fall back to ``eq22``, which falls back to ``none``).
-    """
-    if predictor not in _COEFFS:
-        raise InputError("predictor", predictor, f"choose one of {PREDICTORS}")
-    if len(history) < 3 and predictor in ("eq23", "eq24"):
-        predictor = "eq22"
-    if len(history) < 2:
-        predictor = "none"
-    a1, a2 = _COEFFS[predictor]
-    p0 = history[0]
-    if a1 == 0.0 and a2 == 0.0:
-        return p0.copy()
-    dv = np.zeros(model.nv)
-    if a1:
-        dv += a1 * pin.difference(model, p0, history[1])
-    if a2:
-        dv += a2 * pin.difference(model, p0, history[2])
-    return pin.integrate(model, p0, dv)
-
-
-def pose_distance(Ta: np.ndarray, Tb: np.ndarray, length: float) -> float:
-    """``sqrt(|dt|^2 + (length * angle)^2)`` between two 4x4 poses (m)."""
-    M = pin.SE3(Ta[:3, :3], Ta[:3, 3]).inverse() * pin.SE3(Tb[:3, :3], Tb[:3, 3])
-    xi = pin.log6(M).vector
-    return float(np.hypot(np.linalg.norm(Ta[:3, :3] @ xi[:3]), length * np.linalg.norm(xi[3:])))
-
-
-@dataclass(frozen=True)
-class TrackResult:
-    """One tracked sample.
-
-    Attributes:
-        solution: the solver's :class:`Solution` (pose 4x4 base -> platform, m).
-        status: ``"ok"`` (no flag), ``"flagged"`` (a pose, but see ``flags``) or ``"failed"``.
-        flags: subset of ``jump``, ``branch_uncertain``, ``near_singular``, ``out_of_limits``, ``not_converged``.
-        jump: distance (m, rotations scaled) between the solution and ``2 P0 - P1``.
-        allowed_jump: the bound ``jump`` was checked against (``inf`` before two samples).
-        condition_number: of the direct-kinematics constraint Jacobian.
-        solve_time: wall-clock seconds of prediction + solve.
-    """
-
-    solution: Solution
-    status: str
-    flags: tuple[str, ...]
-    jump: float
-    allowed_jump: float
-    condition_number: float
-    solve_time: float
-
-    @property
-    def ok(self) -> bool:
-        """True when the sample's status is ``ok`` (no failure, no flag)."""
-        return self.status == "ok"
-
-    @property
-    def pose(self) -> np.ndarray:
-        """Platform pose of the sample (4x4, base frame, metres)."""
-        return self.solution.pose
+__all__ = [
+    "FAILED_STATUSES",
+    "FLAGS",
+    "PREDICTORS",
+    "TrackResult",
+    "Tracker",
+    "TrackerSettings",
+    "characteristic_length",
+    "pose_distance",
+    "predict",
+]
 
 
 class Tracker:
@@ -128,13 +67,16 @@ class Tracker:
 
     Args:
         hexa: the hexapod.
-        predictor: one of :data:`PREDICTORS`.
+        predictor: one of :data:`PREDICTORS` (the Newton guess; the checks do not depend on it).
         initial: known starting configuration (``Solution`` or ``q``); default home.
-        tol, max_iter: Newton settings per sample.
-        jump_ratio, jump_floor: the ``jump`` flag bound ``jump_ratio * step + jump_floor``
-            (``jump_floor`` in m; default ``1e-6 * length``).
-        cond_limit: ``near_singular`` bound; default ``cond_factor`` x the home value.
-        length: m per rad in pose distances (default :func:`characteristic_length`).
+        tol, max_iter: Newton settings per sample (closure residual, m and rad).
+        length: m per rad in pose distances and condition numbers (default
+            :func:`characteristic_length`).
+        settings: a :class:`TrackerSettings`; keyword ``options`` replace its fields
+            (``noise=50e-6``, ``recover=False``, ...).
+
+    A tracker keeps per-stream state and its own solver buffers: one tracker per stream and
+    thread (the :class:`Hexapod` may be shared).
     """
 
     def __init__(
@@ -145,78 +87,281 @@ class Tracker:
         *,
         tol: float = 1e-10,
         max_iter: int = 20,
-        jump_ratio: float = 0.5,
-        jump_floor: float | None = None,
-        cond_limit: float | None = None,
-        cond_factor: float = 100.0,
         length: float | None = None,
+        settings: TrackerSettings | None = None,
+        **options,
     ):
         if predictor not in PREDICTORS:
             raise InputError("predictor", predictor, f"choose one of {PREDICTORS}")
         self.hexa, self.predictor, self.tol, self.max_iter = hexa, predictor, tol, max_iter
+        self.settings = s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
         self.length = characteristic_length(hexa) if length is None else float(length)
-        self.jump_ratio = jump_ratio
-        self.jump_floor = 1e-6 * self.length if jump_floor is None else jump_floor
-        if cond_limit is None:
-            home = hexa.forward(np.zeros(6))
-            cond_limit = cond_factor * home.condition_number
-        self.cond_limit = float(cond_limit)
-        self._history: deque[np.ndarray] = deque(maxlen=3)
+        self._motion = MotionModel()
+        self._sens = SensitivityEvaluator(hexa, self.length)
+        clm = hexa.closed_loop
+        self._prism_q, self._ff = clm.prismatic_q, slice(clm.platform_v, clm.platform_v + 6)
+        home = self._sens.evaluate(hexa.q_home)
+        self.home_condition = home.condition_number
+        self.cond_limit = float(s.cond_limit) if s.cond_limit is not None else s.cond_factor * self.home_condition
+        self._hist: deque[np.ndarray] = deque(maxlen=s.window)
+        self._L = np.zeros((s.window, 6))
+        self._ages = np.zeros(s.window, dtype=np.int64)  # samples since each trusted one
+        self._raw: deque[np.ndarray] = deque(maxlen=s.stuck_samples + _STUCK_LOOKBACK)
         self.reset(initial)
 
     def reset(self, initial=None) -> None:
         """Forget the history; restart from ``initial`` (``Solution``, ``q`` or home)."""
-        self._history.clear()
-        self._solved = 0
-        self._uncertain = False
         if initial is None:
             q = self.hexa.q_home
         elif isinstance(initial, Solution):
             q = initial.q.copy()
         else:
             q = np.asarray(initial, dtype=float).copy()
-        self._history.appendleft(q)
+            if q.shape != (self.hexa.nq,) or not np.all(np.isfinite(q)):
+                raise InputError("initial", initial, f"expected a Solution or {self.hexa.nq} finite values")
+        self._restart(q, trusted=False)
+        self._raw.clear()
+        self._frozen = np.zeros(6, dtype=np.int64)
+        self._stuck = np.zeros(6, dtype=bool)
+        self._lost = False  # recover=False: a failed branch check latches branch_uncertain
+        self._uncertified = False  # passed near a singularity since the anchor
+        self._sign, self._near = self._sens.evaluate(q).det_sign, False  # of the newest trusted sample
+        self._z2, self._scale = 1.0, 1.0  # observed / stated noise (mean square, root), <= 1
 
+    def _restart(self, q: np.ndarray, trusted: bool) -> None:
+        """History = ``q`` only (``trusted``: ``q`` is a sample of the stream)."""
+        self._hist.clear()
+        self._hist.appendleft(q)
+        self._n = 0
+        self._gap = 0
+        self._doubt = False  # a pose failed the branch check since the newest trusted sample
+        self._last_q = q
+        if trusted:
+            self._push_trusted(q)
+
+    def _push_trusted(self, q: np.ndarray) -> None:
+        if self._n > 0 or len(self._hist) > 1 or self._hist[0] is not q:
+            self._hist.appendleft(q)
+        self._L[1:] = self._L[:-1].copy()
+        self._L[0] = q[self._prism_q]
+        self._ages[1:] = self._ages[:-1].copy()
+        self._ages[0] = 0
+        self._n = min(self._n + 1, self.settings.window)
+        self._gap = 0
+        self._doubt = False
+
+    # ----- the per-sample work -----
     def step(self, lengths) -> TrackResult:
-        """Solve one sample (readings in m). Never raises on a failed solve: see ``status``."""
-        model = self.hexa.model
+        """Solve and check one sample (readings in m, leg order).
+
+        Never raises on bad readings or a failed solve: see ``status`` and ``flags``.
+        """
         t0 = time.perf_counter()
-        guess = predict(model, list(self._history), self.predictor)
-        try:
-            sol = self.hexa.forward(lengths, guess=guess, tol=self.tol, max_iter=self.max_iter, check=False)
-        except HexapodError as exc:  # readings outside the stroke, NaN, ...
-            q = self._history[0]
-            sol = Solution(
-                self.hexa.pose_of(q),
-                q.copy(),
-                np.asarray(lengths, dtype=float),
-                "invalid_input",
-                0,
-                float("nan"),
-                None,
-                str(exc),
-            )
-        elapsed = time.perf_counter() - t0
+        s = self.settings
+        self._ages += 1  # every sample, readable or not, is one period
+        l = np.asarray(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
+        if l.shape != (6,) or not np.all(np.isfinite(l)):
+            msg = f"expected 6 finite readings, got {lengths!r}"
+            return self._failure(l if l.shape == (6,) else np.full(6, np.nan), "invalid_input", msg, (), (), t0)
+        self._update_frozen(l)
+        n, m = self._n, self._gap + 1
+        checked = n >= s.settle_samples and m <= s.max_gap + 1
+        z, zmax = _NO_Z, math.nan
+        lhat, w, spread = None, None, 0.0
+        if checked:
+            w, spread = self._motion.weights(tuple(self._ages[:n].tolist()))
+            lhat = w @ self._L[:n]
+            z = np.abs(l - lhat) / (s.noise * spread)
+            zmax = float(z.max())
+            if zmax <= s.jump_sigmas:  # observed noise scale, for the branch check
+                self._z2 += _SCALE_RATE * (min(float(z @ z) / 6.0, 1.0) - self._z2)
+                self._scale = max(math.sqrt(self._z2), _SCALE_FLOOR)
         flags: list[str] = []
+        legs: tuple[int, ...] = ()
+        frozen = int(self._frozen.max())
+        suspect = False
+        if zmax > s.jump_sigmas or frozen > 0 or self._stuck.any():
+            stuck = stuck_legs(self._frozen, z, self._moved(), s) | (self._stuck & (self._frozen > 0))
+            self._stuck = stuck  # latched while the reading stays unchanged
+            jump = z > s.jump_sigmas
+            legs = tuple(int(i) for i in np.flatnonzero(jump | stuck))
+            flags += ["jump"] * bool(jump.any()) + ["stuck"] * bool(stuck.any())
+            suspect = bool(flags)
+        if self._gap > s.max_gap and "stuck" not in flags:
+            return self._reanchor(l, flags, legs, t0)
+        sol = self._solve(l, self._guess())
         if sol.status not in ("converged", "out_of_limits"):
-            return TrackResult(sol, "failed", ("not_converged",), float("nan"), float("nan"), float("nan"), elapsed)
+            return self._failure(l, sol.status, sol.message, tuple(flags), legs, t0, sol)
+        sens = self._sens.evaluate(sol.q)
+        if checked and not suspect and not self._lost:
+            sol, sens, consistent = self._branch_check(sol, sens, l, lhat, w, spread)
+            if not consistent:
+                flags.append("branch_uncertain")
+                self._lost = not s.recover
+                self._doubt = suspect = s.recover
+        if (self._lost or self._uncertified) and "branch_uncertain" not in flags:
+            flags.append("branch_uncertain")
+        if not checked and m <= s.max_gap + 1:
+            flags.append("settling")
+        return self._finish(sol, sens, flags, legs, zmax, trusted=not suspect, t0=t0)
+
+    def _update_frozen(self, l: np.ndarray) -> None:
+        if self._raw:
+            unchanged = np.abs(l - self._raw[-1]) <= self.settings.stuck_tolerance
+            self._frozen = np.where(unchanged, self._frozen + 1, 0)
+        self._raw.append(l)
+
+    def _moved(self) -> np.ndarray:
+        """Largest change of the other legs over each leg's frozen run (m).
+
+        Only for legs frozen long enough to be tested (0 for the others); the run is limited
+        to the readings kept.
+        """
+        moved = np.zeros(6)
+        for i in np.flatnonzero(self._frozen >= self.settings.stuck_samples):
+            back = min(int(self._frozen[i]), len(self._raw) - 1)
+            d = np.abs(self._raw[-1] - self._raw[-1 - back])
+            d[i] = 0.0
+            moved[i] = d.max()
+        return moved
+
+    def _guess(self) -> np.ndarray:
+        if self._gap > self.settings.max_gap:
+            return self._last_q
+        return predict(self.hexa.model, list(self._hist)[:3], self.predictor)
+
+    def _solve(self, l: np.ndarray, guess: np.ndarray) -> Solution:
+        try:
+            return self.hexa.forward(l, guess=guess, tol=self.tol, max_iter=self.max_iter, check=False)
+        except HexapodError as exc:  # a reading outside the stroke
+            q = self._last_q
+            return Solution(self.hexa.pose_of(q), q.copy(), l.copy(), "invalid_input", 0, math.nan, None, str(exc))
+
+    def _branch_check(self, sol, sens, l, lhat, w, spread):
+        """Compare the pose with the motion model's pose plus ``J^-1`` (reading innovation).
+
+        On a mismatch re-solve from the motion model's configuration (``recover``).
+        """
+        model = self.hexa.model
+        q0 = self._hist[0]
+        dv = np.zeros(model.nv)
+        for j in range(1, w.size):
+            dv += w[j] * pin.difference(model, q0, self._hist[j])
+        q_model = pin.integrate(model, q0, dv)
+        if self.settings.recover and sens.condition_number > self.cond_limit:
+            # near a singularity assemblies meet: keep the one the motion continues to
+            alt = self._solve(l, q_model)
+            if alt.status in ("converged", "out_of_limits") and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
+                sol, sens = alt, self._sens.evaluate(alt.q)
+        bound = self.settings.branch_sigmas * self.settings.noise * self._scale * spread
+
+        def consistent(sol, sens) -> bool:
+            near = self._near or sens.condition_number > self.cond_limit
+            if sens.det_sign != self._sign and not near:
+                return False  # across a singularity without passing near one: another assembly
+            e = pin.difference(model, q_model, sol.q)[self._ff] - self._sens.Jinv @ (l - lhat)
+            size = math.hypot(np.linalg.norm(e[:3]), self.length * np.linalg.norm(e[3:]))
+            return size <= bound * math.hypot(sens.translation, self.length * sens.rotation) + 1e-9 * self.length
+
+        if consistent(sol, sens):
+            return sol, sens, True
+        if not self.settings.recover:
+            return sol, sens, False
+        retry = self._solve(l, q_model)
+        if retry.status in ("converged", "out_of_limits"):
+            rsens = self._sens.evaluate(retry.q)
+            if consistent(retry, rsens):
+                return retry, rsens, True
+            self._sens.evaluate(sol.q)
+        return sol, sens, False
+
+    def _reanchor(self, l: np.ndarray, flags: list[str], legs: tuple, t0: float) -> TrackResult:
+        """Continuation to ``l`` from the last trusted configuration; restart the history there.
+
+        In finer steps if needed, then from the newest solved configuration.
+        """
+        s = self.settings
+        sol: Solution | None = None
+        for q0, step in ((self._hist[0], s.continuation_step), (self._hist[0], s.continuation_step / 8)) + (
+            (self._last_q, s.continuation_step),
+        ):
+            sol = self._continue(q0, l, step)
+            if sol.status in ("converged", "out_of_limits"):
+                break
+        else:
+            assert sol is not None
+            return self._failure(l, sol.status, f"re-anchoring: {sol.message}", tuple(flags), legs, t0, sol)
+        assert sol is not None
+        sens = self._sens.evaluate(sol.q)
+        # poses that kept failing the branch check: the last trusted one may be on another
+        # assembly already, so the re-anchored one cannot be certified (until reset)
+        self._lost = self._lost or self._doubt
+        self._restart(sol.q, trusted=True)
+        self._sign, self._near = sens.det_sign, sens.condition_number > self.cond_limit
+        out = [*flags] + (["branch_uncertain"] if self._lost or self._uncertified else []) + ["settling"]
+        return self._finish(sol, sens, out, legs, math.nan, trusted=None, t0=t0)
+
+    def _continue(self, q0: np.ndarray, l: np.ndarray, step: float) -> Solution:
+        """Newton along the straight reading path from ``q0``'s readings to ``l``."""
+        l0 = q0[self._prism_q]
+        n = max(1, math.ceil(float(np.max(np.abs(l - l0))) / step))
+        q, sol = q0, None
+        for k in range(1, n + 1):
+            sol = self._solve(l0 + (l - l0) * (k / n), q)
+            if sol.status not in ("converged", "out_of_limits"):
+                return sol
+            q = sol.q
+        assert sol is not None
+        return sol
+
+    def _finish(self, sol, sens, flags, legs, innovation, trusted, t0) -> TrackResult:
+        s = self.settings
+        if sens.condition_number > self.cond_limit:
+            flags.append("near_singular")
+            # assemblies meet here: which one the platform leaves on cannot be certified
+            # from the readings, so every later pose is branch_uncertain until reset()
+            # (not for a faulty sample: its pose is not where the platform is)
+            self._uncertified = self._uncertified or trusted is not False
         if sol.status == "out_of_limits":
             flags.append("out_of_limits")
-        jump, allowed = 0.0, float("inf")
-        if self._solved >= 2:
-            pose_of = self.hexa.pose_of
-            p0, p1 = pose_of(self._history[0]), pose_of(self._history[1])
-            lin = pose_of(predict(model, list(self._history)[:2], "eq22"))
-            jump = pose_distance(lin, sol.pose, self.length)
-            allowed = self.jump_ratio * pose_distance(p1, p0, self.length) + self.jump_floor
-            if jump > allowed:
-                flags.append("jump")
-                self._uncertain = True
-        if self._uncertain and "jump" not in flags:
-            flags.append("branch_uncertain")
-        cond = sol.condition_number
-        if not cond <= self.cond_limit:
-            flags.append("near_singular")
-        self._history.appendleft(sol.q)
-        self._solved += 1
-        return TrackResult(sol, "flagged" if flags else "ok", tuple(flags), jump, allowed, cond, elapsed)
+        sig_t, sig_r = s.noise * sens.translation, s.noise * sens.rotation
+        if (
+            s.max_sigma_factor is not None
+            and not math.hypot(sig_t, self.length * sig_r) <= s.max_sigma_factor * s.noise
+        ):
+            flags.append("imprecise")
+        if trusted:
+            self._push_trusted(sol.q)
+            self._sign, self._near = sens.det_sign, sens.condition_number > self.cond_limit
+        elif trusted is not None:
+            self._gap += 1
+        self._last_q = sol.q
+        margin = self.home_condition / sens.condition_number
+        return TrackResult(
+            sol,
+            "ok",
+            tuple(flags),
+            legs,
+            innovation,
+            sig_t,
+            sig_r,
+            sens.condition_number,
+            margin,
+            time.perf_counter() - t0,
+        )
+
+    def _failure(self, l, status, message, flags, legs, t0, sol=None) -> TrackResult:
+        self._gap += 1
+        if sol is None:
+            q = self._last_q
+            sol = Solution(self.hexa.pose_of(q), q.copy(), l.copy(), status, 0, math.nan, None, message)
+        nan = math.nan
+        return TrackResult(sol, status, flags, legs, nan, nan, nan, nan, nan, time.perf_counter() - t0)
+
+
+def _numeric(values) -> bool:
+    try:
+        np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return True

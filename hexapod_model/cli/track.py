@@ -3,19 +3,27 @@
 from __future__ import annotations
 
 import argparse
+import io
 import json
+import sys
 from pathlib import Path
 
+from ..analysis.tracker_checks import DEFAULT_READING_NOISE
 from ..analysis.tracking import PREDICTORS
 from ..files import atomic_write_text, check_output_path
-from ..studies.track import SPEEDS, run_table, simulate
-from ._common import add_hexapod_argument, hexapod_of, progress
+from ..io.tables import LENGTH_COLUMNS, column, read_table, write_table
+from ..studies.track import SPEEDS, TRACK_LOG_COLUMNS, run_table, simulate, track_log
+from ._common import add_hexapod_argument, hexapod_of, note, progress
 
 DESCRIPTION = """\
 Track trajectory A or B of the 1 kHz experiment of Jakobović and Jelenković (2002) with the
-stream tracker (warm
-starts, eq. 22-24 predictors, flags for doubtful samples) and report the errors against the
-true poses; --table runs every trajectory x predictor x speed."""
+stream tracker (warm starts, eq. 22-24 predictors, flags for doubtful samples) and report the
+errors against the true poses; --table runs every trajectory x predictor x speed.
+
+With --readings FILE.csv (columns t,l1..l6: seconds, metres) the tracker runs over a recorded
+stream instead and writes one row per sample: t,x,y,z,qx,qy,qz,qw,roll,pitch,yaw (m, unit
+quaternion, degrees), status (ok or the failure's name), flags (separated by ';', empty when
+none) and iterations. Exit code 1 when a sample failed or was flagged after the first ones."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -30,6 +38,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--table", action="store_true", help="all trajectories x predictors x speeds")
     p.add_argument("--out", default=".", help="directory for the PNG (default: current; created)")
     p.add_argument("--json", help="write the summary (or table) as JSON")
+    p.add_argument("--readings", metavar="FILE.csv", help="track a recorded stream (columns t,l1..l6)")
+    p.add_argument("-o", "--output", metavar="OUT.csv", help="with --readings: output CSV (default: standard output)")
+    p.add_argument(
+        "--noise",
+        type=float,
+        default=DEFAULT_READING_NOISE,
+        help=f"with --readings: standard deviation of the reading noise in m (default {DEFAULT_READING_NOISE:g})",
+    )
     p.set_defaults(func=run)
 
 
@@ -48,8 +64,37 @@ def format_table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def run_readings(args: argparse.Namespace) -> int:
+    """``hexapod track --readings``: one output row per recorded sample."""
+    out = None if args.output in (None, "-") else check_output_path(args.output, args.readings)
+    header, data = read_table(args.readings, ["t", *LENGTH_COLUMNS])
+    hexa = hexapod_of(args)
+    times, readings = column(header, data, ["t"])[:, 0], column(header, data, LENGTH_COLUMNS)
+    rows, counts = track_log(
+        hexa, times, readings, args.predictor, progress=lambda it, n, d: progress(it, n, d), noise=args.noise
+    )
+    text = io.StringIO()
+    write_table(None, TRACK_LOG_COLUMNS, rows, out=text)
+    if out is None:
+        sys.stdout.write(text.getvalue())
+    else:
+        atomic_write_text(out, text.getvalue())
+    settle = min(3, len(rows))
+    late = [r for k, r in enumerate(rows) if r[-3] != "ok" or (r[-2] and (k >= settle or r[-2] != "settling"))]
+    if late:
+        summary = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))
+        note("track", f"{len(late)} of {len(rows)} samples failed or flagged ({summary})")
+        return 1
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     """``hexapod track``."""
+    if args.readings:
+        return run_readings(args)
+    if args.output:
+        note("track", "-o/--output needs --readings; use --out for the figure folder")
+        return 2
     if args.json:
         check_output_path(args.json)
     hexa = hexapod_of(args)

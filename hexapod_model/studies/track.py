@@ -19,6 +19,8 @@ import numpy as np
 
 from ..analysis.tracking import PREDICTORS, Tracker, characteristic_length, pose_distance
 from ..analysis.trajectories import trajectory_poses
+from ..exceptions import InputError
+from ..io.tables import POSE_COLUMNS, pose_row
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.rotations import matrix_to_rpy
 
@@ -34,7 +36,8 @@ class TrackingRun:
     Attributes:
         t: times (s). errors: (n, 6) |d roll|, |d pitch|, |d yaw| (deg), |dx|, |dy|, |dz| (m).
         distance: (n,) pose error (m, rotations x base radius). off_branch: (n,) bool.
-        status: (n,) tracker status (``ok``/``flagged``/``failed``). flags: counts per flag.
+        status: (n,) ``ok`` (no flag), ``flagged`` (a pose with flags) or ``failed`` (no pose).
+        flags: counts per flag.
         truth_status: counts of the inverse-kinematics statuses of the true poses.
     """
 
@@ -120,6 +123,7 @@ def simulate(
         readings = true_readings(hexa, poses)
     lengths, truth_status = readings
     first = hexa.inverse(poses[0], check=False)
+    tracker_options.setdefault("recover", False)  # the paper's tracker: the predictor alone decides
     tracker = Tracker(hexa, predictor, initial=first, length=length, **tracker_options)
     n = len(t)
     errors, dist = np.zeros((n, 6)), np.zeros(n)
@@ -132,7 +136,8 @@ def simulate(
         errors[k, :3] = np.degrees(np.minimum(d, 2 * np.pi - d))
         errors[k, 3:] = np.abs(T[:3, 3] - poses[k][:3, 3])
         dist[k] = pose_distance(poses[k], T, length)
-        status[k], times[k] = res.status, res.solve_time
+        status[k] = "ok" if res.ok else ("failed" if res.failed else "flagged")
+        times[k] = res.solve_time
         for f in res.flags:
             flags[f] = flags.get(f, 0) + 1
     return TrackingRun(
@@ -163,3 +168,32 @@ def run_table(
         for pr in predictors:
             rows.append(simulate(hexa, tr, sp, pr, readings=readings).summary())
     return rows
+
+
+TRACK_LOG_COLUMNS = ["t", *POSE_COLUMNS, "status", "flags", "iterations"]
+
+
+def track_log(
+    hexa: Hexapod, times: np.ndarray, readings: np.ndarray, predictor: str = "eq22", progress=None, **options
+) -> tuple[list[list], dict]:
+    """Track a recorded stream: rows of :data:`TRACK_LOG_COLUMNS` and counts per flag/status.
+
+    ``times`` (s) must increase strictly (the checks assume one sample per period); a row of
+    readings with NaN (an unreadable cell) is that sample's ``invalid_input``. A failed
+    sample's pose cells are NaN (written empty), never the previous pose.
+    """
+    times = np.asarray(times, dtype=float)
+    if times.size > 1 and not np.all(np.diff(times) > 0):
+        k = int(np.flatnonzero(~(np.diff(times) > 0))[0])
+        raise InputError("t", float(times[k + 1]), f"row {k + 2}: times must increase strictly")
+    tracker = Tracker(hexa, predictor, **options)
+    rows: list[list] = []
+    counts: dict[str, int] = {}
+    items = zip(times, readings)
+    for t, lengths in progress(items, len(times), "track") if progress else items:
+        r = tracker.step(lengths)
+        pose = pose_row(r.pose) if not r.failed else [float("nan")] * len(POSE_COLUMNS)
+        rows.append([float(t), *map(float, pose), r.status, ";".join(r.flags), r.iterations])
+        for key in (r.status,) if r.failed else r.flags:
+            counts[key] = counts.get(key, 0) + 1
+    return rows, counts

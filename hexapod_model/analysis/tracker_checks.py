@@ -1,0 +1,156 @@
+"""The stream tracker's statistics: its settings, the motion model and the per-leg reading tests.
+
+Measurement model: each reading is the true leg value plus independent Gaussian noise of
+standard deviation ``noise`` (m; default the encoder accuracy, 10 um). Over a few
+milliseconds a leg moves like a quadratic in time, so the *motion model* predicts the next
+readings by a least-squares quadratic through the last ``n`` *trusted* samples (3 <= n <=
+``window``), extrapolated ``m`` samples ahead (``m - 1`` untrusted samples in between). The
+prediction ``l^ = sum_j w_j l_j`` is linear in the readings, so its innovation
+``nu = l - l^`` has standard deviation ``noise * spread`` with ``spread = sqrt(1 + sum w_j^2)``
+(2.05 for ``n = 6, m = 1``); the model's own error (the third derivative of the motion) is
+not in ``spread``: on trajectory B at 8x it is below 6 um (0.5 ``noise``).
+
+Per leg, ``z = |nu| / (noise * spread)``:
+
+* ``jump``: ``z > jump_sigmas`` (default 5: 6e-7 per leg and sample under the model);
+* ``stuck``: the reading has not changed (by more than ``stuck_tolerance``, default 0: a
+  frozen value) while the motion implies it must move: its own prediction moved by more than
+  ``stuck_sigmas`` (default 3), or, after ``stuck_samples`` (default 3) unchanged samples,
+  another leg moved by more than ``stuck_sigmas * sqrt(2) * noise`` meanwhile. A working
+  encoder with noise repeats its value with probability ~ resolution / noise per sample; at
+  rest (no motion) nothing is flagged. The flag stays while the reading stays unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from ..exceptions import InputError
+
+DEFAULT_READING_NOISE = 10e-6  # m, the order of the LinACE encoder accuracy (seed 000 §2)
+
+
+@dataclass(frozen=True)
+class TrackerSettings:
+    """What the tracker assumes and when it flags; every length in metres.
+
+    Attributes:
+        noise: standard deviation of the Gaussian reading noise (m).
+        jump_sigmas: a reading farther than this many innovation sigmas from the motion
+            model's prediction is a ``jump``.
+        stuck_samples: unchanged readings before the other legs' motion can raise ``stuck``.
+        stuck_sigmas: how clearly the motion must imply that a frozen leg moves.
+        stuck_tolerance: largest change (m) that counts as "unchanged" (0: identical value).
+        window: trusted samples in the least-squares quadratic (>= 3).
+        max_gap: untrusted samples the motion model may bridge; after more, the history is
+            reset and the tracker re-anchors (see :class:`~hexapod_model.analysis.tracking.Tracker`).
+        settle_samples: trusted samples after a reset before the checks run again (>= 3:
+            the quadratic needs three); those samples are flagged ``settling``.
+        branch_sigmas: the solved pose may differ from the motion model's pose plus the
+            reading innovation mapped through ``J^-1`` by this many propagated pose sigmas
+            (plus ``1e-9 * length``) before ``branch_uncertain``.
+        cond_factor: ``near_singular`` when the condition number of the eliminated Jacobian
+            exceeds ``cond_factor`` x its home value (or ``cond_limit`` when given).
+        cond_limit: absolute ``near_singular`` bound (default from ``cond_factor``).
+        max_sigma_factor: ``imprecise`` when the 1-sigma pose uncertainty
+            ``hypot(sigma_translation, length * sigma_rotation)`` exceeds this many ``noise``
+            (the Jacobian amplifies the reading noise; ``None``: never).
+        continuation_step: largest reading change (m) per Newton solve when re-anchoring.
+        recover: re-solve from the motion model when a pose fails the branch check;
+            ``False`` keeps the seed 002 experiment's raw behaviour (a failed branch check
+            latches ``branch_uncertain`` until ``reset``).
+    """
+
+    noise: float = DEFAULT_READING_NOISE
+    jump_sigmas: float = 5.0
+    stuck_samples: int = 3
+    stuck_sigmas: float = 3.0
+    stuck_tolerance: float = 0.0
+    window: int = 6
+    max_gap: int = 3
+    settle_samples: int = 3
+    branch_sigmas: float = 3.0
+    cond_factor: float = 100.0
+    cond_limit: float | None = None
+    max_sigma_factor: float | None = 10.0
+    continuation_step: float = 2e-3
+    recover: bool = True
+
+    def __post_init__(self) -> None:
+        positive = ("noise", "jump_sigmas", "stuck_sigmas", "branch_sigmas", "cond_factor", "continuation_step")
+        for name in positive:
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v > 0):
+                raise InputError(name, v, "expected a finite number > 0")
+        for name in ("cond_limit", "max_sigma_factor"):
+            v = getattr(self, name)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0):
+                raise InputError(name, v, "expected a number > 0 or None")
+        v = self.stuck_tolerance
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v >= 0):
+            raise InputError("stuck_tolerance", v, "expected a finite number >= 0")
+        for name, lo in (("stuck_samples", 1), ("window", 3), ("max_gap", 0), ("settle_samples", 3)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < lo:
+                raise InputError(name, v, f"expected an integer >= {lo}")
+        if self.settle_samples > self.window:
+            raise InputError("settle_samples", self.settle_samples, f"cannot exceed window ({self.window})")
+        if not isinstance(self.recover, bool):
+            raise InputError("recover", self.recover, "expected True or False")
+
+    @classmethod
+    def with_options(cls, base: TrackerSettings | None, options: dict) -> TrackerSettings:
+        """``base`` (default settings) with the keyword ``options`` replaced.
+
+        Unknown names are an :class:`InputError`.
+        """
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(options) - known)
+        if unknown:
+            raise InputError("tracker option", unknown[0], f"choose from {sorted(known)}")
+        values = {f.name: getattr(base, f.name) for f in fields(cls)} if base is not None else {}
+        values.update(options)
+        return cls(**values)
+
+
+class MotionModel:
+    """Least-squares quadratic extrapolation weights and innovation spreads.
+
+    ``weights(ages)`` are the weights of the trusted samples (newest first) taken ``ages``
+    samples before the current one (``(1, 2, 3, ...)`` without a gap; untrusted samples
+    leave holes); they sum to 1, so they also act on configurations in the tangent space
+    at the newest one (``X = P0 (+) sum_j w_j (P_j (-) P0)``). Cached per pattern of ages.
+    """
+
+    def __init__(self) -> None:
+        self._cache: dict[tuple[int, ...], tuple[np.ndarray, float]] = {}
+
+    def weights(self, ages: tuple[int, ...]) -> tuple[np.ndarray, float]:
+        """``(w, spread)`` for trusted samples of the given ages (>= 3 of them, all distinct)."""
+        hit = self._cache.get(ages)
+        if hit is None:
+            t = -np.asarray(ages, dtype=float)
+            w = np.linalg.pinv(np.vander(t, 3, increasing=True))[0]  # the fit's value at t = 0
+            hit = self._cache[ages] = (w, float(np.sqrt(1.0 + w @ w)))
+        return hit
+
+
+def stuck_legs(frozen: np.ndarray, z: np.ndarray, moved: np.ndarray, settings: TrackerSettings) -> np.ndarray:
+    """Boolean (6,): frozen legs that the motion implies move.
+
+    A leg is stuck when its reading is unchanged while its own prediction moves by more than
+    ``stuck_sigmas`` innovation sigmas, or when it has been unchanged for ``stuck_samples``
+    while another leg moved by more than ``stuck_sigmas * sqrt(2) * noise``.
+
+    Args:
+        frozen: consecutive samples each leg's reading has stayed unchanged.
+        z: normalised innovations (``nan`` when the motion model is not available).
+        moved: largest change of the *other* legs' readings over each leg's frozen run (m).
+        settings: the tracker's settings.
+    """
+    predicted = (frozen > 0) & (np.nan_to_num(z, nan=0.0) > settings.stuck_sigmas)
+    others = (frozen >= settings.stuck_samples) & (moved > settings.stuck_sigmas * math.sqrt(2.0) * settings.noise)
+    return predicted | others

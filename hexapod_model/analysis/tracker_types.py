@@ -1,0 +1,126 @@
+"""The stream tracker's vocabulary: predictors, pose distances, the per-sample result.
+
+Predictors are seed 002's eqs. 22-24; :class:`TrackResult` is what clients (the CLI, the
+fixture service) read.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import InputError
+from ..kinematics.hexapod import Hexapod
+from ..kinematics.solver import Solution
+
+PREDICTORS = ("none", "eq22", "eq23", "eq24")
+# X - P0 = sum_k a_k (P_k - P0), k = 1, 2
+_COEFFS = {"none": (0.0, 0.0), "eq22": (-1.0, 0.0), "eq23": (0.0, -0.5), "eq24": (0.5, -0.75)}
+
+#: every flag a sample can carry, in the order they are checked
+FLAGS = ("jump", "stuck", "branch_uncertain", "settling", "near_singular", "out_of_limits", "imprecise")
+#: statuses of a sample without a pose (``status`` is ``ok`` otherwise)
+FAILED_STATUSES = ("invalid_input", "max_iterations", "singular")
+
+
+def characteristic_length(hexa: Hexapod) -> float:
+    """Largest horizontal base anchor radius (m); for a URDF, of the legs' first joints."""
+    g = hexa.geometry
+    if g is not None:
+        return float(np.max(np.linalg.norm(g.base_points()[:, :2], axis=1)))
+    m = hexa.model
+    pts = np.array([m.jointPlacements[leg.joints[0]].translation for leg in hexa.closed_loop.legs])
+    return float(np.max(np.linalg.norm(pts[:, :2], axis=1))) or 0.25
+
+
+def predict(model: pin.Model, history, predictor: str) -> np.ndarray:
+    """Predicted configuration from ``history = [P0, P1, P2, ...]`` (newest first).
+
+    With fewer samples than the predictor needs, the highest-order predictor the history
+    allows is used (``eq24``/``eq23`` fall back to ``eq22``, which falls back to ``none``).
+    """
+    if predictor not in _COEFFS:
+        raise InputError("predictor", predictor, f"choose one of {PREDICTORS}")
+    if len(history) < 3 and predictor in ("eq23", "eq24"):
+        predictor = "eq22"
+    if len(history) < 2:
+        predictor = "none"
+    a1, a2 = _COEFFS[predictor]
+    p0 = history[0]
+    if a1 == 0.0 and a2 == 0.0:
+        return p0.copy()
+    dv = np.zeros(model.nv)
+    if a1:
+        dv += a1 * pin.difference(model, p0, history[1])
+    if a2:
+        dv += a2 * pin.difference(model, p0, history[2])
+    return pin.integrate(model, p0, dv)
+
+
+def pose_distance(Ta: np.ndarray, Tb: np.ndarray, length: float) -> float:
+    """``sqrt(|dt|^2 + (length * angle)^2)`` between two 4x4 poses (m)."""
+    M = pin.SE3(Ta[:3, :3], Ta[:3, 3]).inverse() * pin.SE3(Tb[:3, :3], Tb[:3, 3])
+    xi = pin.log6(M).vector
+    return float(np.hypot(np.linalg.norm(Ta[:3, :3] @ xi[:3]), length * np.linalg.norm(xi[3:])))
+
+
+@dataclass(frozen=True)
+class TrackResult:
+    """One tracked sample.
+
+    A sample is *good* (:attr:`ok`) when ``status == "ok"`` and ``flags`` is empty; then its
+    pose passed every check. With flags the pose is solved but must not be used blindly;
+    without a pose (``status`` in :data:`FAILED_STATUSES`) :attr:`pose` is the last one.
+
+    Attributes:
+        solution: the solver's :class:`Solution` (pose 4x4 base -> platform, m).
+        status: ``"ok"`` (a solved pose) or the failure's name (:data:`FAILED_STATUSES`).
+        flags: subset of :data:`FLAGS`, in that order.
+        legs: legs (0-based) named by ``jump`` or ``stuck``.
+        innovation: largest normalised reading innovation ``|l - l^| / (noise * spread)``
+            (``nan`` when the motion model was not available).
+        sigma_translation: 1-sigma position uncertainty (m): ``noise * sqrt(trace)`` of the
+            position block of ``J^-1 J^-T`` (``nan`` without a pose, ``inf`` when singular).
+        sigma_rotation: 1-sigma orientation uncertainty (rad), likewise.
+        condition_number: of the eliminated 6x6 Jacobian, rotations scaled by the tracker's length.
+        singularity_margin: home condition number / ``condition_number`` (1 at home, 0 singular).
+        solve_time: wall-clock seconds of the whole step.
+    """
+
+    solution: Solution
+    status: str
+    flags: tuple[str, ...]
+    legs: tuple[int, ...]
+    innovation: float
+    sigma_translation: float
+    sigma_rotation: float
+    condition_number: float
+    singularity_margin: float
+    solve_time: float
+
+    @property
+    def ok(self) -> bool:
+        """True when the pose is solved and passed every check (no flag)."""
+        return self.status == "ok" and not self.flags
+
+    @property
+    def failed(self) -> bool:
+        """True when the sample has no pose of its own."""
+        return self.status != "ok"
+
+    @property
+    def pose(self) -> np.ndarray:
+        """Platform pose of the sample (4x4, base frame, metres)."""
+        return self.solution.pose
+
+    @property
+    def iterations(self) -> int:
+        """Newton steps of the sample's solve."""
+        return self.solution.iterations
+
+    def sigma_mm_deg(self) -> tuple[float, float]:
+        """``(translation mm, rotation deg)``: the 1-sigma figures as the fixture service publishes them."""
+        return self.sigma_translation * 1e3, math.degrees(self.sigma_rotation)
