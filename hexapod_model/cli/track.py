@@ -66,7 +66,7 @@ def format_table(rows: list[dict]) -> str:
 
 def run_readings(args: argparse.Namespace) -> int:
     """``hexapod track --readings``: one output row per recorded sample."""
-    out = None if args.output in (None, "-") else check_output_path(args.output, args.readings)
+    out = None if args.output in (None, "-") else check_output_path(args.output, args.readings, args.hexapod)
     header, data = read_table(args.readings, ["t", *LENGTH_COLUMNS])
     hexa = hexapod_of(args)
     times, readings = column(header, data, ["t"])[:, 0], column(header, data, LENGTH_COLUMNS)
@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
         note("track", "-o/--output needs --readings; use --out for the figure folder")
         return 2
     if args.json:
-        check_output_path(args.json)
+        check_output_path(args.json, args.hexapod)
     hexa = hexapod_of(args)
     result: dict | list[dict]
     if args.table:

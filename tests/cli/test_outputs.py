@@ -41,6 +41,8 @@ def _unchanged(path, before):
         (["snapshot", "{d}/X.urdf", "-o", "{d}/X.urdf"], "X.urdf"),
         (["snapshot", "{d}/X.urdf", "-o", "{d}/s.html", "--png", "{d}/X.urdf"], "X.urdf"),
         (["reproduce", "--urdf", "{d}/X.urdf", "--poses", "5", "--json", "{d}/X.urdf"], "X.urdf"),
+        (["track", "{d}/X.urdf", "--json", "{d}/X.urdf"], "X.urdf"),
+        (["track", "{d}/X.urdf", "--readings", "{d}/l.csv", "-o", "{d}/X.urdf"], "X.urdf"),
     ],
 )
 def test_an_input_is_never_an_output(files, capsys, argv, target):
