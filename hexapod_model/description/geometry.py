@@ -10,7 +10,13 @@ Frames and units (SI throughout):
   its two axes; for a ball joint, its centre; for a guideway leg, the slider's Cardan centre
   at home.
 * The **leg reading** (the measured prismatic joint, metres) is zero at home and grows as
-  the leg extends; ``stroke`` bounds it.
+  the leg extends; ``stroke`` bounds it. A leg may carry an encoder model (``encoder_zero``,
+  ``encoder_scale``, both 0 by default): its reading is then
+  ``encoder_zero + (1 + encoder_scale) * d`` with ``d`` the leg's extension from home, which
+  ``stroke`` bounds.
+* Joint axes need not be exactly perpendicular to the leg at home (a calibrated fixture's are
+  not): the common normal of each Cardan joint is then the projection of the leg direction on
+  the plane perpendicular to its fixed axis (see :mod:`hexapod_model.description.legs`).
 
 Joint types (``joint_type``):
 
@@ -37,6 +43,8 @@ from ..exceptions import GeometryError
 
 JOINT_TYPES = ("cardan", "spherical", "guideway")
 Vec3 = tuple[float, float, float]
+MAX_AXIS_TILT_DEG = 10.0  # largest angle between a fixed Cardan axis and the plane perpendicular to the leg
+ENCODER_SCALE_LIMIT = 0.5  # |encoder_scale| bound (a relative scale error of the reading)
 
 
 def _vec3(name: str, value: Any, *, unit: bool = False) -> Vec3:
@@ -79,6 +87,12 @@ class LegGeometry:
         platform_axis: platform-fixed Cardan axis in the platform frame (cardan legs only);
             ``None`` picks the same direction as ``base_axis``.
         guideway: unit direction of the slider's guideway in the base frame (guideway legs).
+        base_offset: this leg's distance between its two base Cardan axes (m); ``None`` uses
+            the hexapod's ``base_offset``.
+        platform_offset: same at the platform Cardan joint (m, cardan legs only).
+        encoder_zero: the reading at home (m), 0 by default.
+        encoder_scale: relative scale error of the reading (dimensionless, 0 by default):
+            reading = ``encoder_zero + (1 + encoder_scale) * extension``.
     """
 
     base_anchor: Vec3
@@ -87,6 +101,10 @@ class LegGeometry:
     base_axis: Vec3 | None = None
     platform_axis: Vec3 | None = None
     guideway: Vec3 | None = None
+    base_offset: float | None = None
+    platform_offset: float | None = None
+    encoder_zero: float = 0.0
+    encoder_scale: float = 0.0
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -102,6 +120,12 @@ class LegGeometry:
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < 0.0 < hi):
             raise GeometryError("stroke", self.stroke, "need finite min < 0 < max (0 = home reading)")
         set_(self, "stroke", (lo, hi))
+        for name in ("base_offset", "platform_offset"):
+            if getattr(self, name) is not None:
+                set_(self, name, _number(name, getattr(self, name), 0.0, 10.0))
+        set_(self, "encoder_zero", _number("encoder_zero", self.encoder_zero, -10.0, 10.0))
+        lim = ENCODER_SCALE_LIMIT
+        set_(self, "encoder_scale", _number("encoder_scale", self.encoder_scale, -lim, lim))
 
 
 @dataclass(frozen=True)
@@ -151,22 +175,36 @@ class HexapodGeometry:
         for i, leg in enumerate(legs):
             self._check_leg(i, leg)
 
+    def offsets(self, i: int) -> tuple[float, float]:
+        """Base and platform Cardan axis offsets (m) of leg ``i``: its own or the hexapod's."""
+        leg = self.legs[i]
+        eb = self.base_offset if leg.base_offset is None else leg.base_offset
+        return eb, self.platform_offset if leg.platform_offset is None else leg.platform_offset
+
     def _check_leg(self, i: int, leg: LegGeometry) -> None:
         where = f"legs[{i}]"
         if not isinstance(leg, LegGeometry):
             raise GeometryError(where, leg, "expected a LegGeometry")
+        if self.joint_type != "cardan" and leg.platform_offset not in (None, 0.0):
+            raise GeometryError(
+                f"{where}.platform_offset", leg.platform_offset, "only cardan legs have a platform Cardan joint"
+            )
         w, length = self.home_leg_axis(i)
-        need = self.base_offset / 2 + self.platform_offset / 2
+        need = sum(self.offsets(i)) / 2
         if length <= need + 1e-6:
             raise GeometryError(
                 f"{where}.platform_anchor",
                 leg.platform_anchor,
                 f"home leg length {length:.6g} m must exceed the joint offsets {need:.6g} m",
             )
+        max_cos = math.sin(math.radians(MAX_AXIS_TILT_DEG))
         for name, axis in (("base_axis", leg.base_axis), ("platform_axis", leg.platform_axis)):
-            if axis is not None and abs(float(np.dot(axis, w))) > 1e-6:
+            if axis is not None and abs(float(np.dot(axis, w))) > max_cos:
                 raise GeometryError(
-                    f"{where}.{name}", axis, f"must be perpendicular to the home leg axis {tuple(np.round(w, 6))}"
+                    f"{where}.{name}",
+                    axis,
+                    f"must be perpendicular to the home leg axis {tuple(np.round(w, 6))} "
+                    f"within {MAX_AXIS_TILT_DEG:g} deg",
                 )
         if self.joint_type == "guideway":
             if leg.guideway is None:
@@ -203,13 +241,20 @@ class HexapodGeometry:
         return np.array([leg.platform_anchor for leg in self.legs])
 
     def to_dict(self) -> dict:
-        """Plain dict (the file format of :func:`geometry_from_dict`)."""
+        """Plain dict (the file format of :func:`geometry_from_dict`); leg fields left at their
+        default (``None``, a zero encoder model) are omitted.
+        """
         out: dict[str, Any] = {}
+        defaults = {f.name: f.default for f in fields(LegGeometry)}
         for f in fields(self):
             v = getattr(self, f.name)
             if f.name == "legs":
                 v = [
-                    {k: (list(x) if isinstance(x, tuple) else x) for k, x in vars(leg).items() if x is not None}
+                    {
+                        k: (list(x) if isinstance(x, tuple) else x)
+                        for k, x in vars(leg).items()
+                        if x is not None and not (k.startswith("encoder_") and x == defaults[k])
+                    }
                     for leg in v
                 ]
             out[f.name] = v

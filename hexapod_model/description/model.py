@@ -6,7 +6,9 @@
   gives them; the platform is a free flyer whose configuration is relative to the home pose);
 * ``constraints``: one Pinocchio ``FrameAnchorConstraintModel`` (``6d`` closure) or
   ``PointAnchorConstraintModel`` (``3d``) per leg, tip side first;
-* index arrays of each leg's joints and of the measured prismatic joints.
+* index arrays of each leg's joints and of the measured prismatic joints;
+* ``encoder_zero``, ``encoder_scale``: (6,) each leg's encoder model from the URDF's
+  ``<encoder>`` elements (reading = zero + (1 + scale) * prismatic value; zeros without one).
 
 For speed the solver works on an *augmented* copy (``solver_model``) in which a zero-motion
 free-flyer "probe" joint is attached at every closure frame: after one
@@ -25,7 +27,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import UrdfError
-from .urdf import Closure, read_closures, validate_urdf
+from .urdf import Closure, read_closures, read_encoders, validate_urdf
 
 _REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
 _PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
@@ -147,6 +149,7 @@ class ClosedLoopModel:
         self.platform_q = m.joints[self.platform_joint].idx_q
         self.platform_v = m.joints[self.platform_joint].idx_v
         self.home = m.jointPlacements[self.platform_joint].copy()
+        self.encoder_zero, self.encoder_scale = self._encoders(read_encoders(urdf_xml, source))
         self._check_assembled()
 
     @classmethod
@@ -186,6 +189,15 @@ class ClosedLoopModel:
                 f"closure {c.name}: the leg chain must hold exactly one prismatic joint, found {len(prismatic)}",
             )
         return Leg(c.name, tuple(reversed(chain)), prismatic[0], tip, anchor)
+
+    def _encoders(self, found: dict[str, tuple[float, float]]) -> tuple[np.ndarray, np.ndarray]:
+        """(6,) zero (m) and scale of each leg's reading, from the ``<encoder>`` elements."""
+        names = [self.model.names[leg.prismatic] for leg in self.legs]
+        stray = sorted(set(found) - set(names))
+        if stray:
+            raise UrdfError(self.source, stray[0], "an <encoder> must name a leg's prismatic joint")
+        zero = np.array([found.get(n, (0.0, 0.0))[0] for n in names])
+        return zero, np.array([found.get(n, (0.0, 0.0))[1] for n in names])
 
     def _constraint(self, leg: Leg):
         m = self.model

@@ -67,7 +67,14 @@ class Hexapod:
         self.constraint_models = list(model.constraints)
         self.nq, self.nv = m.nq, m.nv
         self.joint_names: tuple[str, ...] = tuple(m.names[1:])
-        self.stroke = np.array([[model.lower[i], model.upper[i]] for i in model.prismatic_q])
+        #: each leg's encoder model (reading = zero + gain * prismatic value), None when the identity
+        self._encoder = (
+            None
+            if not (np.any(model.encoder_zero) or np.any(model.encoder_scale))
+            else (model.encoder_zero.copy(), 1.0 + model.encoder_scale)
+        )
+        #: (6, 2) reading limits (m): the prismatic joint limits, through the encoder model if any
+        self.stroke = self.readings_of(np.array([[model.lower[i], model.upper[i]] for i in model.prismatic_q]).T).T
         self.prismatic_names = tuple(m.names[leg.prismatic] for leg in model.legs)
         self._limited = model.limited_q()
         self._solvers: dict[tuple[int, ...], NewtonSolver] = {}
@@ -142,7 +149,21 @@ class Hexapod:
 
     def lengths_of(self, q: np.ndarray) -> np.ndarray:
         """Leg readings (m) of configuration ``q``, leg order."""
-        return q[self.closed_loop.prismatic_q].copy()
+        return self.readings_of(q[self.closed_loop.prismatic_q])
+
+    def readings_of(self, joints: np.ndarray) -> np.ndarray:
+        """Leg readings (m) of prismatic joint values (m, leg order, last axis): the URDF's
+        ``<encoder>`` model, the identity without one.
+        """
+        if self._encoder is None:
+            return np.array(joints, dtype=float)
+        return self._encoder[0] + self._encoder[1] * np.asarray(joints, dtype=float)
+
+    def joints_of(self, readings: np.ndarray) -> np.ndarray:
+        """Prismatic joint values (m) of leg readings (m, leg order): the inverse of :meth:`readings_of`."""
+        if self._encoder is None:
+            return np.array(readings, dtype=float)
+        return (np.asarray(readings, dtype=float) - self._encoder[0]) / self._encoder[1]
 
     def _set_pose(self, q: np.ndarray, pose) -> None:
         T = check_pose(pose)
@@ -200,7 +221,7 @@ class Hexapod:
             check_vector("lengths", lengths, 6)  # names NaN / inf first
             raise LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
         q = self._start(guess)
-        q[self.closed_loop.prismatic_q] = lengths
+        q[self.closed_loop.prismatic_q] = lengths if self._encoder is None else self.joints_of(lengths)
         return self._finish(self._solver(self._held_forward), q, tol, max_iter, check)
 
     def inverse(
@@ -233,7 +254,8 @@ class Hexapod:
         """Hybrid kinematics: hold the named joints at the given values, solve for the rest.
 
         ``held`` maps URDF joint names to values: a float (m or rad) for a one-dof joint, a
-        4x4 pose for ``platform_joint`` (the floating joint). Example: hold three legs and
+        4x4 pose for ``platform_joint`` (the floating joint). A prismatic joint takes its joint
+        value (extension from home), not the encoder reading of an ``<encoder>`` model. Example: hold three legs and
         the platform height is not possible (whole joints only), but holding five prismatic
         joints and one Cardan angle is.
 
@@ -275,10 +297,14 @@ class Hexapod:
 
     def _limit_error(self, iq: int, value: float) -> LimitError:
         """The error for configuration entry ``iq`` at ``value`` outside its limits."""
-        what = "stroke" if iq in self.closed_loop.prismatic_q else "joint"
-        return LimitError(
-            self.closed_loop.joint_name_of_q(iq), value, self.closed_loop.lower[iq], self.closed_loop.upper[iq], what
-        )
+        clm = self.closed_loop
+        if iq in clm.prismatic_q and self._encoder is not None:  # in readings, as the user gives them
+            k = int(np.flatnonzero(clm.prismatic_q == iq)[0])
+            zero, gain = self._encoder[0][k], self._encoder[1][k]
+            value, lo, hi = zero + gain * value, zero + gain * clm.lower[iq], zero + gain * clm.upper[iq]
+            return LimitError(clm.joint_name_of_q(iq), value, lo, hi, "stroke")
+        what = "stroke" if iq in clm.prismatic_q else "joint"
+        return LimitError(clm.joint_name_of_q(iq), value, clm.lower[iq], clm.upper[iq], what)
 
     def _finish(self, solver: NewtonSolver, q0: np.ndarray, tol: float, max_iter: int, check: bool) -> Solution:
         if type(tol) is not float or not 0.0 < tol <= MAX_TOL:  # one comparison on the hot path
@@ -291,7 +317,7 @@ class Hexapod:
             if bad >= 0:
                 k = int(self._limited[bad])
                 status, msg = "out_of_limits", str(self._limit_error(k, q[k]))
-        sol = Solution(self.pose_of(q), q, q[self.closed_loop.prismatic_q], status, it, res, jac, msg)
+        sol = Solution(self.pose_of(q), q, self.lengths_of(q), status, it, res, jac, msg)
         if check and status != "converged":
             raise {"singular": SingularityError, "out_of_limits": WorkspaceError}.get(status, ConvergenceError)(
                 sol, f"{status}: {msg}"

@@ -1,0 +1,55 @@
+"""Write a geometry as a TOML file (the format :func:`~hexapod_model.description.geometry.load_geometry` reads).
+
+Per-leg values that all legs share go to the short, hexapod-level form (:func:`compact`), so a
+calibrated file lists per leg only what differs between legs. Numbers are written with
+``repr`` (the shortest text that reads back to the same float): file -> geometry is exact.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+from ..description.geometry import HexapodGeometry
+from ..files import atomic_write_text
+
+
+def compact(geom: HexapodGeometry) -> HexapodGeometry:
+    """The same hexapod with uniform per-leg offsets moved to the hexapod level.
+
+    An offset that every leg has in common becomes ``base_offset`` / ``platform_offset`` and
+    leaves the legs; a leg value equal to the hexapod-level one is dropped.
+    """
+    legs = list(geom.legs)
+    top = {}
+    for k, name in enumerate(("base_offset", "platform_offset")):
+        values = [geom.offsets(i)[k] for i in range(6)]
+        common = values[0] if all(v == values[0] for v in values) else getattr(geom, name)
+        top[name] = common
+        legs = [replace(leg, **{name: None if v == common else v}) for leg, v in zip(legs, values)]
+    return replace(geom, legs=tuple(legs), **top)
+
+
+def _value(v) -> str:
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_value(x) for x in v) + "]"
+    return repr(float(v))
+
+
+def geometry_to_toml(geom: HexapodGeometry, comment: str = "") -> str:
+    """TOML text of ``compact(geom)``; ``comment`` lines go first, each prefixed with ``#``."""
+    data = compact(geom).to_dict()
+    lines = [f"# {line}".rstrip() for line in comment.splitlines()]
+    legs = data.pop("legs")
+    lines += [f"{k} = {_value(v)}" for k, v in data.items()]
+    for leg in legs:
+        lines += ["", "[[legs]]"] + [f"{k} = {_value(v)}" for k, v in leg.items()]
+    return "\n".join(lines) + "\n"
+
+
+def save_geometry(geom: HexapodGeometry, path: str | Path, comment: str = "") -> Path:
+    """Write :func:`geometry_to_toml` to ``path`` atomically; returns the path."""
+    return atomic_write_text(path, geometry_to_toml(geom, comment))
