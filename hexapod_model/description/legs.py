@@ -13,7 +13,8 @@ perpendicular to that fixed axis and lies in the plane of the fixed axis and the
 
 Everything here is plain arithmetic (no ``abs``, ``norm`` or ``arctan2`` on the inputs), so it
 also runs on complex numbers: the calibration differentiates it by complex steps, which are
-exact to rounding (no truncation error, unlike finite differences).
+exact to rounding (no truncation error, unlike finite differences). Vectors may carry leading
+batch axes (one construction per complex step).
 """
 
 from __future__ import annotations
@@ -26,14 +27,33 @@ PERPENDICULAR = 1e-12  # |a . w| below which a real axis counts as perpendicular
 MAX_ITERATIONS = 200
 
 
+def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a . b`` over the last axis (no conjugation of complex values)."""
+    return np.sum(a * b, axis=-1)
+
+
 def unit(v: np.ndarray) -> np.ndarray:
-    """``v / |v|`` (also for complex ``v``: no conjugation)."""
-    return v / np.sqrt(v @ v)
+    """``v / |v|`` over the last axis (also for complex ``v``: no conjugation)."""
+    return v / np.sqrt(dot(v, v))[..., None]
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross product of two 3-vectors (real or complex)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    """Cross product over the last axis (real or complex)."""
+    a, b = np.broadcast_arrays(a, b)
+    return np.stack(
+        [a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1], a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+         a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]],
+        axis=-1,
+    )  # fmt: skip
+
+
+def _columns(*vectors: np.ndarray) -> np.ndarray:
+    """Rotation matrices whose columns are ``vectors`` (leading axes kept)."""
+    return np.stack(np.broadcast_arrays(*vectors), axis=-1)
+
+
+def _t(M: np.ndarray) -> np.ndarray:
+    return np.swapaxes(M, -1, -2)
 
 
 def default_axis(d: np.ndarray) -> np.ndarray:
@@ -47,9 +67,9 @@ def default_axis(d: np.ndarray) -> np.ndarray:
 
 def common_normal(w: np.ndarray, a: np.ndarray) -> np.ndarray:
     """Unit common normal of a Cardan joint with fixed axis ``a`` on a leg along ``w``."""
-    if np.isrealobj(w) and np.isrealobj(a) and abs(float(w @ a)) <= PERPENDICULAR:
+    if np.isrealobj(w) and np.isrealobj(a) and w.ndim == a.ndim == 1 and abs(float(w @ a)) <= PERPENDICULAR:
         return w
-    return unit(w - (w @ a) * a)
+    return unit(w - dot(w, a)[..., None] * a)
 
 
 @dataclass(frozen=True)
@@ -74,7 +94,7 @@ class LegAxes:
     base: np.ndarray
     start: np.ndarray
     roll: np.ndarray
-    rest: complex | float
+    rest: np.ndarray
     platform: np.ndarray | None
     platform_rel: np.ndarray | None
 
@@ -95,14 +115,17 @@ def leg_axes(
         base_axis: unit fixed base Cardan axis (base frame).
         platform_axis: unit fixed platform Cardan axis, or ``None`` for a ball joint at the platform.
         base_offset, platform_offset: axis offsets ``e_b``, ``e_p`` (m).
+
+    Every argument may carry the same leading batch axes (offsets: those axes only).
     """
     b, p = base_anchor, platform_anchor_home
+    eb, ep = np.asarray(base_offset)[..., None], np.asarray(platform_offset)[..., None]
     cardan = platform_axis is not None
     w = unit(p - b)
     for _ in range(MAX_ITERATIONS):
-        d = p - b - base_offset / 2 * common_normal(w, base_axis)
+        d = p - b - eb / 2 * common_normal(w, base_axis)
         if cardan:
-            d = d - platform_offset / 2 * common_normal(w, platform_axis)
+            d = d - ep / 2 * common_normal(w, platform_axis)
         new = unit(d)
         change = new - w
         w = new
@@ -112,12 +135,12 @@ def leg_axes(
             break
     n_b = common_normal(w, base_axis)
     second = cross(n_b, base_axis)
-    base = np.column_stack([base_axis, second, n_b])
-    leg = np.column_stack([cross(second, w), second, w])
-    s2 = b + base_offset / 2 * n_b
+    base = _columns(base_axis, second, n_b)
+    leg = _columns(cross(second, w), second, w)
+    s2 = b + eb / 2 * n_b
     if not cardan:
-        return LegAxes(w, base, b - base_offset / 2 * n_b, base.T @ leg, (p - s2) @ w, None, None)
+        return LegAxes(w, base, b - eb / 2 * n_b, _t(base) @ leg, dot(p - s2, w), None, None)
     n_p = common_normal(w, platform_axis)
-    platform = np.column_stack([platform_axis, cross(n_p, platform_axis), n_p])
-    rest = (p - platform_offset / 2 * n_p - s2) @ w
-    return LegAxes(w, base, b - base_offset / 2 * n_b, base.T @ leg, rest, platform, leg.T @ platform)
+    platform = _columns(platform_axis, cross(n_p, platform_axis), n_p)
+    rest = dot(p - ep / 2 * n_p - s2, w)
+    return LegAxes(w, base, b - eb / 2 * n_b, _t(base) @ leg, rest, platform, _t(leg) @ platform)

@@ -1,0 +1,309 @@
+"""Identify a hexapod's joint geometry from measured poses (nonlinear least squares).
+
+Unknowns: the per-leg corrections of :class:`~hexapod_model.analysis.calibration_parameters.ParameterSet`
+and the measuring and marker frames (:mod:`~hexapod_model.analysis.calibration_frames`).
+``scipy.optimize.least_squares`` (Levenberg-Marquardt) minimises the whitened pose residuals
+with the exact Jacobian: :class:`~hexapod_model.analysis.calibration_derivatives.CalibrationModel`
+for the geometry (implicit function theorem on the closures), closed forms for the frames.
+
+Before the fit, :func:`~hexapod_model.analysis.calibration_identifiability.analyse` fixes the
+gauge and holds at nominal every parameter the data cannot determine; after it, the analysis
+is repeated at the solution. The 1-sigma of each identified parameter is from the covariance
+``s0^2 (J^T J)^-1`` (``s0`` the a-posteriori noise factor, 1 when the stated noise is right)
+plus what the held parameters, known only to their expected magnitude, do to it: ``S S^T``
+with ``S = (J^T J)^-1 J^T J_held diag(scale_held)`` (a "consider" covariance).
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from scipy.optimize import least_squares
+
+from ..analysis.calibration_derivatives import CalibrationModel
+from ..analysis.calibration_frames import Noise, fit_frames, frame_jacobian, predict, residual, twist_jacobian
+from ..analysis.calibration_identifiability import Combination, analyse
+from ..analysis.calibration_parameters import ParameterSet
+from ..description.geometry import HexapodGeometry
+from ..exceptions import HexapodError, InputError
+
+FRAME_SCALE = 1e-3  # m and rad: expected size of the frame corrections after the initial alignment
+EQUATIONS_PER_UNKNOWN = 2  # at least this many residual rows per unknown
+OUTLIER_RMS = 5.0  # a row this many stated sigmas off (RMS over its 6 rows) ...
+OUTLIER_MEDIAN = 5.0  # ... and this many times the median row is an outlier
+EXPLAINED_RMS = 20.0  # the median row must end below this many stated sigmas
+NEAR_NOMINAL = 20.0  # corrections beyond this many expected magnitudes are not "near nominal"
+PENALTY = 1e3  # residual of a row the trial geometry cannot solve (the step is rejected)
+
+
+@dataclass(frozen=True)
+class MeasuredPoses:
+    """Leg readings (N, 6, m) and the measured poses (N, 4, 4) of the marker frame in the
+    measuring device's frame; ``lines`` names each row in messages (CSV line numbers).
+    """
+
+    readings: np.ndarray
+    measured: np.ndarray
+    source: str = "<data>"
+    lines: tuple[int, ...] | None = None
+
+    def line(self, k: int) -> str:
+        """How row ``k`` is named in messages."""
+        return f"line {self.lines[k]}" if self.lines is not None else f"row {k + 1}"
+
+    def subset(self, rows: np.ndarray) -> MeasuredPoses:
+        """The rows ``rows`` only."""
+        lines = None if self.lines is None else tuple(self.lines[k] for k in rows)
+        return MeasuredPoses(self.readings[rows], self.measured[rows], self.source, lines)
+
+
+@dataclass(frozen=True)
+class Identification:
+    """What :func:`identify` found.
+
+    Attributes:
+        parameters: the unknowns (names, scales, nominal geometry).
+        delta: (P,) identified corrections (SI; 0 where held at nominal).
+        sigma: (P,) 1-sigma of each correction (NaN where held).
+        identifiable: (P,) False where held at nominal.
+        measuring_frame: 4x4 base frame in the measuring device's frame.
+        marker_frame: 4x4 measured (marker) frame in the platform frame.
+        frame_sigma: (12,) 1-sigma of the two frames' twists (m, rad; measuring then marker).
+        combinations: the unidentifiable combinations (and the parameter held for each).
+        spectrum: singular values of the scaled identification Jacobian, gauge fixed.
+        identified_spectrum: the same without the held parameters.
+        noise_factor: a-posteriori factor ``s0`` on the stated noise.
+        evaluations: model evaluations of the least squares.
+    """
+
+    parameters: ParameterSet
+    delta: np.ndarray
+    sigma: np.ndarray
+    identifiable: np.ndarray
+    measuring_frame: np.ndarray
+    marker_frame: np.ndarray
+    frame_sigma: np.ndarray
+    combinations: tuple[Combination, ...]
+    spectrum: np.ndarray
+    identified_spectrum: np.ndarray
+    noise_factor: float
+    evaluations: int
+
+    @property
+    def geometry(self) -> HexapodGeometry:
+        """The calibrated geometry."""
+        return self.parameters.geometry(self.delta, name=f"{self.parameters.nominal.name}_calibrated")
+
+    def predict(self, readings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Measured-frame poses (N, 4, 4) the calibrated model predicts for ``readings``, and the ok mask."""
+        P, _, _, ok = CalibrationModel(self.parameters, self.delta).forward(np.asarray(readings, dtype=float))
+        return predict(self.measuring_frame, P, self.marker_frame), ok
+
+
+def solve_nominal(ps: ParameterSet, data: MeasuredPoses) -> tuple[CalibrationModel, np.ndarray, list, list]:
+    """The nominal model and its poses of every row; a row it cannot solve is an :class:`InputError`."""
+    model = CalibrationModel(ps, np.zeros(ps.size))
+    P, qs, Gs, ok = model.forward(data.readings)
+    if not ok.all():
+        k = int(np.flatnonzero(~ok)[0])
+        try:
+            sol = model.hexapod.forward(data.readings[k], check=False)
+            why = sol.message or sol.status
+        except HexapodError as exc:
+            why = str(exc)
+        raise InputError(
+            "measured row", data.line(k), f"{data.source}: readings {np.round(data.readings[k], 6).tolist()} m give no "
+            f"pose of the nominal hexapod inside its workspace ({why})"
+        )
+    return model, P, qs, Gs
+
+
+class _Problem:
+    """The least-squares problem in the free scaled corrections ``z`` and the frame twists."""
+
+    def __init__(self, ps, data, noise, basis, frames, guesses):
+        self.ps, self.data, self.noise, self.basis = ps, data, noise, basis
+        self.T_mb0, self.T_pm0 = frames
+        self.D = basis * ps.scales[:, None]  # delta = D @ z
+        self.guesses = guesses
+        self.cache: dict = {}
+        self.evaluations = 0
+
+    def unpack(self, x):
+        n = self.D.shape[1]
+        mb, pm = x[n : n + 6] * FRAME_SCALE, x[n + 6 :] * FRAME_SCALE
+        return self.D @ x[:n], self.T_mb0 @ pin.exp6(mb).homogeneous, self.T_pm0 @ pin.exp6(pm).homogeneous, mb, pm
+
+    def state(self, x):
+        key = x.tobytes()
+        if key not in self.cache:
+            delta, T_mb, T_pm, _, _ = self.unpack(x)
+            model = CalibrationModel(self.ps, delta)
+            P, qs, Gs, ok = model.forward(self.data.readings, self.guesses)
+            self.evaluations += 1
+            if ok.all():
+                self.guesses = qs
+            self.cache = {key: (model, P, qs, Gs, ok, T_mb, T_pm)}
+        return self.cache[key]
+
+    def fun(self, x):
+        _, P, _, _, ok, T_mb, T_pm = self.state(x)
+        r = np.full((len(P), 6), PENALTY)
+        r[ok] = residual(predict(T_mb, P[ok], T_pm), self.data.measured[ok], self.noise)
+        return r.reshape(-1)
+
+    def jac(self, x):
+        model, P, qs, Gs, ok, T_mb, T_pm = self.state(x)
+        if not ok.all():
+            raise InputError("calibration", self.data.source, "a trial geometry cannot solve every row")
+        _, _, _, mb, pm = self.unpack(x)
+        Jg, Jf = jacobians(model, P, qs, Gs, T_mb, T_pm, self.data.measured, self.noise)
+        Jf = Jf.copy()
+        Jf[:, :6] = Jf[:, :6] @ pin.Jexp6(mb) * FRAME_SCALE
+        Jf[:, 6:] = Jf[:, 6:] @ pin.Jexp6(pm) * FRAME_SCALE
+        return np.hstack([Jg @ self.D, Jf])
+
+
+def jacobians(model, P, qs, Gs, T_mb, T_pm, measured, noise) -> tuple[np.ndarray, np.ndarray]:
+    """Whitened residual derivatives (6N, P) w.r.t. the corrections and (6N, 12) w.r.t. the
+    right twists of the measuring and marker frames.
+    """
+    n = len(P)
+    A = T_mb @ P
+    Jpose = twist_jacobian(A, np.broadcast_to(T_pm, (n, 4, 4)), measured, noise)
+    Jg = np.concatenate([Jpose[k] @ model.pose_jacobian(qs[k], Gs[k]) for k in range(n)])
+    return Jg, frame_jacobian(T_mb, P, T_pm, measured, noise).reshape(6 * n, 12)
+
+
+def _held(ps: ParameterSet, hold: tuple[str, ...]) -> tuple[int, ...]:
+    out = []
+    for pattern in hold:
+        found = [k for k, name in enumerate(ps.names) if fnmatch.fnmatchcase(name, pattern)]
+        if not found:
+            raise InputError("hold", pattern, f"matches no parameter (e.g. 'leg1.encoder_zero_m', '*.base_axis.*')")
+        out += found
+    return tuple(sorted(set(out)))
+
+
+def identify(
+    nominal: HexapodGeometry,
+    data: MeasuredPoses,
+    noise: Noise = Noise(),
+    *,
+    encoder_scale: bool = False,
+    hold: tuple[str, ...] = (),
+    max_sigma: float = 1.0,
+) -> Identification:
+    """Identify the per-leg geometry and both frames from measured poses.
+
+    Args:
+        nominal: the nominal ``cardan`` geometry.
+        data: readings and measured poses.
+        noise: the stated measurement noise (weights the residuals).
+        encoder_scale: also identify each reading's scale error.
+        hold: parameter names or ``fnmatch`` patterns to keep at nominal.
+        max_sigma: a combination whose 1-sigma would exceed this many expected magnitudes is
+            held at nominal (see :mod:`~hexapod_model.analysis.calibration_identifiability`).
+
+    Raises:
+        InputError: too few poses for the unknowns, a row the nominal hexapod cannot solve, an
+            outlier row (named with its error), or data no geometry near nominal explains.
+    """
+    ps = ParameterSet(nominal, encoder_scale)
+    held = _held(ps, hold)
+    n_rows, unknowns = len(data.readings), ps.size - 12 - len(held) + 12
+    if 6 * n_rows < EQUATIONS_PER_UNKNOWN * unknowns:
+        need = math.ceil(EQUATIONS_PER_UNKNOWN * unknowns / 6)
+        raise InputError(
+            "poses", n_rows, f"{6 * n_rows} equations for {unknowns} unknowns: need at least {need} measured poses"
+        )
+    model, P, qs, Gs = solve_nominal(ps, data)
+    frames = fit_frames(P, data.measured, noise)
+    C = ps.gauge_constraints() * ps.scales[None, :]
+    result, delta = None, np.zeros(ps.size)
+    for _ in range(3):
+        Jg, Jf = jacobians(model, P, qs, Gs, *frames, data.measured, noise)
+        ana = analyse(Jg * ps.scales[None, :], Jf, C, ps.names, max_sigma, held)
+        if result is not None and set(ana.held) == set(held):
+            break
+        held = ana.held
+        problem = _Problem(ps, data, noise, ana.basis, frames, qs)
+        x0 = np.concatenate([ana.basis.T @ (delta / ps.scales), np.zeros(12)])  # from the previous fit
+        result = least_squares(problem.fun, x0, jac=problem.jac, method="lm", xtol=1e-10, ftol=1e-10, gtol=1e-10)
+        model, P, qs, Gs, _, T_mb, T_pm = problem.state(result.x)
+        frames, delta = (T_mb, T_pm), problem.unpack(result.x)[0]
+        problem = _Problem(ps, data, noise, ana.basis, frames, qs)  # frames re-centred on the solution
+        result.x = np.concatenate([result.x[: ana.basis.shape[1]], np.zeros(12)])
+    assert result is not None
+    return _finish(ps, data, noise, problem, result, ana)
+
+
+def _finish(ps, data, noise, problem, result, ana) -> Identification:
+    """Covariance, outlier and plausibility checks, the :class:`Identification`."""
+    delta, T_mb, T_pm, _, _ = problem.unpack(result.x)
+    r = problem.fun(result.x).reshape(-1, 6)
+    rms = np.sqrt(np.mean(r**2, axis=1))
+    median = float(np.median(rms))
+    worst = int(np.argmax(rms))
+    if rms[worst] > OUTLIER_RMS and rms[worst] > OUTLIER_MEDIAN * median:
+        dp = np.linalg.norm(r[worst, :3]) * noise.position_m * 1e3
+        dr = math.degrees(np.linalg.norm(r[worst, 3:]) * noise.rotation_rad)
+        raise InputError(
+            "measured row",
+            data.line(worst),
+            f"{data.source}: an outlier: after calibration its pose is still {dp:.3g} mm / {dr:.3g} deg off, "
+            f"{rms[worst] / median:.0f} times the median row; check or remove it",
+        )
+    if median > EXPLAINED_RMS:
+        raise InputError(
+            "measured data",
+            data.source,
+            f"no geometry near nominal explains the readings: after calibration the median row is {median:.0f} "
+            f"stated sigmas off ({noise.position_m * 1e3:g} mm / {math.degrees(noise.rotation_rad):g} deg); "
+            "check NOMINAL, the leg order and the units (m)",
+        )
+    far = np.abs(delta) > NEAR_NOMINAL * ps.scales
+    if far.any():
+        k = int(np.argmax(np.abs(delta) / ps.scales))
+        raise InputError(
+            ps.names[k],
+            float(delta[k]),
+            f"correction beyond {NEAR_NOMINAL:g} x {ps.scales[k]:g}: no geometry near nominal explains the data",
+        )
+    J = problem.jac(result.x)
+    dof = max(r.size - J.shape[1], 1)
+    s0 = float(np.sqrt(np.sum(r**2) / dof))
+    _, s, Vt = np.linalg.svd(np.linalg.qr(J, mode="r"))  # QR first: a small SVD
+    cov = s0**2 * (Vt.T / s**2) @ Vt
+    held = list(ana.held)
+    if held:  # the held parameters are only known to their tolerance: add what that does to the rest
+        model, P, qs, Gs, _, T_mb, T_pm = problem.state(result.x)
+        Jh = jacobians(model, P, qs, Gs, T_mb, T_pm, data.measured, noise)[0][:, held] * ps.scales[held]
+        sensitivity = (Vt.T / s**2) @ Vt @ (J.T @ Jh)
+        cov = cov + sensitivity @ sensitivity.T
+    n = problem.D.shape[1]
+    cov_delta = problem.D @ cov[:n, :n] @ problem.D.T
+    sigma = np.sqrt(np.clip(np.diag(cov_delta), 0, None))
+    identifiable = np.ones(ps.size, bool)
+    identifiable[list(ana.held)] = False
+    sigma[~identifiable] = np.nan
+    delta[~identifiable] = 0.0
+    frame_sigma = FRAME_SCALE * np.sqrt(np.clip(np.diag(cov[n:, n:]), 0, None))
+    return Identification(
+        ps,
+        delta,
+        sigma,
+        identifiable,
+        T_mb,
+        T_pm,
+        frame_sigma,
+        ana.combinations,
+        ana.spectrum,
+        ana.identified,
+        s0,
+        problem.evaluations,
+    )

@@ -1,0 +1,94 @@
+"""K-fold validation of a calibration: pose errors on measured poses the fit has not seen.
+
+The poses are split at random into ``k`` folds. For each fold, the other ``k - 1`` folds are
+the training set and the fold is predicted by
+
+* **before**: the nominal geometry, with the measuring and marker frames fitted to the
+  training set (a rigid alignment: without it the errors would only show the unknown frames);
+* **after**: the geometry and frames identified on the training set.
+
+Every pose is predicted exactly once, so the errors cover the whole data set.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..analysis.calibration import MeasuredPoses, identify, solve_nominal
+from ..analysis.calibration_frames import Noise, fit_frames, pose_errors, predict
+from ..analysis.calibration_parameters import ParameterSet
+from ..description.geometry import HexapodGeometry
+from ..exceptions import InputError
+
+Progress = Callable[[Iterable, int, str], Iterable]
+
+
+def _no_progress(iterable: Iterable, total: int, desc: str) -> Iterable:
+    return iterable
+
+
+@dataclass(frozen=True)
+class Validation:
+    """Held-out errors of every pose.
+
+    Attributes:
+        folds: ``k``.
+        fold: (N,) the fold each pose was held out in.
+        before, after: (translation mm, rotation deg) errors of each pose, (N,) each.
+    """
+
+    folds: int
+    fold: np.ndarray
+    before: tuple[np.ndarray, np.ndarray]
+    after: tuple[np.ndarray, np.ndarray]
+
+
+def folds_of(n: int, k: int, seed: int = 0) -> np.ndarray:
+    """(n,) fold index of each pose: a random split into ``k`` folds of (nearly) equal size."""
+    if not 2 <= k <= n:
+        raise InputError("folds", k, f"need 2 <= folds <= poses ({n})")
+    fold = np.empty(n, dtype=int)
+    fold[np.random.default_rng(seed).permutation(n)] = np.arange(n) % k
+    return fold
+
+
+def cross_validate(
+    nominal: HexapodGeometry,
+    data: MeasuredPoses,
+    noise: Noise = Noise(),
+    folds: int = 5,
+    seed: int = 0,
+    progress: Progress = _no_progress,
+    **identify_options,
+) -> Validation:
+    """Held-out errors before and after calibration (see the module doc).
+
+    Keywords go to :func:`~hexapod_model.analysis.calibration.identify`.
+
+    Raises:
+        InputError: as :func:`~hexapod_model.analysis.calibration.identify` on a training set
+            (too few poses per fold, an outlier), or a held-out row the calibrated model
+            cannot solve.
+    """
+    n = len(data.readings)
+    fold = folds_of(n, folds, seed)
+    ps = ParameterSet(nominal, identify_options.get("encoder_scale", False))
+    _, P, _, _ = solve_nominal(ps, data)
+    before = (np.zeros(n), np.zeros(n))
+    after = (np.zeros(n), np.zeros(n))
+    for f in progress(range(folds), folds, "k-fold validation"):
+        test, train = np.flatnonzero(fold == f), np.flatnonzero(fold != f)
+        frames = fit_frames(P[train], data.measured[train], noise)
+        err = pose_errors(predict(frames[0], P[test], frames[1]), data.measured[test])
+        before[0][test], before[1][test] = err
+        result = identify(nominal, data.subset(train), noise, **identify_options)
+        M, ok = result.predict(data.readings[test])
+        if not ok.all():
+            k = int(test[np.flatnonzero(~ok)[0]])
+            raise InputError("measured row", data.line(k), "the geometry calibrated on the other folds cannot solve it")
+        err = pose_errors(M, data.measured[test])
+        after[0][test], after[1][test] = err
+    return Validation(folds, fold, before, after)
