@@ -116,8 +116,10 @@ def solve_nominal(ps: ParameterSet, data: MeasuredPoses) -> tuple[CalibrationMod
         except HexapodError as exc:
             why = str(exc)
         raise InputError(
-            "measured row", data.line(k), f"{data.source}: readings {np.round(data.readings[k], 6).tolist()} m give no "
-            f"pose of the nominal hexapod inside its workspace ({why})"
+            "measured row",
+            data.line(k),
+            f"{data.source}: readings {np.round(data.readings[k], 6).tolist()} m give no "
+            f"pose of the nominal hexapod inside its workspace ({why})",
         )
     return model, P, qs, Gs
 
@@ -184,7 +186,7 @@ def _held(ps: ParameterSet, hold: tuple[str, ...]) -> tuple[int, ...]:
     for pattern in hold:
         found = [k for k, name in enumerate(ps.names) if fnmatch.fnmatchcase(name, pattern)]
         if not found:
-            raise InputError("hold", pattern, f"matches no parameter (e.g. 'leg1.encoder_zero_m', '*.base_axis.*')")
+            raise InputError("hold", pattern, "matches no parameter (e.g. 'leg1.encoder_zero_m', '*.base_axis.*')")
         out += found
     return tuple(sorted(set(out)))
 

@@ -18,8 +18,7 @@ import pinocchio as pin
 
 from ..analysis.calibration_parameters import ParameterSet
 from ..description.geometry import HexapodGeometry
-from ..description.legs import leg_axes
-from ..description.urdf import axes_of, fixed_axes
+from ..description.legs import axes_of, fixed_axes, leg_axes
 
 
 def move(geom: HexapodGeometry, G_b: np.ndarray, G_p: np.ndarray) -> HexapodGeometry:

@@ -25,8 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..description.geometry import HexapodGeometry
-from ..description.legs import unit
-from ..description.urdf import fixed_axes
+from ..description.legs import fixed_axes, unit
 from ..exceptions import GeometryError
 
 #: expected magnitude of each kind of parameter (SI): the tolerances of the simulated study
@@ -107,9 +106,7 @@ class ParameterSet:
         self.legs = tuple(np.array([k for k, p in enumerate(self.parameters) if p.leg == i]) for i in range(6))
         self.axes = tuple(fixed_axes(nominal, i) for i in range(6))
         #: per leg, per fixed axis (base, platform): the unit directions of ``tilt`` and ``turn``
-        self.tangents = tuple(
-            tuple(_tangents(nominal.home_leg_axis(i)[0], a) for a in self.axes[i]) for i in range(6)
-        )
+        self.tangents = tuple(tuple(_tangents(nominal.home_leg_axis(i)[0], a) for a in self.axes[i]) for i in range(6))
 
     def index(self, name: str) -> int:
         """Position of parameter ``name`` in the vector."""

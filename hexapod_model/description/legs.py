@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..description.geometry import HexapodGeometry
+
 PERPENDICULAR = 1e-12  # |a . w| below which a real axis counts as perpendicular to the leg
 MAX_ITERATIONS = 200
 
@@ -144,3 +146,24 @@ def leg_axes(
     platform = _columns(platform_axis, cross(n_p, platform_axis), n_p)
     rest = dot(p - ep / 2 * n_p - s2, w)
     return LegAxes(w, base, b - eb / 2 * n_b, _t(base) @ leg, rest, platform, _t(leg) @ platform)
+
+
+def fixed_axes(geom: HexapodGeometry, i: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """Unit fixed Cardan axes of leg ``i``: base (base frame) and platform (platform frame;
+    ``None`` for ball joints), the defaults filled in (horizontal, perpendicular to the home
+    centre line; the platform axis parallel to the base one).
+    """
+    leg = geom.legs[i]
+    a_b = default_axis(geom.home_leg_axis(i)[0]) if leg.base_axis is None else np.asarray(leg.base_axis, float)
+    if geom.joint_type != "cardan":
+        return a_b, None
+    return a_b, a_b.copy() if leg.platform_axis is None else np.asarray(leg.platform_axis, float)
+
+
+def axes_of(geom: HexapodGeometry, i: int) -> LegAxes:
+    """The home construction (:func:`~hexapod_model.description.legs.leg_axes`) of leg ``i``."""
+    a_b, a_p = fixed_axes(geom, i)
+    eb, ep = geom.offsets(i)
+    leg = geom.legs[i]
+    p = geom.home_translation + np.asarray(leg.platform_anchor)
+    return leg_axes(np.asarray(leg.base_anchor, float), p, a_b, a_p, eb, ep)

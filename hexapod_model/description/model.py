@@ -19,6 +19,7 @@ The probes are always at identity and never move; they are invisible to the call
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,7 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import UrdfError
-from .urdf import Closure, read_closures, read_encoders, validate_urdf
+from .urdf import Closure, read_closures, validate_urdf
 
 _REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
 _PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
@@ -293,3 +294,33 @@ class ClosedLoopModel:
                 j = aug.addJoint(f.parentJoint, pin.JointModelFreeFlyer(), f.placement, f"__probe_{leg.name}_{which}")
                 cols.append(np.arange(aug.joints[j].idx_v, aug.joints[j].idx_v + 6))
         return aug, np.array(cols)
+
+
+def read_encoders(urdf_xml: str, source: str = "<string>") -> dict[str, tuple[float, float]]:
+    """``joint name -> (zero, scale)`` of the robot-level ``<encoder>`` elements.
+
+    ``<encoder joint="leg1_prismatic" zero="0.001" scale="0"/>`` says that leg 1's reading is
+    ``zero + (1 + scale) * q`` for its prismatic joint value ``q`` (m); legs without one read ``q``.
+
+    Raises:
+        UrdfError: malformed XML, a missing or non-numeric attribute, a scale outside
+            (-0.5, 0.5), or two elements for the same joint.
+    """
+    try:
+        root = ET.fromstring(urdf_xml)
+    except ET.ParseError as exc:
+        raise UrdfError(source, str(exc), "not well-formed XML") from None
+    out: dict[str, tuple[float, float]] = {}
+    for el in root.findall("encoder"):
+        text = ET.tostring(el, encoding="unicode").strip()
+        joint = el.get("joint")
+        try:
+            zero, scale = float(el.get("zero", "0")), float(el.get("scale", "0"))
+        except ValueError:
+            raise UrdfError(source, text, "encoder zero and scale must be numbers") from None
+        if not joint or not (np.isfinite(zero) and abs(scale) < 0.5):
+            raise UrdfError(source, text, "encoder needs a joint, a finite zero (m) and |scale| < 0.5")
+        if joint in out:
+            raise UrdfError(source, joint, "two <encoder> elements for the same joint")
+        out[joint] = (zero, scale)
+    return out

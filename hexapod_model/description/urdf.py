@@ -26,7 +26,7 @@ import numpy as np
 from ..exceptions import UrdfError
 from ..files import atomic_write_text
 from .geometry import HexapodGeometry, LegGeometry
-from .legs import LegAxes, default_axis, leg_axes
+from .legs import axes_of
 
 COLOURS = {
     "base": (0.25, 0.27, 0.30, 1.0),
@@ -88,27 +88,6 @@ def _guideway(leg: LegGeometry) -> tuple[float, float, float]:
     if leg.guideway is None:
         raise UrdfError("geometry", leg, "a guideway leg needs its guideway direction")
     return leg.guideway
-
-
-def fixed_axes(geom: HexapodGeometry, i: int) -> tuple[np.ndarray, np.ndarray | None]:
-    """Unit fixed Cardan axes of leg ``i``: base (base frame) and platform (platform frame;
-    ``None`` for ball joints), the defaults filled in (horizontal, perpendicular to the home
-    centre line; the platform axis parallel to the base one).
-    """
-    leg = geom.legs[i]
-    a_b = default_axis(geom.home_leg_axis(i)[0]) if leg.base_axis is None else np.asarray(leg.base_axis, float)
-    if geom.joint_type != "cardan":
-        return a_b, None
-    return a_b, a_b.copy() if leg.platform_axis is None else np.asarray(leg.platform_axis, float)
-
-
-def axes_of(geom: HexapodGeometry, i: int) -> LegAxes:
-    """The home construction (:func:`~hexapod_model.description.legs.leg_axes`) of leg ``i``."""
-    a_b, a_p = fixed_axes(geom, i)
-    eb, ep = geom.offsets(i)
-    leg = geom.legs[i]
-    p = geom.home_translation + np.asarray(leg.platform_anchor)
-    return leg_axes(np.asarray(leg.base_anchor, float), p, a_b, a_p, eb, ep)
 
 
 def leg_frame(geom: HexapodGeometry, i: int) -> np.ndarray:
@@ -339,36 +318,6 @@ def validate_urdf(urdf_xml: str, source: str = "<string>") -> None:
         raise UrdfError(source, str(exc).strip()[:200], "not a valid URDF (yourdfpy)") from None
     if not valid:
         raise UrdfError(source, problems[0] if problems else "validate() failed", "not a valid URDF (yourdfpy)")
-
-
-def read_encoders(urdf_xml: str, source: str = "<string>") -> dict[str, tuple[float, float]]:
-    """``joint name -> (zero, scale)`` of the robot-level ``<encoder>`` elements.
-
-    ``<encoder joint="leg1_prismatic" zero="0.001" scale="0"/>`` says that leg 1's reading is
-    ``zero + (1 + scale) * q`` for its prismatic joint value ``q`` (m); legs without one read ``q``.
-
-    Raises:
-        UrdfError: malformed XML, a missing or non-numeric attribute, a scale outside
-            (-0.5, 0.5), or two elements for the same joint.
-    """
-    try:
-        root = ET.fromstring(urdf_xml)
-    except ET.ParseError as exc:
-        raise UrdfError(source, str(exc), "not well-formed XML") from None
-    out: dict[str, tuple[float, float]] = {}
-    for el in root.findall("encoder"):
-        text = ET.tostring(el, encoding="unicode").strip()
-        joint = el.get("joint")
-        try:
-            zero, scale = float(el.get("zero", "0")), float(el.get("scale", "0"))
-        except ValueError:
-            raise UrdfError(source, text, "encoder zero and scale must be numbers") from None
-        if not joint or not (np.isfinite(zero) and abs(scale) < 0.5):
-            raise UrdfError(source, text, "encoder needs a joint, a finite zero (m) and |scale| < 0.5")
-        if joint in out:
-            raise UrdfError(source, joint, "two <encoder> elements for the same joint")
-        out[joint] = (zero, scale)
-    return out
 
 
 def read_closures(urdf_xml: str, source: str = "<string>") -> list[Closure]:

@@ -174,6 +174,8 @@ def run_calibration(
         hexa = Hexapod.from_geometry(simulation.true_geometry)
         P = np.array([hexa.forward(r).pose for r in data.readings])
         true_errors = pose_errors(predict(simulation.measuring_frame, P, simulation.marker_frame), data.measured)
-        geom, _, _ = regauge(ident.parameters, simulation.true_geometry, simulation.measuring_frame, simulation.marker_frame)
+        geom, _, _ = regauge(
+            ident.parameters, simulation.true_geometry, simulation.measuring_frame, simulation.marker_frame
+        )
         truth = ident.parameters.delta_of(geom)
     return CalibrationResult(ident, validation, data, simulation, true_errors, truth, seconds)

@@ -14,8 +14,8 @@ import hexapod_model as hm
 from hexapod_model.analysis.standard import StandardModel
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.description.geometry_toml import compact, geometry_to_toml, save_geometry
+from hexapod_model.description.legs import axes_of
 from hexapod_model.description.model import ClosedLoopModel
-from hexapod_model.description.urdf import axes_of
 
 
 def perturbed(seed: int = 1, encoders: bool = True) -> hm.HexapodGeometry:
