@@ -42,8 +42,10 @@ PENALTY = 1e3  # residual of a row the trial geometry cannot solve (the step is 
 
 @dataclass(frozen=True)
 class MeasuredPoses:
-    """Leg readings (N, 6, m) and the measured poses (N, 4, 4) of the marker frame in the
-    measuring device's frame; ``lines`` names each row in messages (CSV line numbers).
+    """Leg readings (N, 6, m) and measured poses (N, 4, 4).
+
+    The measured poses are those of the marker frame in the measuring device's frame;
+    ``lines`` names each row in messages (CSV line numbers).
     """
 
     readings: np.ndarray
@@ -171,8 +173,9 @@ class _Problem:
 
 
 def jacobians(model, P, qs, Gs, T_mb, T_pm, measured, noise) -> tuple[np.ndarray, np.ndarray]:
-    """Whitened residual derivatives (6N, P) w.r.t. the corrections and (6N, 12) w.r.t. the
-    right twists of the measuring and marker frames.
+    """Whitened residual derivatives w.r.t. the corrections (6N, P) and the frames (6N, 12).
+
+    The frame columns are right twists of the measuring frame, then the marker frame.
     """
     n = len(P)
     A = T_mb @ P

@@ -1,7 +1,7 @@
-"""The hexapod of one parameter vector, its direct kinematics, and the exact derivative of each
-solved platform pose with respect to every parameter.
+"""The hexapod of one parameter vector and the exact derivative of its solved poses.
 
-The derivative follows from the implicit function theorem on the closure equations
+Direct kinematics of the corrected geometry, and the derivative of each solved platform pose
+with respect to every parameter. The derivative follows from the implicit function theorem on the closure equations
 ``r(q_free, q_prismatic(theta), theta) = 0`` (the solver's reduced residual, 6 rows per leg):
 
     dq_free/dtheta = -G_free^-1 (dr/dtheta + G_prismatic dq_prismatic/dtheta),
@@ -32,8 +32,9 @@ SITES = ("cardan_base_1", "cardan_base_2", "roll", "cardan_platform_1", "cardan_
 
 
 def site_placements(ps: ParameterSet, i: int, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rotations (..., 7, 3, 3) and translations (..., 7, 3) of leg ``i``'s placements in the
-    URDF, in the order of :data:`SITES`, for its correction slots ``v`` (..., 14) (real or complex).
+    """Rotations (..., 7, 3, 3) and translations (..., 7, 3) of leg ``i``'s URDF placements.
+
+    In the order of :data:`SITES`, for its correction slots ``v`` (..., 14), real or complex.
     """
     v = np.asarray(v)
     a = ps.leg_arrays(i, v)
@@ -48,8 +49,10 @@ def site_placements(ps: ParameterSet, i: int, v: np.ndarray) -> tuple[np.ndarray
 
 
 def site_derivatives(ps: ParameterSet, i: int, v: np.ndarray) -> np.ndarray:
-    """(7, 6, 14) body twists ``[R^T dt; vex(R^T dR)]`` of leg ``i``'s placements per unit change
-    of each correction slot, by complex steps (exact to rounding; all slots in one batch).
+    """(7, 6, 14) body twists ``[R^T dt; vex(R^T dR)]`` of leg ``i``'s placements per slot.
+
+    Per unit change of each correction slot, by complex steps (exact to rounding; all slots in
+    one batch).
     """
     steps = np.asarray(v, dtype=float) + 1j * COMPLEX_STEP * np.eye(LEG_SIZE)
     R, t = site_placements(ps, i, steps)  # (14, 7, 3, 3), (14, 7, 3)
@@ -109,9 +112,11 @@ class CalibrationModel:
         return poses, qs, jacs, ok
 
     def pose_jacobian(self, q: np.ndarray, G_free: np.ndarray) -> np.ndarray:
-        """(6, P) derivative of the platform pose at the solved configuration ``q`` w.r.t. the
-        corrections: body twist ``[v; w]`` of the platform frame (m, rad) per unit parameter.
-        ``G_free`` is the reduced constraint Jacobian there (``Solution.jacobian``).
+        """(6, P) derivative of the platform pose at the solved configuration ``q``.
+
+        With respect to the corrections: body twist ``[v; w]`` of the platform frame (m, rad)
+        per unit parameter. ``G_free`` is the reduced constraint Jacobian there
+        (``Solution.jacobian``).
         """
         hexa = self.hexapod
         clm, m, d = hexa.closed_loop, hexa.model, hexa.data
@@ -147,8 +152,10 @@ class CalibrationModel:
 
 
 def _operators(points: np.ndarray, E: np.ndarray) -> np.ndarray:
-    """(n, 6, 6) ``[I, -[p]x; 0, (tr(E) I - E) / 2]``: how one side of each closure's residual
-    changes when its frame (origin ``p``) moves by a world twist ``[v; w]``.
+    """(n, 6, 6) ``[I, -[p]x; 0, (tr(E) I - E) / 2]`` of each closure side.
+
+    How that side's residual changes when its frame (origin ``p``) moves by a world twist
+    ``[v; w]``.
     """
     out = np.zeros((len(points), 6, 6))
     out[:, :3, :3] = np.eye(3)

@@ -39,8 +39,9 @@ ERROR_KEYS = (
 
 @dataclass(frozen=True)
 class Noise:
-    """Stated measurement noise: sigma of each position coordinate (m) and of each rotation
-    component (rad) of the measured poses.
+    """Stated measurement noise of the measured poses.
+
+    Sigma of each position coordinate (m) and of each rotation component (rad).
     """
 
     position_m: float = 1e-4
@@ -87,8 +88,9 @@ def residual(M: np.ndarray, measured: np.ndarray, noise: Noise) -> np.ndarray:
 
 
 def twist_jacobian(A: np.ndarray, B: np.ndarray, measured: np.ndarray, noise: Noise) -> np.ndarray:
-    """(N, 6, 6) derivative of :func:`residual` of ``M = A exp(d) B`` w.r.t. the twist ``d``
-    (``[v; w]``, at ``d = 0``), for (N, 4, 4) ``A``, ``B``.
+    """(N, 6, 6) derivative of :func:`residual` of ``M = A exp(d) B`` w.r.t. the twist ``d``.
+
+    ``d = [v; w]``, taken at ``d = 0``, for (N, 4, 4) ``A`` and ``B``.
     """
     RA, tB = A[:, :3, :3], B[:, :3, 3]
     M = A @ B
@@ -105,8 +107,9 @@ def twist_jacobian(A: np.ndarray, B: np.ndarray, measured: np.ndarray, noise: No
 
 
 def least_squares_step(J: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """``argmin |J x - r|`` for a tall, well-conditioned ``J`` (the 12 frame columns), by the
-    normal equations: a 12 x 12 solve instead of a factorisation of the tall matrix.
+    """``argmin |J x - r|`` for a tall, well-conditioned ``J`` (the 12 frame columns).
+
+    By the normal equations: a 12 x 12 solve instead of a factorisation of the tall matrix.
     """
     return np.linalg.solve(J.T @ J, J.T @ r)
 
@@ -152,8 +155,10 @@ def frame_jacobian(T_mb: np.ndarray, P: np.ndarray, T_pm: np.ndarray, measured: 
 def fit_frames(
     P: np.ndarray, measured: np.ndarray, noise: Noise, start: tuple[np.ndarray, np.ndarray] | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares ``(T_mb, T_pm)`` for fixed model poses ``P``: a rigid alignment of the
-    measuring device to the model (Gauss-Newton from :func:`initial_frames` or ``start``).
+    """Least-squares ``(T_mb, T_pm)`` for fixed model poses ``P``.
+
+    A rigid alignment of the measuring device to the model (Gauss-Newton from
+    :func:`initial_frames` or ``start``).
     """
     T_mb, T_pm = initial_frames(P, measured) if start is None else start
     for _ in range(50):

@@ -22,12 +22,13 @@ from ..description.legs import axes_of, fixed_axes, leg_axes
 
 
 def move(geom: HexapodGeometry, G_b: np.ndarray, G_p: np.ndarray) -> HexapodGeometry:
-    """``geom`` with its base-side joints moved by ``G_b`` (4x4, base frame) and its platform-side
-    joints by ``G_p`` (4x4, platform frame); encoder zeros keep each reading's physical leg length.
+    """``geom`` with its base-side joints moved by ``G_b`` and its platform-side joints by ``G_p``.
 
-    What moves rigidly are the plate-fixed features: each fixed Cardan axis and the foot of its
-    common normal on it. The centres (midpoints of the common normals at home) follow from the
-    new home construction, solved by fixed-point iteration.
+    ``G_b`` is a 4x4 in the base frame, ``G_p`` one in the platform frame; encoder zeros keep
+    each reading's physical leg length. What moves rigidly are the plate-fixed features: each
+    fixed Cardan axis and the foot of its common normal on it. The centres (midpoints of the
+    common normals at home) follow from the new home construction, solved by fixed-point
+    iteration.
     """
     legs = []
     h = geom.home_translation

@@ -60,6 +60,16 @@ class Parameter:
     scale: float
 
 
+def _raw(geom: HexapodGeometry, p: Parameter) -> float:
+    """The value (SI) of a non-axis parameter ``p`` in ``geom``."""
+    leg = geom.legs[p.leg]
+    if p.kind in ("base_centre", "platform_centre"):
+        return float((leg.base_anchor if p.kind == "base_centre" else leg.platform_anchor)[p.index])
+    if p.kind in ("base_offset", "platform_offset"):
+        return geom.offsets(p.leg)[p.kind == "platform_offset"]
+    return float(getattr(leg, p.kind))
+
+
 def _tangents(w0: np.ndarray, a0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """Unit directions perpendicular to the axis ``a0``: towards the leg ``w0``, and about it."""
     assert a0 is not None
@@ -123,16 +133,8 @@ class ParameterSet:
         """Parameter values (SI) for the corrections ``delta``: nominal + delta (axis angles: delta)."""
         out = np.array(delta, dtype=float)
         for k, p in enumerate(self.parameters):
-            leg, g = self.nominal.legs[p.leg], self.nominal
-            base = {
-                "base_centre": lambda: leg.base_anchor[p.index],
-                "platform_centre": lambda: leg.platform_anchor[p.index],
-                "base_offset": lambda: g.offsets(p.leg)[0],
-                "platform_offset": lambda: g.offsets(p.leg)[1],
-                "encoder_zero": lambda: leg.encoder_zero,
-                "encoder_scale": lambda: leg.encoder_scale,
-            }.get(p.kind)
-            out[k] += base() if base is not None else 0.0
+            if p.kind not in ("base_axis", "platform_axis"):
+                out[k] += _raw(self.nominal, p)
         return out
 
     def leg_vector(self, i: int, delta: np.ndarray) -> np.ndarray:
@@ -142,9 +144,10 @@ class ParameterSet:
         return v
 
     def leg_arrays(self, i: int, v: np.ndarray) -> dict:
-        """Leg ``i``'s joint description for its correction slots ``v`` (..., 14) (real or
-        complex, leading batch axes kept): centres ``b``, ``p`` (m), unit fixed axes ``a_b``,
-        ``a_p``, offsets ``e_b``, ``e_p`` (m), ``zero`` (m), ``scale``.
+        """Leg ``i``'s joint description for its correction slots ``v`` (..., 14).
+
+        Real or complex, leading batch axes kept: centres ``b``, ``p`` (m), unit fixed axes
+        ``a_b``, ``a_p``, offsets ``e_b``, ``e_p`` (m), ``zero`` (m), ``scale``.
         """
         leg = self.nominal.legs[i]
         eb, ep = self.nominal.offsets(i)
@@ -188,22 +191,13 @@ class ParameterSet:
         """The corrections that turn the nominal geometry into ``geom`` (its inverse of :meth:`geometry`)."""
         out = np.zeros(self.size)
         for k, p in enumerate(self.parameters):
-            leg = geom.legs[p.leg]
             if p.kind in ("base_axis", "platform_axis"):
                 side = 0 if p.kind == "base_axis" else 1
                 a = np.asarray(fixed_axes(geom, p.leg)[side])
                 a0 = self.axes[p.leg][side]
                 out[k] = float(a @ self.tangents[p.leg][side][p.index]) / float(a @ a0)
             else:
-                value = {
-                    "base_centre": lambda: leg.base_anchor[p.index],
-                    "platform_centre": lambda: leg.platform_anchor[p.index],
-                    "base_offset": lambda: geom.offsets(p.leg)[0],
-                    "platform_offset": lambda: geom.offsets(p.leg)[1],
-                    "encoder_zero": lambda: leg.encoder_zero,
-                    "encoder_scale": lambda: leg.encoder_scale,
-                }[p.kind]()
-                out[k] = value
+                out[k] = _raw(geom, p)
         return out - self.nominal_values()
 
     def gauge_constraints(self) -> np.ndarray:

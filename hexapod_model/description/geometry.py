@@ -241,8 +241,9 @@ class HexapodGeometry:
         return np.array([leg.platform_anchor for leg in self.legs])
 
     def to_dict(self) -> dict:
-        """Plain dict (the file format of :func:`geometry_from_dict`); leg fields left at their
-        default (``None``, a zero encoder model) are omitted.
+        """Plain dict (the file format of :func:`geometry_from_dict`).
+
+        Leg fields left at their default (``None``, a zero encoder model) are omitted.
         """
         out: dict[str, Any] = {}
         defaults = {f.name: f.default for f in fields(LegGeometry)}

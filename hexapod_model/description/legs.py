@@ -116,7 +116,8 @@ def leg_axes(
         platform_anchor_home: platform joint centre at home, in the base frame (m).
         base_axis: unit fixed base Cardan axis (base frame).
         platform_axis: unit fixed platform Cardan axis, or ``None`` for a ball joint at the platform.
-        base_offset, platform_offset: axis offsets ``e_b``, ``e_p`` (m).
+        base_offset: base axis offset ``e_b`` (m).
+        platform_offset: platform axis offset ``e_p`` (m).
 
     Every argument may carry the same leading batch axes (offsets: those axes only).
     """
@@ -149,9 +150,11 @@ def leg_axes(
 
 
 def fixed_axes(geom: HexapodGeometry, i: int) -> tuple[np.ndarray, np.ndarray | None]:
-    """Unit fixed Cardan axes of leg ``i``: base (base frame) and platform (platform frame;
-    ``None`` for ball joints), the defaults filled in (horizontal, perpendicular to the home
-    centre line; the platform axis parallel to the base one).
+    """Unit fixed Cardan axes of leg ``i``, defaults filled in.
+
+    Base axis in the base frame, platform axis in the platform frame (``None`` for ball
+    joints). Defaults: horizontal and perpendicular to the home centre line; the platform axis
+    parallel to the base one.
     """
     leg = geom.legs[i]
     a_b = default_axis(geom.home_leg_axis(i)[0]) if leg.base_axis is None else np.asarray(leg.base_axis, float)

@@ -91,8 +91,10 @@ def _guideway(leg: LegGeometry) -> tuple[float, float, float]:
 
 
 def leg_frame(geom: HexapodGeometry, i: int) -> np.ndarray:
-    """Rotation (base frame) of leg ``i``'s base yoke at home: x the base Cardan axis, z the common normal
-    (the leg direction when the axis is perpendicular to it).
+    """Rotation (base frame) of leg ``i``'s base yoke at home.
+
+    x is the base Cardan axis, z the common normal (the leg direction when the axis is
+    perpendicular to it).
     """
     return axes_of(geom, i).base
 
@@ -187,7 +189,7 @@ def _write_leg(w_: _Writer, geom: HexapodGeometry, i: int, lim: float) -> Closur
     rpy = _rpy(R)
     parent, start = "base_link", axes.start
     if geom.joint_type == "guideway":
-        g = np.asarray(_guideway(leg))
+        g = np.asarray(leg.guideway)
         lo, hi = leg.stroke
         z = g
         x = np.cross([0.0, 0.0, 1.0], z) if abs(z[2]) < 0.99 else np.array([1.0, 0.0, 0.0])

@@ -97,8 +97,9 @@ def geometry_of_urdf(clm: ClosedLoopModel) -> HexapodGeometry:
 
 
 def _check_same(clm: ClosedLoopModel, geom: HexapodGeometry) -> None:
-    """Refuse a geometry whose generated URDF does not put every joint axis where ``clm`` has it
-    at home (a joint's world twist column fixes its line; a reversed axis negates it).
+    """Refuse a geometry whose generated URDF does not put every joint axis where ``clm`` has it.
+
+    Compared at home: a joint's world twist column fixes its line; a reversed axis negates it.
     """
     other = ClosedLoopModel(geometry_to_urdf(geom), f"<geometry of {clm.source}>")
     cols = []

@@ -152,8 +152,9 @@ class Hexapod:
         return self.readings_of(q[self.closed_loop.prismatic_q])
 
     def readings_of(self, joints: np.ndarray) -> np.ndarray:
-        """Leg readings (m) of prismatic joint values (m, leg order, last axis): the URDF's
-        ``<encoder>`` model, the identity without one.
+        """Leg readings (m) of prismatic joint values (m, leg order, last axis).
+
+        The URDF's ``<encoder>`` model; the identity without one.
         """
         if self._encoder is None:
             return np.array(joints, dtype=float)
@@ -254,10 +255,10 @@ class Hexapod:
         """Hybrid kinematics: hold the named joints at the given values, solve for the rest.
 
         ``held`` maps URDF joint names to values: a float (m or rad) for a one-dof joint, a
-        4x4 pose for ``platform_joint`` (the floating joint). A prismatic joint takes its joint
-        value (extension from home), not the encoder reading of an ``<encoder>`` model. Example: hold three legs and
+        4x4 pose for ``platform_joint`` (the floating joint). Example: hold three legs and
         the platform height is not possible (whole joints only), but holding five prismatic
-        joints and one Cardan angle is.
+        joints and one Cardan angle is. A prismatic joint takes its joint value (extension
+        from home), not the reading of an ``<encoder>`` model.
 
         Raises:
             InputError: an unknown joint, a bad value, or a held set that leaves the other
