@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import fnmatch
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
@@ -230,9 +230,11 @@ def identify(
     frames = fit_frames(P, data.measured, noise)
     C = ps.gauge_constraints() * ps.scales[None, :]
     result, delta = None, np.zeros(ps.size)
+    combinations: list[Combination] = []
     for _ in range(3):
         Jg, Jf = jacobians(model, P, qs, Gs, *frames, data.measured, noise)
         ana = analyse(Jg * ps.scales[None, :], Jf, C, ps.names, max_sigma, held)
+        combinations += ana.combinations
         if result is not None and set(ana.held) == set(held):
             break
         held = ana.held
@@ -244,7 +246,7 @@ def identify(
         problem = _Problem(ps, data, noise, ana.basis, frames, qs)  # frames re-centred on the solution
         result.x = np.concatenate([result.x[: ana.basis.shape[1]], np.zeros(12)])
     assert result is not None
-    return _finish(ps, data, noise, problem, result, ana)
+    return _finish(ps, data, noise, problem, result, replace(ana, combinations=tuple(combinations)))
 
 
 def _finish(ps, data, noise, problem, result, ana) -> Identification:

@@ -98,7 +98,9 @@ class CalibrationModel:
         (home when ``None`` or when that start fails).
         """
         n = len(readings)
-        poses, qs, jacs, ok = np.full((n, 4, 4), np.nan), [None] * n, [None] * n, np.zeros(n, bool)
+        poses, ok = np.full((n, 4, 4), np.nan), np.zeros(n, bool)
+        qs: list[np.ndarray | None] = [None] * n
+        jacs: list[np.ndarray | None] = [None] * n
         for k in range(n):
             starts = [None] if guesses is None or guesses[k] is None else [guesses[k], None]
             for start in starts:
@@ -106,7 +108,7 @@ class CalibrationModel:
                     sol = self.hexapod.forward(readings[k], guess=start, check=False)
                 except HexapodError:  # readings outside this geometry's stroke: the row fails
                     break
-                if sol.converged:
+                if sol.converged and sol.jacobian is not None:
                     poses[k], qs[k], jacs[k], ok[k] = sol.pose, sol.q, sol.jacobian, True
                     break
         return poses, qs, jacs, ok

@@ -56,7 +56,7 @@ def _blocks(ps: ParameterSet, poses: np.ndarray, noise: Noise) -> tuple[np.ndarr
         if not ik.converged:
             continue
         sol = hexa.forward(ik.lengths, guess=ik.q, check=False)
-        if not sol.converged:
+        if not sol.converged or sol.jacobian is None:
             continue
         ok[k] = True
         J = twist_jacobian(T[None], eye, T[None], noise)[0]

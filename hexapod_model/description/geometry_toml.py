@@ -21,14 +21,15 @@ def compact(geom: HexapodGeometry) -> HexapodGeometry:
     An offset that every leg has in common becomes ``base_offset`` / ``platform_offset`` and
     leaves the legs; a leg value equal to the hexapod-level one is dropped.
     """
-    legs = list(geom.legs)
-    top = {}
-    for k, name in enumerate(("base_offset", "platform_offset")):
-        values = [geom.offsets(i)[k] for i in range(6)]
-        common = values[0] if all(v == values[0] for v in values) else getattr(geom, name)
-        top[name] = common
-        legs = [replace(leg, **{name: None if v == common else v}) for leg, v in zip(legs, values)]
-    return replace(geom, legs=tuple(legs), **top)
+    base = [geom.offsets(i)[0] for i in range(6)]
+    plat = [geom.offsets(i)[1] for i in range(6)]
+    eb = base[0] if all(v == base[0] for v in base) else geom.base_offset
+    ep = plat[0] if all(v == plat[0] for v in plat) else geom.platform_offset
+    legs = tuple(
+        replace(leg, base_offset=None if b == eb else b, platform_offset=None if p == ep else p)
+        for leg, b, p in zip(geom.legs, base, plat)
+    )
+    return replace(geom, legs=legs, base_offset=eb, platform_offset=ep)
 
 
 def _value(v) -> str:

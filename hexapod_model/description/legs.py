@@ -123,11 +123,10 @@ def leg_axes(
     """
     b, p = base_anchor, platform_anchor_home
     eb, ep = np.asarray(base_offset)[..., None], np.asarray(platform_offset)[..., None]
-    cardan = platform_axis is not None
     w = unit(p - b)
     for _ in range(MAX_ITERATIONS):
         d = p - b - eb / 2 * common_normal(w, base_axis)
-        if cardan:
+        if platform_axis is not None:
             d = d - ep / 2 * common_normal(w, platform_axis)
         new = unit(d)
         change = new - w
@@ -141,7 +140,7 @@ def leg_axes(
     base = _columns(base_axis, second, n_b)
     leg = _columns(cross(second, w), second, w)
     s2 = b + eb / 2 * n_b
-    if not cardan:
+    if platform_axis is None:
         return LegAxes(w, base, b - eb / 2 * n_b, _t(base) @ leg, dot(p - s2, w), None, None)
     n_p = common_normal(w, platform_axis)
     platform = _columns(platform_axis, cross(n_p, platform_axis), n_p)

@@ -13,10 +13,12 @@ Gaussian noise, measured poses 0.1 mm per coordinate and 0.05 deg per rotation c
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -29,10 +31,13 @@ from ..analysis.calibration_validation import Validation, cross_validate
 from ..analysis.standard import skew_exp
 from ..analysis.trajectories import box_poses
 from ..description.geometry import HexapodGeometry
+from ..description.geometry_toml import save_geometry
+from ..description.urdf_geometry import geometry_of_urdf
 from ..exceptions import InputError
+from ..files import atomic_write_text
 from ..io.tables import column, read_table
-from ..kinematics.hexapod import Hexapod
-from ..studies.reproduce import DATA_COLUMNS, load_measured
+from ..kinematics.hexapod import Hexapod, load_hexapod
+from ..studies.reproduce import DATA_COLUMNS, StudyInput, load_measured, save_measured
 
 Progress = Callable[[Iterable, int, str], Iterable]
 
@@ -84,26 +89,23 @@ def simulate(
     errors: Errors = Errors(),
     encoder_noise: float = 10e-6,
     noise: Noise = Noise(),
+    truth: Simulation | None = None,
 ) -> Simulation:
-    """Draw a true hexapod, frames and ``n`` reachable poses (see the module doc)."""
+    """Draw a true hexapod, frames and ``n`` reachable poses (see the module doc).
+
+    With ``truth``, measure ``n`` new poses of that simulation's hexapod and frames instead.
+    """
     if n < 2:
         raise InputError("poses", n, "need at least 2 poses")
     rng = np.random.default_rng(seed)
-    ps = ParameterSet(nominal, encoder_scale=errors.encoder_scale > 0)
-    half = {"centre": errors.centre_m, "axis": errors.axis_rad, "offset": errors.offset_m}
-    half |= {"encoder_zero": errors.encoder_zero_m, "encoder_scale": errors.encoder_scale}
-    width = np.array([half[next(k for k in half if k in p.kind)] for p in ps.parameters])
-    delta = rng.uniform(-1, 1, ps.size) * width
-    nominal_values = ps.nominal_values()
-    offsets = np.array(["offset" in p.kind for p in ps.parameters])
-    delta[offsets] = np.maximum(delta[offsets], -nominal_values[offsets])  # an offset stays >= 0
-    truth = ps.geometry(delta, name=f"{nominal.name}_true")
-    T_mb, T_pm = np.eye(4), np.eye(4)
-    T_mb[:3, :3], T_mb[:3, 3] = _random_rotation(rng, 30.0), rng.uniform(-0.5, 0.5, 3)
-    T_pm[:3, :3] = _random_rotation(rng, 20.0)
-    T_pm[:3, 3] = [*rng.uniform(-0.05, 0.05, 2), rng.uniform(0.03, 0.1)]
-    hexa = Hexapod.from_geometry(truth)
-    poses, readings, drawn = [], [], 0
+    if truth is None:
+        true_geometry, T_mb, T_pm = _draw_truth(nominal, rng, errors)
+    else:
+        true_geometry, T_mb, T_pm = truth.true_geometry, truth.measuring_frame, truth.marker_frame
+    hexa = Hexapod.from_geometry(true_geometry)
+    poses: list[np.ndarray] = []
+    readings: list[np.ndarray] = []
+    drawn = 0
     while len(poses) < n:
         for T in box_poses(hexa.home_pose, max(16, 2 * (n - len(poses))), seed=int(rng.integers(2**63))):
             drawn += 1
@@ -119,7 +121,26 @@ def simulate(
     measured[:, :3, :3] = skew_exp(rng.normal(0.0, noise.rotation_rad, (n, 3))) @ measured[:, :3, :3]
     noisy = np.array(readings) + rng.normal(0.0, encoder_noise, (n, 6))
     data = MeasuredPoses(noisy, measured, f"simulation (seed {seed}, {n} poses)")
-    return Simulation(nominal, truth, T_mb, T_pm, data, P)
+    return Simulation(nominal, true_geometry, T_mb, T_pm, data, P)
+
+
+def _draw_truth(
+    nominal: HexapodGeometry, rng: np.random.Generator, errors: Errors
+) -> tuple[HexapodGeometry, np.ndarray, np.ndarray]:
+    """A true geometry (nominal + uniform errors) and true frames (see the module doc)."""
+    ps = ParameterSet(nominal, encoder_scale=errors.encoder_scale > 0)
+    half = {"centre": errors.centre_m, "axis": errors.axis_rad, "offset": errors.offset_m}
+    half |= {"encoder_zero": errors.encoder_zero_m, "encoder_scale": errors.encoder_scale}
+    width = np.array([half[next(k for k in half if k in p.kind)] for p in ps.parameters])
+    delta = rng.uniform(-1, 1, ps.size) * width
+    nominal_values = ps.nominal_values()
+    offsets = np.array(["offset" in p.kind for p in ps.parameters])
+    delta[offsets] = np.maximum(delta[offsets], -nominal_values[offsets])  # an offset stays >= 0
+    T_mb, T_pm = np.eye(4), np.eye(4)
+    T_mb[:3, :3], T_mb[:3, 3] = _random_rotation(rng, 30.0), rng.uniform(-0.5, 0.5, 3)
+    T_pm[:3, :3] = _random_rotation(rng, 20.0)
+    T_pm[:3, 3] = [*rng.uniform(-0.05, 0.05, 2), rng.uniform(0.03, 0.1)]
+    return ps.geometry(delta, name=f"{nominal.name}_true"), T_mb, T_pm
 
 
 def load_poses(path: str) -> MeasuredPoses:
@@ -179,3 +200,26 @@ def run_calibration(
         )
         truth = ident.parameters.delta_of(geom)
     return CalibrationResult(ident, validation, data, simulation, true_errors, truth, seconds)
+
+
+def nominal_geometry(spec: str) -> HexapodGeometry:
+    """The nominal geometry named by a preset, geometry file or URDF (read back off the URDF)."""
+    hexa = load_hexapod(spec)
+    if hexa.geometry is not None:
+        return hexa.geometry
+    return geometry_of_urdf(hexa.closed_loop)
+
+
+def save_simulation(sim: Simulation, folder: str | Path) -> list[Path]:
+    """Write a simulation's data and its truth into ``folder``.
+
+    ``simulated_measured.csv`` (the ``--data`` format), ``true_geometry.toml`` and
+    ``true_frames.json``.
+    """
+    folder = Path(folder)
+    data = StudyInput(sim.data.readings, sim.data.measured, sim.data.source)
+    paths = [save_measured(folder / "simulated_measured.csv", data)]
+    paths.append(save_geometry(sim.true_geometry, folder / "true_geometry.toml", "simulated true geometry"))
+    frames = {"measuring_frame": sim.measuring_frame.tolist(), "marker_frame": sim.marker_frame.tolist()}
+    paths.append(atomic_write_text(folder / "true_frames.json", json.dumps(frames, indent=2) + "\n"))
+    return paths
