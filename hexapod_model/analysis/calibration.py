@@ -37,7 +37,7 @@ OUTLIER_RMS = 5.0  # a row this many stated sigmas off (RMS over its 6 rows) ...
 OUTLIER_MEDIAN = 5.0  # ... and this many times the median row is an outlier
 EXPLAINED_RMS = 20.0  # the median row must end below this many stated sigmas
 NEAR_NOMINAL = 20.0  # corrections beyond this many expected magnitudes are not "near nominal"
-PENALTY = 1e3  # residual of a row the trial geometry cannot solve (the step is rejected)
+PENALTY = 1e8  # residual (stated sigmas) of a row a trial geometry cannot solve: the step is always rejected
 
 
 @dataclass(frozen=True)
@@ -133,6 +133,7 @@ class _Problem:
         self.ps, self.data, self.noise, self.basis = ps, data, noise, basis
         self.T_mb0, self.T_pm0 = frames
         self.D = basis * ps.scales[:, None]  # delta = D @ z
+        self.D[np.linalg.norm(basis, axis=1) < 1e-12] = 0.0  # held parameters stay exactly nominal
         self.guesses = guesses
         self.cache: dict = {}
         self.evaluations = 0
@@ -146,7 +147,13 @@ class _Problem:
         key = x.tobytes()
         if key not in self.cache:
             delta, T_mb, T_pm, _, _ = self.unpack(x)
-            model = CalibrationModel(self.ps, delta)
+            try:
+                model = CalibrationModel(self.ps, delta)
+            except HexapodError:  # a trial step to no valid geometry (a negative offset): rejected
+                n = len(self.data.readings)
+                self.cache = {key: (None, np.full((n, 4, 4), np.nan), [None] * n, [None] * n, np.zeros(n, bool))}
+                self.cache[key] += (T_mb, T_pm)
+                return self.cache[key]
             P, qs, Gs, ok = model.forward(self.data.readings, self.guesses)
             self.evaluations += 1
             if ok.all():
@@ -163,7 +170,12 @@ class _Problem:
     def jac(self, x):
         model, P, qs, Gs, ok, T_mb, T_pm = self.state(x)
         if not ok.all():
-            raise InputError("calibration", self.data.source, "a trial geometry cannot solve every row")
+            raise InputError(
+                "measured data",
+                self.data.source,
+                "no geometry near nominal explains the readings: the fit reached a geometry that cannot "
+                "solve every row; check NOMINAL, the leg order and the units (m)",
+            )
         _, _, _, mb, pm = self.unpack(x)
         Jg, Jf = jacobians(model, P, qs, Gs, T_mb, T_pm, self.data.measured, self.noise)
         Jf = Jf.copy()
@@ -210,7 +222,8 @@ def identify(
         data: readings and measured poses.
         noise: the stated measurement noise (weights the residuals).
         encoder_scale: also identify each reading's scale error.
-        hold: parameter names or ``fnmatch`` patterns to keep at nominal.
+        hold: parameter names or ``fnmatch`` patterns to keep at nominal. Offsets that are
+            nominally zero (ideal universal joints) are always kept: they cannot be negative.
         max_sigma: a combination whose 1-sigma would exceed this many expected magnitudes is
             held at nominal (see :mod:`~hexapod_model.analysis.calibration_identifiability`).
 
@@ -220,6 +233,8 @@ def identify(
     """
     ps = ParameterSet(nominal, encoder_scale)
     held = _held(ps, hold)
+    zero = [k for k, p in enumerate(ps.parameters) if "offset" in p.kind and ps.nominal_values()[k] == 0.0]
+    held = tuple(sorted(set(held) | set(zero)))  # an ideal universal joint's offset cannot become negative
     n_rows, unknowns = len(data.readings), ps.size - 12 - len(held) + 12
     if 6 * n_rows < EQUATIONS_PER_UNKNOWN * unknowns:
         need = math.ceil(EQUATIONS_PER_UNKNOWN * unknowns / 6)

@@ -134,3 +134,17 @@ def test_malformed_encoder_elements_are_rejected():
         ClosedLoopModel(text.replace('joint="leg2_prismatic"', 'joint="leg2_roll"'))
     with pytest.raises(hm.UrdfError, match="must be numbers"):
         ClosedLoopModel(re.sub(r'(<encoder joint="leg1_prismatic" zero=")[^"]*', r"\1x", text))
+
+
+def test_a_cardan_geometry_is_read_back_off_its_urdf():
+    from hexapod_model.description.urdf_geometry import geometry_of_urdf
+
+    g = perturbed()
+    back = geometry_of_urdf(ClosedLoopModel(hm.geometry_to_urdf(g), "p.urdf"))
+    np.testing.assert_allclose(back.base_points(), g.base_points(), atol=1e-12)
+    np.testing.assert_allclose(back.platform_points(), g.platform_points(), atol=1e-12)
+    for a, b in zip(back.legs, g.legs):
+        assert abs(abs(np.dot(a.base_axis, b.base_axis)) - 1) < 1e-12
+        assert abs(a.base_offset - b.base_offset) < 1e-12 and abs(a.encoder_zero - b.encoder_zero) < 1e-12
+    with pytest.raises(hm.UrdfError, match="cardan legs"):
+        geometry_of_urdf(ClosedLoopModel(hm.geometry_to_urdf(hm.get_preset("spherical"))))
