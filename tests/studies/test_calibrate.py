@@ -43,7 +43,8 @@ def test_small_study_report_and_json():
     assert all(set(report[k]) == keys for k in ("before", "after", "true_geometry"))
     assert np.array(report["measuring_frame"]).shape == (4, 4) and np.array(report["marker_frame"]).shape == (4, 4)
     params = report["parameters"]
-    assert len(params) == 78 and all(set(p) == {"name", "nominal", "identified", "sigma", "identifiable"} for p in params)
+    fields = {"name", "nominal", "identified", "sigma", "identifiable"}
+    assert len(params) == 78 and all(set(p) == fields for p in params)
     held = [p for p in params if not p["identifiable"]]
     assert held and all(p["sigma"] is None and p["identified"] == p["nominal"] for p in held)
     assert report["after"]["translation_mean_mm"] < report["before"]["translation_mean_mm"]
