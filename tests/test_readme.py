@@ -100,4 +100,8 @@ def test_study_and_evaluation_commands_run(tmp_path, monkeypatch):
             del args[k : k + 2]
         if args[0] == "view":
             args += ["--once", "--rate", "1000"]  # show, then exit instead of serving until Ctrl-C
+        if args[0] == "calibrate":  # 2 folds, fixed axis directions: 54 unknowns, 3 fits of 20-40 poses
+            args += ["--folds", "2", "--hold", "*_axis.*", "--candidates", "150"]
+        if "--scenario" in args:
+            args += ["--calibration-poses", "40"]
         assert main(args) == 0, line

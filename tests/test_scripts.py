@@ -145,3 +145,19 @@ def test_stream_memory_benchmark_runs():
     rows = [ln.split() for ln in out.stdout.strip().splitlines()[2:]]
     assert [(r[0], r[1], r[-1]) for r in rows] == [("fk", "300", "0"), ("ik", "300", "0")]  # both exit 0
     assert all(float(r[3]) > 10 for r in rows)  # max RSS in MB
+
+
+def test_calibration_study_script_runs(tmp_path):
+    out = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "benchmarks" / "calibration_study.py"),
+            *("--poses", "40", "--folds", "2", "--hold", "*_axis.*", "--json", str(tmp_path / "c.json")),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert out.returncode == 0, out.stderr
+    assert "after (calibrated)" in out.stdout and "within 3 sigma" in out.stdout
+    assert (tmp_path / "c.json").stat().st_size > 100

@@ -1,7 +1,7 @@
 """Figures of ``hexapod calibrate`` (matplotlib ``Figure`` objects saved as PNG).
 
-* ``calibration_errors.png``: held-out pose errors before and after calibration (and of the
-  true geometry in a simulation), translation and rotation;
+* ``calibration_errors.png``: cumulative distributions of the held-out pose errors before and
+  after calibration (and of the true geometry in a simulation), translation and rotation;
 * ``calibration_parameters.png``: the identified corrections with 1-sigma error bars, in units
   of each parameter's expected magnitude; held parameters marked, the truth when simulated;
 * ``calibration_singular_values.png``: the singular values of the scaled identification
@@ -21,7 +21,7 @@ COLOURS = {"before": "#d62728", "after": "#1f77b4", "true": "#2ca02c"}
 
 
 def errors(path: Path, result: CalibrationResult) -> Path:
-    """Histograms of the held-out errors before / after (and the truth's)."""
+    """Cumulative distributions of the held-out errors before / after (and the truth's)."""
     fig = Figure(figsize=(8.0, 3.3), dpi=90)
     axes = fig.subplots(1, 2)
     sets = [("before", result.validation.before, "nominal geometry, frames fitted")]
@@ -29,13 +29,17 @@ def errors(path: Path, result: CalibrationResult) -> Path:
     if result.true_errors is not None:
         sets.append(("true", result.true_errors, "true geometry"))
     for k, (ax, unit) in enumerate(zip(axes, ("mm", "deg"))):
-        top = max(float(np.max(e[k])) for _, e, _ in sets)
-        bins = np.linspace(0.0, top * 1.02, 40)
         for key, e, label in sets:
-            ax.hist(e[k], bins=bins, color=COLOURS[key], alpha=0.55, label=f"{label}: mean {np.mean(e[k]):.3g} {unit}")
+            values = np.sort(e[k])
+            share = np.arange(1, values.size + 1) / values.size
+            ax.step(
+                values, share, where="post", color=COLOURS[key], label=f"{label}: mean {np.mean(values):.3g} {unit}"
+            )
         ax.set_xlabel(f"{'translation' if k == 0 else 'rotation'} error [{unit}]")
-        ax.set_ylabel("poses")
-        ax.legend(fontsize=7)
+        ax.set_ylabel("share of poses")
+        ax.set_xlim(left=0)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="center right")
     fig.suptitle(
         f"Held-out pose errors ({result.validation.folds}-fold), {len(result.data.readings)} poses", fontsize=10
     )
