@@ -33,9 +33,11 @@ class Combination:
     """A parameter combination the data cannot determine.
 
     Attributes:
-        sigma: its 1-sigma uncertainty in expected magnitudes (``inf`` when not seen at all;
-            0 for a parameter the frame convention pins once the others are held).
-        terms: ``(name, coefficient)`` of its largest scaled components, largest first.
+        sigma: the held parameter's 1-sigma if it were identified with the others still free,
+            in expected magnitudes (``inf`` when the data do not see it at all; 0 for a
+            parameter the frame convention pins once the others are held).
+        terms: ``(name, coefficient)``: the held parameter (coefficient 1) and the other
+            parameters that move with it (scaled, largest first; none of the other held ones).
         held: the parameter held at nominal because of it.
     """
 
@@ -48,7 +50,7 @@ class Combination:
         if self.sigma == 0.0:
             return f"{self.held}: fixed at nominal by the frame convention once the parameters above are held"
         combo = " ".join(f"{c:+.2f} {n}" for n, c in self.terms)
-        size = "not seen by the data" if not np.isfinite(self.sigma) else f"1-sigma {self.sigma:.3g} x tolerance"
+        size = "not seen by the data" if not np.isfinite(self.sigma) else f"1-sigma {self.sigma:.3g} x its tolerance"
         return f"{combo} ({size}): {self.held} held at nominal"
 
 
@@ -114,16 +116,20 @@ def analyse(
             break
         Y = basis @ Vt[weak].T  # (P, w) the weak combinations, scaled parameters
         Y[held_now] = 0.0
-        # the w parameters that best span the weak combinations (QR with column pivoting)
-        pivots = qr(Y.T, pivoting=True, mode="r")[1][: weak.size]
-        for j, k in zip(weak, pivots):
-            y = basis @ Vt[j]
-            y = y / y[np.argmax(np.abs(y))]
-            order = [int(k)] + [m for m in np.argsort(-np.abs(y)) if abs(y[m]) >= 0.1 and m not in held_now][:5]
-            order = list(dict.fromkeys(order))[:6]
-            sigma = 1.0 / s[j] if s[j] > RANK_TOL * max(s[0], 1e-300) else float("inf")
-            combos.append(Combination(sigma, tuple((names[m], float(y[m])) for m in order), names[int(k)]))
-            held_now.append(int(k))
+        # the w parameters that best span the weak combinations (QR with column pivoting) ...
+        pivots = [int(k) for k in qr(Y.T, pivoting=True, mode="r")[1][: weak.size]]
+        # ... and the combinations rewritten with coefficient 1 on one of them, 0 on the others
+        Y = Y @ np.linalg.inv(Y[pivots])
+        coef = basis @ Vt.T  # parameter k's 1-sigma with all free: sqrt(sum_j (coef[k, j] / s_j)^2)
+        null = s <= RANK_TOL * max(s[0], 1e-300)
+        for j, k in enumerate(pivots):
+            y = Y[:, j]
+            unseen = bool(np.any(np.abs(coef[k, null]) > 1e-9))
+            sigma = float("inf") if unseen else float(np.sqrt(np.sum((coef[k] / s) ** 2)))
+            others = [m for m in np.argsort(-np.abs(y)) if abs(y[m]) >= 0.1 and m not in pivots][:5]
+            terms = ((names[k], 1.0),) + tuple((names[m], float(y[m])) for m in others)
+            combos.append(Combination(sigma, terms, names[k]))
+        held_now += pivots
         basis = free_basis(constraints, held_now, size)
     for k in np.flatnonzero(np.linalg.norm(basis, axis=1) < 1e-9):  # pinned to zero by the gauge and the holds
         if k not in held_now:
