@@ -131,9 +131,9 @@ def analyse(
             combos.append(Combination(sigma, terms, names[k]))
         held_now += pivots
         basis = free_basis(constraints, held_now, size)
-    for k in np.flatnonzero(np.linalg.norm(basis, axis=1) < 1e-9):  # pinned to zero by the gauge and the holds
-        if k not in held_now:
-            held_now.append(int(k))
-            combos.append(Combination(0.0, ((names[k], 1.0),), names[k]))
+    for pinned in np.flatnonzero(np.linalg.norm(basis, axis=1) < 1e-9).tolist():  # by the gauge and the holds
+        if pinned not in held_now:
+            held_now.append(pinned)
+            combos.append(Combination(0.0, ((names[pinned], 1.0),), names[pinned]))
     identified = np.linalg.svd(J @ basis, compute_uv=False) if basis.shape[1] else np.zeros(0)
     return Identifiability(tuple(held_now), tuple(combos), basis, spectrum, identified)
