@@ -21,46 +21,21 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-import pinocchio as pin
 from scipy.optimize import least_squares
 
 from ..analysis.calibration_derivatives import CalibrationModel
-from ..analysis.calibration_frames import Noise, fit_frames, frame_jacobian, predict, residual, twist_jacobian
+from ..analysis.calibration_frames import Noise, fit_frames, predict
 from ..analysis.calibration_identifiability import Combination, analyse
 from ..analysis.calibration_parameters import ParameterSet
+from ..analysis.calibration_problem import FRAME_SCALE, MeasuredPoses, Problem, jacobians
 from ..description.geometry import HexapodGeometry
 from ..exceptions import HexapodError, InputError
 
-FRAME_SCALE = 1e-3  # m and rad: expected size of the frame corrections after the initial alignment
 EQUATIONS_PER_UNKNOWN = 2  # at least this many residual rows per unknown
 OUTLIER_RMS = 5.0  # a row this many stated sigmas off (RMS over its 6 rows) ...
 OUTLIER_MEDIAN = 5.0  # ... and this many times the median row is an outlier
 EXPLAINED_RMS = 20.0  # the median row must end below this many stated sigmas
 NEAR_NOMINAL = 20.0  # corrections beyond this many expected magnitudes are not "near nominal"
-PENALTY = 1e8  # residual (stated sigmas) of a row a trial geometry cannot solve: the step is always rejected
-
-
-@dataclass(frozen=True)
-class MeasuredPoses:
-    """Leg readings (N, 6, m) and measured poses (N, 4, 4).
-
-    The measured poses are those of the marker frame in the measuring device's frame;
-    ``lines`` names each row in messages (CSV line numbers).
-    """
-
-    readings: np.ndarray
-    measured: np.ndarray
-    source: str = "<data>"
-    lines: tuple[int, ...] | None = None
-
-    def line(self, k: int) -> str:
-        """How row ``k`` is named in messages."""
-        return f"line {self.lines[k]}" if self.lines is not None else f"row {k + 1}"
-
-    def subset(self, rows: np.ndarray) -> MeasuredPoses:
-        """The rows ``rows`` only."""
-        lines = None if self.lines is None else tuple(self.lines[k] for k in rows)
-        return MeasuredPoses(self.readings[rows], self.measured[rows], self.source, lines)
 
 
 @dataclass(frozen=True)
@@ -126,76 +101,6 @@ def solve_nominal(ps: ParameterSet, data: MeasuredPoses) -> tuple[CalibrationMod
     return model, P, qs, Gs
 
 
-class _Problem:
-    """The least-squares problem in the free scaled corrections ``z`` and the frame twists."""
-
-    def __init__(self, ps, data, noise, basis, frames, guesses):
-        self.ps, self.data, self.noise, self.basis = ps, data, noise, basis
-        self.T_mb0, self.T_pm0 = frames
-        self.D = basis * ps.scales[:, None]  # delta = D @ z
-        self.D[np.linalg.norm(basis, axis=1) < 1e-12] = 0.0  # held parameters stay exactly nominal
-        self.guesses = guesses
-        self.cache: dict = {}
-        self.evaluations = 0
-
-    def unpack(self, x):
-        n = self.D.shape[1]
-        mb, pm = x[n : n + 6] * FRAME_SCALE, x[n + 6 :] * FRAME_SCALE
-        return self.D @ x[:n], self.T_mb0 @ pin.exp6(mb).homogeneous, self.T_pm0 @ pin.exp6(pm).homogeneous, mb, pm
-
-    def state(self, x):
-        key = x.tobytes()
-        if key not in self.cache:
-            delta, T_mb, T_pm, _, _ = self.unpack(x)
-            try:
-                model = CalibrationModel(self.ps, delta)
-            except HexapodError:  # a trial step to no valid geometry (a negative offset): rejected
-                n = len(self.data.readings)
-                self.cache = {key: (None, np.full((n, 4, 4), np.nan), [None] * n, [None] * n, np.zeros(n, bool))}
-                self.cache[key] += (T_mb, T_pm)
-                return self.cache[key]
-            P, qs, Gs, ok = model.forward(self.data.readings, self.guesses)
-            self.evaluations += 1
-            if ok.all():
-                self.guesses = qs
-            self.cache = {key: (model, P, qs, Gs, ok, T_mb, T_pm)}
-        return self.cache[key]
-
-    def fun(self, x):
-        _, P, _, _, ok, T_mb, T_pm = self.state(x)
-        r = np.full((len(P), 6), PENALTY)
-        r[ok] = residual(predict(T_mb, P[ok], T_pm), self.data.measured[ok], self.noise)
-        return r.reshape(-1)
-
-    def jac(self, x):
-        model, P, qs, Gs, ok, T_mb, T_pm = self.state(x)
-        if not ok.all():
-            raise InputError(
-                "measured data",
-                self.data.source,
-                "no geometry near nominal explains the readings: the fit reached a geometry that cannot "
-                "solve every row; check NOMINAL, the leg order and the units (m)",
-            )
-        _, _, _, mb, pm = self.unpack(x)
-        Jg, Jf = jacobians(model, P, qs, Gs, T_mb, T_pm, self.data.measured, self.noise)
-        Jf = Jf.copy()
-        Jf[:, :6] = Jf[:, :6] @ pin.Jexp6(mb) * FRAME_SCALE
-        Jf[:, 6:] = Jf[:, 6:] @ pin.Jexp6(pm) * FRAME_SCALE
-        return np.hstack([Jg @ self.D, Jf])
-
-
-def jacobians(model, P, qs, Gs, T_mb, T_pm, measured, noise) -> tuple[np.ndarray, np.ndarray]:
-    """Whitened residual derivatives w.r.t. the corrections (6N, P) and the frames (6N, 12).
-
-    The frame columns are right twists of the measuring frame, then the marker frame.
-    """
-    n = len(P)
-    A = T_mb @ P
-    Jpose = twist_jacobian(A, np.broadcast_to(T_pm, (n, 4, 4)), measured, noise)
-    Jg = np.concatenate([Jpose[k] @ model.pose_jacobian(qs[k], Gs[k]) for k in range(n)])
-    return Jg, frame_jacobian(T_mb, P, T_pm, measured, noise).reshape(6 * n, 12)
-
-
 def _held(ps: ParameterSet, hold: tuple[str, ...]) -> tuple[int, ...]:
     out = []
     for pattern in hold:
@@ -253,12 +158,12 @@ def identify(
         if result is not None and set(ana.held) == set(held):
             break
         held = ana.held
-        problem = _Problem(ps, data, noise, ana.basis, frames, qs)
+        problem = Problem(ps, data, noise, ana.basis, frames, qs)
         x0 = np.concatenate([ana.basis.T @ (delta / ps.scales), np.zeros(12)])  # from the previous fit
         result = least_squares(problem.fun, x0, jac=problem.jac, method="lm", xtol=1e-10, ftol=1e-10, gtol=1e-10)
         model, P, qs, Gs, _, T_mb, T_pm = problem.state(result.x)
         frames, delta = (T_mb, T_pm), problem.unpack(result.x)[0]
-        problem = _Problem(ps, data, noise, ana.basis, frames, qs)  # frames re-centred on the solution
+        problem = Problem(ps, data, noise, ana.basis, frames, qs)  # frames re-centred on the solution
         result.x = np.concatenate([result.x[: ana.basis.shape[1]], np.zeros(12)])
     assert result is not None
     return _finish(ps, data, noise, problem, result, replace(ana, combinations=tuple(combinations)))

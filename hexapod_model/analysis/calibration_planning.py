@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.calibration import FRAME_SCALE
 from ..analysis.calibration_derivatives import CalibrationModel
 from ..analysis.calibration_frames import Noise, frame_jacobian, twist_jacobian
 from ..analysis.calibration_identifiability import frame_free, free_basis
 from ..analysis.calibration_parameters import ParameterSet
+from ..analysis.calibration_problem import FRAME_SCALE
 from ..analysis.trajectories import box_poses
 from ..description.geometry import HexapodGeometry
 from ..exceptions import InputError

@@ -7,11 +7,11 @@ import pinocchio as pin
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.analysis.calibration import MeasuredPoses, _Problem
 from hexapod_model.analysis.calibration_derivatives import CalibrationModel, site_derivatives, site_placements
 from hexapod_model.analysis.calibration_frames import Noise, predict, residual, twist_jacobian
 from hexapod_model.analysis.calibration_identifiability import free_basis
 from hexapod_model.analysis.calibration_parameters import ParameterSet
+from hexapod_model.analysis.calibration_problem import MeasuredPoses, Problem
 from hexapod_model.analysis.trajectories import box_poses
 
 
@@ -94,7 +94,7 @@ def test_identification_jacobian_matches_finite_differences(parameters):
     T_mb, T_pm = pin.exp6(np.array([0.1, -0.2, 0.3, 0.2, 0.1, -0.1])).homogeneous, np.eye(4)
     data = MeasuredPoses(readings, predict(T_mb, poses, T_pm))
     basis = free_basis(ps.gauge_constraints() * ps.scales, (), ps.size)
-    problem = _Problem(ps, data, Noise(), basis, (T_mb, T_pm), None)
+    problem = Problem(ps, data, Noise(), basis, (T_mb, T_pm), None)
     rng = np.random.default_rng(3)
     x = np.concatenate([rng.normal(0, 0.5, basis.shape[1]), rng.normal(0, 2.0, 12)])  # frames away from 0
     J = problem.jac(x)

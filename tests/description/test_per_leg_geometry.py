@@ -148,3 +148,16 @@ def test_a_cardan_geometry_is_read_back_off_its_urdf():
         assert abs(a.base_offset - b.base_offset) < 1e-12 and abs(a.encoder_zero - b.encoder_zero) < 1e-12
     with pytest.raises(hm.UrdfError, match="cardan legs"):
         geometry_of_urdf(ClosedLoopModel(hm.geometry_to_urdf(hm.get_preset("spherical"))))
+
+
+def test_per_leg_example_of_the_geometry_doc_loads():
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "geometry.md").read_text()
+    block = re.findall(r"```toml\n(.*?)```", text, re.S)[1]
+    d = hm.get_preset("reference").to_dict()
+    d["legs"][0] = tomllib.loads(block)["legs"][0]
+    g = hm.geometry_from_dict(d)
+    assert g.offsets(0) == (0.01243, 0.01187) and g.legs[0].encoder_zero == 0.00081
+    sol = hm.Hexapod.from_geometry(g).forward([0.00081, 0, 0, 0, 0, 0])
+    assert sol.converged and sol.iterations == 0  # the reading at home is the home pose

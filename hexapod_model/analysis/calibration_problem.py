@@ -1,0 +1,140 @@
+"""The least-squares problem of a calibration: measured poses, residuals and their exact Jacobian.
+
+The unknowns are the free scaled corrections ``z`` (the geometry is ``delta = D z``, ``D`` the
+identifiability basis times the parameter scales, so held parameters stay exactly nominal) and
+the right twists of the measuring and marker frames (in units of :data:`FRAME_SCALE`, through
+``pin.Jexp6``). Rows are the whitened pose residuals of
+:mod:`~hexapod_model.analysis.calibration_frames`; a trial geometry that is not valid or cannot
+solve a row gets :data:`PENALTY` residuals, so the step is rejected.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..analysis.calibration_derivatives import CalibrationModel
+from ..analysis.calibration_frames import frame_jacobian, predict, residual, twist_jacobian
+from ..exceptions import HexapodError, InputError
+
+FRAME_SCALE = 1e-3  # m and rad: expected size of the frame corrections after the initial alignment
+PENALTY = 1e8  # residual (stated sigmas) of a row a trial geometry cannot solve: the step is always rejected
+
+
+@dataclass(frozen=True)
+class MeasuredPoses:
+    """Leg readings (N, 6, m) and measured poses (N, 4, 4).
+
+    The measured poses are those of the marker frame in the measuring device's frame;
+    ``lines`` names each row in messages (CSV line numbers).
+    """
+
+    readings: np.ndarray
+    measured: np.ndarray
+    source: str = "<data>"
+    lines: tuple[int, ...] | None = None
+
+    def __post_init__(self) -> None:
+        r, M = np.asarray(self.readings, dtype=float), np.asarray(self.measured, dtype=float)
+        if r.ndim != 2 or r.shape[1] != 6 or M.shape != (len(r), 4, 4):
+            raise InputError("measured poses", (r.shape, M.shape), "need readings (N, 6) and poses (N, 4, 4)")
+        if not (np.all(np.isfinite(r)) and np.all(np.isfinite(M))):
+            raise InputError("measured poses", self.source, "readings and poses must be finite")
+        if self.lines is not None and len(self.lines) != len(r):
+            raise InputError("lines", len(self.lines), f"need one line number per row ({len(r)})")
+        object.__setattr__(self, "readings", r)
+        object.__setattr__(self, "measured", M)
+
+    def line(self, k: int) -> str:
+        """How row ``k`` is named in messages."""
+        return f"line {self.lines[k]}" if self.lines is not None else f"row {k + 1}"
+
+    def subset(self, rows: np.ndarray) -> MeasuredPoses:
+        """The rows ``rows`` only."""
+        lines = None if self.lines is None else tuple(self.lines[k] for k in rows)
+        return MeasuredPoses(self.readings[rows], self.measured[rows], self.source, lines)
+
+
+class Problem:
+    """The least-squares problem in the free scaled corrections ``z`` and the frame twists.
+
+    Args:
+        ps: the parameter set.
+        data: the measured poses.
+        noise: the stated noise (row weights).
+        basis: (P, n) basis of the free scaled corrections.
+        frames: ``(T_mb, T_pm)`` the frame twists are relative to.
+        guesses: configurations to start each row's direct kinematics from (or ``None``).
+    """
+
+    def __init__(self, ps, data, noise, basis, frames, guesses):
+        self.ps, self.data, self.noise, self.basis = ps, data, noise, basis
+        self.T_mb0, self.T_pm0 = frames
+        self.D = basis * ps.scales[:, None]  # delta = D @ z
+        self.D[np.linalg.norm(basis, axis=1) < 1e-12] = 0.0  # held parameters stay exactly nominal
+        self.guesses = guesses
+        self.cache: dict = {}
+        self.evaluations = 0
+
+    def unpack(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(delta, T_mb, T_pm, twist_mb, twist_pm)`` of the unknowns ``x``."""
+        n = self.D.shape[1]
+        mb, pm = x[n : n + 6] * FRAME_SCALE, x[n + 6 :] * FRAME_SCALE
+        return self.D @ x[:n], self.T_mb0 @ pin.exp6(mb).homogeneous, self.T_pm0 @ pin.exp6(pm).homogeneous, mb, pm
+
+    def state(self, x: np.ndarray) -> tuple:
+        """Model, poses, configurations, Jacobians, ok mask and frames at ``x`` (cached: the last ``x``)."""
+        key = x.tobytes()
+        if key not in self.cache:
+            delta, T_mb, T_pm, _, _ = self.unpack(x)
+            try:
+                model = CalibrationModel(self.ps, delta)
+            except HexapodError:  # a trial step to no valid geometry (a negative offset): rejected
+                n = len(self.data.readings)
+                self.cache = {key: (None, np.full((n, 4, 4), np.nan), [None] * n, [None] * n, np.zeros(n, bool))}
+                self.cache[key] += (T_mb, T_pm)
+                return self.cache[key]
+            P, qs, Gs, ok = model.forward(self.data.readings, self.guesses)
+            self.evaluations += 1
+            if ok.all():
+                self.guesses = qs
+            self.cache = {key: (model, P, qs, Gs, ok, T_mb, T_pm)}
+        return self.cache[key]
+
+    def fun(self, x: np.ndarray) -> np.ndarray:
+        """(6N,) whitened residuals at ``x``."""
+        _, P, _, _, ok, T_mb, T_pm = self.state(x)
+        r = np.full((len(P), 6), PENALTY)
+        r[ok] = residual(predict(T_mb, P[ok], T_pm), self.data.measured[ok], self.noise)
+        return r.reshape(-1)
+
+    def jac(self, x: np.ndarray) -> np.ndarray:
+        """(6N, n) their exact derivative at ``x`` (raises when a row cannot be solved there)."""
+        model, P, qs, Gs, ok, T_mb, T_pm = self.state(x)
+        if not ok.all():
+            raise InputError(
+                "measured data",
+                self.data.source,
+                "no geometry near nominal explains the readings: the fit reached a geometry that cannot "
+                "solve every row; check NOMINAL, the leg order and the units (m)",
+            )
+        _, _, _, mb, pm = self.unpack(x)
+        Jg, Jf = jacobians(model, P, qs, Gs, T_mb, T_pm, self.data.measured, self.noise)
+        Jf = Jf.copy()
+        Jf[:, :6] = Jf[:, :6] @ pin.Jexp6(mb) * FRAME_SCALE
+        Jf[:, 6:] = Jf[:, 6:] @ pin.Jexp6(pm) * FRAME_SCALE
+        return np.hstack([Jg @ self.D, Jf])
+
+
+def jacobians(model, P, qs, Gs, T_mb, T_pm, measured, noise) -> tuple[np.ndarray, np.ndarray]:
+    """Whitened residual derivatives w.r.t. the corrections (6N, P) and the frames (6N, 12).
+
+    The frame columns are right twists of the measuring frame, then the marker frame.
+    """
+    n = len(P)
+    A = T_mb @ P
+    Jpose = twist_jacobian(A, np.broadcast_to(T_pm, (n, 4, 4)), measured, noise)
+    Jg = np.concatenate([Jpose[k] @ model.pose_jacobian(qs[k], Gs[k]) for k in range(n)])
+    return Jg, frame_jacobian(T_mb, P, T_pm, measured, noise).reshape(6 * n, 12)
