@@ -6,6 +6,7 @@ import argparse
 import io
 import json
 import math
+import sys
 from pathlib import Path
 
 from ..analysis.calibration_frames import Noise
@@ -102,7 +103,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         data = load_poses(args.measured)
     options = {"encoder_scale": args.encoder_scale, "hold": tuple(args.hold), "max_sigma": args.max_sigma}
-    note("calibrate", f"identifying on {len(data.readings)} poses, then {args.folds}-fold validation ...")
+    if sys.stderr.isatty():  # like the progress bars: only on a terminal
+        note("calibrate", f"identifying on {len(data.readings)} poses, then {args.folds}-fold validation ...")
     result = run_calibration(nominal, data, noise, args.folds, args.seed, sim, progress, **options)
     print(format_report(result, noise))
     geometry = result.identification.geometry
