@@ -224,9 +224,13 @@ def urdf_to_mjcf(urdf_xml: str, *, actuated: bool = False, source: str = "<strin
         source: file name used in error messages.
 
     Raises:
-        UrdfError: the URDF is malformed or uses a joint type or limit the translation needs.
+        UrdfError: the URDF is malformed or uses a joint type or limit the translation needs,
+            or it carries an ``<encoder>`` reading model (a calibrated geometry), which MJCF
+            has no place for: the exported file would read joint values as readings.
     """
     conv = _Converter(urdf_xml, source)
+    if conv.robot.find("encoder") is not None:
+        raise UrdfError(source, "<encoder>", "MJCF cannot carry the encoder zero/scale of a calibrated geometry")
     name = conv.robot.get("name", "hexapod")
     root = ET.Element("mujoco", model=name)
     ET.SubElement(root, "compiler", angle="radian", autolimits="true", fusestatic="true", inertiafromgeom="false")

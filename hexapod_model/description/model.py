@@ -150,7 +150,8 @@ class ClosedLoopModel:
         self.platform_q = m.joints[self.platform_joint].idx_q
         self.platform_v = m.joints[self.platform_joint].idx_v
         self.home = m.jointPlacements[self.platform_joint].copy()
-        self.encoder_zero, self.encoder_scale = self._encoders(read_encoders(urdf_xml, source))
+        found = read_encoders(self.urdf_xml, source) if self.urdf_xml is not None else {}
+        self.encoder_zero, self.encoder_scale = self._encoders(found)  # MJCF carries none
         self._check_assembled()
 
     @classmethod

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..files import atomic_save_figure
 from ..studies.calibrate import CalibrationResult
 
 COLOURS = {"before": "#d62728", "after": "#1f77b4", "true": "#2ca02c"}
@@ -44,7 +45,7 @@ def errors(path: Path, result: CalibrationResult) -> Path:
         f"Held-out pose errors ({result.validation.folds}-fold), {len(result.data.readings)} poses", fontsize=10
     )
     fig.tight_layout()
-    fig.savefig(path)
+    atomic_save_figure(fig, path)
     return path
 
 
@@ -73,7 +74,7 @@ def parameters(path: Path, result: CalibrationResult) -> Path:
     ax.axhline(0, color="0.6", lw=0.8)
     ax.legend(fontsize=7, loc="upper right")
     fig.tight_layout()
-    fig.savefig(path)
+    atomic_save_figure(fig, path)
     return path
 
 
@@ -89,7 +90,7 @@ def singular_values(path: Path, result: CalibrationResult, max_sigma: float = 1.
     ax.set_title("Identifiability: singular values, frame convention applied", fontsize=10)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
+    atomic_save_figure(fig, path)
     return path
 
 

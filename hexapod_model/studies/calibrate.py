@@ -35,7 +35,7 @@ from ..description.geometry_toml import save_geometry
 from ..description.urdf_geometry import geometry_of_urdf
 from ..exceptions import InputError
 from ..files import atomic_write_text
-from ..io.tables import column, read_table
+from ..io.tables import open_table
 from ..kinematics.hexapod import Hexapod, load_hexapod
 from ..studies.reproduce import DATA_COLUMNS, StudyInput, load_measured, save_measured
 
@@ -144,11 +144,15 @@ def _draw_truth(
 
 
 def load_poses(path: str) -> MeasuredPoses:
-    """A measured CSV (the ``hexapod reproduce --data`` format) as :class:`MeasuredPoses`."""
+    """A measured CSV (the ``hexapod reproduce --data`` format) as :class:`MeasuredPoses`.
+
+    Rows are named by their file line in messages; every row is checked by
+    :func:`~hexapod_model.studies.reproduce.load_measured` (the first bad one is an error).
+    """
     data = load_measured(path)
-    header, table = read_table(path, DATA_COLUMNS)
-    rows = np.flatnonzero(np.all(np.isfinite(column(header, table, DATA_COLUMNS)), axis=1))
-    return MeasuredPoses(data.readings, data.reference, str(path), tuple(int(k) + 2 for k in rows))
+    with open_table(path, DATA_COLUMNS) as table:
+        lines = tuple(int(line) for line in table.read(DATA_COLUMNS).lines)
+    return MeasuredPoses(data.readings, data.reference, str(path), lines)
 
 
 @dataclass(frozen=True)

@@ -161,3 +161,11 @@ def test_per_leg_example_of_the_geometry_doc_loads():
     assert g.offsets(0) == (0.01243, 0.01187) and g.legs[0].encoder_zero == 0.00081
     sol = hm.Hexapod.from_geometry(g).forward([0.00081, 0, 0, 0, 0, 0])
     assert sol.converged and sol.iterations == 0  # the reading at home is the home pose
+
+
+def test_mjcf_export_refuses_an_encoder_model():
+    from hexapod_model.description.mjcf import geometry_to_mjcf
+
+    with pytest.raises(hm.UrdfError, match="encoder"):
+        geometry_to_mjcf(perturbed())
+    assert "<mujoco" in geometry_to_mjcf(perturbed(encoders=False))  # tilted axes and offsets are fine
