@@ -1,0 +1,123 @@
+"""Per-fixture state judged from the readings alone: locked / moving / drift, and stuck legs.
+
+* :class:`LockDetector`: the brakes (Bem, Ude, Nemec 2026, §2) hold the plate still, so readings
+  that stay within ``band`` (m) of where a steady run started for ``lock_time`` (s) mean
+  ``locked``. The lock reference is the mean of that run. While locked, ``unlock_samples``
+  consecutive samples farther than ``band`` from the reference mean ``moving`` again (one
+  spike does not unlock); an exponential average of the readings (time constant ``lock_time``)
+  farther than ``drift_limit`` from the reference is a ``drift`` alarm (the plate creeps while
+  the brakes are on).
+* :class:`StuckDetector`: an encoder repeating exactly the same count for ``frames`` sets
+  while another leg moved by more than ``band`` is ``stuck``. It relies on the count noise of a
+  moving leg; with noise below one count, set ``frames`` high or 0 (off).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+class LockDetector:
+    """Locked / moving / drift of one fixture from its reading sets.
+
+    Args:
+        lock_time: seconds of steady readings before ``locked`` (also the drift average's
+            time constant).
+        band: steady band (m).
+        drift_limit: drift alarm threshold (m), below ``band``.
+        unlock_samples: consecutive samples outside the band that unlock.
+    """
+
+    def __init__(self, lock_time: float, band: float, drift_limit: float, unlock_samples: int):
+        self.lock_time, self.band, self.drift_limit, self.unlock_samples = lock_time, band, drift_limit, unlock_samples
+        self.state = "moving"
+        self.reference: np.ndarray | None = None  # mean readings of the locking run (m)
+        self.drift = False
+        self._run_start: tuple[float, np.ndarray] | None = None
+        self._sum = np.zeros(6)
+        self._n = 0
+        self._outside = 0
+        self._ema = np.zeros(6)
+        self._t_last = 0.0
+
+    def _restart(self, t: float, readings: np.ndarray) -> None:
+        self._run_start = (t, readings.copy())
+        self._sum[:] = readings
+        self._n = 1
+
+    def update(self, t: float, readings: np.ndarray) -> bool:
+        """Add a reading set at time ``t`` (s); True when a moving fixture has been steady long enough.
+
+        The caller then calls :meth:`lock` (with the reference it accepted) or :meth:`restart`.
+        """
+        if self.state == "locked":
+            assert self.reference is not None
+            if float(np.max(np.abs(readings - self.reference))) > self.band:
+                self._outside += 1
+                if self._outside >= self.unlock_samples:
+                    self.state, self.reference, self.drift, self._outside = "moving", None, False, 0
+                    self._restart(t, readings)
+                return False
+            self._outside = 0
+            alpha = 1.0 - math.exp(-max(t - self._t_last, 0.0) / max(self.lock_time, 1e-9))
+            self._ema += alpha * (readings - self._ema)
+            self._t_last = t
+            self.drift = float(np.max(np.abs(self._ema - self.reference))) > self.drift_limit
+            return False
+        if self._run_start is None or float(np.max(np.abs(readings - self._run_start[1]))) > self.band:
+            self._restart(t, readings)
+        else:
+            self._sum += readings
+            self._n += 1
+        return t - self._run_start[0] >= self.lock_time  # type: ignore[index]
+
+    @property
+    def run_mean(self) -> np.ndarray:
+        """Mean readings (m) of the current steady run."""
+        return self._sum / max(self._n, 1)
+
+    def lock(self, t: float, reference: np.ndarray) -> None:
+        """Enter ``locked`` with ``reference`` readings (m) at time ``t`` (s)."""
+        self.state, self.reference, self.drift, self._outside = "locked", reference.copy(), False, 0
+        self._ema[:] = reference
+        self._t_last = t
+
+    def restart(self, t: float, readings: np.ndarray) -> None:
+        """Start a new steady run at this set (a lock could not be taken)."""
+        self._restart(t, readings)
+
+
+class StuckDetector:
+    """Legs whose count repeats exactly while the fixture moves.
+
+    Args:
+        frames: repeats (sets) that make a leg ``stuck``; 0 disables the check.
+        band: motion of another leg (m) over the same sets that shows the fixture moved.
+    """
+
+    def __init__(self, frames: int, band: float):
+        self.frames, self.band = frames, band
+        self._counts: list[int] | None = None
+        self._repeats = np.zeros(6, dtype=int)
+        self._snap = np.zeros((6, 6))
+
+    def update(self, counts: list[int], readings: np.ndarray) -> list[int]:
+        """Add a set's raw counts and readings (m); returns the stuck legs (0-based)."""
+        if self.frames == 0:
+            return []
+        stuck = []
+        for k in range(6):
+            if self._counts is not None and counts[k] == self._counts[k]:
+                self._repeats[k] += 1
+            else:
+                self._repeats[k] = 0
+                self._snap[k] = readings
+            if self._repeats[k] >= self.frames:
+                moved = np.abs(readings - self._snap[k]) > self.band
+                moved[k] = False
+                if moved.any():
+                    stuck.append(k)
+        self._counts = list(counts)
+        return stuck
