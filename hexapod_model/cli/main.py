@@ -7,10 +7,10 @@ import sys
 
 from .. import __version__
 from ..exceptions import HexapodError, SolverError
-from . import core, evaluate, reproduce, track, view
+from . import core, evaluate, fixture, reproduce, serve, track, view
 
 EXIT_CODES = {0: "all good", 1: "some rows or the solve failed", 2: "usage error or unreadable input"}
-COMMANDS = (core, reproduce, evaluate, track, view)
+COMMANDS = (core, reproduce, evaluate, track, view, serve, fixture)
 
 DESCRIPTION = """\
 Leg readings <-> platform pose for Stewart-Gough hexapods with offset-axis Cardan joints.
