@@ -1,12 +1,14 @@
 """One fixture's cycle: encoder frames in, complete reading sets solved, records out.
 
 A **reading set** is complete when each of the six legs has sent a frame since the last set,
-all younger than ``staleness``. A leg sending twice before the set completes (a frame of
-another leg was lost) starts a new set, so a set never mixes readings more than one frame
-period apart; when the missing leg's newest frame is older than ``staleness`` the set is
-published as ``silent_leg``. A set with a bad frame, an error bit, a reading outside the stroke
-or a stuck leg is published with that status and **no pose**; a solved set is ``ok`` only when
-the tracker (through :class:`~hexapod_model.service.solve.PoseSolver`) raised no flag.
+all within ``max_skew`` of each other (default: half the measured frame period) and younger
+than ``staleness``. A leg sending twice before the set completes (a frame of another leg was
+lost) starts a new set, and frames older than ``max_skew`` at completion are dropped from it,
+so a set never mixes readings of different sampling instants; when the missing leg's newest
+frame is older than ``staleness`` the set is published as ``silent_leg``. A set with a bad
+frame, an error bit, a reading outside the stroke or a stuck leg is published with that status
+and **no pose**; a solved set is ``ok`` only when the tracker (through
+:class:`~hexapod_model.service.solve.PoseSolver`) raised no flag.
 
 Status values: ``ok``, ``no_data`` (nothing received yet), ``silent_leg``, ``bad_frame``,
 ``encoder_error``, ``out_of_stroke``, ``stuck_leg``, ``not_converged``, ``flagged``. Flags name the
@@ -60,7 +62,8 @@ class FixtureCycle:
         self._err, self._warn, self._bad, self._fresh = [False] * 6, [False] * 6, [False] * 6, [False] * 6
         self._n_fresh = 0
         self.lock = LockDetector(cfg.lock_time, cfg.steady_band, cfg.drift_limit, cfg.unlock_samples)
-        self.stuck = StuckDetector(cfg.stuck_frames, cfg.steady_band)
+        self.stuck = StuckDetector(cfg.stuck_sigmas, cfg.noise, self.layout.metres_per_count)
+        self._period = math.nan  # s, average interval between two frames of one leg
         self._advisory: set[str] = set()
         self._episode = self._stored_episode = 0
         self._new_lock_stored = False
@@ -95,10 +98,19 @@ class FixtureCycle:
             self._readings[leg] = self.cfg.legs[leg].reading(d.count)
         except FrameError:
             self._bad[leg], self._readings[leg] = True, math.nan
+        dt = t - self._t[leg]
+        if 0.0 < dt <= self.cfg.staleness:
+            self._period = dt if math.isnan(self._period) else self._period + 0.05 * (dt - self._period)
         self._t[leg] = t
         self._fresh[leg] = True
         self._n_fresh += 1
         if self._n_fresh == 6:
+            skew = self.cfg.max_skew or 0.5 * self._period
+            if t - float(np.min(self._t)) > skew:  # frames of different sampling instants: keep the newest
+                self._fresh = [bool(t - tk <= skew) for tk in self._t]
+                self._n_fresh = sum(self._fresh)
+                self.solver.gap()
+                return published
             self._fresh = [False] * 6
             self._n_fresh = 0
             return self._complete(t)

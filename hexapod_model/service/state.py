@@ -7,9 +7,8 @@
   spike does not unlock); an exponential average of the readings (time constant ``lock_time``)
   farther than ``drift_limit`` from the reference is a ``drift`` alarm (the plate creeps while
   the brakes are on).
-* :class:`StuckDetector`: an encoder repeating exactly the same count for ``frames`` sets
-  while another leg moved by more than ``band`` is ``stuck``. It relies on the count noise of a
-  moving leg; with noise below one count, set ``frames`` high or 0 (off).
+* :class:`StuckDetector`: an encoder repeating exactly the same count while its own recent
+  velocity predicts a change of more than ``sigmas`` times the noise is ``stuck``.
 """
 
 from __future__ import annotations
@@ -90,34 +89,45 @@ class LockDetector:
 
 
 class StuckDetector:
-    """Legs whose count repeats exactly while the fixture moves.
+    """Legs whose count stays exactly the same although their own recent motion says it should change.
+
+    A moving leg's count changes every set (noise alone makes an exact repeat unlikely), so a
+    repeat is suspicious only in proportion to the change the leg's recent velocity predicts:
+    after ``m`` repeats at an estimated ``v`` (m per set), the leg is ``stuck`` when
+    ``|v| m > sigmas * max(noise, resolution)``. The velocity is an exponential average
+    (``alpha``) of the per-set changes, frozen while the count repeats. A still fixture (a
+    locked plate) cannot reveal a stuck encoder, and needs not: its readings do not change.
 
     Args:
-        frames: repeats (sets) that make a leg ``stuck``; 0 disables the check.
-        band: motion of another leg (m) over the same sets that shows the fixture moved.
+        sigmas: threshold in noise units; 0 disables the check.
+        noise: 1-sigma reading noise (m).
+        resolution: metres per count.
     """
 
-    def __init__(self, frames: int, band: float):
-        self.frames, self.band = frames, band
+    def __init__(self, sigmas: float, noise: float, resolution: float, alpha: float = 0.5):
+        self.limit = sigmas * max(noise, abs(resolution))
+        self.alpha = alpha
         self._counts: list[int] | None = None
-        self._repeats = np.zeros(6, dtype=int)
-        self._snap = np.zeros((6, 6))
+        self._last = np.zeros(6)
+        self._run = np.zeros(6, dtype=int)
+        self._v = np.zeros(6)
 
     def update(self, counts: list[int], readings: np.ndarray) -> list[int]:
         """Add a set's raw counts and readings (m); returns the stuck legs (0-based)."""
-        if self.frames == 0:
+        if self.limit == 0.0:
             return []
         stuck = []
         for k in range(6):
-            if self._counts is not None and counts[k] == self._counts[k]:
-                self._repeats[k] += 1
-            else:
-                self._repeats[k] = 0
-                self._snap[k] = readings
-            if self._repeats[k] >= self.frames:
-                moved = np.abs(readings - self._snap[k]) > self.band
-                moved[k] = False
-                if moved.any():
+            if self._counts is None:
+                continue
+            if counts[k] == self._counts[k]:
+                self._run[k] += 1
+                if abs(self._v[k]) * self._run[k] > self.limit:
                     stuck.append(k)
+            else:
+                step = (readings[k] - self._last[k]) / (self._run[k] + 1)
+                self._v[k] += self.alpha * (step - self._v[k])
+                self._run[k] = 0
         self._counts = list(counts)
+        self._last[:] = readings
         return stuck
