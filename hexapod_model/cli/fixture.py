@@ -90,7 +90,7 @@ def _fmt(v) -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return ""
     if isinstance(v, float):
-        return f"{v:.12g}"
+        return repr(float(v))  # round-trips: Unix times need 16 digits
     s = str(v)
     return '"' + s.replace('"', '""') + '"' if ("," in s or '"' in s) else s
 

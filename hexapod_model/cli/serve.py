@@ -81,8 +81,7 @@ def run_serve(args: argparse.Namespace) -> int:
     sim_bus = sim = None
     service.start()
     try:
-        host, port = service.address or ("", 0)
-        note("serve", f"serving http://{host}:{port} (fixtures: {', '.join(service.names())}); Ctrl-C stops")
+        note("serve", f"fixtures {', '.join(service.names())}; Ctrl-C stops")
         if args.simulate:
             sim_bus = can.Bus(interface="virtual", channel=config.bus.channel)
             sim = Simulator(config, sim_config, sim_bus, truth=1, hexapods=service.hexapods)

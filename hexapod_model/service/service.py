@@ -86,22 +86,22 @@ class FixtureService:
         """Open the store, recover every fixture's last lock, open bus and HTTP, start the cycle thread."""
         cfg = self.config
         self._started = time.time()
-        self.store = Store(cfg.store.path, cfg.store.samples)
-        try:
+        try:  # what can fail fails first, before anything is logged or written
+            if self._http:
+                self.endpoint = HttpEndpoint(cfg.http.host, cfg.http.port, Routes(self.names, self.record, self.health))
+            if self._bus is None:
+                self._bus = open_bus(cfg)
+            self.store = Store(cfg.store.path, cfg.store.samples)
             for f in cfg.fixtures:
                 hexa = self.hexapods[f.name]
                 cycle = FixtureCycle(f, hexa, geometry_hash(hexa), self.store.last_lock(f.name), self._started)
                 self.cycles[f.name] = cycle
                 log.info("fixture %s: %s", f.name, cycle.recovery)
-            self._routes = {(leg.can_id, leg.extended_id): (self.cycles[f.name], k) for f in cfg.fixtures
-                            for k, leg in enumerate(f.legs)}  # fmt: skip
-            if self._http:
-                self.endpoint = HttpEndpoint(cfg.http.host, cfg.http.port, Routes(self.names, self.record, self.health))
-            if self._bus is None:
-                self._bus = open_bus(cfg)
         except BaseException:
             self._close()
             raise
+        self._routes = {(leg.can_id, leg.extended_id): (self.cycles[f.name], k) for f in cfg.fixtures
+                        for k, leg in enumerate(f.legs)}  # fmt: skip
         self.writer = StoreWriter(self.store)
         self._last_logged = {name: -1e300 for name in self.cycles}
         if self.endpoint is not None:
