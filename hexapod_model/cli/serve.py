@@ -83,7 +83,7 @@ def run_serve(args: argparse.Namespace) -> int:
     try:
         note("serve", f"fixtures {', '.join(service.names())}; Ctrl-C stops")
         if args.simulate:
-            sim_bus = can.Bus(interface="virtual", channel=config.bus.channel)
+            sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
             sim = Simulator(config, sim_config, sim_bus, truth=1, hexapods=service.hexapods)
             sim.start()
         deadline = None if args.duration is None else time.monotonic() + args.duration

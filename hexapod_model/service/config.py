@@ -71,8 +71,9 @@ class FixtureConfig:
         stuck_sigmas: a leg whose count repeats exactly although its recent velocity predicts a
             change beyond this many ``noise`` is ``stuck`` (0: off).
         max_skew: largest spread (s) of the frame times of one reading set; 0 (default): half
-            the legs' measured frame period (encoders sampled together, SYNC or polled). Set it
-            to the frame period or more for free-running encoders.
+            the legs' measured frame period, for encoders sampled together (SYNC or polled) whose
+            frames reach the bus in a burst. Set it for free-running encoders or bursts longer
+            than half the period (1 kHz sets on a 500 kbit/s bus).
         predictor: the tracker's predictor (``none``, ``eq22``, ``eq23``, ``eq24``).
         confirm_samples: consistent samples after a tracker jump before the branch is re-confirmed.
         index: position in the file's ``[[fixtures]]`` list (for messages).
@@ -87,7 +88,7 @@ class FixtureConfig:
     steady_band: float = 100e-6
     drift_limit: float = 30e-6
     unlock_samples: int = 3
-    stuck_sigmas: float = 4.0
+    stuck_sigmas: float = 8.0
     max_skew: float = 0.0
     predictor: str = "eq22"
     confirm_samples: int = 5
@@ -220,7 +221,7 @@ def _fixture(t: Table, index: int, folder: Path) -> FixtureConfig:
         steady_band=t.number("steady_band", 10 * noise, 1e-9, 0.1),
         drift_limit=t.number("drift_limit", 3 * noise, 1e-9, 0.1),
         unlock_samples=t.integer("unlock_samples", 3, 1, 1000),
-        stuck_sigmas=t.number("stuck_sigmas", 4.0, 0.0, 1e6),
+        stuck_sigmas=t.number("stuck_sigmas", 8.0, 0.0, 1e6),
         max_skew=t.number("max_skew", 0.0, 0.0, 60.0),
         predictor=t.text("predictor", "eq22", PREDICTORS),
         confirm_samples=t.integer("confirm_samples", 5, 1, 10_000),

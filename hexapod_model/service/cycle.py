@@ -3,9 +3,10 @@
 A **reading set** is complete when each of the six legs has sent a frame since the last set,
 all within ``max_skew`` of each other (default: half the measured frame period) and younger
 than ``staleness``. A leg sending twice before the set completes (a frame of another leg was
-lost) starts a new set, and frames older than ``max_skew`` at completion are dropped from it,
-so a set never mixes readings of different sampling instants; when the missing leg's newest
-frame is older than ``staleness`` the set is published as ``silent_leg``. A set with a bad
+lost) starts a new set, and frames farther than ``max_skew`` from the newest are dropped from
+it, so a set never mixes readings of two sampling instants (and re-synchronises after a lost
+frame); when the missing leg's newest frame is older than ``staleness`` the set is published
+as ``silent_leg``. A set with a bad
 frame, an error bit, a reading outside the stroke or a stuck leg is published with that status
 and **no pose**; a solved set is ``ok`` only when the tracker (through
 :class:`~hexapod_model.service.solve.PoseSolver`) raised no flag.
@@ -63,7 +64,11 @@ class FixtureCycle:
         self._n_fresh = 0
         self.lock = LockDetector(cfg.lock_time, cfg.steady_band, cfg.drift_limit, cfg.unlock_samples)
         self.stuck = StuckDetector(cfg.stuck_sigmas, cfg.noise, self.layout.metres_per_count)
-        self._period = math.nan  # s, average interval between two frames of one leg
+        self._period = math.nan  # s, median interval between two frames of one leg (recent frames)
+        self._intervals = np.full(63, math.nan)
+        self._n_frames = 0
+        self._instant = self._lost = 0  # sampling instants, and sets lost since the last complete one
+        self._t_set = math.nan
         self._advisory: set[str] = set()
         self._episode = self._stored_episode = 0
         self._new_lock_stored = False
@@ -88,6 +93,7 @@ class FixtureCycle:
         if self._fresh[leg]:  # a leg repeats: some other leg's frame is missing
             self._fresh = [False] * 6
             self._n_fresh = 0
+            self._lost += 1
             self.solver.gap()
             silent = [k for k in range(6) if k != leg and t - self._t[k] > self.cfg.staleness]
             if silent:
@@ -99,16 +105,20 @@ class FixtureCycle:
         except FrameError:
             self._bad[leg], self._readings[leg] = True, math.nan
         dt = t - self._t[leg]
-        if 0.0 < dt <= self.cfg.staleness:
-            self._period = dt if math.isnan(self._period) else self._period + 0.05 * (dt - self._period)
+        if 0.0 < dt <= self.cfg.staleness:  # the median ignores missed frames and bunched arrivals
+            self._intervals[self._n_frames % 63] = dt
+            self._n_frames += 1
+            if self._n_frames % 16 == 8:
+                self._period = float(np.nanmedian(self._intervals))
         self._t[leg] = t
         self._fresh[leg] = True
         self._n_fresh += 1
         if self._n_fresh == 6:
             skew = self.cfg.max_skew or 0.5 * self._period
-            if t - float(np.min(self._t)) > skew:  # frames of different sampling instants: keep the newest
+            if t - float(np.min(self._t)) > skew:  # frames of two sampling instants: keep the newest
                 self._fresh = [bool(t - tk <= skew) for tk in self._t]
                 self._n_fresh = sum(self._fresh)
+                self._lost += 1
                 self.solver.gap()
                 return published
             self._fresh = [False] * 6
@@ -134,6 +144,13 @@ class FixtureCycle:
 
     # ----- one set -----
     def _complete(self, t: float) -> dict:
+        steps, dt = 1 + self._lost, t - self._t_set  # instants since the last set: lost sets count
+        if dt > 0.0 and self._period > 0.0:  # (False for NaN)
+            steps = max(steps, round(dt / self._period))
+        if steps > 1:
+            self.solver.gap()  # the predictor assumes one instant per set
+        self._instant += steps
+        self._lost, self._t_set = 0, t
         r = self._readings.copy()
         for status, bad, name in (
             ("bad_frame", self._bad, "bad_frame"),
@@ -144,7 +161,7 @@ class FixtureCycle:
         out = np.flatnonzero((r < self._lo) | (r > self._hi))
         if out.size:
             return self._failure(t, "out_of_stroke", [f"out_of_stroke:leg{k + 1}" for k in out])
-        stuck = self.stuck.update(self._counts, r)
+        stuck = self.stuck.update(self._instant, self._counts, r)
         if stuck:
             return self._failure(t, "stuck_leg", [f"stuck:leg{k + 1}" for k in stuck])
         was_locked = self.lock.state == "locked"

@@ -197,20 +197,22 @@ class FixtureService:
                 log.error("bus: %s", exc)
                 self._stop.wait(tick)
                 continue
-            now = time.time()
-            if msg is not None:
+            if msg is None:
+                clock = time.time()  # nothing queued: the bus is quiet now
+            else:
+                clock = msg.timestamp or time.time()  # the bus's own clock: a backlog is not silence
                 route = routes.get((msg.arbitration_id, msg.is_extended_id))
                 if route is None or msg.is_error_frame or msg.is_remote_frame:
                     self.unknown_frames += 1
                 else:
                     self.frames += 1
-                    rec = route[0].on_frame(route[1], msg.data, msg.timestamp or now)
+                    rec = route[0].on_frame(route[1], msg.data, clock)
                     if rec is not None:
                         self._publish(route[0], rec)
-            if now - last_check >= tick:
-                last_check = now
+            if clock - last_check >= tick:
+                last_check = clock
                 for cycle in self.cycles.values():
-                    rec = cycle.check_silence(now)
+                    rec = cycle.check_silence(clock)
                     if rec is not None:
                         self._publish(cycle, rec)
 

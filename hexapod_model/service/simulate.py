@@ -28,6 +28,7 @@ from .errors import FrameError
 from .simconfig import SimConfig, SimFixture
 
 log = logging.getLogger(__name__)
+FRAME_TIME = 130e-6  # s: one 8-byte frame on a 1 Mbit/s bus, the spacing of a set's stamps
 
 
 @dataclass(frozen=True)
@@ -37,7 +38,8 @@ class SentSet:
     Attributes:
         fixture: its name.
         t_sim: simulation time (s).
-        t_first, t_last: wall-clock time (s, Unix) just before the first and after the last frame.
+        t_first, t_last: time (s, Unix) of the set: its stamp and that of its last frame, or the
+            wall-clock time just before the first and after the last frame when not stamped.
         pose: the true pose (4x4, base -> platform, m).
         readings: the true readings (m), before noise and faults.
         sent: which legs' frames went on the bus.
@@ -87,6 +89,11 @@ class _Encoders:
             self.tau = (self.tau + self.sim.speed(t_sim)) % len(self.sim.poses)
         return pose, true
 
+    def skip(self, t_sim: float) -> None:
+        """Let a set's time pass unsent: the plate moves on."""
+        if len(self.sim.poses) > 1:
+            self.tau = (self.tau + self.sim.speed(t_sim)) % len(self.sim.poses)
+
     def frames(self, t_sim: float, true: np.ndarray) -> tuple[list[can.Message | None], tuple[str, ...]]:
         """The six frames (``None``: not sent) of a set at ``t_sim``."""
         r = true + self.rng.normal(0.0, self.sim.noise, 6) if self.sim.noise > 0 else true.copy()
@@ -133,7 +140,8 @@ class Simulator:
     Args:
         service: the service configuration (frame layouts, CAN ids, hexapods).
         sim: the simulation.
-        bus: where the frames go (a python-can bus; ``virtual`` reaches this process only).
+        bus: where the frames go (a python-can bus; ``virtual`` reaches this process only and
+            keeps the sampling-time stamps when created with ``preserve_timestamps=True``).
         truth: how many sent sets :attr:`truth` keeps.
         hexapods: already loaded hexapods by fixture name (else loaded here).
     """
@@ -155,28 +163,46 @@ class Simulator:
             hexa = hexapods.get(s.name) or cfg.load_hexapod()
             self._encoders.append(_Encoders(s, cfg, hexa, np.random.default_rng(rng.integers(2**63))))
         self.truth: deque[SentSet] = deque(maxlen=truth)
-        self.frames_sent = 0
+        self.frames_sent = self.sets_skipped = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
-    def send_set(self, index: int, t_sim: float) -> SentSet:
-        """Send one reading set of fixture ``index`` (of ``sim.fixtures``) at simulation time ``t_sim``."""
+    def send_set(self, index: int, t_sim: float, stamp: float | None = None) -> SentSet:
+        """Send one reading set of fixture ``index`` (of ``sim.fixtures``) at simulation time ``t_sim``.
+
+        With ``stamp`` (s, Unix) the frames carry it (plus :data:`FRAME_TIME` per frame, as a bus
+        delivers a burst) as their timestamps; a virtual bus keeps them when it was created with
+        ``preserve_timestamps=True``, so the receiver sees the sampling times however late this
+        thread runs. Without, the bus stamps them when sent.
+        """
         enc = self._encoders[index]
         pose, true = enc.advance(t_sim)
         msgs, faults = enc.frames(t_sim, true)
         t_first = time.time()
-        for m in msgs:
+        if stamp is not None and t_first - stamp > 1.0 / enc.sim.rate:  # this thread stalled: lost
+            msgs = [None] * 6
+        for k, m in enumerate(msgs):
             if m is not None:
+                if stamp is not None:
+                    m.timestamp = stamp + k * FRAME_TIME
                 self.bus.send(m)
-        sent = SentSet(enc.sim.name, t_sim, t_first, time.time(), pose, true, tuple(m is not None for m in msgs),
+        if stamp is not None:
+            t_first, t_last = stamp, stamp + 5 * FRAME_TIME
+        else:
+            t_last = time.time()
+        sent = SentSet(enc.sim.name, t_sim, t_first, t_last, pose, true, tuple(m is not None for m in msgs),
                        faults)  # fmt: skip
         self.frames_sent += sum(sent.sent)
         self.truth.append(sent)
         return sent
 
     def run(self, duration: float | None = None) -> None:
-        """Send sets at each fixture's rate until :meth:`stop` or ``duration`` seconds of simulation."""
-        start = time.monotonic()
+        """Send sets at each fixture's rate until :meth:`stop` or ``duration`` seconds of simulation.
+
+        Frames are stamped with their sampling time (see :meth:`send_set`); a set due more than
+        one period ago is skipped (its time passes unsent), never sent in a burst.
+        """
+        start, wall = time.monotonic(), time.time()
         due = [0.0] * len(self._encoders)
         while not self._stop.is_set():
             i = min(range(len(due)), key=due.__getitem__)
@@ -187,14 +213,16 @@ class Simulator:
             if wait > 0:
                 self._stop.wait(min(wait, 0.05))
                 continue
-            try:
-                self.send_set(i, t_sim)
-            except (can.CanError, HexapodError) as exc:
-                log.error("simulated fixture %s: %s", self._encoders[i].sim.name, exc)
-            due[i] += 1.0 / self._encoders[i].sim.rate
-            behind = time.monotonic() - start - due[i]
-            if behind > 0.5:  # fell far behind (machine busy): skip, do not burst
-                due[i] += behind
+            period = 1.0 / self._encoders[i].sim.rate
+            if -wait > period:  # late by more than a period (busy machine): encoders sample on their
+                self._encoders[i].skip(t_sim)  # own clock, so this set is lost, not sent in a burst
+                self.sets_skipped += 1
+            else:
+                try:
+                    self.send_set(i, t_sim, wall + t_sim)
+                except (can.CanError, HexapodError) as exc:
+                    log.error("simulated fixture %s: %s", self._encoders[i].sim.name, exc)
+            due[i] += period
 
     @property
     def running(self) -> bool:

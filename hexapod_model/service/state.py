@@ -91,12 +91,15 @@ class LockDetector:
 class StuckDetector:
     """Legs whose count stays exactly the same although their own recent motion says it should change.
 
-    A moving leg's count changes every set (noise alone makes an exact repeat unlikely), so a
-    repeat is suspicious only in proportion to the change the leg's recent velocity predicts:
-    after ``m`` repeats at an estimated ``v`` (m per set), the leg is ``stuck`` when
-    ``|v| m > sigmas * max(noise, resolution)``. The velocity is an exponential average
-    (``alpha``) of the per-set changes, frozen while the count repeats. A still fixture (a
-    locked plate) cannot reveal a stuck encoder, and needs not: its readings do not change.
+    A moving leg's count changes every set (its noise alone makes an exact repeat unlikely), so a
+    repeat is suspicious in proportion to the change the leg's recent velocity predicts: after a
+    repeat lasting ``n`` frame periods at an estimated ``v`` (m per period), the leg is ``stuck``
+    when ``|v| n > sigmas * max(noise, resolution)``. The velocity is an exponential average
+    (``alpha`` per set) of the leg's rate of change, frozen while the count repeats. With the
+    default 8 sigma a stuck leg goes unnoticed while it would have moved about 8 sigma (about 3
+    sigma of the pose) when its speed is well known; a leg moving by about the noise per set has
+    a noisy speed estimate and may take a few sets more. A still fixture (a locked plate) cannot
+    reveal a stuck encoder, and needs not: its readings do not change.
 
     Args:
         sigmas: threshold in noise units; 0 disables the check.
@@ -104,30 +107,31 @@ class StuckDetector:
         resolution: metres per count.
     """
 
-    def __init__(self, sigmas: float, noise: float, resolution: float, alpha: float = 0.5):
+    def __init__(self, sigmas: float, noise: float, resolution: float, alpha: float = 0.3):
         self.limit = sigmas * max(noise, abs(resolution))
         self.alpha = alpha
         self._counts: list[int] | None = None
-        self._last = np.zeros(6)
-        self._run = np.zeros(6, dtype=int)
+        self._since = np.zeros(6, dtype=np.int64)  # sampling instant the current count was first seen
+        self._value = np.zeros(6)  # its reading (m)
         self._v = np.zeros(6)
 
-    def update(self, counts: list[int], readings: np.ndarray) -> list[int]:
-        """Add a set's raw counts and readings (m); returns the stuck legs (0-based)."""
+    def update(self, instant: int, counts: list[int], readings: np.ndarray) -> list[int]:
+        """Add a set: its sampling instant (frame periods since the start), raw counts and readings (m).
+
+        Returns the stuck legs (0-based). Counting in sampling instants rather than in seconds keeps
+        the speed estimate right when frames arrive bunched (USB adapters, a busy host).
+        """
         if self.limit == 0.0:
             return []
         stuck = []
         for k in range(6):
-            if self._counts is None:
-                continue
-            if counts[k] == self._counts[k]:
-                self._run[k] += 1
-                if abs(self._v[k]) * self._run[k] > self.limit:
+            if self._counts is not None and counts[k] == self._counts[k]:
+                if abs(self._v[k]) * (instant - self._since[k]) > self.limit:
                     stuck.append(k)
-            else:
-                step = (readings[k] - self._last[k]) / (self._run[k] + 1)
-                self._v[k] += self.alpha * (step - self._v[k])
-                self._run[k] = 0
+                continue
+            if self._counts is not None and instant > self._since[k]:
+                rate = (readings[k] - self._value[k]) / (instant - self._since[k])
+                self._v[k] += self.alpha * (rate - self._v[k])
+            self._since[k], self._value[k] = instant, readings[k]
         self._counts = list(counts)
-        self._last[:] = readings
         return stuck

@@ -112,6 +112,12 @@ class Store:
         with self._lock:
             self.db.close()
 
+    def __enter__(self) -> Store:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
     def add_lock(self, event: LockEvent, samples: Sequence[tuple] = ()) -> LockEvent:
         """Commit ``event`` (and pending ``samples``) durably; returns it with its ``id``."""
         values = (event.t, *event.position, *event.quaternion, *event.readings)
