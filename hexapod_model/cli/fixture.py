@@ -12,8 +12,29 @@ import numpy as np
 from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
 
-LOCK_COLUMNS = ["fixture", "t", "time", "x", "y", "z", "qx", "qy", "qz", "qw", "roll", "pitch", "yaw",
-                "l1", "l2", "l3", "l4", "l5", "l6", "status", "geometry_hash"]  # fmt: skip
+LOCK_COLUMNS = [
+    "fixture",
+    "t",
+    "time",
+    "x",
+    "y",
+    "z",
+    "qx",
+    "qy",
+    "qz",
+    "qw",
+    "roll",
+    "pitch",
+    "yaw",
+    "l1",
+    "l2",
+    "l3",
+    "l4",
+    "l5",
+    "l6",
+    "status",
+    "geometry_hash",
+]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -70,8 +91,10 @@ def run_status(args: argparse.Namespace) -> int:
 
     config, store = _open(args)
     try:
-        print(f"{'fixture':12s} {'locked at':29s} {'x (m)':>10s} {'y (m)':>10s} {'z (m)':>10s} "
-              f"{'roll':>8s} {'pitch':>8s} {'yaw (deg)':>9s}  geometry")  # fmt: skip
+        print(
+            f"{'fixture':12s} {'locked at':29s} {'x (m)':>10s} {'y (m)':>10s} {'z (m)':>10s} "
+            f"{'roll':>8s} {'pitch':>8s} {'yaw (deg)':>9s}  geometry"
+        )
         for f in config.fixtures:
             e = store.last_lock(f.name)
             if e is None:
@@ -79,8 +102,10 @@ def run_status(args: argparse.Namespace) -> int:
                 continue
             same = e.geometry_hash == geometry_hash(f.load_hexapod())
             r = _rpy_deg(e.quaternion)
-            print(f"{f.name:12s} {iso(e.t):29s} {e.position[0]:10.6f} {e.position[1]:10.6f} {e.position[2]:10.6f} "
-                  f"{r[0]:8.3f} {r[1]:8.3f} {r[2]:9.3f}  {'same' if same else 'CHANGED (pose not used)'}")  # fmt: skip
+            print(
+                f"{f.name:12s} {iso(e.t):29s} {e.position[0]:10.6f} {e.position[1]:10.6f} {e.position[2]:10.6f} "
+                f"{r[0]:8.3f} {r[1]:8.3f} {r[2]:9.3f}  {'same' if same else 'CHANGED (pose not used)'}"
+            )
     finally:
         store.close()
     return 0
@@ -122,7 +147,7 @@ def run_history(args: argparse.Namespace) -> int:
                     *e.readings,
                     e.status,
                     e.geometry_hash,
-                ]  # fmt: skip
+                ]
                 for e in store.locks(args.fixture, since)
             ]
     finally:

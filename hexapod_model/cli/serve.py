@@ -24,8 +24,9 @@ recover them at the next start. Ctrl-C (or SIGTERM) stops it cleanly. Format: do
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``serve`` and ``simulate-encoders``."""
-    p = sub.add_parser("serve", help="run the fixture pose service (CAN in, poses over HTTP)",
-                       description=SERVE_DESCRIPTION)  # fmt: skip
+    p = sub.add_parser(
+        "serve", help="run the fixture pose service (CAN in, poses over HTTP)", description=SERVE_DESCRIPTION
+    )
     p.add_argument("config", metavar="FIXTURE.toml", help="the service configuration")
     p.add_argument("--simulate", metavar="SIM.toml", help="simulated encoders on a virtual bus (no hardware)")
     p.add_argument("--jsonl", action="store_true", help="also write every record as a JSON line on stdout")

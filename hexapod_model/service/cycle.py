@@ -36,9 +36,18 @@ from .store import LockEvent
 
 log = logging.getLogger(__name__)
 RECORD_KEYS = (
-    "fixture", "t", "readings", "pose", "status", "flags", "iterations", "state", "stored", "sigma",
+    "fixture",
+    "t",
+    "readings",
+    "pose",
+    "status",
+    "flags",
+    "iterations",
+    "state",
+    "stored",
+    "sigma",
     "singularity_margin",
-)  # fmt: skip
+)
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
 
 
@@ -193,8 +202,12 @@ class FixtureCycle:
         dr = float(np.linalg.norm(pin.log3(R.T @ outcome.pose[:3, :3])))
         if dt > MOVED_SIGMAS * u.translation or dr > MOVED_SIGMAS * u.rotation:
             self._advisory.add("moved_while_off")
-            log.warning("fixture %s: moved while off: %.3g mm, %.3g deg from the stored lock pose", self.cfg.name,
-                        dt * 1e3, math.degrees(dr))  # fmt: skip
+            log.warning(
+                "fixture %s: moved while off: %.3g mm, %.3g deg from the stored lock pose",
+                self.cfg.name,
+                dt * 1e3,
+                math.degrees(dr),
+            )
         else:
             self.lock.lock(t, rec.readings)
             self._episode += 1
@@ -239,8 +252,10 @@ class FixtureCycle:
             elif status == "ok":
                 status = "flagged"
                 flags.append("near_singular")
-        fresh = [None if math.isnan(v) or t - self._t[k] > self.cfg.staleness else float(v) for k, v in
-                 enumerate(self._readings)]  # fmt: skip
+        fresh = [
+            None if math.isnan(v) or t - self._t[k] > self.cfg.staleness else float(v)
+            for k, v in enumerate(self._readings)
+        ]
         locked = self.lock.state == "locked"
         record = {
             "fixture": self.cfg.name,

@@ -100,8 +100,11 @@ class FixtureService:
         except BaseException:
             self._close()
             raise
-        self._routes = {(leg.can_id, leg.extended_id): (self.cycles[f.name], k) for f in cfg.fixtures
-                        for k, leg in enumerate(f.legs)}  # fmt: skip
+        self._routes = {
+            (leg.can_id, leg.extended_id): (self.cycles[f.name], k)
+            for f in cfg.fixtures
+            for k, leg in enumerate(f.legs)
+        }
         self.writer = StoreWriter(self.store)
         self._last_logged = {name: -1e300 for name in self.cycles}
         if self.endpoint is not None:
@@ -240,5 +243,12 @@ def sample_row(rec: Record) -> tuple:
 
     pose = rec["pose"]
     pose_values = [None] * 7 if pose is None else [pose[k] for k in ("x", "y", "z", "qx", "qy", "qz", "qw")]
-    return (rec["fixture"], rec["t"], rec["status"], json.dumps(rec["flags"]), rec["state"], *rec["readings"],
-            *pose_values)  # fmt: skip
+    return (
+        rec["fixture"],
+        rec["t"],
+        rec["status"],
+        json.dumps(rec["flags"]),
+        rec["state"],
+        *rec["readings"],
+        *pose_values,
+    )

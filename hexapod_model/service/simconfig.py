@@ -127,8 +127,9 @@ def simulation_from_dict(data: dict, service: ServiceConfig, source: str = "<dic
     items = top.take("fixtures")
     if not isinstance(items, list) or not items:
         raise top.error("fixtures", items, "expected one or more [[fixtures]] tables")
-    fixtures = tuple(_fixture(Table(f, f"fixtures[{i}]", source), service, folder or Path(".")) for i, f in
-                     enumerate(items))  # fmt: skip
+    fixtures = tuple(
+        _fixture(Table(f, f"fixtures[{i}]", source), service, folder or Path(".")) for i, f in enumerate(items)
+    )
     top.finish()
     names = [f.name for f in fixtures]
     for i, n in enumerate(names):

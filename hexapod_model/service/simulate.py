@@ -190,8 +190,7 @@ class Simulator:
             t_first, t_last = stamp, stamp + 5 * FRAME_TIME
         else:
             t_last = time.time()
-        sent = SentSet(enc.sim.name, t_sim, t_first, t_last, pose, true, tuple(m is not None for m in msgs),
-                       faults)  # fmt: skip
+        sent = SentSet(enc.sim.name, t_sim, t_first, t_last, pose, true, tuple(m is not None for m in msgs), faults)
         self.frames_sent += sum(sent.sent)
         self.truth.append(sent)
         return sent

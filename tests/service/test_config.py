@@ -105,7 +105,7 @@ def test_home_count_must_fit_the_layout(tmp_path):
         (
             {"name": "left", "hold": [0, 0, 0.4, 0, 0, 0], "faults": [{"kind": "stuck_leg", "leg": 7}]},
             "fixtures[0].faults[0].leg",
-        ),  # fmt: skip
+        ),
         ({"name": "left", "trajectory": "A", "lock": 1.0, "move": 0.3, "ramp": 0.2}, "fixtures[0].ramp"),
     ],
 )

@@ -58,10 +58,13 @@ def truth_of(truth, fixture, t):
 
 def test_end_to_end_poses_equal_the_truth_within_sigma_over_http_and_subscribers(tmp_path):
     config = service_config(tmp_path, [fixture_table("left"), fixture_table("right", 1, home_counts=50_000)])
-    sim = sim_config(config, [
-        {"name": "left", "rate": 200.0, "trajectory": "A", "period": 6.0},
-        {"name": "right", "rate": 50.0, "hold": [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]},
-    ])  # fmt: skip
+    sim = sim_config(
+        config,
+        [
+            {"name": "left", "rate": 200.0, "trajectory": "A", "period": 6.0},
+            {"name": "right", "rate": 50.0, "hold": [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]},
+        ],
+    )
     hexapods = {"left": hexapod("reference"), "right": hexapod("reference")}
     records, truth, answers = run_service(config, sim, 3.0, hexapods)
     good = [r for r in records if r["status"] == "ok"]

@@ -72,7 +72,7 @@ def test_noise_alone_never_drifts_or_unlocks():
 def test_stuck_leg_is_a_repeat_its_own_recent_motion_rules_out():
     rng = np.random.default_rng(4)
     det = StuckDetector(sigmas=8, noise=NOISE, resolution=1e-6)
-    found = []
+    found, frozen = [], 0.0
     for k in range(40):
         r = 2e-5 * k + rng.normal(0, NOISE, 6)  # 20 um per set: 2 sigma
         if k >= 20:

@@ -13,8 +13,16 @@ from hexapod_model.service.store import SAMPLE_COLUMNS, StoreWriter
 
 
 def event(fixture="left", t=1.5, k=0.0):
-    return LockEvent(fixture, t, np.array([0.01, -0.02, 0.4 + k]), np.array([0.0, 0.0, 0.0, 1.0]),
-                     np.arange(6) * 1e-3, "ok", "ab" * 32, np.linspace(0, 1, 43))  # fmt: skip
+    return LockEvent(
+        fixture,
+        t,
+        np.array([0.01, -0.02, 0.4 + k]),
+        np.array([0.0, 0.0, 0.0, 1.0]),
+        np.arange(6) * 1e-3,
+        "ok",
+        "ab" * 32,
+        np.linspace(0, 1, 43),
+    )
 
 
 def sample(t, fixture="left"):
@@ -46,8 +54,8 @@ def test_sample_log_is_bounded(tmp_path):
     store.add_samples([sample(float(t)) for t in range(80, 120)])
     rows = store.samples()
     assert len(rows) == 50 and [r[1] for r in rows] == [float(t) for t in range(70, 120)]
-    assert len(rows[0]) == len(SAMPLE_COLUMNS) and [r[1] for r in store.samples("left", 115.0)] == [115.0 + k for k in
-                                                                                                   range(5)]  # fmt: skip
+    assert len(rows[0]) == len(SAMPLE_COLUMNS)
+    assert [r[1] for r in store.samples("left", 115.0)] == [115.0 + k for k in range(5)]
 
 
 def test_writer_calls_back_only_after_the_commit_is_visible_to_another_connection(tmp_path):
