@@ -19,6 +19,7 @@ from ..kinematics.rotations import quaternion_to_matrix
 from ._common import note
 
 FRAME_S = 0.05  # the view's refresh period
+ONCE_S = 30.0  # --once gives up after this long without a pose (the meshcat server's start included)
 
 
 def pose_of_record(record: dict | None) -> np.ndarray | None:
@@ -33,11 +34,16 @@ def pose_of_record(record: dict | None) -> np.ndarray | None:
 
 
 def live_view(
-    hexa: Hexapod, latest: Callable[[], dict | None], stop: threading.Event, deadline: float | None = None
+    hexa: Hexapod,
+    latest: Callable[[], dict | None],
+    stop: threading.Event,
+    deadline: float | None = None,
+    count: int | None = None,
 ) -> int:
-    """Show the pose of ``latest()`` (a record) in a local meshcat view until ``stop`` or ``deadline``.
+    """Show the pose of ``latest()`` (a record) in a local meshcat view.
 
-    Poses are shown through inverse kinematics (warm started); returns the number of poses shown.
+    Until ``stop`` is set, the monotonic clock passes ``deadline``, or ``count`` poses were shown.
+    Poses are shown through inverse kinematics (warm started); returns the number shown.
     """
     from ..viz.meshcat_scene import HexapodScene, start_visualizer, stop_visualizer
 
@@ -46,7 +52,7 @@ def live_view(
     try:
         scene = HexapodScene(hexa, vis)
         print(f"meshcat: {vis.url()}", flush=True)
-        while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
+        while not stop.is_set() and (deadline is None or time.monotonic() < deadline) and shown != count:
             rec = latest()
             T = pose_of_record(rec)
             if T is not None and rec is not None and rec["t"] != last_t:
@@ -87,9 +93,10 @@ def run_live(args: argparse.Namespace) -> int:
             return None
 
     stop = threading.Event()
-    deadline = time.monotonic() + 2 * FRAME_S if args.once else None
-    try:
-        shown = live_view(hexa, latest, stop, deadline)
+    try:  # --once: the first pose served, or nothing after ONCE_S
+        shown = live_view(
+            hexa, latest, stop, time.monotonic() + ONCE_S if args.once else None, 1 if args.once else None
+        )
     except KeyboardInterrupt:
         return 0
     print(f"hexapod view: showed {shown} poses of {name} from {url}", file=sys.stderr)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import logging
@@ -43,12 +44,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run_simulate)
 
 
-def _logging(command: str, level: str) -> None:
+@contextlib.contextmanager
+def _logging(command: str, level: str):
+    """The package's log records as ``hexapod COMMAND: LEVEL message`` lines on stderr, for the command's run."""
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter(f"hexapod {command}: %(levelname)s %(message)s"))
     root = logging.getLogger("hexapod_model")
+    saved = root.handlers[:], root.level
     root.handlers[:] = [handler]
     root.setLevel(level)
+    try:
+        yield
+    finally:
+        root.handlers[:], level = saved
+        root.setLevel(level)
 
 
 def _stop_on_sigterm(stop: threading.Event) -> None:
@@ -65,11 +74,15 @@ def simulated(config):
 
 def run_serve(args: argparse.Namespace) -> int:
     """``hexapod serve``."""
+    with _logging("serve", args.log_level):
+        return _serve(args)
+
+
+def _serve(args: argparse.Namespace) -> int:
     import can
 
     from ..service import FixtureService, ServiceError, Simulator, load_config, load_simulation
 
-    _logging("serve", args.log_level)
     config = load_config(args.config)
     if args.simulate:
         config = simulated(config)
@@ -80,8 +93,8 @@ def run_serve(args: argparse.Namespace) -> int:
     if args.jsonl:
         service.subscribe(_jsonl_writer(stop))
     sim_bus = sim = None
-    service.start()
     try:
+        service.start()
         note("serve", f"fixtures {', '.join(service.names())}; Ctrl-C stops")
         if args.simulate:
             sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
@@ -124,9 +137,13 @@ def _jsonl_writer(stop: threading.Event):
 
 def run_simulate(args: argparse.Namespace) -> int:
     """``hexapod simulate-encoders``."""
+    with _logging("simulate-encoders", "INFO"):
+        return _simulate(args)
+
+
+def _simulate(args: argparse.Namespace) -> int:
     from ..service import Simulator, load_config, load_simulation, open_bus
 
-    _logging("simulate-encoders", "INFO")
     config = load_config(args.config)
     sim_config = load_simulation(args.sim, config)
     b = config.bus
