@@ -50,14 +50,14 @@ def _logging(command: str, level: str):
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter(f"hexapod {command}: %(levelname)s %(message)s"))
     root = logging.getLogger("hexapod_model")
-    saved = root.handlers[:], root.level
+    saved_handlers, saved_level = root.handlers[:], root.level
     root.handlers[:] = [handler]
     root.setLevel(level)
     try:
         yield
     finally:
-        root.handlers[:], level = saved
-        root.setLevel(level)
+        root.handlers[:] = saved_handlers
+        root.setLevel(saved_level)
 
 
 def _stop_on_sigterm(stop: threading.Event) -> None:
