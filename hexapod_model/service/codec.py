@@ -15,6 +15,8 @@ does not fit the field is a :class:`FrameError`.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
+from typing import NamedTuple
 
 import can
 
@@ -98,24 +100,23 @@ class FrameLayout:
         t.finish()
         return layout
 
-    @property
+    @cached_property
     def length(self) -> int:
         """Bytes a frame needs: the count field and every status bit."""
         bits = [b for b in (self.error_bit, self.warning_bit) if b is not None]
         return max([self.offset + self.width] + [b // 8 + 1 for b in bits])
 
-    @property
+    @cached_property
     def count_range(self) -> tuple[int, int]:
         """Smallest and largest count the field holds."""
         n = 8 * self.width
         return (-(1 << (n - 1)), (1 << (n - 1)) - 1) if self.signed else (0, (1 << n) - 1)
 
 
-@dataclass(frozen=True)
-class Decoded:
-    """One decoded frame: the raw count and the status bits."""
+class Decoded(NamedTuple):
+    """One decoded frame: the raw position count and the status bits."""
 
-    count: int
+    position: int
     error: bool
     warning: bool
 
@@ -124,11 +125,14 @@ def decode(layout: FrameLayout, data: bytes | bytearray) -> Decoded:
     """Count and status bits of a payload; :class:`FrameError` when it is too short."""
     if len(data) < layout.length:
         raise FrameError(f"payload of {len(data)} bytes; the layout needs {layout.length}")
-    field = bytes(data[layout.offset : layout.offset + layout.width])
+    field = data[layout.offset : layout.offset + layout.width]
     count = int.from_bytes(field, layout.byte_order, signed=layout.signed)  # type: ignore[arg-type]
-    err = layout.error_bit is not None and bool(data[layout.error_bit >> 3] >> (layout.error_bit & 7) & 1)
-    warn = layout.warning_bit is not None and bool(data[layout.warning_bit >> 3] >> (layout.warning_bit & 7) & 1)
-    return Decoded(count, err, warn)
+    e, w = layout.error_bit, layout.warning_bit
+    return Decoded(
+        count,
+        e is not None and bool(data[e >> 3] >> (e & 7) & 1),
+        w is not None and bool(data[w >> 3] >> (w & 7) & 1),
+    )
 
 
 def encode(layout: FrameLayout, count: int, error: bool = False, warning: bool = False) -> bytes:

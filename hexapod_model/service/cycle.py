@@ -48,6 +48,7 @@ RECORD_KEYS = (
     "sigma",
     "singularity_margin",
 )
+POSE_KEYS = ("x", "y", "z", "qx", "qy", "qz", "qw", "roll", "pitch", "yaw")
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
 
 
@@ -65,16 +66,17 @@ class FixtureCycle:
     def __init__(self, cfg: FixtureConfig, hexa: Hexapod, geometry_hash: str, recovered: LockEvent | None, t0: float):
         self.cfg, self.hexa, self.geometry_hash = cfg, hexa, geometry_hash
         self.layout = cfg.legs[0].layout
-        self._lo, self._hi = hexa.stroke[:, 0], hexa.stroke[:, 1]
-        self._t = np.full(6, -math.inf)
-        self._readings = np.full(6, math.nan)
+        self._lo, self._hi = hexa.stroke[:, 0].tolist(), hexa.stroke[:, 1].tolist()
+        self._home = [leg.home_count for leg in cfg.legs]
+        self._t = [-math.inf] * 6  # receipt time of each leg's newest frame (lists: faster than arrays here)
+        self._readings = [math.nan] * 6
         self._counts = [0] * 6
         self._err, self._warn, self._bad, self._fresh = [False] * 6, [False] * 6, [False] * 6, [False] * 6
         self._n_fresh = 0
         self.lock = LockDetector(cfg.lock_time, cfg.steady_band, cfg.drift_limit, cfg.unlock_samples)
         self.stuck = StuckDetector(cfg.stuck_sigmas, cfg.noise, self.layout.metres_per_count)
         self._period = math.nan  # s, median interval between two frames of one leg (recent frames)
-        self._intervals = np.full(63, math.nan)
+        self._intervals: list[float] = []
         self._n_frames = 0
         self._instant = self._lost = 0  # sampling instants, and sets lost since the last complete one
         self._t_set = math.nan
@@ -108,23 +110,26 @@ class FixtureCycle:
             if silent:
                 published = self._failure(t, "silent_leg", [f"silent:leg{k + 1}" for k in silent])
         try:
-            d = decode(self.layout, data)
-            self._counts[leg], self._err[leg], self._warn[leg], self._bad[leg] = d.count, d.error, d.warning, False
-            self._readings[leg] = self.cfg.legs[leg].reading(d.count)
+            count, self._err[leg], self._warn[leg] = decode(self.layout, data)
+            self._counts[leg], self._bad[leg] = count, False
+            self._readings[leg] = (count - self._home[leg]) * self.layout.metres_per_count
         except FrameError:
             self._bad[leg], self._readings[leg] = True, math.nan
         dt = t - self._t[leg]
         if 0.0 < dt <= self.cfg.staleness:  # the median ignores missed frames and bunched arrivals
-            self._intervals[self._n_frames % 63] = dt
+            if len(self._intervals) < 63:
+                self._intervals.append(dt)
+            else:
+                self._intervals[self._n_frames % 63] = dt
             self._n_frames += 1
-            if self._n_frames % 16 == 8:
-                self._period = float(np.nanmedian(self._intervals))
+            if self._n_frames % 32 == 8:
+                self._period = sorted(self._intervals)[len(self._intervals) // 2]
         self._t[leg] = t
         self._fresh[leg] = True
         self._n_fresh += 1
         if self._n_fresh == 6:
             skew = self.cfg.max_skew or 0.5 * self._period
-            if t - float(np.min(self._t)) > skew:  # frames of two sampling instants: keep the newest
+            if t - min(self._t) > skew:  # frames of two sampling instants: keep the newest
                 self._fresh = [bool(t - tk <= skew) for tk in self._t]
                 self._n_fresh = sum(self._fresh)
                 self._lost += 1
@@ -160,17 +165,17 @@ class FixtureCycle:
             self.solver.gap()  # the predictor assumes one instant per set
         self._instant += steps
         self._lost, self._t_set = 0, t
-        r = self._readings.copy()
+        r = np.array(self._readings)
         for status, bad, name in (
             ("bad_frame", self._bad, "bad_frame"),
             ("encoder_error", self._err, "encoder_error"),
         ):
             if any(bad):
                 return self._failure(t, status, [f"{name}:leg{k + 1}" for k in range(6) if bad[k]])
-        out = np.flatnonzero((r < self._lo) | (r > self._hi))
-        if out.size:
+        out = [k for k in range(6) if not self._lo[k] <= self._readings[k] <= self._hi[k]]
+        if out:
             return self._failure(t, "out_of_stroke", [f"out_of_stroke:leg{k + 1}" for k in out])
-        stuck = self.stuck.update(self._instant, self._counts, r)
+        stuck = self.stuck.update(self._instant, self._counts, self._readings)
         if stuck:
             return self._failure(t, "stuck_leg", [f"stuck:leg{k + 1}" for k in stuck])
         was_locked = self.lock.state == "locked"
@@ -217,7 +222,7 @@ class FixtureCycle:
         mean = self.lock.run_mean
         sol = self.solver.solve_once(mean, outcome.q)  # type: ignore[arg-type]
         if sol.status != "converged":
-            self.lock.restart(t, self._readings)
+            self.lock.restart(t, np.array(self._readings))
             return
         quat = _quaternion(sol.pose[:3, :3])
         event = LockEvent(self.cfg.name, t, sol.pose[:3, 3].copy(), quat, mean, "ok", self.geometry_hash, sol.q)
@@ -235,27 +240,24 @@ class FixtureCycle:
         if self._new_lock_stored:
             self._new_lock_stored = False
             self._advisory -= {"moved_while_off", "stored_geometry_changed"}
-        for k in range(6):
-            if self._warn[k] and not self._err[k]:
-                flags.append(f"encoder_warning:leg{k + 1}")
-        flags.extend(sorted(self._advisory))
+        if any(self._warn):
+            flags.extend(f"encoder_warning:leg{k + 1}" for k in range(6) if self._warn[k] and not self._err[k])
+        if self._advisory:
+            flags.extend(sorted(self._advisory))
         pose = sigma = margin = None
         if outcome is not None and outcome.pose is not None and outcome.uncertainty is not None:
             T, u = outcome.pose, outcome.uncertainty
-            q = _quaternion(T[:3, :3])
-            rpy = np.degrees(pin.rpy.matrixToRpy(T[:3, :3]))
-            keys = ("x", "y", "z", "qx", "qy", "qz", "qw", "roll", "pitch", "yaw")
-            pose = dict(zip(keys, map(float, (*T[:3, 3], *q, *rpy))))
+            R = T[:3, :3]
+            values = T[:3, 3].tolist() + _quaternion(R).tolist() + np.degrees(pin.rpy.matrixToRpy(R)).tolist()
+            pose = dict(zip(POSE_KEYS, values))
             if math.isfinite(u.translation) and math.isfinite(u.rotation):
                 sigma = {"translation_mm": u.translation * 1e3, "rotation_deg": math.degrees(u.rotation)}
                 margin = u.margin
             elif status == "ok":
                 status = "flagged"
                 flags.append("near_singular")
-        fresh = [
-            None if math.isnan(v) or t - self._t[k] > self.cfg.staleness else float(v)
-            for k, v in enumerate(self._readings)
-        ]
+        old = t - self.cfg.staleness
+        fresh = [None if v != v or self._t[k] < old else v for k, v in enumerate(self._readings)]  # v != v: NaN
         locked = self.lock.state == "locked"
         record = {
             "fixture": self.cfg.name,

@@ -111,11 +111,11 @@ class StuckDetector:
         self.limit = sigmas * max(noise, abs(resolution))
         self.alpha = alpha
         self._counts: list[int] | None = None
-        self._since = np.zeros(6, dtype=np.int64)  # sampling instant the current count was first seen
-        self._value = np.zeros(6)  # its reading (m)
-        self._v = np.zeros(6)
+        self._since = [0] * 6  # sampling instant the current count was first seen
+        self._value = [0.0] * 6  # its reading (m)
+        self._v = [0.0] * 6  # m per instant
 
-    def update(self, instant: int, counts: list[int], readings: np.ndarray) -> list[int]:
+    def update(self, instant: int, counts: list[int], readings) -> list[int]:
         """Add a set: its sampling instant (frame periods since the start), raw counts and readings (m).
 
         Returns the stuck legs (0-based). Counting in sampling instants rather than in seconds keeps
@@ -124,14 +124,15 @@ class StuckDetector:
         if self.limit == 0.0:
             return []
         stuck = []
+        prev, since, value, v = self._counts, self._since, self._value, self._v
         for k in range(6):
-            if self._counts is not None and counts[k] == self._counts[k]:
-                if abs(self._v[k]) * (instant - self._since[k]) > self.limit:
+            if prev is not None and counts[k] == prev[k]:
+                if abs(v[k]) * (instant - since[k]) > self.limit:
                     stuck.append(k)
                 continue
-            if self._counts is not None and instant > self._since[k]:
-                rate = (readings[k] - self._value[k]) / (instant - self._since[k])
-                self._v[k] += self.alpha * (rate - self._v[k])
-            self._since[k], self._value[k] = instant, readings[k]
+            if prev is not None and instant > since[k]:
+                rate = (float(readings[k]) - value[k]) / (instant - since[k])
+                v[k] += self.alpha * (rate - v[k])
+            since[k], value[k] = instant, float(readings[k])
         self._counts = list(counts)
         return stuck

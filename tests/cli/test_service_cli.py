@@ -139,7 +139,7 @@ def test_simulate_encoders_sends_the_fixtures_own_frames(tmp_path, capsys):
     readings = {}
     for m in frames:
         leg = legs[m.arbitration_id - 0x181]
-        readings[m.arbitration_id] = leg.reading(decode(leg.layout, m.data).count)
+        readings[m.arbitration_id] = leg.reading(decode(leg.layout, m.data).position)
     hexa = config.fixtures[0].load_hexapod()
     T = np.eye(4)
     T[:3, :3] = rpy_to_matrix(*np.radians(HOLD[3:]))

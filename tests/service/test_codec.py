@@ -15,7 +15,7 @@ def test_default_layout_bytes_are_ours_as_documented():
     assert data == bytes([0xFE, 0xFF, 0xFF, 0xFF, 0x01])
     assert decode(layout, data) == decode(layout, data + b"\x00\x00\x00")
     d = decode(layout, bytes([0x10, 0x27, 0, 0, 0x02, 0, 0, 0]))
-    assert (d.count, d.error, d.warning) == (10000, False, True)
+    assert (d.position, d.error, d.warning) == (10000, False, True)
 
 
 def test_big_endian_unsigned_field_at_an_offset():
@@ -23,7 +23,7 @@ def test_big_endian_unsigned_field_at_an_offset():
     data = encode(layout, 0x123456, error=True)
     assert data == bytes([0x80, 0x00, 0x12, 0x34, 0x56])
     d = decode(layout, data)
-    assert (d.count, d.error, d.warning) == (0x123456, True, False)  # warning bit 0 is clear
+    assert (d.position, d.error, d.warning) == (0x123456, True, False)  # warning bit 0 is clear
 
 
 @pytest.mark.parametrize("order", ["little", "big"])
@@ -32,7 +32,7 @@ def test_round_trip_at_the_field_limits(order, width, signed):
     layout = FrameLayout(byte_order=order, offset=0, width=width, signed=signed, error_bit=None, warning_bit=None)
     lo, hi = layout.count_range
     for count in (lo, lo + 1, 0 if signed else 1, hi - 1, hi):
-        assert decode(layout, encode(layout, count)).count == count
+        assert decode(layout, encode(layout, count)).position == count
     with pytest.raises(FrameError, match="does not fit"):
         encode(layout, hi + 1)
     with pytest.raises(FrameError, match="does not fit"):
@@ -54,7 +54,7 @@ def test_leg_reading_home_count_and_direction():
     msg = leg.message(0.002, warning=True)
     assert isinstance(msg, can.Message) and msg.arbitration_id == 0x181 and not msg.is_extended_id
     d = decode(leg.layout, msg.data)
-    assert leg.reading(d.count) == pytest.approx(0.002, abs=1e-12) and d.warning and not d.error
+    assert leg.reading(d.position) == pytest.approx(0.002, abs=1e-12) and d.warning and not d.error
     small = LegCodec(1, FrameLayout(width=1, signed=False, error_bit=None, warning_bit=None))
     with pytest.raises(FrameError, match="outside the field"):
         small.message(0.001)  # 1000 counts in an 8-bit field: refused, never clamped

@@ -81,7 +81,7 @@ def test_end_to_end_poses_equal_the_truth_within_sigma_over_http_and_subscribers
         dp, dr = pose_error(r, sent.pose)
         ratios.append((dp / (r["sigma"]["translation_mm"] * 1e-3), dr / np.radians(r["sigma"]["rotation_deg"])))
     ratios = np.array(ratios)
-    assert ratios.max() < 5.0 and 0.5 < np.mean(ratios**2) < 1.6
+    assert ratios.max() < 5.0 and 0.5 < np.mean(ratios**2) < 1.6, (ratios.max(0), np.mean(ratios**2, 0))
     code, body = answers["/fixtures"]
     assert code == 200 and body == {"fixtures": ["left", "right"]}
     code, body = answers["/fixtures/left/pose"]
