@@ -70,10 +70,12 @@ class FixtureConfig:
         unlock_samples: consecutive samples outside the band that unlock (one spike does not).
         stuck_sigmas: a leg whose count repeats exactly although its recent velocity predicts a
             change beyond this many ``noise`` is ``stuck`` (0: off).
-        max_skew: largest spread (s) of the frame times of one reading set; 0 (default): half
+        max_skew: largest spread (s) of the frame times of one reading set; 0 (default): 3/4 of
             the legs' measured frame period, for encoders sampled together (SYNC or polled) whose
-            frames reach the bus in a burst. Set it for free-running encoders or bursts longer
-            than half the period (1 kHz sets on a 500 kbit/s bus).
+            frames reach the bus in a burst shorter than that. A set completed by the next
+            instant's first frame spans a period less one frame and is refused; when the burst
+            fills more than half the period (1 kHz sets on a 1 Mbit/s bus) two frames lost in one
+            set can go unseen: use a slower rate or fewer fixtures per bus.
         predictor: the tracker's predictor (``none``, ``eq22``, ``eq23``, ``eq24``).
         confirm_samples: consistent samples after a tracker jump before the branch is re-confirmed.
         index: position in the file's ``[[fixtures]]`` list (for messages).

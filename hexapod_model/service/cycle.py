@@ -1,15 +1,14 @@
 """One fixture's cycle: encoder frames in, complete reading sets solved, records out.
 
 A **reading set** is complete when each of the six legs has sent a frame since the last set,
-all within ``max_skew`` of each other (default: half the measured frame period) and younger
+all within ``max_skew`` of each other (default: 3/4 of the measured frame period) and younger
 than ``staleness``. A leg sending twice before the set completes (a frame of another leg was
 lost) starts a new set, and frames farther than ``max_skew`` from the newest are dropped from
 it, so a set never mixes readings of two sampling instants (and re-synchronises after a lost
 frame); when the missing leg's newest frame is older than ``staleness`` the set is published
-as ``silent_leg``. A set with a bad
-frame, an error bit, a reading outside the stroke or a stuck leg is published with that status
-and **no pose**; a solved set is ``ok`` only when the tracker (through
-:class:`~hexapod_model.service.solve.PoseSolver`) raised no flag.
+as ``silent_leg``. A set with a bad frame, an error bit, a reading outside the stroke or a stuck
+leg is published with that status and **no pose**; a solved set is ``ok`` only when the tracker
+(through :class:`~hexapod_model.service.solve.PoseSolver`) raised no flag.
 
 Status values: ``ok``, ``no_data`` (nothing received yet), ``silent_leg``, ``bad_frame``,
 ``encoder_error``, ``out_of_stroke``, ``stuck_leg``, ``not_converged``, ``flagged``. Flags name the
@@ -128,7 +127,7 @@ class FixtureCycle:
         self._fresh[leg] = True
         self._n_fresh += 1
         if self._n_fresh == 6:
-            skew = self.cfg.max_skew or 0.5 * self._period
+            skew = self.cfg.max_skew or 0.75 * self._period
             if t - min(self._t) > skew:  # frames of two sampling instants: keep the newest
                 self._fresh = [bool(t - tk <= skew) for tk in self._t]
                 self._n_fresh = sum(self._fresh)

@@ -17,6 +17,8 @@ import math
 
 import numpy as np
 
+GAP_INSTANTS = 3  # sampling instants without a set after which a leg's speed estimate restarts
+
 
 class LockDetector:
     """Locked / moving / drift of one fixture from its reading sets.
@@ -95,7 +97,8 @@ class StuckDetector:
     repeat is suspicious in proportion to the change the leg's recent velocity predicts: after a
     repeat lasting ``n`` frame periods at an estimated ``v`` (m per period), the leg is ``stuck``
     when ``|v| n > sigmas * max(noise, resolution)``. The velocity is an exponential average
-    (``alpha`` per set) of the leg's rate of change, frozen while the count repeats. With the
+    (``alpha`` per instant) of the leg's rate of change, frozen while the count repeats, and
+    forgotten after a gap of more than ``GAP_INSTANTS`` sampling instants. With the
     default 8 sigma a stuck leg goes unnoticed while it would have moved about 8 sigma (about 3
     sigma of the pose) when its speed is well known; a leg moving by about the noise per set has
     a noisy speed estimate and may take a few sets more. A still fixture (a locked plate) cannot
@@ -130,9 +133,11 @@ class StuckDetector:
                 if abs(v[k]) * (instant - since[k]) > self.limit:
                     stuck.append(k)
                 continue
-            if prev is not None and instant > since[k]:
-                rate = (float(readings[k]) - value[k]) / (instant - since[k])
-                v[k] += self.alpha * (rate - v[k])
+            n = instant - since[k]
+            if prev is not None and 0 < n <= GAP_INSTANTS:  # an average over n instants weighs as n sets
+                v[k] += (1.0 - (1.0 - self.alpha) ** n) * ((float(readings[k]) - value[k]) / n - v[k])
+            elif n > GAP_INSTANTS:  # the speed before a long gap says nothing about now
+                v[k] = 0.0
             since[k], value[k] = instant, float(readings[k])
         self._counts = list(counts)
         return stuck
