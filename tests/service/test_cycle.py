@@ -11,9 +11,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hexapod_model.service import RECORD_KEYS, LockEvent
+from hexapod_model.service import RECORD_KEYS, FixtureCycle, LockEvent, geometry_hash
 from hexapod_model.service.cycle import _quaternion
 
+from ..conftest import hexapod
 from .helpers import drive, fixture_table, pose_error, service_config, sim_config
 
 RATE = 100.0
@@ -149,3 +150,24 @@ def test_recovery_without_motion_is_locked_and_stored_from_the_first_pose(tmp_pa
     cycle, out = drive(svc, sim, 0.1, recovered=other, t0=4.0e9)
     assert cycle.recovered is None and "another geometry" in cycle.recovery
     assert all("stored_geometry_changed" in rec["flags"] and rec["status"] == "ok" for _, rec in out)
+
+
+def test_drift_while_locked_is_flagged_in_the_record_and_logged(tmp_path, caplog):
+    svc = service_config(tmp_path, [fixture_table(lock_time=0.2)])
+    cfg = svc.fixtures[0]
+    hexa = hexapod("reference")
+    cycle = FixtureCycle(cfg, hexa, geometry_hash(hexa), None, 0.0)
+    held = hexa.forward([0.01, -0.01, 0.02, 0.0, 0.005, -0.004]).lengths
+    rng = np.random.default_rng(2)
+    out = []
+    with caplog.at_level("WARNING", logger="hexapod_model.service"):
+        for k in range(200):  # still for 0.5 s, then leg 1 creeps 1 um per set (1 mm/s, below the band)
+            r = held + rng.normal(0, 10e-6, 6)
+            r[0] += 1e-6 * max(0, k - 50)
+            for leg, codec in enumerate(cfg.legs):
+                rec = cycle.on_frame(leg, codec.message(float(r[leg])).data, 1.0 + k / RATE)
+            out.append(rec)
+    drifting = [k for k, rec in enumerate(out) if "drift" in rec["flags"]]
+    assert drifting and out[drifting[0]]["state"] == "locked" and out[drifting[0]]["status"] == "ok"
+    assert 50 + 25 <= drifting[0] <= 50 + 80  # 3 sigma = 30 um of creep, plus the average's lag
+    assert sum("drift" in m for m in caplog.messages) == 1
