@@ -17,7 +17,7 @@ from ._common import note
 # python-can and the service are imported when a command runs: `hexapod --help` stays fast.
 
 SERVE_DESCRIPTION = """\
-Run the pose service of every fixture of CONFIG: read the encoder frames from the CAN bus,
+Run the pose service of every fixture of FIXTURE.toml: read the encoder frames from the CAN bus,
 track each fixture's pose, publish records (GET /fixtures, /fixtures/NAME/pose, /health on the
 [http] address; JSON lines on stdout with --jsonl), store lock poses in the SQLite store and
 recover them at the next start. Ctrl-C (or SIGTERM) stops it cleanly. Format: docs/service.md."""
