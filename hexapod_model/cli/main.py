@@ -8,7 +8,7 @@ import sys
 
 from .. import __version__
 from ..exceptions import HexapodError, SolverError
-from . import calibrate, core, evaluate, mjcf, reproduce, track, view
+from . import calibrate, core, evaluate, fixture, mjcf, reproduce, serve, track, view
 
 EXIT_CODES = {
     0: "all good",
@@ -17,7 +17,7 @@ EXIT_CODES = {
     130: "interrupted (Ctrl-C)",
     141: "standard output closed early (e.g. piped into head)",
 }
-COMMANDS = (core, mjcf, reproduce, calibrate, evaluate, track, view)
+COMMANDS = (core, mjcf, reproduce, calibrate, evaluate, track, view, serve, fixture)
 
 DESCRIPTION = """\
 Leg readings <-> platform pose for Stewart-Gough hexapods with offset-axis Cardan joints.

@@ -42,6 +42,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--rate", type=float, default=50.0, help="animation rows per second (default 50)")
     p.add_argument("--once", action="store_true", help="show (and play) then exit instead of serving until Ctrl-C")
+    p.add_argument(
+        "--live", action="store_true", help="HEXAPOD is a fixture.toml: show the poses its running service serves"
+    )
+    p.add_argument("--fixture", help="with --live: the fixture to show (default: the first)")
     p.set_defaults(func=run_view)
 
     p = sub.add_parser("snapshot", help="write the scene as self-contained HTML and, with --png, a PNG")
@@ -98,6 +102,10 @@ def play_frames(hexa: Hexapod, path: str | Path) -> list[Solution]:
 
 def run_view(args: argparse.Namespace) -> int:
     """``hexapod view``."""
+    if args.live:
+        from .live import run_live
+
+        return run_live(args)
     from ..viz.meshcat_scene import start_visualizer, stop_visualizer
 
     vis = start_visualizer()

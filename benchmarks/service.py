@@ -1,0 +1,201 @@
+"""Throughput, CPU and latency of the fixture pose service (not a test: figures are printed).
+
+python benchmarks/service.py [--seconds S] [--one 250,500,1000,2000] [--many 50,100,200] [--fixtures 20]
+
+A feeder thread plays trajectory A (reference hexapod, 10 um reading noise, frames encoded with
+each fixture's layout and CAN ids) on python-can's virtual bus at a set rate per fixture; the
+service (its cycle thread, the store writer, HTTP on 127.0.0.1:0) runs in the same process, as
+``hexapod serve --simulate`` does. Frames carry their sampling time as timestamps (as a SocketCAN
+receiver stamps a burst) and are put straight into the receiving virtual bus's queue, as a kernel
+delivers them (the virtual bus's own ``send`` deep-copies each frame under this process's GIL: a
+cost of the stand-in hardware, not of the service). Per run: sets sent and solved, the latency
+from the arrival of the frame that completed a set to the publication of its record (the
+subscriber's call; a backlog counts), and the CPU time
+of the service's threads (cycle + store + HTTP) and of the whole process (feeder included), in
+percent of one core. A rate is *sustained* when at least 99 % of the sets sent are solved and
+the p99 latency stays under 10 ms (no backlog). The machine's other load is part of the figures:
+run it on an idle machine for the capacity.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import tempfile
+import threading
+import time
+import uuid
+from pathlib import Path
+
+import can
+import numpy as np
+
+from hexapod_model import Hexapod
+from hexapod_model.service import FixtureService, config_from_dict
+from hexapod_model.service.simconfig import trajectory_sequence
+
+SETS = 2000  # one there-and-back of trajectory A, whatever the rate
+
+
+def readings_sequence(hexa: Hexapod, noise: float = 10e-6, seed: int = 0) -> np.ndarray:
+    """(SETS, 6) noisy readings along trajectory A there and back (0.01 m per paper unit)."""
+    poses = trajectory_sequence("A", hexa.home_pose, 0.01, SETS / 8.0, 8.0)
+    out, guess = [], None
+    for T in poses:
+        guess = hexa.inverse(T, guess=guess)
+        out.append(guess.lengths.copy())
+    return np.array(out) + np.random.default_rng(seed).normal(0.0, noise, (len(out), 6))
+
+
+def drain(service: FixtureService, limit: float = 10.0) -> None:
+    """Wait until the service has taken every frame sent (its count stops changing) or ``limit`` s."""
+    end = time.monotonic() + limit
+    while time.monotonic() < end:
+        n = service.frames
+        time.sleep(0.2)
+        if service.frames == n:
+            return
+
+
+def thread_cpu(threads: list[threading.Thread]) -> float:
+    """CPU seconds used so far by ``threads`` (Linux per-thread clocks)."""
+    total = 0.0
+    for t in threads:
+        if t is not None and t.ident is not None and t.is_alive():
+            total += time.clock_gettime(time.pthread_getcpuclockid(t.ident))
+    return total
+
+
+def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> dict:
+    """One run: ``fixtures`` fixtures at ``rate`` sets per second each for ``seconds``."""
+    channel = f"bench-{uuid.uuid4().hex}"
+    tables = [
+        {"name": f"f{i:02d}", "hexapod": "reference", "can_ids": [0x100 + 8 * i + k for k in range(6)]}
+        for i in range(fixtures)
+    ]
+    config = config_from_dict(
+        {
+            "bus": {"interface": "virtual", "channel": channel},
+            "store": {"path": str(folder / f"{channel}.sqlite"), "samples": 100_000},
+            "http": {"host": "127.0.0.1", "port": 0},
+            "fixtures": tables,
+        }
+    )
+    legs = [f.legs for f in config.fixtures]
+    names = [f.name for f in config.fixtures]
+    frames = [[[leg.message(float(r[k])) for k, leg in enumerate(fl)] for fl in legs] for r in readings]
+    latencies: list[float] = []
+    statuses: dict[str, int] = {}
+    arrived: dict[tuple[str, float], float] = {}  # (fixture, t of its last frame) -> when it was on the bus
+
+    def on_record(rec: dict) -> None:  # runs in the cycle thread
+        sent_at = arrived.get((rec["fixture"], rec["t"]))
+        if rec["pose"] is not None and sent_at is not None:  # a solved set of the measured phase
+            latencies.append(time.time() - sent_at)
+        statuses[rec["status"]] = statuses.get(rec["status"], 0) + 1
+
+    bus = can.Bus(interface="virtual", channel=channel)  # the service's receiving end
+    service = FixtureService(config, bus=bus, hexapods={f.name: hexa for f in config.fixtures})
+    service.subscribe(on_record)
+    deliver = bus.queue.put  # straight into the receiving queue, as a kernel delivers frames: the
+    # virtual bus's send (a deepcopy per frame, in this process and under its GIL) is not the service
+    sent, position = [0], [0]  # sets sent in the measured phase; where the trajectory is
+    stop = threading.Event()
+
+    def feed() -> None:  # continues the trajectory where the warm-up left it
+        period, k, start, wall = 1.0 / rate, 0, time.perf_counter(), time.time()
+        while not stop.is_set():
+            wait = start + k * period - time.perf_counter()
+            if wait > 0:
+                time.sleep(wait)
+            stamp = wall + k * period  # the sampling time, as an encoder's frame would carry it
+            for name, msgs in zip(names, frames[(position[0] + k) % len(frames)]):
+                for j, m in enumerate(msgs):
+                    m = copy.copy(m)
+                    m.timestamp = stamp + j * 130e-6
+                    deliver(m)
+                arrived[(name, m.timestamp)] = time.time()  # the set's last frame is at the receiver
+            sent[0] += 1
+            k += 1
+        position[0] += k
+
+    service.start()
+    try:
+        warm = threading.Thread(target=feed, daemon=True)
+        warm.start()
+        time.sleep(1.0)  # warm-up: caches, first solves
+        stop.set()
+        warm.join()
+        drain(service)
+        stop.clear()
+        arrived.clear()
+        latencies.clear()
+        statuses.clear()
+        sent[0] = 0
+        threads = [service._thread, getattr(service.writer, "_thread", None)]
+        if service.endpoint is not None:
+            threads.append(service.endpoint._thread)
+        c0, p0, t0 = thread_cpu(threads), time.process_time(), time.perf_counter()
+        feeder = threading.Thread(target=feed, daemon=True)
+        feeder.start()
+        time.sleep(seconds)
+        stop.set()
+        feeder.join()
+        fed = time.perf_counter() - t0
+        drain(service)  # a backlog is worked off (and its latency counted), up to 10 s
+        c1, p1 = thread_cpu(threads), time.process_time()
+    finally:
+        service.stop()
+        bus.shutdown()
+    lat = np.array(latencies) * 1e3
+    records = len(latencies)  # solved sets
+    return {
+        "fixtures": fixtures,
+        "rate_hz": rate,
+        "sets_sent": sent[0] * fixtures,
+        "records": records,
+        "statuses": statuses,
+        "latency_ms_median": float(np.median(lat)) if records else float("nan"),
+        "latency_ms_p99": float(np.percentile(lat, 99)) if records else float("nan"),
+        "service_cpu_pct": 100.0 * (c1 - c0) / fed,  # CPU per second of stream, backlog included
+        "process_cpu_pct": 100.0 * (p1 - p0) / fed,
+        "sustained": records >= 0.99 * sent[0] * fixtures and records > 0 and float(np.percentile(lat, 99)) < 10.0,
+    }
+
+
+def line(r: dict) -> str:
+    return (
+        f"{r['fixtures']:3d} x {r['rate_hz']:6.0f} Hz  sets {r['sets_sent']:7d}  solved {r['records']:7d}  "
+        f"latency median {r['latency_ms_median']:6.2f} ms  p99 {r['latency_ms_p99']:7.2f} ms  "
+        f"CPU service {r['service_cpu_pct']:5.1f} %  process {r['process_cpu_pct']:5.1f} %  "
+        f"{'sustained' if r['sustained'] else 'NOT sustained'}  {r['statuses']}"
+    )
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=5.0, help="measured seconds per run")
+    ap.add_argument("--one", default="250,500,1000,2000", help="set rates (Hz) for one fixture")
+    ap.add_argument("--many", default="50,100,200", help="set rates (Hz) per fixture for --fixtures fixtures")
+    ap.add_argument("--fixtures", type=int, default=20)
+    ap.add_argument("--json", help="also write the runs as JSON")
+    args = ap.parse_args(argv)
+    hexa = Hexapod.from_preset("reference")
+    readings = readings_sequence(hexa)
+    reports = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for n, rates in ((1, args.one), (args.fixtures, args.many)):
+            for rate in (float(v) for v in rates.split(",") if v):
+                reports.append(run(hexa, readings, n, rate, args.seconds, Path(tmp)))
+                print(line(reports[-1]), flush=True)
+    for n in (1, args.fixtures):
+        ok = [r["rate_hz"] for r in reports if r["fixtures"] == n and r["sustained"]]
+        print(f"highest sustained set rate, {n} fixture(s): {max(ok):.0f} Hz" if ok else f"{n} fixture(s): none")
+    if args.json:
+        Path(args.json).write_text(json.dumps(reports, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

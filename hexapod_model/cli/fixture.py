@@ -1,0 +1,161 @@
+"""``hexapod fixture status`` and ``hexapod fixture history``: what the service's store holds."""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import math
+import sys
+
+import numpy as np
+
+from ..exceptions import InputError
+from ..files import atomic_write_text, check_output_path
+
+LOCK_COLUMNS = [
+    "fixture",
+    "t",
+    "time",
+    "x",
+    "y",
+    "z",
+    "qx",
+    "qy",
+    "qz",
+    "qw",
+    "roll",
+    "pitch",
+    "yaw",
+    "l1",
+    "l2",
+    "l3",
+    "l4",
+    "l5",
+    "l6",
+    "status",
+    "geometry_hash",
+]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``fixture status`` and ``fixture history``."""
+    p = sub.add_parser("fixture", help="stored lock poses and sample log of the pose service")
+    actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    s = actions.add_parser("status", help="the last stored lock pose of every fixture")
+    s.add_argument("config", metavar="FIXTURE.toml")
+    s.set_defaults(func=run_status)
+    h = actions.add_parser("history", help="stored lock events (or the sample log) as CSV")
+    h.add_argument("config", metavar="FIXTURE.toml")
+    h.add_argument("--since", metavar="T", help="from time T: Unix seconds or ISO 8601 (local time unless it says)")
+    h.add_argument("--fixture", help="only this fixture")
+    h.add_argument("--samples", action="store_true", help="the sample log instead of the lock events")
+    h.add_argument("-o", "--output", metavar="LOG.csv", help="write the CSV here (default: stdout)")
+    h.set_defaults(func=run_history)
+
+
+def parse_time(text: str) -> float:
+    """Unix seconds of ``text`` (a number or an ISO 8601 date-time); :class:`InputError` otherwise."""
+    try:
+        return float(text)
+    except ValueError:
+        pass
+    try:
+        return dt.datetime.fromisoformat(text).timestamp()
+    except ValueError:
+        raise InputError(
+            "--since", text, "expected Unix seconds or an ISO 8601 date-time such as 2026-05-01T12:00"
+        ) from None
+
+
+def iso(t: float) -> str:
+    """Local ISO 8601 time of Unix seconds ``t`` (milliseconds)."""
+    return dt.datetime.fromtimestamp(t).astimezone().isoformat(timespec="milliseconds")
+
+
+def _open(args: argparse.Namespace):
+    from ..service import Store, load_config
+
+    config = load_config(args.config)
+    return config, Store(config.store.path, create=False)
+
+
+def _rpy_deg(quaternion) -> np.ndarray:
+    from ..kinematics.rotations import matrix_to_rpy, quaternion_to_matrix
+
+    return np.degrees(matrix_to_rpy(quaternion_to_matrix(np.asarray(quaternion))))
+
+
+def run_status(args: argparse.Namespace) -> int:
+    """``hexapod fixture status``."""
+    from ..service import geometry_hash
+
+    config, store = _open(args)
+    try:
+        print(
+            f"{'fixture':12s} {'locked at':29s} {'x (m)':>10s} {'y (m)':>10s} {'z (m)':>10s} "
+            f"{'roll':>8s} {'pitch':>8s} {'yaw (deg)':>9s}  geometry"
+        )
+        for f in config.fixtures:
+            e = store.last_lock(f.name)
+            if e is None:
+                print(f"{f.name:12s} no lock pose stored")
+                continue
+            same = e.geometry_hash == geometry_hash(f.load_hexapod())
+            r = _rpy_deg(e.quaternion)
+            print(
+                f"{f.name:12s} {iso(e.t):29s} {e.position[0]:10.6f} {e.position[1]:10.6f} {e.position[2]:10.6f} "
+                f"{r[0]:8.3f} {r[1]:8.3f} {r[2]:9.3f}  {'same' if same else 'CHANGED (pose not used)'}"
+            )
+    finally:
+        store.close()
+    return 0
+
+
+def _fmt(v) -> str:
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return ""
+    if isinstance(v, float):
+        return repr(float(v))  # round-trips: Unix times need 16 digits
+    s = str(v)
+    return '"' + s.replace('"', '""') + '"' if ("," in s or '"' in s) else s
+
+
+def run_history(args: argparse.Namespace) -> int:
+    """``hexapod fixture history``."""
+    since = None if args.since is None else parse_time(args.since)
+    if args.output:
+        check_output_path(args.output, args.config)
+    config, store = _open(args)
+    try:
+        if args.fixture is not None and args.fixture not in [f.name for f in config.fixtures]:
+            raise InputError("--fixture", args.fixture, f"not a fixture of {args.config}")
+        if args.samples:
+            from ..service.store import SAMPLE_COLUMNS
+
+            header = list(SAMPLE_COLUMNS)
+            rows = [list(r) for r in store.samples(args.fixture, since)]
+        else:
+            header = LOCK_COLUMNS
+            rows = [
+                [
+                    e.fixture,
+                    e.t,
+                    iso(e.t),
+                    *e.position,
+                    *e.quaternion,
+                    *_rpy_deg(e.quaternion),
+                    *e.readings,
+                    e.status,
+                    e.geometry_hash,
+                ]
+                for e in store.locks(args.fixture, since)
+            ]
+    finally:
+        store.close()
+    text = "\n".join(",".join(_fmt(v) for v in row) for row in [header, *rows]) + "\n"
+    if args.output:
+        atomic_write_text(args.output, text)
+        print(f"hexapod fixture history: wrote {len(rows)} rows to {args.output}", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return 0

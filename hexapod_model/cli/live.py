@@ -1,0 +1,103 @@
+"""The live 3-D view of a served fixture: ``hexapod view FIXTURE.toml --live`` and ``hexapod serve --view``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import threading
+import time
+import urllib.error
+import urllib.request
+from collections.abc import Callable
+
+import numpy as np
+
+from ..exceptions import HexapodError
+from ..kinematics.hexapod import Hexapod
+from ..kinematics.rotations import quaternion_to_matrix
+from ._common import note
+
+FRAME_S = 0.05  # the view's refresh period
+ONCE_S = 30.0  # --once gives up after this long without a pose (the meshcat server's start included)
+
+
+def pose_of_record(record: dict | None) -> np.ndarray | None:
+    """The 4x4 pose (base -> platform, m) of a published record, or None when it has none."""
+    if not record or not record.get("pose"):
+        return None
+    p = record["pose"]
+    T = np.eye(4)
+    T[:3, :3] = quaternion_to_matrix([p["qx"], p["qy"], p["qz"], p["qw"]])
+    T[:3, 3] = [p["x"], p["y"], p["z"]]
+    return T
+
+
+def live_view(
+    hexa: Hexapod,
+    latest: Callable[[], dict | None],
+    stop: threading.Event,
+    deadline: float | None = None,
+    count: int | None = None,
+) -> int:
+    """Show the pose of ``latest()`` (a record) in a local meshcat view.
+
+    Until ``stop`` is set, the monotonic clock passes ``deadline``, or ``count`` poses were shown.
+    Poses are shown through inverse kinematics (warm started); returns the number shown.
+    """
+    from ..viz.meshcat_scene import HexapodScene, start_visualizer, stop_visualizer
+
+    vis = start_visualizer()
+    shown, last_t, guess = 0, None, None
+    try:
+        scene = HexapodScene(hexa, vis)
+        print(f"meshcat: {vis.url()}", flush=True)
+        while not stop.is_set() and (deadline is None or time.monotonic() < deadline) and shown != count:
+            rec = latest()
+            T = pose_of_record(rec)
+            if T is not None and rec is not None and rec["t"] != last_t:
+                last_t = rec["t"]
+                try:
+                    guess = hexa.inverse(T, guess=guess)
+                    scene.show(guess)
+                    shown += 1
+                except HexapodError as exc:
+                    note("view", f"pose at t={rec['t']} not shown: {exc}")
+            stop.wait(FRAME_S)
+    finally:
+        stop_visualizer(vis)
+    return shown
+
+
+def run_live(args: argparse.Namespace) -> int:
+    """``hexapod view FIXTURE.toml --live``: poll a running service over HTTP and show its poses."""
+    from ..service import load_config
+
+    config = load_config(args.hexapod)
+    name = args.fixture or config.fixtures[0].name
+    try:
+        hexa = config.fixture(name).load_hexapod()
+    except KeyError:
+        raise HexapodError(f"--fixture {name!r}: not a fixture of {args.hexapod}") from None
+    url = f"http://{config.http.host}:{config.http.port}/fixtures/{name}/pose"
+    errors: list[str] = []
+
+    def latest() -> dict | None:
+        try:
+            with urllib.request.urlopen(url, timeout=1.0) as r:
+                return json.load(r)
+        except (urllib.error.URLError, OSError, ValueError) as exc:
+            if not errors:
+                print(f"hexapod view: {url}: {exc} (is `hexapod serve` running?)", file=sys.stderr)
+            errors.append(str(exc))
+            return None
+
+    stop = threading.Event()
+    try:  # --once: the first pose served, or nothing after ONCE_S
+        shown = live_view(
+            hexa, latest, stop, time.monotonic() + ONCE_S if args.once else None, 1 if args.once else None
+        )
+    except KeyboardInterrupt:
+        return 0
+    print(f"hexapod view: showed {shown} poses of {name} from {url}", file=sys.stderr)
+    return 0 if shown or not args.once else 1

@@ -1,0 +1,166 @@
+"""``hexapod serve`` (the fixture pose service) and ``hexapod simulate-encoders``."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import dataclasses
+import json
+import logging
+import signal
+import sys
+import threading
+import time
+
+from ._common import note
+
+# python-can and the service are imported when a command runs: `hexapod --help` stays fast.
+
+SERVE_DESCRIPTION = """\
+Run the pose service of every fixture of FIXTURE.toml: read the encoder frames from the CAN bus,
+track each fixture's pose, publish records (GET /fixtures, /fixtures/NAME/pose, /health on the
+[http] address; JSON lines on stdout with --jsonl), store lock poses in the SQLite store and
+recover them at the next start. Ctrl-C (or SIGTERM) stops it cleanly. Format: docs/service.md."""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``serve`` and ``simulate-encoders``."""
+    p = sub.add_parser(
+        "serve", help="run the fixture pose service (CAN in, poses over HTTP)", description=SERVE_DESCRIPTION
+    )
+    p.add_argument("config", metavar="FIXTURE.toml", help="the service configuration")
+    p.add_argument("--simulate", metavar="SIM.toml", help="simulated encoders on a virtual bus (no hardware)")
+    p.add_argument("--jsonl", action="store_true", help="also write every record as a JSON line on stdout")
+    p.add_argument("--view", action="store_true", help="show the served poses in a local meshcat view")
+    p.add_argument("--fixture", help="the fixture --view shows (default: the first)")
+    p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: until Ctrl-C)")
+    p.add_argument("--log-level", default="INFO", choices=("DEBUG", "INFO", "WARNING", "ERROR"))
+    p.set_defaults(func=run_serve)
+
+    p = sub.add_parser("simulate-encoders", help="send simulated encoder frames on the configured bus")
+    p.add_argument("config", metavar="FIXTURE.toml", help="the service configuration (bus, layouts, CAN ids)")
+    p.add_argument("sim", metavar="SIM.toml", help="the simulation")
+    p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: until Ctrl-C)")
+    p.set_defaults(func=run_simulate)
+
+
+@contextlib.contextmanager
+def _logging(command: str, level: str):
+    """The package's log records as ``hexapod COMMAND: LEVEL message`` lines on stderr, for the command's run."""
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter(f"hexapod {command}: %(levelname)s %(message)s"))
+    root = logging.getLogger("hexapod_model")
+    saved_handlers, saved_level = root.handlers[:], root.level
+    root.handlers[:] = [handler]
+    root.setLevel(level)
+    try:
+        yield
+    finally:
+        root.handlers[:] = saved_handlers
+        root.setLevel(saved_level)
+
+
+def _stop_on_sigterm(stop: threading.Event) -> None:
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, lambda *_: stop.set())
+
+
+def simulated(config):
+    """``config`` with its bus replaced by a virtual one (same channel name): frames stay in this process."""
+    from ..service.config import BusConfig
+
+    return dataclasses.replace(config, bus=BusConfig("virtual", config.bus.channel))
+
+
+def run_serve(args: argparse.Namespace) -> int:
+    """``hexapod serve``."""
+    with _logging("serve", args.log_level):
+        return _serve(args)
+
+
+def _serve(args: argparse.Namespace) -> int:
+    import can
+
+    from ..service import FixtureService, ServiceError, Simulator, load_config, load_simulation
+
+    config = load_config(args.config)
+    if args.simulate:
+        config = simulated(config)
+        sim_config = load_simulation(args.simulate, config)
+    stop = threading.Event()
+    _stop_on_sigterm(stop)
+    service = FixtureService(config)
+    if args.jsonl:
+        service.subscribe(_jsonl_writer(stop))
+    sim_bus = sim = None
+    try:
+        service.start()
+        note("serve", f"fixtures {', '.join(service.names())}; Ctrl-C stops")
+        if args.simulate:
+            sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+            sim = Simulator(config, sim_config, sim_bus, truth=1, hexapods=service.hexapods)
+            sim.start()
+        deadline = None if args.duration is None else time.monotonic() + args.duration
+        if args.view:
+            from .live import live_view
+
+            name = args.fixture or service.names()[0]
+            if service.record(name) is None:
+                raise ServiceError(f"--fixture {name!r}: not a fixture of {args.config}")
+            live_view(service.hexapods[name], lambda: service.record(name), stop, deadline)
+        else:
+            while not stop.wait(0.2):
+                if deadline is not None and time.monotonic() >= deadline:
+                    break
+    except KeyboardInterrupt:
+        pass
+    finally:
+        if sim is not None:
+            sim.stop()
+        if sim_bus is not None:
+            sim_bus.shutdown()
+        service.stop()
+    note("serve", f"stopped; store {config.store.path}")
+    return 0
+
+
+def _jsonl_writer(stop: threading.Event):
+    def write(record: dict) -> None:
+        try:
+            sys.stdout.write(json.dumps(record, allow_nan=False) + "\n")
+            sys.stdout.flush()
+        except (BrokenPipeError, ValueError):  # the reader went away: stop the service
+            stop.set()
+
+    return write
+
+
+def run_simulate(args: argparse.Namespace) -> int:
+    """``hexapod simulate-encoders``."""
+    with _logging("simulate-encoders", "INFO"):
+        return _simulate(args)
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from ..service import Simulator, load_config, load_simulation, open_bus
+
+    config = load_config(args.config)
+    sim_config = load_simulation(args.sim, config)
+    b = config.bus
+    if b.interface == "virtual":
+        note("simulate-encoders", "the 'virtual' interface reaches buses of this process only")
+    bus = open_bus(config, receive=False)
+    stop = threading.Event()
+    _stop_on_sigterm(stop)
+    sim = Simulator(config, sim_config, bus, truth=1)
+    try:
+        sim.start(args.duration)
+        while sim.running and not stop.wait(0.1):
+            pass
+    except KeyboardInterrupt:
+        pass
+    finally:
+        sim.stop()
+        bus.shutdown()
+    note("simulate-encoders", f"sent {sim.frames_sent} frames on {b.interface}/{b.channel}")
+    return 0

@@ -1,0 +1,70 @@
+"""The fixture pose service: encoder frames on CAN in, tracked poses out, persisted and recovered.
+
+Bem, Ude, Nemec 2026 ("Experimental Validation of the Direct Kinematics of a Passive
+Stewart-Gough Platform with Modified Cardan Joints Using Integrated Absolute Linear Encoders",
+§2 and §5.5): absolute encoders on the six legs report on a CAN bus, an edge computer collects
+the readings, the pose is computed, published to the robot cell and kept in non-volatile memory
+for recovery after shutdown. Here: python-can for the bus, the stream tracker for the poses,
+SQLite for the store, the standard library's HTTP server for clients. ``docs/service.md``.
+
+Public API::
+
+    from hexapod_model.service import FixtureService, load_config
+    svc = FixtureService(load_config("fixture.toml")).start()
+    svc.record("left")      # the latest record (dict), also GET /fixtures/left/pose
+    svc.stop()
+"""
+
+from .codec import Decoded, FrameLayout, LegCodec, decode, encode
+from .config import (
+    BusConfig,
+    FixtureConfig,
+    HttpConfig,
+    ServiceConfig,
+    StoreConfig,
+    config_from_dict,
+    geometry_hash,
+    load_config,
+)
+from .cycle import RECORD_KEYS, FixtureCycle
+from .errors import ConfigError, FrameError, ServiceError
+from .service import FixtureService, open_bus
+from .simconfig import Fault, SimConfig, SimFixture, load_simulation, simulation_from_dict
+from .simulate import SentSet, Simulator
+from .solve import PoseSolver, SolveOutcome, Uncertainty
+from .store import LockEvent, Store
+
+__all__ = [
+    "BusConfig",
+    "ConfigError",
+    "Decoded",
+    "Fault",
+    "FixtureConfig",
+    "FixtureCycle",
+    "FixtureService",
+    "FrameError",
+    "FrameLayout",
+    "HttpConfig",
+    "LegCodec",
+    "LockEvent",
+    "PoseSolver",
+    "RECORD_KEYS",
+    "SentSet",
+    "ServiceConfig",
+    "ServiceError",
+    "SimConfig",
+    "SimFixture",
+    "Simulator",
+    "SolveOutcome",
+    "Store",
+    "StoreConfig",
+    "Uncertainty",
+    "config_from_dict",
+    "decode",
+    "encode",
+    "geometry_hash",
+    "load_config",
+    "load_simulation",
+    "open_bus",
+    "simulation_from_dict",
+]

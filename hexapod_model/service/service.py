@@ -1,0 +1,255 @@
+"""The fixture pose service: one CAN bus in, per-fixture cycles, records out (HTTP, subscribers, store).
+
+>>> from hexapod_model.service import FixtureService, load_config
+>>> with FixtureService(load_config("fixture.toml")) as svc:   # doctest: +SKIP
+...     svc.subscribe(print)          # every published record (a dict)
+...     svc.record("left")            # the latest one; also GET /fixtures/left/pose
+
+Threads: one reads the bus and runs every fixture's cycle (so a record is published within the
+frame's own iteration), one writes the store (:class:`~hexapod_model.service.store.StoreWriter`),
+and the HTTP server's. Subscribers run on the bus thread: keep them short.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable
+from functools import partial
+from typing import Any
+
+import can
+
+from .config import ServiceConfig, geometry_hash
+from .cycle import FixtureCycle
+from .errors import ServiceError
+from .http import HttpEndpoint, Routes
+from .store import Store, StoreWriter
+
+log = logging.getLogger(__name__)
+Record = dict
+
+
+def open_bus(config: ServiceConfig, receive: bool = True) -> can.BusABC:
+    """The configured python-can bus (:class:`ServiceError` if it cannot be opened).
+
+    With ``receive`` on SocketCAN the kernel delivers only the fixtures' CAN ids. Other interfaces
+    would filter in Python, frame by frame (30 us a frame with 120 ids on the virtual bus), so
+    there the service's own id table drops the others.
+    """
+    b = config.bus
+    filters = None
+    if receive and b.interface == "socketcan":
+        filters = [
+            {"can_id": leg.can_id, "can_mask": 0x1FFFFFFF if leg.extended_id else 0x7FF, "extended": leg.extended_id}
+            for f in config.fixtures
+            for leg in f.legs
+        ]
+    kwargs: dict[str, Any] = {"bitrate": b.bitrate} if b.bitrate else {}
+    try:
+        return can.Bus(interface=b.interface, channel=b.channel, can_filters=filters, **kwargs)
+    except (can.CanError, OSError, ImportError, ValueError) as exc:
+        raise ServiceError(f"bus {b.interface}/{b.channel}: cannot open: {exc}") from None
+
+
+class FixtureService:
+    """Run the pose service of every fixture of ``config``.
+
+    Args:
+        config: the validated configuration (:func:`~hexapod_model.service.config.load_config`).
+        bus: an open python-can bus to read instead of the configured one (it is not closed here).
+        http: serve ``GET /fixtures``, ``/fixtures/NAME/pose`` and ``/health`` on ``config.http``.
+        hexapods: already loaded hexapods by fixture name (else loaded from the configuration).
+
+    Raises:
+        ConfigError: a fixture's hexapod cannot be loaded.
+    """
+
+    def __init__(self, config: ServiceConfig, bus: can.BusABC | None = None, http: bool = True, hexapods=None):
+        self.config = config
+        hexapods = hexapods or {}
+        self.hexapods = {f.name: hexapods.get(f.name) or f.load_hexapod() for f in config.fixtures}
+        self._bus, self._own_bus, self._http = bus, bus is None, http
+        self._subscribers: list[Callable[[Record], None]] = []
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.cycles: dict[str, FixtureCycle] = {}
+        self.endpoint: HttpEndpoint | None = None
+        self.store: Store | None = None
+        self.writer: StoreWriter | None = None
+        self.frames = self.unknown_frames = 0
+        self._started = 0.0
+
+    # ----- life cycle -----
+    def start(self) -> FixtureService:
+        """Open the store, recover every fixture's last lock, open bus and HTTP, start the cycle thread."""
+        cfg = self.config
+        self._started = time.time()
+        try:  # what can fail fails first, before anything is logged or written
+            if self._http:
+                self.endpoint = HttpEndpoint(cfg.http.host, cfg.http.port, Routes(self.names, self.record, self.health))
+            if self._bus is None:
+                self._bus = open_bus(cfg)
+            self.store = Store(cfg.store.path, cfg.store.samples)
+            for f in cfg.fixtures:
+                hexa = self.hexapods[f.name]
+                cycle = FixtureCycle(f, hexa, geometry_hash(hexa), self.store.last_lock(f.name), self._started)
+                self.cycles[f.name] = cycle
+                log.info("fixture %s: %s", f.name, cycle.recovery)
+        except BaseException:
+            self._close()
+            raise
+        self._routes = {
+            (leg.can_id, leg.extended_id): (self.cycles[f.name], k)
+            for f in cfg.fixtures
+            for k, leg in enumerate(f.legs)
+        }
+        self.writer = StoreWriter(self.store)
+        self._last_logged = {name: -1e300 for name in self.cycles}
+        if self.endpoint is not None:
+            self.endpoint.start()
+            log.info("serving http://%s:%d", *self.endpoint.address)
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._loop, name="hexapod-cycle", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop the cycle, flush the store, close HTTP and (an own) bus."""
+        self._stop.set()
+        if self._thread is not None:
+            if self._thread.ident is not None:  # Ctrl-C may land between creating and starting it
+                self._thread.join()
+            self._thread = None
+        if self.writer is not None:
+            self.writer.stop()
+            self.writer = None
+        self._close()
+
+    def _close(self) -> None:
+        if self.endpoint is not None:
+            self.endpoint.stop()
+            self.endpoint = None
+        if self._own_bus and self._bus is not None:
+            self._bus.shutdown()
+            self._bus = None
+        if self.store is not None:
+            self.store.close()
+            self.store = None
+
+    def __enter__(self) -> FixtureService:
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    @property
+    def address(self) -> tuple[str, int] | None:
+        """``(host, port)`` of the HTTP endpoint once started (None without HTTP)."""
+        return None if self.endpoint is None else self.endpoint.address
+
+    # ----- outputs -----
+    def subscribe(self, callback: Callable[[Record], None]) -> None:
+        """Call ``callback(record)`` for every published record (on the cycle thread)."""
+        self._subscribers.append(callback)
+
+    def names(self) -> list[str]:
+        """Fixture names, configuration order."""
+        return [f.name for f in self.config.fixtures]
+
+    def record(self, name: str) -> Record | None:
+        """The latest record of fixture ``name`` (None for an unknown name)."""
+        cycle = self.cycles.get(name)
+        return None if cycle is None else cycle.last
+
+    def health(self) -> dict:
+        """Service state: ``ok`` or ``degraded`` (store error, cycle stopped or a fixture without a good pose)."""
+        now = time.time()
+        fixtures = {}
+        for name, c in self.cycles.items():
+            rec = c.last
+            fixtures[name] = {
+                "status": rec["status"],
+                "state": rec["state"],
+                "stored": rec["stored"],
+                "age_s": now - rec["t"],
+                "recovery": c.recovery,
+                "recovered_t": None if c.recovered is None else c.recovered.t,
+            }
+        store_error = None if self.writer is None else self.writer.error
+        running = self._thread is not None and self._thread.is_alive()
+        good = running and store_error is None and all(f["status"] == "ok" for f in fixtures.values())
+        return {
+            "status": "ok" if good else "degraded",
+            "uptime_s": now - self._started,
+            "frames": self.frames,
+            "unknown_frames": self.unknown_frames,
+            "store": {"path": str(self.config.store.path), "error": store_error},
+            "fixtures": fixtures,
+        }
+
+    # ----- the cycle thread -----
+    def _loop(self) -> None:
+        assert self._bus is not None
+        tick = min(0.05, max(0.002, min(f.staleness for f in self.config.fixtures) / 2))
+        routes, bus, last_check = self._routes, self._bus, time.time()
+        while not self._stop.is_set():
+            try:
+                msg = bus.recv(timeout=tick)
+            except (can.CanError, OSError) as exc:
+                log.error("bus: %s", exc)
+                self._stop.wait(tick)
+                continue
+            if msg is None:
+                clock = time.time()  # nothing queued: the bus is quiet now
+            else:
+                clock = msg.timestamp or time.time()  # the bus's own clock: a backlog is not silence
+                route = routes.get((msg.arbitration_id, msg.is_extended_id))
+                if route is None or msg.is_error_frame or msg.is_remote_frame:
+                    self.unknown_frames += 1
+                else:
+                    self.frames += 1
+                    rec = route[0].on_frame(route[1], msg.data, clock)
+                    if rec is not None:
+                        self._publish(route[0], rec)
+            if clock - last_check >= tick:
+                last_check = clock
+                for cycle in self.cycles.values():
+                    rec = cycle.check_silence(clock)
+                    if rec is not None:
+                        self._publish(cycle, rec)
+
+    def _publish(self, cycle: FixtureCycle, rec: Record) -> None:
+        writer = self.writer
+        assert writer is not None
+        if cycle.pending_lock is not None:
+            episode, event = cycle.pending_lock
+            cycle.pending_lock = None
+            writer.lock(event, partial(cycle.lock_stored, episode))
+        name = rec["fixture"]
+        if rec["t"] - self._last_logged[name] >= self.config.store.sample_interval:
+            self._last_logged[name] = rec["t"]
+            writer.sample(sample_row(rec))
+        for callback in self._subscribers:
+            try:
+                callback(rec)
+            except Exception:  # noqa: BLE001 - one bad subscriber must not stop the fixtures
+                log.exception("record subscriber %r failed", callback)
+
+
+def sample_row(rec: Record) -> tuple:
+    """A record as a row of the store's ``samples`` table."""
+    import json
+
+    pose = rec["pose"]
+    pose_values = [None] * 7 if pose is None else [pose[k] for k in ("x", "y", "z", "qx", "qy", "qz", "qw")]
+    return (
+        rec["fixture"],
+        rec["t"],
+        rec["status"],
+        json.dumps(rec["flags"]),
+        rec["state"],
+        *rec["readings"],
+        *pose_values,
+    )

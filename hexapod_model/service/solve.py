@@ -1,0 +1,140 @@
+"""The service's one adapter to the stream tracker.
+
+The cycle (:mod:`hexapod_model.service.cycle`) never calls the tracker directly: it calls
+:class:`PoseSolver` — ``step(readings, instant)`` per reading set it solves (``instant``: the
+sampling instant's number, so instants without a solved set are known), ``solve_once(readings, q)``
+for a lock pose — and gets a :class:`SolveOutcome`. Only this module knows the tracker's API
+(:class:`hexapod_model.analysis.tracking.Tracker`, whose statistical, self-clearing checks
+judge every sample against the configured reading noise; see docs/evaluate.md).
+
+* An instant without a solved set (lost frames, a faulty encoder, ...) is given to the tracker
+  as an unreadable sample, so its motion model keeps one period per instant; after more than
+  ``max_gap`` of them it re-anchors by continuation and flags the next samples ``settling``.
+* The 1-sigma pose uncertainty is the tracker's: independent reading noise ``noise`` (m)
+  propagated through the eliminated 6x6 Jacobian, ``Cov(xi) = noise^2 J^-1 J^-T``;
+  ``translation`` is ``sqrt(trace)`` of the position block (RMS length of the position error, m),
+  ``rotation`` that of the rotation-vector block (rad). ``margin`` is ``cond(home) / cond(here)``
+  of the 6x6 map with rotations scaled by the characteristic length: 1 at home, towards 0 at a
+  singularity.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..analysis.sensitivity import SensitivityEvaluator
+from ..analysis.tracking import Tracker, characteristic_length
+from ..kinematics.hexapod import Hexapod
+from ..kinematics.solver import Solution
+
+_UNREADABLE = np.full(6, np.nan)
+
+
+@dataclass(frozen=True)
+class Uncertainty:
+    """Noise-propagated 1-sigma pose uncertainty and the distance from a singularity.
+
+    Attributes:
+        translation: RMS length of the position error (m).
+        rotation: RMS angle of the rotation error (rad).
+        margin: ``cond(home) / cond(here)`` of the length-scaled 6x6 Jacobian.
+    """
+
+    translation: float
+    rotation: float
+    margin: float
+
+
+@dataclass(frozen=True)
+class SolveOutcome:
+    """One solved reading set.
+
+    Attributes:
+        pose: 4x4 base -> platform (m), or ``None`` when the solve failed.
+        q: the configuration of the solution (``None`` when failed).
+        status: ``ok`` (no flag), ``flagged`` (a pose, see ``flags``) or ``failed``.
+        flags: tracker flags (``jump``, ``stuck``, ``branch_uncertain``, ``settling``,
+            ``near_singular``, ``out_of_limits``, ``imprecise``) and, for a failed solve, the
+            failure's name.
+        iterations: Newton steps.
+        uncertainty: of the pose (``None`` when failed).
+        solve_time: seconds spent (prediction, solve, checks, uncertainty).
+    """
+
+    pose: np.ndarray | None
+    q: np.ndarray | None
+    status: str
+    flags: tuple[str, ...]
+    iterations: int
+    uncertainty: Uncertainty | None
+    solve_time: float
+
+
+class PoseSolver:
+    """Readings of one fixture in, tracked poses with flags and uncertainty out.
+
+    Args:
+        hexa: the fixture's hexapod.
+        noise: 1-sigma reading noise (m).
+        predictor: the tracker's predictor.
+        initial: configuration ``q`` to start from (a recovered lock pose); default home.
+        confirm_samples: kept for configuration compatibility; the tracker's own checks decide
+            when a doubt clears.
+    """
+
+    def __init__(self, hexa: Hexapod, noise: float, predictor: str = "eq22", initial=None, confirm_samples: int = 5):
+        self.hexa, self.noise, self.confirm_samples = hexa, float(noise), confirm_samples
+        self.length = characteristic_length(hexa)
+        q0 = hexa.q_home if initial is None else np.asarray(initial, dtype=float)
+        self.tracker = Tracker(hexa, predictor, initial=q0, length=self.length, noise=self.noise)
+        self._sens = SensitivityEvaluator(hexa, self.length)  # for poses outside the stream
+        self._instant: int | None = None  # of the last set given to the tracker
+
+    def propagation(self, q: np.ndarray) -> np.ndarray:
+        """``J^-1`` (6x6): platform twist ``[v; w]`` (platform frame) per unit reading change, at ``q``.
+
+        The inverse of :func:`hexapod_model.analysis.jacobian.leg_jacobian_local` (NaN when singular).
+        """
+        self._sens.evaluate(np.asarray(q, dtype=float))
+        return self._sens.Jinv.copy()
+
+    def uncertainty(self, q: np.ndarray) -> Uncertainty:
+        """1-sigma pose uncertainty at configuration ``q`` (inf and margin 0 when singular)."""
+        s = self._sens.evaluate(np.asarray(q, dtype=float))
+        if not s.condition_number < np.inf:
+            return Uncertainty(float("inf"), float("inf"), 0.0)
+        return Uncertainty(
+            self.noise * s.translation, self.noise * s.rotation, self.tracker.home_condition / s.condition_number
+        )
+
+    def solve_once(self, readings: np.ndarray, q: np.ndarray) -> Solution:
+        """A single solve from ``q`` (no tracking), never raising: see ``status``."""
+        return self.hexa.forward(readings, guess=q, tol=self.tracker.tol, check=False)
+
+    def step(self, readings: np.ndarray, instant: int | None = None) -> SolveOutcome:
+        """Solve one complete reading set (m, leg order); never raises on a failed solve.
+
+        Args:
+            readings: the set's six readings (m).
+            instant: number of the set's sampling instant (``None``: the one after the last).
+        """
+        t0 = time.perf_counter()
+        if instant is not None and self._instant is not None:
+            # beyond max_gap + 1 the tracker re-anchors anyway: more unreadable samples change nothing
+            for _ in range(min(instant - self._instant - 1, self.tracker.settings.max_gap + 1)):
+                self.tracker.step(_UNREADABLE)
+        self._instant = instant
+        r = self.tracker.step(readings)
+        if r.failed:
+            return SolveOutcome(None, None, "failed", (*r.flags, r.status), r.iterations, None, _since(t0))
+        u = Uncertainty(r.sigma_translation, r.sigma_rotation, r.singularity_margin)
+        status = "flagged" if r.flags else "ok"
+        sol = r.solution
+        return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, _since(t0))
+
+
+def _since(t0: float) -> float:
+    return time.perf_counter() - t0

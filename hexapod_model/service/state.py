@@ -1,0 +1,143 @@
+"""Per-fixture state judged from the readings alone: locked / moving / drift, and stuck legs.
+
+* :class:`LockDetector`: the brakes (Bem, Ude, Nemec 2026, §2) hold the plate still, so readings
+  that stay within ``band`` (m) of where a steady run started for ``lock_time`` (s) mean
+  ``locked``. The lock reference is the mean of that run. While locked, ``unlock_samples``
+  consecutive samples farther than ``band`` from the reference mean ``moving`` again (one
+  spike does not unlock); an exponential average of the readings (time constant ``lock_time``)
+  farther than ``drift_limit`` from the reference is a ``drift`` alarm (the plate creeps while
+  the brakes are on).
+* :class:`StuckDetector`: an encoder repeating exactly the same count while its own recent
+  velocity predicts a change of more than ``sigmas`` times the noise is ``stuck``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+GAP_INSTANTS = 3  # sampling instants without a set after which a leg's speed estimate restarts
+
+
+class LockDetector:
+    """Locked / moving / drift of one fixture from its reading sets.
+
+    Args:
+        lock_time: seconds of steady readings before ``locked`` (also the drift average's
+            time constant).
+        band: steady band (m).
+        drift_limit: drift alarm threshold (m), below ``band``.
+        unlock_samples: consecutive samples outside the band that unlock.
+    """
+
+    def __init__(self, lock_time: float, band: float, drift_limit: float, unlock_samples: int):
+        self.lock_time, self.band, self.drift_limit, self.unlock_samples = lock_time, band, drift_limit, unlock_samples
+        self.state = "moving"
+        self.reference: np.ndarray | None = None  # mean readings of the locking run (m)
+        self.drift = False
+        self._run_start: tuple[float, np.ndarray] | None = None
+        self._sum = np.zeros(6)
+        self._n = 0
+        self._outside = 0
+        self._ema = np.zeros(6)
+        self._t_last = 0.0
+
+    def _restart(self, t: float, readings: np.ndarray) -> None:
+        self._run_start = (t, readings.copy())
+        self._sum[:] = readings
+        self._n = 1
+
+    def update(self, t: float, readings: np.ndarray) -> bool:
+        """Add a reading set at time ``t`` (s); True when a moving fixture has been steady long enough.
+
+        The caller then calls :meth:`lock` (with the reference it accepted) or :meth:`restart`.
+        """
+        if self.state == "locked":
+            assert self.reference is not None
+            if float(np.max(np.abs(readings - self.reference))) > self.band:
+                self._outside += 1
+                if self._outside >= self.unlock_samples:
+                    self.state, self.reference, self.drift, self._outside = "moving", None, False, 0
+                    self._restart(t, readings)
+                return False
+            self._outside = 0
+            alpha = 1.0 - math.exp(-max(t - self._t_last, 0.0) / max(self.lock_time, 1e-9))
+            self._ema += alpha * (readings - self._ema)
+            self._t_last = t
+            self.drift = float(np.max(np.abs(self._ema - self.reference))) > self.drift_limit
+            return False
+        if self._run_start is None or float(np.max(np.abs(readings - self._run_start[1]))) > self.band:
+            self._restart(t, readings)
+        else:
+            self._sum += readings
+            self._n += 1
+        return t - self._run_start[0] >= self.lock_time  # type: ignore[index]
+
+    @property
+    def run_mean(self) -> np.ndarray:
+        """Mean readings (m) of the current steady run."""
+        return self._sum / max(self._n, 1)
+
+    def lock(self, t: float, reference: np.ndarray) -> None:
+        """Enter ``locked`` with ``reference`` readings (m) at time ``t`` (s)."""
+        self.state, self.reference, self.drift, self._outside = "locked", reference.copy(), False, 0
+        self._ema[:] = reference
+        self._t_last = t
+
+    def restart(self, t: float, readings: np.ndarray) -> None:
+        """Start a new steady run at this set (a lock could not be taken)."""
+        self._restart(t, readings)
+
+
+class StuckDetector:
+    """Legs whose count stays exactly the same although their own recent motion says it should change.
+
+    A moving leg's count changes every set (its noise alone makes an exact repeat unlikely), so a
+    repeat is suspicious in proportion to the change the leg's recent velocity predicts: after a
+    repeat lasting ``n`` frame periods at an estimated ``v`` (m per period), the leg is ``stuck``
+    when ``|v| n > sigmas * max(noise, resolution)``. The velocity is an exponential average
+    (``alpha`` per instant) of the leg's rate of change, frozen while the count repeats, and
+    forgotten after a gap of more than ``GAP_INSTANTS`` sampling instants. With the
+    default 8 sigma a stuck leg goes unnoticed while it would have moved about 8 sigma (about 3
+    sigma of the pose) when its speed is well known; a leg moving by about the noise per set has
+    a noisy speed estimate and may take a few sets more. A still fixture (a locked plate) cannot
+    reveal a stuck encoder, and needs not: its readings do not change.
+
+    Args:
+        sigmas: threshold in noise units; 0 disables the check.
+        noise: 1-sigma reading noise (m).
+        resolution: metres per count.
+    """
+
+    def __init__(self, sigmas: float, noise: float, resolution: float, alpha: float = 0.3):
+        self.limit = sigmas * max(noise, abs(resolution))
+        self.alpha = alpha
+        self._counts: list[int] | None = None
+        self._since = [0] * 6  # sampling instant the current count was first seen
+        self._value = [0.0] * 6  # its reading (m)
+        self._v = [0.0] * 6  # m per instant
+
+    def update(self, instant: int, counts: list[int], readings) -> list[int]:
+        """Add a set: its sampling instant (frame periods since the start), raw counts and readings (m).
+
+        Returns the stuck legs (0-based). Counting in sampling instants rather than in seconds keeps
+        the speed estimate right when frames arrive bunched (USB adapters, a busy host).
+        """
+        if self.limit == 0.0:
+            return []
+        stuck = []
+        prev, since, value, v = self._counts, self._since, self._value, self._v
+        for k in range(6):
+            if prev is not None and counts[k] == prev[k]:
+                if abs(v[k]) * (instant - since[k]) > self.limit:
+                    stuck.append(k)
+                continue
+            n = instant - since[k]
+            if prev is not None and 0 < n <= GAP_INSTANTS:  # an average over n instants weighs as n sets
+                v[k] += (1.0 - (1.0 - self.alpha) ** n) * ((float(readings[k]) - value[k]) / n - v[k])
+            elif n > GAP_INSTANTS:  # the speed before a long gap says nothing about now
+                v[k] = 0.0
+            since[k], value[k] = instant, float(readings[k])
+        self._counts = list(counts)
+        return stuck

@@ -1,0 +1,325 @@
+"""``hexapod serve`` / ``simulate-encoders`` / ``fixture`` / ``view --live``, in-process and as processes.
+
+Everything runs on python-can's ``virtual`` bus (buses of one process) and HTTP on 127.0.0.1;
+the process-level tests start ``hexapod serve ... --simulate`` on an ephemeral port, are bounded
+in time and stop the process they started.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import socket
+import sqlite3
+import subprocess
+import sys
+import threading
+import time
+import urllib.request
+import uuid
+from pathlib import Path
+
+import can
+import numpy as np
+import pytest
+
+from hexapod_model.cli.main import main
+from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.service import RECORD_KEYS, FixtureService, Simulator, decode, load_config, load_simulation
+
+ROOT = Path(__file__).resolve().parents[2]
+HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]
+
+
+def write_config(tmp_path, port=0, extra="", fixtures=None, channel=None) -> Path:
+    fixtures = fixtures or [("left", "reference", [0x181 + k for k in range(6)], "")]
+    text = f'[bus]\ninterface = "virtual"\nchannel = "{channel or uuid.uuid4().hex}"\n'
+    text += f'[store]\npath = "store.sqlite"\n[http]\nhost = "127.0.0.1"\nport = {port}\n{extra}'
+    for name, hexa, ids, more in fixtures:
+        text += f'[[fixtures]]\nname = "{name}"\nhexapod = "{hexa}"\ncan_ids = {ids}\n{more}'
+    p = tmp_path / "fixture.toml"
+    p.write_text(text)
+    return p
+
+
+def write_sim(tmp_path, body: str, name="sim.toml") -> Path:
+    p = tmp_path / name
+    p.write_text("seed = 5\n" + body)
+    return p
+
+
+HOLD_SIM = f'[[fixtures]]\nname = "left"\nrate = 100.0\nhold = {HOLD}\n'
+
+
+# ----- bad input: one line, exit 2 -----
+def bad_cases(tmp_path):
+    ids = [0x181 + k for k in range(6)]
+    (tmp_path / "broken.urdf").write_text("<robot name='x'><link name='base'/></robot>")
+    return {
+        "missing field": (
+            write_config(tmp_path, fixtures=[("left", "reference", ids, "")])
+            .read_text()
+            .replace('name = "left"\n', ""),
+            "fixtures[0].name",
+        ),
+        "duplicate CAN id": (
+            write_config(tmp_path, fixtures=[("left", "reference", ids[:5] + [ids[0]], "")]).read_text(),
+            "duplicate CAN id",
+        ),
+        "unknown interface": (write_config(tmp_path).read_text().replace('"virtual"', '"vcan"'), "bus.interface"),
+        "unreadable hexapod file": (
+            write_config(tmp_path, fixtures=[("left", "broken.urdf", ids, "")]).read_text(),
+            "fixtures[0].hexapod",
+        ),
+    }
+
+
+@pytest.mark.parametrize("case", ["missing field", "duplicate CAN id", "unknown interface", "unreadable hexapod file"])
+def test_bad_configuration_one_line_exit_2(tmp_path, capsys, case):
+    text, words = bad_cases(tmp_path)[case]
+    cfg = tmp_path / "bad.toml"
+    cfg.write_text(text)
+    assert main(["serve", str(cfg), "--duration", "0.1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("hexapod serve: error:") and words in err[0], err
+
+
+def test_port_in_use_one_line_exit_2(tmp_path, capsys):
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        cfg = write_config(tmp_path, port=port)
+        assert main(["serve", str(cfg), "--duration", "0.1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"127.0.0.1:{port}: port in use" in err[0], err
+    assert not (tmp_path / "store.sqlite").exists()  # nothing was started
+
+
+def test_fixture_commands_without_a_store_or_with_bad_times(tmp_path, capsys):
+    cfg = write_config(tmp_path)
+    assert main(["fixture", "status", str(cfg)]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    assert main(["fixture", "history", str(cfg), "--since", "yesterday"]) == 2
+    assert "--since" in capsys.readouterr().err
+
+
+# ----- in-process commands -----
+def test_simulate_encoders_sends_the_fixtures_own_frames(tmp_path, capsys):
+    cfg = write_config(
+        tmp_path,
+        fixtures=[
+            (
+                "left",
+                "reference",
+                [0x181 + k for k in range(6)],
+                "home_counts = 1000\n[fixtures.encoder]\nbyte_order = 'big'\n",
+            )
+        ],
+    )
+    sim = write_sim(tmp_path, HOLD_SIM.replace("rate = 100.0", "rate = 50.0\nnoise = 0.0"))
+    config = load_config(cfg)
+    listener = can.Bus(interface="virtual", channel=config.bus.channel)
+    try:
+        assert main(["simulate-encoders", str(cfg), str(sim), "--duration", "0.3"]) == 0
+        frames = []
+        while (m := listener.recv(timeout=0.5)) is not None:
+            frames.append(m)
+    finally:
+        listener.shutdown()
+    assert "sent" in capsys.readouterr().err
+    assert (
+        12 <= len(frames) <= 6 * 16
+        and len(frames) % 6 == 0
+        and {m.arbitration_id for m in frames} == set(range(0x181, 0x187))
+    )
+    legs = config.fixtures[0].legs
+    readings = {}
+    for m in frames:
+        leg = legs[m.arbitration_id - 0x181]
+        readings[m.arbitration_id] = leg.reading(decode(leg.layout, m.data).position)
+    hexa = config.fixtures[0].load_hexapod()
+    T = np.eye(4)
+    T[:3, :3] = rpy_to_matrix(*np.radians(HOLD[3:]))
+    T[:3, 3] = HOLD[:3]
+    truth = hexa.inverse(T).lengths
+    assert np.allclose([readings[0x181 + k] for k in range(6)], truth, atol=0.6e-6)  # 1 um counts, no noise
+
+
+# ----- process level -----
+def env():
+    e = dict(os.environ)
+    e["PYTHONPATH"] = str(ROOT) + os.pathsep + e.get("PYTHONPATH", "")
+    return e
+
+
+class Served:
+    """``hexapod serve`` in a subprocess: its port, its JSON lines (read in a thread), bounded waits."""
+
+    def __init__(self, *args: str):
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "hexapod_model", "serve", *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env(),
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # Ctrl-C works, as in a terminal
+        )
+        self.records: list[dict] = []
+        self.err: list[str] = []
+        self.port: int | None = None
+        self._port_seen = threading.Event()
+        threading.Thread(target=self._read_out, daemon=True).start()
+        threading.Thread(target=self._read_err, daemon=True).start()
+
+    def _read_out(self):
+        for line in self.proc.stdout:
+            self.records.append(json.loads(line))
+
+    def _read_err(self):
+        for line in self.proc.stderr:
+            self.err.append(line)
+            m = re.search(r"serving http://127\.0\.0\.1:(\d+)", line)
+            if m:
+                self.port = int(m.group(1))
+                self._port_seen.set()
+
+    def wait_port(self, timeout=90.0) -> int:
+        assert self._port_seen.wait(timeout), "".join(self.err)
+        assert self.port is not None
+        return self.port
+
+    def get(self, path):
+        with urllib.request.urlopen(f"http://127.0.0.1:{self.port}{path}", timeout=5) as r:
+            return json.load(r)
+
+    def wait_for(self, predicate, timeout=60.0):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if predicate():
+                return
+            assert self.proc.poll() is None, "".join(self.err)
+            time.sleep(0.05)
+        raise AssertionError(f"timed out; stderr: {''.join(self.err)[-2000:]}")
+
+    def finish(self, sig=signal.SIGINT, timeout=30.0) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        try:
+            return self.proc.wait(timeout)
+        finally:
+            if self.proc.poll() is None:
+                self.proc.kill()
+                self.proc.wait()
+
+
+def test_serve_simulated_over_http_and_json_lines_then_ctrl_c_and_fixture_status(tmp_path, capsys):
+    cfg = write_config(tmp_path, fixtures=[("left", "reference", [0x181 + k for k in range(6)], "lock_time = 0.3\n")])
+    sim = write_sim(tmp_path, HOLD_SIM)
+    served = Served(str(cfg), "--simulate", str(sim), "--jsonl")
+    try:
+        served.wait_port()
+        assert served.get("/fixtures") == {"fixtures": ["left"]}
+        served.wait_for(lambda: any(r["stored"] for r in served.records))
+        pose = served.get("/fixtures/left/pose")
+        health = served.get("/health")
+    finally:
+        code = served.finish(signal.SIGINT)
+    assert code == 0, "".join(served.err)
+    assert tuple(pose) == RECORD_KEYS and pose["status"] == "ok" and pose["state"] == "locked" and pose["stored"]
+    assert health["status"] == "ok" and health["fixtures"]["left"]["stored"]
+    ok = [r for r in served.records if r["status"] == "ok"]
+    assert len(ok) > 20 and all(tuple(r) == RECORD_KEYS for r in served.records)
+    for r in ok:  # the held pose, within 5 sigma (sigma: RMS error length)
+        p = r["pose"]
+        assert np.linalg.norm(np.array([p["x"], p["y"], p["z"]]) - HOLD[:3]) < 5e-3 * r["sigma"]["translation_mm"]
+        assert np.allclose([p["roll"], p["pitch"], p["yaw"]], HOLD[3:], atol=5 * 3**0.5 * r["sigma"]["rotation_deg"])
+    assert main(["fixture", "status", str(cfg)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[1].split()[0] == "left" and out[1].split()[-1] == "same"
+    assert np.allclose([float(v) for v in out[1].split()[2:8]], HOLD, atol=2e-3)
+    assert main(["fixture", "history", str(cfg), "-o", str(tmp_path / "log.csv")]) == 0
+    rows = (tmp_path / "log.csv").read_text().splitlines()
+    first_locked = next(r for r in served.records if r["state"] == "locked")
+    assert rows[0].startswith("fixture,t,time,x,y,z") and len(rows) == 2
+    assert float(rows[1].split(",")[1]) == first_locked["t"]
+    assert main(["fixture", "history", str(cfg), "--samples", "--since", "0"]) == 0
+    assert len(capsys.readouterr().out.splitlines()) > 20
+
+
+def test_kill_9_while_committing_locks_then_restart_recovers_the_last_lock(tmp_path):
+    ids2 = [0x191 + k for k in range(6)]
+    cfg = write_config(
+        tmp_path,
+        fixtures=[
+            ("left", "reference", [0x181 + k for k in range(6)], "lock_time = 0.15\n"),
+            ("right", "reference", ids2, "lock_time = 0.15\n"),
+        ],
+    )
+    body = ""
+    for name in ("left", "right"):
+        body += f'[[fixtures]]\nname = "{name}"\nrate = 100.0\ntrajectory = "A"\nscale = 0.004\nperiod = 4.0\n'
+        body += "move = 0.4\nlock = 0.4\nramp = 0.1\n"
+    sim = write_sim(tmp_path, body)
+    served = Served(str(cfg), "--simulate", str(sim), "--jsonl")
+
+    def episodes():  # (fixture, t of the locking record, seen stored) per lock episode so far
+        out, state = {}, {}
+        for r in list(served.records):
+            f = r["fixture"]
+            if r["state"] == "locked" and state.get(f) != "locked":
+                out[(f, r["t"])] = False
+                key = (f, r["t"])
+            if r["state"] == "locked" and r["stored"]:
+                out[key] = True
+            state[f] = r["state"]
+        return out
+
+    try:
+        served.wait_port()
+        served.wait_for(lambda: sum(episodes().values()) >= 4)
+        n = len(episodes())  # kill the moment a new lock is being committed
+        served.wait_for(lambda: len(episodes()) > n)
+        served.proc.kill()
+    finally:
+        served.finish()
+    stored = [k for k, v in episodes().items() if v]
+    db = sqlite3.connect(tmp_path / "store.sqlite")
+    assert db.execute("PRAGMA integrity_check").fetchone()[0] == "ok"  # opens without repair
+    events = db.execute("SELECT fixture, t FROM lock_events ORDER BY id").fetchall()
+    db.close()
+    assert set(stored) <= set(events) and len(stored) >= 4  # every lock published as stored is there
+    last = {f: t for f, t in events}
+    restarted = Served(str(cfg), "--simulate", str(write_sim(tmp_path, HOLD_SIM, "hold.toml")))
+    try:
+        restarted.wait_port()
+        health = restarted.get("/health")
+    finally:
+        code = restarted.finish()
+    assert code == 0, "".join(restarted.err)
+    for f in ("left", "right"):
+        assert health["fixtures"][f]["recovered_t"] == last[f]  # the guess is the last lock pose
+
+
+def test_view_live_shows_a_served_pose(tmp_path, capsys):
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    cfg = write_config(tmp_path, port=port)
+    config = load_config(cfg)
+    sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    sim = Simulator(config, load_simulation(write_sim(tmp_path, HOLD_SIM), config), sim_bus)
+    try:
+        with FixtureService(config) as service:
+            sim.start()
+            deadline = time.monotonic() + 30
+            while (service.record("left") or {}).get("status") != "ok" and time.monotonic() < deadline:
+                time.sleep(0.05)
+            assert main(["view", str(cfg), "--live", "--once"]) == 0
+    finally:
+        sim.stop()
+        sim_bus.shutdown()
+    captured = capsys.readouterr()
+    assert "meshcat: http://127.0.0.1" in captured.out and "showed 1 poses of left" in captured.err

@@ -1,0 +1,84 @@
+"""Shared by the service tests: configurations, a bus that only collects, driving a cycle by hand."""
+
+from __future__ import annotations
+
+import uuid
+from pathlib import Path
+
+import can
+import numpy as np
+import pinocchio as pin
+
+from hexapod_model.service import FixtureCycle, Simulator, config_from_dict, geometry_hash, simulation_from_dict
+
+from ..conftest import hexapod
+
+IDS = [[0x181 + k for k in range(6)], [0x191 + k for k in range(6)]]
+
+
+def fixture_table(name: str = "left", index: int = 0, **extra) -> dict:
+    return {"name": name, "hexapod": "reference", "can_ids": IDS[index], **extra}
+
+
+def service_config(tmp_path: Path, fixtures: list[dict] | None = None, channel: str | None = None, **top):
+    data = {
+        "bus": {"interface": "virtual", "channel": channel or f"test-{uuid.uuid4().hex}"},
+        "store": {"path": str(tmp_path / "store.sqlite")},
+        "http": {"host": "127.0.0.1", "port": 0},
+        "fixtures": fixtures or [fixture_table()],
+        **top,
+    }
+    return config_from_dict(data, "test.toml", tmp_path)
+
+
+def sim_config(service, fixtures: list[dict], seed: int = 3):
+    return simulation_from_dict({"seed": seed, "fixtures": fixtures}, service)
+
+
+class CollectingBus:
+    """Stands in for a python-can bus in the simulator: keeps what is sent."""
+
+    def __init__(self):
+        self.sent: list[can.Message] = []
+
+    def send(self, msg: can.Message, timeout=None) -> None:
+        self.sent.append(msg)
+
+
+def drive(service, sim, seconds: float, recovered=None, t0: float = 1.0e9, cycle=None):
+    """Feed ``seconds`` of simulated sets of the first simulated fixture into its cycle, by hand.
+
+    Frames get the simulated time (``t0 + t_sim``) as receipt time. Returns the cycle, the
+    records published (with the simulated set each belongs to) and the simulator's truth.
+    """
+    fixture = sim.fixtures[0]
+    cfg = service.fixture(fixture.name)
+    hexa = hexapod("reference")
+    if cycle is None:
+        cycle = FixtureCycle(cfg, hexa, geometry_hash(hexa), recovered, t0)
+    bus = CollectingBus()
+    simulator = Simulator(service, sim, bus, hexapods={fixture.name: hexa})  # type: ignore[arg-type]
+    leg_of = {leg.can_id: k for k, leg in enumerate(cfg.legs)}
+    out = []
+    n = int(round(seconds * fixture.rate))
+    for k in range(n):
+        t_sim = k / fixture.rate
+        bus.sent.clear()
+        sent = simulator.send_set(0, t_sim)
+        for msg in bus.sent:
+            rec = cycle.on_frame(leg_of[msg.arbitration_id], msg.data, t0 + t_sim)
+            if rec is not None:
+                out.append((sent, rec))
+        if cycle.pending_lock is not None:  # the store's part: committed at once
+            episode, event = cycle.pending_lock
+            cycle.pending_lock = None
+            cycle.lock_stored(episode, event)
+    return cycle, out
+
+
+def pose_error(rec: dict, truth: np.ndarray) -> tuple[float, float]:
+    """Position (m) and rotation (rad) error of a record's pose against a 4x4 truth."""
+    p = rec["pose"]
+    R = pin.Quaternion(p["qw"], p["qx"], p["qy"], p["qz"]).toRotationMatrix()
+    dp = float(np.linalg.norm(np.array([p["x"], p["y"], p["z"]]) - truth[:3, 3]))
+    return dp, float(np.linalg.norm(pin.log3(truth[:3, :3].T @ R)))

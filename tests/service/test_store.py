@@ -1,0 +1,86 @@
+"""The SQLite store: WAL, durable lock events before the callback, bounded sample log, damage refused."""
+
+from __future__ import annotations
+
+import sqlite3
+import threading
+
+import numpy as np
+import pytest
+
+from hexapod_model.service import LockEvent, ServiceError, Store
+from hexapod_model.service.store import SAMPLE_COLUMNS, StoreWriter
+
+
+def event(fixture="left", t=1.5, k=0.0):
+    return LockEvent(
+        fixture,
+        t,
+        np.array([0.01, -0.02, 0.4 + k]),
+        np.array([0.0, 0.0, 0.0, 1.0]),
+        np.arange(6) * 1e-3,
+        "ok",
+        "ab" * 32,
+        np.linspace(0, 1, 43),
+    )
+
+
+def sample(t, fixture="left"):
+    return (fixture, t, "ok", "[]", "moving", *([0.001] * 6), 0.0, 0.0, 0.4, 0.0, 0.0, 0.0, 1.0)
+
+
+def test_wal_mode_and_lock_events_round_trip(tmp_path):
+    store = Store(tmp_path / "s.sqlite")
+    assert store.db.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    assert store.db.execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL
+    a = store.add_lock(event(t=1.0))
+    store.add_lock(event("right", t=2.0))
+    c = store.add_lock(event(t=3.0, k=0.01))
+    assert a.id is not None and c.id is not None and c.id > a.id
+    last = store.last_lock("left")
+    assert last is not None and last.id == c.id and last.t == 3.0 and last.position[2] == 0.4 + 0.01
+    assert np.array_equal(last.q, np.linspace(0, 1, 43)) and np.array_equal(last.readings, np.arange(6) * 1e-3)
+    assert [e.t for e in store.locks()] == [1.0, 2.0, 3.0] and [e.t for e in store.locks("left", 2.0)] == [3.0]
+    assert store.last_lock("nobody") is None
+    store.close()
+    again = Store(tmp_path / "s.sqlite", create=False)
+    assert [e.fixture for e in again.locks()] == ["left", "right", "left"]
+    again.close()
+
+
+def test_sample_log_is_bounded(tmp_path):
+    store = Store(tmp_path / "s.sqlite", samples=50)
+    store.add_samples([sample(float(t)) for t in range(80)])
+    store.add_samples([sample(float(t)) for t in range(80, 120)])
+    rows = store.samples()
+    assert len(rows) == 50 and [r[1] for r in rows] == [float(t) for t in range(70, 120)]
+    assert len(rows[0]) == len(SAMPLE_COLUMNS)
+    assert [r[1] for r in store.samples("left", 115.0)] == [115.0 + k for k in range(5)]
+
+
+def test_writer_calls_back_only_after_the_commit_is_visible_to_another_connection(tmp_path):
+    store = Store(tmp_path / "s.sqlite")
+    writer = StoreWriter(store, flush_interval=0.05)
+    seen, done = [], threading.Event()
+
+    def committed(stored: LockEvent) -> None:
+        other = sqlite3.connect(tmp_path / "s.sqlite")  # a reader that is not the writer
+        seen.append(other.execute("SELECT t FROM lock_events WHERE id = ?", (stored.id,)).fetchone())
+        other.close()
+        done.set()
+
+    for t in range(10):
+        writer.sample(sample(float(t)))
+    writer.lock(event(t=9.5), committed)
+    assert done.wait(10)
+    writer.stop()
+    assert seen == [(9.5,)] and len(store.samples()) == 10  # the pending samples went in with it
+    store.close()
+
+
+def test_a_damaged_or_missing_store_is_refused(tmp_path):
+    (tmp_path / "bad.sqlite").write_bytes(b"this is not an SQLite database" * 100)
+    with pytest.raises(ServiceError, match="bad.sqlite"):
+        Store(tmp_path / "bad.sqlite")
+    with pytest.raises(ServiceError, match="does not exist"):
+        Store(tmp_path / "none.sqlite", create=False)
