@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -52,7 +53,8 @@ class Hexapod:
 
     Construct with :meth:`from_urdf`, :meth:`from_preset`, :meth:`from_geometry` or :meth:`from_mjcf`.
     Leg readings (``lengths``) are the measured prismatic joints in metres, zero at home;
-    poses are 4x4 base -> platform transforms in metres.
+    poses are 4x4 base -> platform transforms in metres. One object may be shared by threads:
+    each thread solves with solver buffers of its own.
     """
 
     def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None):
@@ -77,7 +79,7 @@ class Hexapod:
         self.stroke = self.readings_of(np.array([[model.lower[i], model.upper[i]] for i in model.prismatic_q]).T).T
         self.prismatic_names = tuple(m.names[leg.prismatic] for leg in model.legs)
         self._limited = model.limited_q()
-        self._solvers: dict[tuple[int, ...], NewtonSolver] = {}
+        self._local = threading.local()  # .solvers: {held joints: NewtonSolver}, one per thread
         self._home_h = model.home.homogeneous
         self._stroke_lo = np.ascontiguousarray(self.stroke[:, 0])
         self._stroke_hi = np.ascontiguousarray(self.stroke[:, 1])
@@ -172,9 +174,13 @@ class Hexapod:
         kernels.pose_to_xyzquat(T, self._home_h, q[i : i + 7])
 
     def _solver(self, held: tuple[int, ...]) -> NewtonSolver:
-        solver = self._solvers.get(held)
+        """The calling thread's solver for this set of held joints (buffers are not shared)."""
+        solvers = getattr(self._local, "solvers", None)
+        if solvers is None:
+            solvers = self._local.solvers = {}
+        solver = solvers.get(held)
         if solver is None:
-            solver = self._solvers[held] = NewtonSolver(self.closed_loop, held)
+            solver = solvers[held] = NewtonSolver(self.closed_loop, held)
         return solver
 
     def _check_home_conditioning(self) -> float:
