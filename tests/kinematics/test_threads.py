@@ -34,7 +34,7 @@ def _work(hexa: hm.Hexapod, readings: np.ndarray, poses: np.ndarray) -> list[tup
         warm = hexa.forward(lengths, guess=prev, check=False)
         prev = warm if warm.converged else None
         ik = hexa.inverse(T, check=False)
-        statuses = (cold.status, warm.status, ik.status)
+        statuses = (cold.status, cold.flags, warm.status, warm.flags, ik.status)
         out.append((statuses, cold.pose, warm.pose, ik.lengths, leg_jacobian(hexa, ik.q)))
     return out
 
