@@ -86,7 +86,7 @@ def solve_forward(
     pq = solver.clm.prismatic_q
     l0 = start[pq]
     start[pq] = lengths
-    status, it, res, msg = solver.iterate(start, tol, max_iter, sign, stop_uncertified=True)
+    status, it, res, msg = solver.iterate(start, tol, max_iter, sign, certify=True)
     if status == "converged" and solver.certified:
         return _certified(solver, it, res)
     if status == "max_iterations" and solver.certified:  # contracting, but max_iter too small
@@ -137,7 +137,7 @@ def _follow(
         q0[pq] = l0 + tn * (lengths - l0)
         scale = 0.0 if offset is None else 1.0 - tn
         tol_n = tol if tn == 1.0 else INTERMEDIATE_TOL
-        status, it, res, _ = solver.iterate(q0, tol_n, max_iter, sign, offset, scale, stop_uncertified=True)
+        status, it, res, _ = solver.iterate(q0, tol_n, max_iter, sign, offset, scale, certify=True)
         total += it
         substeps += 1
         accepted = status == "converged" and solver.certified

@@ -232,13 +232,14 @@ class NewtonSolver:
         sign: float = 0.0,
         offset: np.ndarray | None = None,
         scale: float = 0.0,
-        stop_uncertified: bool = False,
+        certify: bool = False,
     ) -> tuple[str, int, float, str]:
         """Newton from ``q0`` (held joints set) on ``r - scale * offset``: ``(status, iterations, residual, message)``.
 
-        Leaves the result in ``self.q_aug``. ``self.certified``: no shortened, singular or flipped
-        step, every ``|dx_k+1| / |dx_k| <= THETA_MAX`` (``self.theta``, measured even after one
-        step above ``_ONE_STEP``), the sign ``sign`` (or the first's) at every Schur step.
+        Leaves the result in ``self.q_aug``. With ``certify``, ``self.certified``: no shortened,
+        singular or flipped step, every ``|dx_k+1| / |dx_k| <= THETA_MAX`` (``self.theta``; one step
+        above ``_ONE_STEP`` is followed by a second), the sign ``sign`` (or the first's) at every
+        Schur step; the solve stops (status ``uncertified``) once that fails.
         """
         model, data, J = self.model, self.data, self.J
         probe_cols, rows, R, p, E, r = self.probe_cols, self.rows, self.R, self.p, self.E, self.r
@@ -270,20 +271,20 @@ class NewtonSolver:
                 status, certified = "singular", False
                 message = f"constraint Jacobian singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g})"
                 break
-            if self.sign != sign:  # only on the Schur path
-                if sign == 0.0:
-                    sign = self.sign
-                else:
-                    certified = False
             biggest = kernels.scatter_step(x, free_v, dv, MAX_STEP)
-            if previous > _THETA_FLOOR and biggest > theta * previous:
-                theta = biggest / previous
-            previous = biggest
-            if biggest > MAX_STEP or theta > THETA_MAX:
-                certified = False
-            if stop_uncertified and not certified:
-                status, message = "uncertified", "Newton contraction or determinant sign check failed"
-                break
+            if certify:
+                certified = sign == 0.0 or self.sign == sign  # the sign is only known on the Schur path
+                sign = sign or self.sign
+                if previous > _THETA_FLOOR and biggest > theta * previous:
+                    theta = biggest / previous
+                previous = biggest
+                if not (certified and biggest <= MAX_STEP and theta <= THETA_MAX):
+                    status, message, certified = (
+                        "uncertified",
+                        "Newton contraction or determinant sign check failed",
+                        False,
+                    )
+                    break
             q = pin.integrate(model, q, dv)
             it += 1
         self.q_aug = q
