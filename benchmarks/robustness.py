@@ -93,6 +93,7 @@ class Checker:
         """
         pq = self.hexa.closed_loop.prismatic_q
         l0, q, s0 = q_start[pq].copy(), q_start, self.sign(q_start)
+        lengths = self.hexa.joints_of(lengths)  # prismatic joint values (an <encoder> model maps them)
         for t in np.linspace(0.0, 1.0, steps + 1)[1:]:
             q0 = q.copy()
             q0[pq] = l0 + t * (lengths - l0)

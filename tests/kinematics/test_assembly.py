@@ -39,7 +39,7 @@ def _connected_end(hexa: hm.Hexapod, lengths: np.ndarray, steps: int = 256) -> n
     q, s0 = hexa.q_home, _sign(hexa, hexa.q_home)
     for t in np.linspace(0.0, 1.0, steps + 1)[1:]:
         q0 = q.copy()
-        q0[pq] = t * lengths
+        q0[pq] = t * hexa.joints_of(lengths)
         q, status = fk.run(q0, 1e-12, 30)[:2]
         if status != "converged" or _sign(hexa, q) != s0:
             return None
