@@ -279,11 +279,7 @@ class NewtonSolver:
                     theta = biggest / previous
                 previous = biggest
                 if not (certified and biggest <= MAX_STEP and theta <= THETA_MAX):
-                    status, message, certified = (
-                        "uncertified",
-                        "Newton contraction or determinant sign check failed",
-                        False,
-                    )
+                    status, message, certified = "uncertified", "contraction or determinant sign check failed", False
                     break
             q = pin.integrate(model, q, dv)
             it += 1
