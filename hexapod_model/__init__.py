@@ -14,6 +14,7 @@ from .description.mjcf import geometry_to_mjcf, urdf_to_mjcf
 from .description.presets import DEFAULT_PRESET, PRESETS, get_preset
 from .description.urdf import geometry_to_urdf, read_closures, write_urdf
 from .exceptions import (
+    AssemblyError,
     ConvergenceError,
     GeometryError,
     HexapodError,
@@ -32,6 +33,7 @@ from .kinematics.hexapod import Hexapod, load_hexapod
 from .kinematics.solver import STATUSES, Solution
 
 __all__ = [
+    "AssemblyError",
     "ConvergenceError",
     "GeometryError",
     "HexapodError",

@@ -128,6 +128,13 @@ class WorkspaceError(SolverError):
     """The solution leaves the workspace: a stroke or Cardan angle limit is violated."""
 
 
+class AssemblyError(SolverError):
+    """Direct kinematics cannot certify which assembly the readings belong to.
+
+    Status ``ambiguous_assembly``; ``result.candidates`` holds the poses of the assemblies found.
+    """
+
+
 class ViewError(HexapodError):
     """The 3-D scene cannot be built or shown (missing optional package, bad configuration)."""
 

@@ -161,3 +161,40 @@ def test_calibration_study_script_runs(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "after (calibrated)" in out.stdout and "within 3 sigma" in out.stdout
     assert (tmp_path / "c.json").stat().st_size > 100
+
+
+def test_robustness_benchmark_classifies_every_solve(tmp_path):
+    out = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "benchmarks" / "robustness.py"),
+            "3-6",
+            "guideway",
+            "--poses",
+            "150",
+            "--json",
+            str(tmp_path / "r.json"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "returned as good but another assembly, unexplained: 0" in out.stdout
+    classes = ("ok", "flagged", "flagged_other", "ambiguous", "ambiguous_truth", "failed", "other_explained")
+    for report in json.loads((tmp_path / "r.json").read_text()):
+        for mode in ("cold", "warm"):
+            counts = report[mode]
+            assert counts["other_unexplained"] == 0
+            assert sum(counts[k] for k in classes) + counts["no_guess"] == report["within_limits"] > 100
+
+
+def test_three_six_benchmark_runs():
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "three_six_fk.py"), "--poses", "30"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "solve_all  median" in out.stdout and "missed 0 times" in out.stdout

@@ -22,15 +22,11 @@ platform frame origin and ``w`` (rad/s) the angular velocity, BOTH EXPRESSED IN 
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.solver import NewtonSolver
-
-_SOLVERS: weakref.WeakKeyDictionary[Hexapod, NewtonSolver] = weakref.WeakKeyDictionary()
 
 
 @dataclass(frozen=True)
@@ -54,13 +50,6 @@ class KinematicEvaluation:
     length_unit: float = 1.0
 
 
-def _solver(hexa: Hexapod) -> NewtonSolver:
-    s = _SOLVERS.get(hexa)
-    if s is None:
-        s = _SOLVERS[hexa] = NewtonSolver(hexa.closed_loop, ())
-    return s
-
-
 def leg_jacobian_local(hexa: Hexapod, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Eliminated leg Jacobian in the platform frame, and a per-leg singularity ratio.
 
@@ -69,7 +58,7 @@ def leg_jacobian_local(hexa: Hexapod, q: np.ndarray) -> tuple[np.ndarray, np.nda
     the platform held, i.e. the leg itself is at a singular configuration).
     """
     clm = hexa.closed_loop
-    _, G = _solver(hexa).evaluate(np.asarray(q, dtype=float))
+    _, G = hexa._solver(()).evaluate(np.asarray(q, dtype=float))  # every joint free; this thread's buffers
     rows = 6 if clm.kind == "6d" else 3
     m = clm.model
     ff = np.arange(clm.platform_v, clm.platform_v + 6)

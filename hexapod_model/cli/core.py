@@ -138,7 +138,11 @@ def _stream(
                     guess = sol
                     good.append(k)
                     solved.append(sol.pose if kind == "fk" else sol.lengths)
-                    tails.append(["ok", sol.iterations, float(sol.residual)])
+                    flags = ";".join(sol.flags)  # a valid pose, but not ok (near_singular): written, counted
+                    tails.append([flags or "ok", sol.iterations, float(sol.residual)])
+                    if flags:
+                        failed += 1
+                        first = first or f"row {total + k + 1} (line {rows.lines[k]}): {flags}: {why}"
                     continue
                 status = "invalid_input" if sol is None else sol.status
                 failed += 1

@@ -246,12 +246,15 @@ class ClosedLoopModel:
         """Per-leg closure error through Pinocchio's constraint models.
 
         Per-leg closure error norm (log6 for 6d, point distance for 3d) at ``q``, through
-        Pinocchio's constraint models (the slow, reference path).
+        Pinocchio's constraint models (the slow, reference path; data of its own per call, so
+        that threads may share the model).
         """
-        pin.computeJointJacobians(self.model, self.data, q)
+        data = self.model.createData()
+        pin.computeJointJacobians(self.model, data, q)
         out = np.empty(6)
-        for i, (c, cd) in enumerate(zip(self.constraints, self.constraint_datas)):
-            c.calc(self.model, self.data, cd)
+        for i, c in enumerate(self.constraints):
+            cd = c.createData()
+            c.calc(self.model, data, cd)
             M = cd.c1Mc2
             out[i] = np.linalg.norm(pin.log6(M).vector if self.kind == "6d" else M.translation)
         return out

@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -20,8 +21,9 @@ from ..description.mjcf_loader import MJCF_SUFFIXES, load_mjcf
 from ..description.model import ClosedLoopModel
 from ..description.presets import PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
-from ..exceptions import ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
-from . import kernels
+from ..exceptions import AssemblyError, ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
+from . import assembly, kernels
+from .assembly import Outcome
 from .checks import (
     MAX_TOL,
     POSE_TOLERANCE,
@@ -43,6 +45,7 @@ _LIMIT_SLACK = 1e-12
 #: (metres and radians; the presets have 9-67, a 20x smaller hexapod about 700, a singular
 #: layout with parallel, coplanar or coincident legs 1e13 and more)
 HOME_CONDITION_LIMIT = 1e6
+_ERRORS = {"singular": SingularityError, "out_of_limits": WorkspaceError, "ambiguous_assembly": AssemblyError}
 
 __all__ = ["Hexapod", "POSE_TOLERANCE", "check_pose", "check_vector", "load_hexapod"]
 
@@ -52,7 +55,8 @@ class Hexapod:
 
     Construct with :meth:`from_urdf`, :meth:`from_preset`, :meth:`from_geometry` or :meth:`from_mjcf`.
     Leg readings (``lengths``) are the measured prismatic joints in metres, zero at home;
-    poses are 4x4 base -> platform transforms in metres.
+    poses are 4x4 base -> platform transforms in metres. One object may be shared by threads:
+    each thread solves with solver buffers of its own.
     """
 
     def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None):
@@ -77,7 +81,7 @@ class Hexapod:
         self.stroke = self.readings_of(np.array([[model.lower[i], model.upper[i]] for i in model.prismatic_q]).T).T
         self.prismatic_names = tuple(m.names[leg.prismatic] for leg in model.legs)
         self._limited = model.limited_q()
-        self._solvers: dict[tuple[int, ...], NewtonSolver] = {}
+        self._local = threading.local()  # .solvers: {held joints: NewtonSolver}, one per thread
         self._home_h = model.home.homogeneous
         self._stroke_lo = np.ascontiguousarray(self.stroke[:, 0])
         self._stroke_hi = np.ascontiguousarray(self.stroke[:, 1])
@@ -172,9 +176,13 @@ class Hexapod:
         kernels.pose_to_xyzquat(T, self._home_h, q[i : i + 7])
 
     def _solver(self, held: tuple[int, ...]) -> NewtonSolver:
-        solver = self._solvers.get(held)
+        """The calling thread's solver for this set of held joints (buffers are not shared)."""
+        solvers = getattr(self._local, "solvers", None)
+        if solvers is None:
+            solvers = self._local.solvers = {}
+        solver = solvers.get(held)
         if solver is None:
-            solver = self._solvers[held] = NewtonSolver(self.closed_loop, held)
+            solver = solvers[held] = NewtonSolver(self.closed_loop, held)
         return solver
 
     def _check_home_conditioning(self) -> float:
@@ -221,9 +229,10 @@ class Hexapod:
         if k >= 0:
             check_vector("lengths", lengths, 6)  # names NaN / inf first
             raise LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
-        q = self._start(guess)
-        q[self.closed_loop.prismatic_q] = lengths if self._encoder is None else self.joints_of(lengths)
-        return self._finish(self._solver(self._held_forward), q, tol, max_iter, check)
+        solver = self._solver(self._held_forward)
+        sign = solver.home_sign if guess is None else getattr(guess, "det_sign", 0)
+        joints = lengths if self._encoder is None else self.joints_of(lengths)
+        return self._finish(solver, self._start(guess), tol, max_iter, check, (joints, sign, guess is not None))
 
     def inverse(
         self,
@@ -307,22 +316,29 @@ class Hexapod:
         what = "stroke" if iq in clm.prismatic_q else "joint"
         return LimitError(clm.joint_name_of_q(iq), value, clm.lower[iq], clm.upper[iq], what)
 
-    def _finish(self, solver: NewtonSolver, q0: np.ndarray, tol: float, max_iter: int, check: bool) -> Solution:
+    def _finish(self, solver: NewtonSolver, q0, tol, max_iter, check: bool, forward: tuple = ()) -> Solution:
+        """Solve from ``q0``: plain, or with ``forward = (joints, sign, warm)`` certified FK (``assembly``)."""
         if type(tol) is not float or not 0.0 < tol <= MAX_TOL:  # one comparison on the hot path
             tol = check_tolerance(tol)
         if type(max_iter) is not int or max_iter < 0:
             max_iter = check_max_iter(max_iter)
-        q, status, it, res, jac, msg = solver.run(q0, tol, max_iter)
+        if forward:
+            out = assembly.solve_forward(solver, q0, forward[0], tol, max_iter, forward[1], forward[2])
+        else:
+            out = Outcome(*solver.run(q0, tol, max_iter))
+        q, status, it, res, jac, msg = out[:6]
         if status == "converged":
             bad = kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, _LIMIT_SLACK)
             if bad >= 0:
                 k = int(self._limited[bad])
                 status, msg = "out_of_limits", str(self._limit_error(k, q[k]))
-        sol = Solution(self.pose_of(q), q, self.lengths_of(q), status, it, res, jac, msg)
+        poses = tuple(self.pose_of(c) for c in out.candidates) if out.candidates else ()
+        sol = Solution(
+            self.pose_of(q), q, self.lengths_of(q), status, it, res, jac, msg, out.flags, poses, out.det_sign
+        )
         if check and status != "converged":
-            raise {"singular": SingularityError, "out_of_limits": WorkspaceError}.get(status, ConvergenceError)(
-                sol, f"{status}: {msg}"
-            )
+            error = _ERRORS.get(status, ConvergenceError)
+            raise error(sol, f"{status}: {msg}")
         return sol
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:

@@ -120,7 +120,8 @@ def scatter_step(x, free_v, dv, max_step):
     """Scatter a Newton step into the full velocity space, limited in size.
 
     ``dv[free_v] = -x`` (the Newton step in the full velocity space; held entries stay 0),
-    scaled down, direction kept, so that no entry exceeds ``max_step`` (rad or m).
+    scaled down, direction kept, so that no entry exceeds ``max_step`` (rad or m). Returns the
+    largest entry of the full step, before shortening.
     """
     biggest = 0.0
     for k in range(x.shape[0]):
@@ -128,6 +129,17 @@ def scatter_step(x, free_v, dv, max_step):
     scale = 1.0 if biggest <= max_step else max_step / biggest
     for k in range(free_v.shape[0]):
         dv[free_v[k]] = -scale * x[k]
+    return biggest
+
+
+@njit(cache=True)
+def shift_residual(r, offset, scale):
+    """``r -= scale * offset`` (a homotopy from a start that does not close); returns ``norm(r)``."""
+    s = 0.0
+    for k in range(r.shape[0]):
+        r[k] -= scale * offset[k]
+        s += r[k] * r[k]
+    return np.sqrt(s)
 
 
 @njit(cache=True)

@@ -9,6 +9,7 @@ The stopping rule is on the closure residual itself (``tol``, mixed metres/radia
 after every step (a warm start 1 ms away takes two steps to 1e-10). A step with an entry
 larger than ``MAX_STEP`` is shortened along its direction: cold starts far from home
 otherwise overshoot into a spurious 180-degree-flipped closure.
+:meth:`NewtonSolver.iterate` also records what :mod:`~hexapod_model.kinematics.assembly` certifies.
 """
 
 from __future__ import annotations
@@ -21,9 +22,11 @@ import pinocchio as pin
 from ..description.model import ClosedLoopModel
 from . import kernels, linalg
 
-STATUSES = ("converged", "max_iterations", "singular", "out_of_limits", "invalid_input")
+STATUSES = ("converged", "ambiguous_assembly", "max_iterations", "singular", "out_of_limits", "invalid_input")
 SINGULAR_PIVOT_RATIO = 1e-13
 MAX_STEP = 0.5  # rad or m: largest entry of one Newton step (cold starts far from the solution)
+THETA_MAX = 0.25  # largest Newton contraction |dx_k+1| / |dx_k| of a certified solve (Kantorovich)
+_THETA_FLOOR, _ONE_STEP = 1e-9, 1e-6  # rounding-level step (no contraction); largest step a solve may end on
 
 
 @dataclass(frozen=True)
@@ -39,7 +42,12 @@ class Solution:
         residual: final closure residual norm (metres and radians mixed).
         jacobian: reduced constraint Jacobian at the final configuration (rows: closures,
             columns: free velocities), or ``None`` if the input was rejected.
-        message: human-readable detail when ``status != "converged"``.
+        message: human-readable detail when ``status != "converged"`` or a flag is set.
+        flags: ``("near_singular",)`` for a direct-kinematics result close to a singularity
+            (another assembly may be close; the CLI writes the flag instead of ``ok``).
+        candidates: with status ``ambiguous_assembly``, the (4, 4) poses of the assemblies
+            found (``pose`` is the first).
+        det_sign: sign of the direct-kinematics Jacobian's determinant at the result (0: none).
     """
 
     pose: np.ndarray
@@ -50,10 +58,13 @@ class Solution:
     residual: float
     jacobian: np.ndarray | None = field(default=None, repr=False)
     message: str = ""
+    flags: tuple[str, ...] = ()
+    candidates: tuple[np.ndarray, ...] = field(default=(), repr=False)
+    det_sign: int = 0
 
     @property
     def converged(self) -> bool:
-        """True when the pose is a valid closed configuration within all joint limits."""
+        """True for a closed configuration within all joint limits (FK: the certified assembly)."""
         return self.status == "converged"
 
     @property
@@ -137,6 +148,14 @@ class NewtonSolver:
         self.dv = np.zeros(self.model.nv)
         self.q_aug = pin.neutral(self.model)
         self._jac_args = (self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
+        self.sign, self.kappa, self.det_sign, self.theta, self.certified = 0.0, np.inf, 0.0, 0.0, False  # last step
+        self.home_sign, self.home_kappa = 0.0, np.inf
+        if self.held_pos is not None:  # Schur path: arguments bound once (17 attribute loads cost 1 us)
+            s = self
+            a = [s.J, s.leg_cols, s.held_pos, s.ff_cols, s.colmap, s.rows, s.p, s.E, s.r, s.x, s.LB, s.PB]
+            self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb])
+            self.iterate(clm.q_home, np.inf, 0)  # converged at once: one Schur step at home
+            self.home_sign, self.home_kappa = self.sign, self.kappa
 
     def _blocks(self, held_v: np.ndarray) -> np.ndarray | None:
         """Columns of each block when the closure Jacobian is block diagonal.
@@ -175,28 +194,15 @@ class NewtonSolver:
         """Solve the Newton system into ``self.x``.
 
         Fill ``self.x`` with the solution of ``G x = r``; return the smallest pivot ratio
-        (0 when singular, 1 for the least-squares path of non-square hybrid problems).
+        (0 when singular, 1 for the least-squares path of non-square hybrid problems). On the
+        Schur path ``self.sign`` becomes the sign of ``det G`` (up to a constant of the layout)
+        and ``self.kappa`` a bound of the condition number of the eliminated 6x6 Jacobian
+        ``M = -dl/dxi`` (leg-reading rates per platform twist).
         """
         if self.held_pos is not None:
-            return linalg.schur_solve(
-                self.J,
-                self.leg_cols,
-                self.held_pos,
-                self.ff_cols,
-                self.colmap,
-                self.rows,
-                self.p,
-                self.E,
-                self.r,
-                self.x,
-                self.LB,
-                self.PB,
-                self.A,
-                self.M,
-                self.pm,
-                self.nb,
-                self.wb,
-            )
+            ratio, self.kappa = linalg.schur_solve(*self._schur_args)
+            self.sign = 1.0 if ratio > 0.0 else -1.0
+            return abs(ratio)
         kernels.jacobian(*self._jac_args)
         if not self.square:
             self.x[:] = np.linalg.lstsq(self.G, self.r, rcond=None)[0]
@@ -218,39 +224,74 @@ class NewtonSolver:
         kernels.jacobian(*self._jac_args)
         return self.r.copy(), self.G.copy()
 
-    def run(self, q0: np.ndarray, tol: float, max_iter: int) -> tuple[np.ndarray, str, int, float, np.ndarray, str]:
-        """Iterate from URDF configuration ``q0`` (held joints already set).
+    def iterate(
+        self,
+        q0: np.ndarray,
+        tol: float,
+        max_iter: int,
+        sign: float = 0.0,
+        offset: np.ndarray | None = None,
+        scale: float = 0.0,
+        certify: bool = False,
+    ) -> tuple[str, int, float, str]:
+        """Newton from ``q0`` (held joints set) on ``r - scale * offset``: ``(status, iterations, residual, message)``.
 
-        Returns ``(q, status, iterations, residual, jacobian, message)``.
+        Leaves the result in ``self.q_aug``. With ``certify``, ``self.certified``: no shortened,
+        singular or flipped step, every ``|dx_k+1| / |dx_k| <= THETA_MAX`` (``self.theta``; one step
+        above ``_ONE_STEP`` is followed by a second), the sign ``sign`` (or the first's) at every
+        Schur step; the solve stops (status ``uncertified``) once that fails.
         """
         model, data, J = self.model, self.data, self.J
         probe_cols, rows, R, p, E, r = self.probe_cols, self.rows, self.R, self.p, self.E, self.r
+        x, free_v, dv, solve_step = self.x, self.free_v, self.dv, self._solve_step
         q = self.q_aug
         q[: self.clm.nq] = q0
         status, message, it = "max_iterations", "", 0
+        theta, previous, certified, inf = 0.0, 0.0, True, np.inf
         while True:
             pin.computeJointJacobians(model, data, q)
             norm, min_trace = kernels.residual(J, probe_cols, rows, R, p, E, r)
-            if norm <= tol:
+            if scale != 0.0:
+                norm = kernels.shift_residual(r, offset, scale)
+            if norm <= tol and (it != 1 or previous <= _ONE_STEP):  # one large step: measure a contraction
                 status = "converged"
                 if min_trace < 1.0:
                     status, message = "max_iterations", "converged to a spurious closure flipped by 180 deg"
-                elif it == 0 and (ratio := self._solve_step()) < SINGULAR_PIVOT_RATIO:
+                    certified = False
+                elif it == 0 and (ratio := solve_step()) < SINGULAR_PIVOT_RATIO:
                     # no step factored the Jacobian: check the start itself is not singular
-                    status = "singular"
+                    status, certified = "singular", False
                     message = f"start is singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g}), no step taken"
                 break
-            if it >= max_iter or not norm < np.inf:  # also stops on NaN
+            if it >= max_iter or not norm < inf:  # also stops on NaN
                 message = f"no convergence to {tol:g} in {it} iterations (residual {norm:.3g})"
                 break
-            ratio = self._solve_step()
+            ratio = solve_step()
             if ratio < SINGULAR_PIVOT_RATIO:
-                status = "singular"
+                status, certified = "singular", False
                 message = f"constraint Jacobian singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g})"
                 break
-            kernels.scatter_step(self.x, self.free_v, self.dv, MAX_STEP)
-            q = pin.integrate(model, q, self.dv)
+            biggest = kernels.scatter_step(x, free_v, dv, MAX_STEP)
+            if certify:
+                certified = sign == 0.0 or self.sign == sign  # the sign is only known on the Schur path
+                sign = sign or self.sign
+                if previous > _THETA_FLOOR and biggest > theta * previous:
+                    theta = biggest / previous
+                previous = biggest
+                if not (certified and biggest <= MAX_STEP and theta <= THETA_MAX):
+                    status, message, certified = "uncertified", "contraction or determinant sign check failed", False
+                    break
+            q = pin.integrate(model, q, dv)
             it += 1
-        kernels.jacobian(*self._jac_args)
         self.q_aug = q
-        return q[: self.clm.nq].copy(), status, it, float(norm), self.G.copy(), message
+        self.theta, self.det_sign, self.certified = theta, sign, certified
+        return status, it, float(norm), message
+
+    def run(self, q0: np.ndarray, tol: float, max_iter: int) -> tuple[np.ndarray, str, int, float, np.ndarray, str]:
+        """Iterate from URDF configuration ``q0`` (held joints already set), no certificate.
+
+        Returns ``(q, status, iterations, residual, jacobian, message)``.
+        """
+        status, it, norm, message = self.iterate(q0, tol, max_iter)
+        kernels.jacobian(*self._jac_args)
+        return self.q_aug[: self.clm.nq].copy(), status, it, norm, self.G.copy(), message

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.analysis.three_six import ThreeSixFK
+from hexapod_model.analysis.jacobian import kinematic_evaluation
+from hexapod_model.analysis.three_six import ACCEPT, MAX_ASSEMBLIES, ThreeSixFK
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.kinematics.rotations import (
     EULER_ORDERS,
@@ -98,6 +99,98 @@ def test_errors(hexa, fk):
         fk.solve([-0.18, 0.17, 0, 0, 0, 0])  # the two legs of pair 0 cannot meet
     with pytest.raises(hm.InputError):
         fk.solve([0.0] * 5)
+
+
+ISSUE_READINGS = [
+    -0.002877279397885346,
+    0.005232292617211892,
+    -0.00532425994014854,
+    -0.05518961782271656,
+    0.025369871239453057,
+    -0.045294087439625264,
+]
+
+
+def test_issue_readings_give_every_assembly_and_the_nearest_is_newtons(hexa, fk):
+    """The angle scan found 6 assemblies, none within 26 mm of Newton's pose, and chose one
+    26.7 mm / 24 deg off without an error."""
+    lengths = np.array(ISSUE_READINGS)
+    newton = hexa.forward(lengths, check=False)
+    assert newton.residual < 1e-12
+    sols = fk.solve_all(lengths)
+    assert len(sols) == 8 <= MAX_ASSEMBLIES
+    assert min(np.abs(s.pose - newton.pose).max() for s in sols) < 1e-9
+    assert np.abs(fk.solve(lengths).pose - newton.pose).max() < 1e-9
+    for s in sols:
+        _readings_match(fk, s, lengths)
+        assert s.residual <= ACCEPT
+
+
+def _scan_roots(fk, lengths, n=20_000):
+    """Independent check: intervals of psi_0 where one of the four branches of |A_1 - A_2|^2 - D_12^2
+    (psi_1, psi_2 from the two other distances) changes sign, on an n-step grid."""
+    C, d = fk.circles(lengths)
+    psi0 = np.linspace(-np.pi, np.pi, n + 1)
+    A0 = C[0] + d[0] * (np.cos(psi0)[:, None] * fk.e[0] + np.sin(psi0)[:, None] * fk.f[0])
+    branches = {}
+    for k in (1, 2):
+        w = A0 - C[k]
+        a, b = 2 * d[k] * w @ fk.e[k], 2 * d[k] * w @ fk.f[k]
+        c = (w * w).sum(1) + d[k] ** 2 - fk.D2[0, k]
+        with np.errstate(invalid="ignore"):
+            spread = np.arccos(c / np.hypot(a, b))
+        branches[k] = [np.arctan2(b, a) + s * spread for s in (1, -1)]
+    found = []
+    for p1 in branches[1]:
+        for p2 in branches[2]:
+            A1 = C[1] + d[1] * (np.cos(p1)[:, None] * fk.e[1] + np.sin(p1)[:, None] * fk.f[1])
+            A2 = C[2] + d[2] * (np.cos(p2)[:, None] * fk.e[2] + np.sin(p2)[:, None] * fk.f[2])
+            g = ((A1 - A2) ** 2).sum(1) - fk.D2[1, 2]
+            change = np.flatnonzero(g[:-1] * g[1:] <= 0)  # NaN (no real psi_1/psi_2) never counts
+            found += [(psi0[i], psi0[i + 1]) for i in change]
+    return found
+
+
+def test_no_assembly_is_missed_against_a_20000_step_scan(hexa, fk):
+    counts = []
+    for T in box_poses(hexa.home_pose, 60, seed=11, translation=0.1, angle_deg=40):
+        ik = hexa.inverse(T, check=False)
+        if not ik.converged:
+            continue
+        sols = fk.solve_all(ik.lengths)
+        psi0 = np.array([s.psi[0] for s in sols])
+        for lo, hi in _scan_roots(fk, ik.lengths):
+            assert np.any((psi0 >= lo - 1e-9) & (psi0 <= hi + 1e-9)), "a sign change without an assembly"
+        assert min(np.abs(s.pose - T).max() for s in sols) < 1e-9  # the truth is always there
+        assert len(sols) % 2 == 0  # mirror pairs about the (planar) base
+        counts.append(len(sols))
+    assert len(counts) > 40 and max(counts) <= MAX_ASSEMBLIES
+
+
+def test_readings_near_a_fold_keep_the_true_assembly(hexa, fk):
+    """Poses whose leg Jacobian is 30 times worse conditioned than at home: another assembly is
+    close, and both must be found."""
+    home = kinematic_evaluation(hexa, hexa.q_home).condition_number
+    near = 0
+    for T in box_poses(hexa.home_pose, 1500, seed=2, translation=0.1, angle_deg=40):
+        ik = hexa.inverse(T, check=False)
+        if not ik.converged or kinematic_evaluation(hexa, ik.q).condition_number < 30 * home:
+            continue
+        near += 1
+        sols = fk.solve_all(ik.lengths)
+        assert min(np.abs(s.pose - T).max() for s in sols) < 1e-9
+        assert all(s.residual <= ACCEPT for s in sols)
+    assert near >= 20
+
+
+def test_nearest_assembly_within_a_distance_or_an_error(hexa, fk):
+    lengths = np.array(ISSUE_READINGS)
+    newton = hexa.forward(lengths, check=False)
+    assert np.abs(fk.solve(lengths, reference=newton.pose, max_distance=1e-6).pose - newton.pose).max() < 1e-9
+    far = newton.pose.copy()
+    far[:3, 3] += [0.0, 0.03, 0.0]  # 30 mm from Newton's assembly, farther still from the others
+    with pytest.raises(hm.WorkspaceError, match="nearest of 8 assemblies is 0.03"):
+        fk.solve(lengths, reference=far, max_distance=0.01)
 
 
 # ----- angles (seed 003 eqs. 12-15) -----

@@ -107,6 +107,36 @@ def test_fk_bad_rows_are_reported_and_the_rest_solved(tmp_path, capsys):
         assert abs(float(rows[k]["z"]) - T[2, 3]) < 1e-9
 
 
+def test_fk_status_column_says_near_singular_and_ambiguous_assembly(tmp_path, capsys):
+    """A valid pose next to a singularity is written with its flag, not as ok; readings whose
+    assembly cannot be certified get ambiguous_assembly and no pose."""
+    sph = hexapod("spherical")  # singular at 90 deg of yaw about its home position
+    yaws = (45.0, 80.0, 90.0)
+    lengths = []
+    for yaw in yaws:
+        T = sph.home_pose.copy()
+        T[:3, :3] = rpy_to_matrix(0.0, 0.0, np.radians(yaw))
+        lengths.append(sph.inverse(T).lengths)
+    (tmp_path / "s.csv").write_text(
+        "l1,l2,l3,l4,l5,l6\n" + "\n".join(",".join(f"{v:.17g}" for v in l) for l in lengths)
+    )
+    assert main(["fk", "spherical", str(tmp_path / "s.csv"), "-o", str(tmp_path / "s_out.csv")]) == 1
+    rows = read_rows(tmp_path / "s_out.csv")
+    assert [r["status"] for r in rows] == ["ok", "ok", "near_singular"]
+    assert float(rows[2]["yaw"]) == pytest.approx(90.0, abs=1e-3)  # given, flagged (ill-conditioned there)
+    assert "row 3 (line 4): near_singular: not certified: near a singularity" in capsys.readouterr().err
+    # 3-6 preset: the straight readings path from home meets a fold (tests/kinematics/test_assembly.py)
+    six = hexapod("3-6")
+    T = box_poses(six.home_pose, 400, seed=1, translation=0.15, angle_deg=60)[83]
+    (tmp_path / "a.csv").write_text(
+        "l1,l2,l3,l4,l5,l6\n" + ",".join(f"{v:.17g}" for v in six.inverse(T).lengths) + "\n"
+    )
+    assert main(["fk", "3-6", str(tmp_path / "a.csv"), "-o", str(tmp_path / "a_out.csv")]) == 1
+    rows = read_rows(tmp_path / "a_out.csv")
+    assert rows[0]["status"] == "ambiguous_assembly" and rows[0]["x"] == ""
+    assert "ambiguous_assembly: cannot certify" in capsys.readouterr().err
+
+
 def test_ik_pose_outside_workspace_row(tmp_path, capsys):
     (tmp_path / "p.csv").write_text("x,y,z,roll,pitch,yaw\n0,0,0.4,0,0,0\n0,0,0.9,0,0,0\n0.01,0,0.41,5,0,0\n")
     assert main(["ik", "reference", str(tmp_path / "p.csv"), "-o", str(tmp_path / "l.csv")]) == 1

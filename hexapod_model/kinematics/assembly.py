@@ -1,0 +1,220 @@
+"""Which assembly direct kinematics returns, and the certificate that it is that one.
+
+Six readings usually admit several platform poses (assemblies). :func:`solve_forward` returns
+as ``converged`` only **the assembly connected to the start**: the end of the path of
+solutions ``x(t)`` for the readings ``l(t) = l0 + t (l - l0)``, ``0 <= t <= 1``, that begins at
+the start configuration and its own readings ``l0`` (home and zero readings for a cold solve,
+the guess otherwise). The path is followed in substeps; a substep is accepted only when its
+Newton corrector
+
+* takes no shortened step (``MAX_STEP``),
+* contracts: every ``|dx_k+1| / |dx_k| <= THETA_MAX`` = 1/4 (Deuflhard's estimate of the
+  affine-covariant Kantorovich quantity ``h0 <= 1/2``, under which the solution is unique in a
+  ball around the substep's start, so the corrector cannot jump to another assembly), and
+* keeps the sign of the constraint Jacobian's determinant (the 36x36 or 18x18 direct-kinematics
+  system, ``prod_i det L_i * det M`` from the Schur step) equal to the start's at every iterate
+  (home's for a cold solve, the guess :class:`Solution`'s ``det_sign`` for a warm one).
+
+The first attempt is the whole path in one substep, i.e. the plain Newton solve: warm starts
+and most cold starts pass at no extra cost. Otherwise the path is followed in substeps (a
+predictor along the first Newton step, then along the secant of the last two path points),
+down to ``MIN_STEP`` and at most ``MAX_SUBSTEPS`` of them. When the path cannot be followed (it
+meets a singularity or a fold of the readings map), the result is ``ambiguous_assembly`` with
+the assemblies found (the plain solve's, and Newton's from the last certified point) as
+candidates, never ``converged``.
+
+A certified result whose eliminated 6x6 Jacobian ``M`` (leg-reading rates per platform twist)
+has a condition-number bound (:func:`~hexapod_model.kinematics.linalg.schur_solve`) above
+``NEAR_SINGULAR_FACTOR`` times its home value carries the flag ``near_singular``: it is the
+connected assembly, but another one may lie close by.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import pinocchio as pin
+
+from . import kernels
+from .solver import THETA_MAX, NewtonSolver
+
+MIN_STEP = 1.0 / 1024  # smallest substep of the readings path before giving up
+MAX_SUBSTEPS = 64
+INTERMEDIATE_TOL = 1e-4  # closure residual of the substeps before the last one
+NEAR_SINGULAR_FACTOR = 30.0  # flag when the condition bound of M exceeds this times its home value
+_DISTINCT = 1e-7  # configurations farther apart than this (m, rad) are different assemblies
+
+
+class Outcome(NamedTuple):
+    """A solve's result before the :class:`Solution` is built: configurations, not poses.
+
+    The first six fields are ``NewtonSolver.run``'s; the others come from the certificate.
+    """
+
+    q: np.ndarray
+    status: str
+    iterations: int
+    residual: float
+    jacobian: np.ndarray | None
+    message: str
+    flags: tuple[str, ...] = ()
+    candidates: tuple[np.ndarray, ...] = ()
+    det_sign: int = 0
+
+
+def solve_forward(
+    solver: NewtonSolver, start: np.ndarray, lengths: np.ndarray, tol: float, max_iter: int, sign: float, warm: bool
+) -> Outcome:
+    """Certified direct kinematics: the assembly connected to ``start`` for readings ``lengths``.
+
+    Args:
+        solver: the direct-kinematics solver (the six prismatic joints held).
+        start: URDF configuration to start from; its prismatic entries are its own readings
+            ``l0`` (overwritten here).
+        lengths: the six readings (m).
+        tol: closure residual of the result.
+        max_iter: Newton steps per substep (the outcome counts them all).
+        sign: determinant sign of the start's assembly (0 when unknown).
+        warm: the start is a guess, not home: an uncertified result of plain Newton that is
+            near a singularity is returned flagged ``near_singular`` before the path is tried.
+
+    Returns:
+        ``converged`` (certified, maybe flagged ``near_singular``), ``ambiguous_assembly`` with
+        candidates, or the plain solve's failure.
+    """
+    pq = solver.clm.prismatic_q
+    l0 = start[pq]
+    start[pq] = lengths
+    status, it, res, msg = solver.iterate(start, tol, max_iter, sign, certify=True)
+    if status == "converged" and solver.certified:
+        return _certified(solver, it, res)
+    if status == "max_iterations" and solver.certified:  # contracting, but max_iter too small
+        kernels.jacobian(*solver._jac_args)
+        return Outcome(solver.q_aug[: solver.clm.nq].copy(), status, it, res, solver.G.copy(), msg)
+    plain = start.copy()  # for the candidates, should the path be blocked
+    first = solver.q_aug[: solver.clm.nq].copy() if it == 1 else None  # after the first Newton step
+    if warm:  # near a singularity no path certifies (its balls shrink): say so, with the plain result
+        status, n, res, msg = solver.iterate(plain, tol, max_iter)
+        it += n
+        if status == "converged" and not solver.kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
+            return _certified(solver, it, res, "not certified: ")
+    start[pq] = l0
+    h = _rescale(solver.theta, False, 1)
+    return _follow(solver, start, l0, lengths, tol, max_iter, sign, (plain, first), it, h)
+
+
+def _follow(
+    solver: NewtonSolver,
+    start: np.ndarray,
+    l0: np.ndarray,
+    lengths: np.ndarray,
+    tol: float,
+    max_iter: int,
+    sign: float,
+    tried: tuple[np.ndarray, np.ndarray | None],
+    total: int,
+    h: float,
+) -> Outcome:
+    """Follow the readings path from ``start`` in certified substeps, the first of ``h``.
+
+    ``tried`` holds the plain attempt's start and, when it took one step, its first iterate.
+    A start that does not close at its own readings follows ``r - (1 - t) r_start`` instead.
+    """
+    model, nq, pq = solver.clm.model, solver.clm.nq, solver.clm.prismatic_q
+    _, _, res, _ = solver.iterate(start, np.inf, 0)  # the start's own closure residual
+    offset = solver.r.copy() if res > INTERMEDIATE_TOL else None
+    x, t, substeps, it, before = start, 0.0, 0, 0, None
+    predicted = tried[1] is not None
+    while t < 1.0 and substeps < MAX_SUBSTEPS and h >= MIN_STEP:
+        tn = 1.0 if t + 1.2 * h >= 1.0 else t + h  # no sliver of a last substep
+        if before is not None:  # predictor: along the secant of the last two path points
+            q0 = pin.integrate(model, x, pin.difference(model, before[0], x) * ((tn - t) / (t - before[1])))
+        elif predicted:  # along the plain attempt's first Newton step (the tangent, to first order)
+            q0 = pin.interpolate(model, x, tried[1], tn)
+        else:
+            q0 = x.copy()
+        q0[pq] = l0 + tn * (lengths - l0)
+        scale = 0.0 if offset is None else 1.0 - tn
+        tol_n = tol if tn == 1.0 else INTERMEDIATE_TOL
+        status, it, res, _ = solver.iterate(q0, tol_n, max_iter, sign, offset, scale, certify=True)
+        total += it
+        substeps += 1
+        accepted = status == "converged" and solver.certified
+        h = (tn - t) * _rescale(solver.theta, accepted, 2 if predicted else 1)  # from the substep tried
+        if accepted:
+            before, x, t, sign, predicted = (x, t), solver.q_aug[:nq].copy(), tn, solver.det_sign, True
+    if t == 1.0:
+        return _certified(solver, total, res)
+    return _ambiguous(solver, x, t, lengths, tol, max_iter, tried[0], total)
+
+
+def _rescale(theta: float, accepted: bool, order: int) -> float:
+    """Factor for the next substep after one with largest contraction ``theta``.
+
+    The contraction grows like ``h ** order`` (1 from the last path point, 2 with a
+    first-order predictor); the next substep aims at ``0.8 THETA_MAX``, at most doubles and
+    at least halves after a rejection.
+    """
+    factor = (0.8 * THETA_MAX / theta) ** (1.0 / order) if theta > 0.0 else 2.0
+    return min(2.0, max(0.5, factor)) if accepted else max(0.1, min(0.5, factor))
+
+
+def _certified(solver: NewtonSolver, total: int, res: float, note: str = "") -> Outcome:
+    """The result in the solver's buffers with its determinant sign and flag (certified unless ``note``)."""
+    kernels.jacobian(*solver._jac_args)
+    q = solver.q_aug[: solver.clm.nq].copy()  # the last Schur step (iterate() takes one even at once)
+    kappa = solver.kappa
+    flags: tuple[str, ...] = ()
+    msg = ""
+    if not kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
+        flags = ("near_singular",)
+        msg = (
+            f"{note}near a singularity: condition bound of the eliminated Jacobian {kappa / solver.home_kappa:.3g} "
+            f"times its home value (flag above {NEAR_SINGULAR_FACTOR:g}); another assembly may be close"
+        )
+    return Outcome(q, "converged", total, res, solver.G.copy(), msg, flags, (), int(solver.sign))
+
+
+def _ambiguous(
+    solver: NewtonSolver,
+    x: np.ndarray,
+    t: float,
+    lengths: np.ndarray,
+    tol: float,
+    max_iter: int,
+    plain: np.ndarray,
+    total: int,
+) -> Outcome:
+    """The candidates when the path is blocked at ``t`` (last certified point ``x``).
+
+    The assemblies found by plain Newton from the start and from ``x``, within the joint limits.
+    """
+    clm = solver.clm
+    found: list[np.ndarray] = []
+    status, res, msg = "max_iterations", float("inf"), ""
+    q_end = x.copy()
+    q_end[clm.prismatic_q] = lengths
+    for q0 in (plain, q_end) if t > 0.0 else (plain,):
+        st, it, r, m = solver.iterate(q0, tol, max_iter)
+        total += it
+        if st == "converged":
+            found.append(solver.q_aug[: clm.nq].copy())
+        elif not found:
+            status, res, msg = st, r, m
+    distinct: list[np.ndarray] = []
+    for q in found:
+        if all(np.abs(pin.difference(clm.model, q, c)).max() > _DISTINCT for c in distinct):
+            distinct.append(q)
+    idx = clm.limited_q()
+    inside = [q for q in distinct if kernels.first_outside_at(q, idx, clm.lower[idx], clm.upper[idx], 1e-12) < 0]
+    where = f"the readings path from the start is blocked at {t:.4f} of the way (a singularity or fold)"
+    if not inside:
+        q = distinct[0] if distinct else solver.q_aug[: clm.nq].copy()
+        _, G = solver.evaluate(q)
+        if distinct:
+            return Outcome(q, "out_of_limits", total, 0.0, G, f"{where}; every assembly found is outside the limits")
+        return Outcome(q, status, total, res, G, f"{msg}; {where}")
+    residual, G = solver.evaluate(inside[0])
+    msg = f"cannot certify the assembly connected to the start: {where}; {len(inside)} candidate assemblies"
+    return Outcome(inside[0], "ambiguous_assembly", total, float(np.linalg.norm(residual)), G, msg, (), tuple(inside))
