@@ -2,7 +2,7 @@
 
     python benchmarks/mjcf_checks.py [PRESET ...] [--poses 1000] [--rest 3]
 
-Per preset, over ``--poses`` random poses of the +-50 mm / +-25 deg box (seed 000 §5.2):
+Per preset, over ``--poses`` random poses of the +-50 mm / +-25 deg box (Bem et al. (2026) §5.2):
 
 * ``pin``: worst gap between Pinocchio's MJCF loader and the URDF path, IK leg readings (m),
   FK platform pose (4x4 entries, m and rotation-matrix entries) and configurations;

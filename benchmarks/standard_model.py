@@ -3,7 +3,7 @@
     python benchmarks/standard_model.py [PRESET] [--poses N] [--repeat R]
 
 Prints poses/s for batch inverse kinematics (``StandardModel.inverse``) and batch Newton
-direct kinematics from the home pose (``StandardModel.forward``) on random poses of seed 000's
+direct kinematics from the home pose (``StandardModel.forward``) on random poses of Bem et al.'s
 test box (+-50 mm, +-25 deg). Targets on the development machine: IK >= 1e6 poses/s, FK >= 2e5
 poses/s. The best of ``--repeat`` runs is reported (after one warm-up that loads numba).
 """
@@ -43,7 +43,7 @@ def main(argv=None) -> int:
     fk = best_rate(lambda: sm.forward(readings), args.poses, args.repeat)
     res = sm.forward(readings)
     err = np.abs(res.poses - poses).max()
-    print(f"standard model, preset {args.preset}, {args.poses} poses (seed 000 box)")
+    print(f"standard model, preset {args.preset}, {args.poses} poses (Bem et al. (2026) box)")
     print(f"  batch IK : {ik:12,.0f} poses/s   (target >= 1,000,000)")
     print(f"  batch FK : {fk:12,.0f} poses/s   (target >=   200,000; from home, tol 1e-12 m)")
     print(

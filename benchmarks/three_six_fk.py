@@ -1,4 +1,4 @@
-"""Timing and assembly counts of seed 003's geometric direct kinematics (``ThreeSixFK``).
+"""Timing and assembly counts of Shi, She and Duan's geometric direct kinematics (``ThreeSixFK``).
 
     python benchmarks/three_six_fk.py [--poses N] [--seed S]
 

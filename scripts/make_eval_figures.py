@@ -1,12 +1,12 @@
 """Write the figures of docs/evaluate.md into docs/img/ (matplotlib, Agg).
 
-* evaluate_seed002_model1.png: seed 002 Fig. 5 for model 1 (condition number, sigma_min sections);
-* track_B_reference.png: seed 002 Figs. 7-10, trajectory B at 1 kHz on the reference hexapod;
-* track_B_three_six.png: seed 002 Figs. 9-10, trajectory B on the 3-6 preset without and with
+* evaluate_seed002_model1.png: Fig. 5 of Jakobović and Jelenković (2002), model 1 (kappa, sigma_min sections);
+* track_B_reference.png: Jakobović and Jelenković (2002) Figs. 7-10, trajectory B at 1 kHz on the reference hexapod;
+* track_B_three_six.png: Jakobović and Jelenković (2002) Figs. 9-10, trajectory B on the 3-6 preset without and with
   prediction (the 'division' onto another branch);
 * track_singular_passage.png: the spherical preset turned through its 90 deg yaw singularity,
   without prediction (follows the wrong branch, flagged) and with eq. 22 (stays on the true one);
-* three_six_assemblies.png: every assembly of the 3-6 sensor for one set of readings (seed 003).
+* three_six_assemblies.png: every assembly of the 3-6 sensor for one set of readings (Shi, She and Duan (2016)).
 
 Usage: python scripts/make_eval_figures.py [--grid N]
 """
@@ -56,7 +56,7 @@ def track_figure() -> None:
 
 
 def three_six_division_figure() -> None:
-    """Seed 002 Figs. 9/10 on the 3-6 preset: trajectory B without and with prediction."""
+    """Jakobović and Jelenković (2002) Figs. 9/10 on the 3-6 preset: trajectory B without and with prediction."""
     hexa = hm.Hexapod.from_preset("3-6")
     fig, axes = plt.subplots(2, 1, figsize=(6.4, 4.8), sharex=True)
     for ax, predictor in zip(axes, ("none", "eq22")):
@@ -74,7 +74,7 @@ def three_six_division_figure() -> None:
     axes[1].set_xlabel("time (s)")
     _save(
         fig,
-        "3-6 preset, trajectory B at 1 kHz: worst angle error per 100 ms (seed 002 Figs. 9-10)",
+        "3-6 preset, trajectory B at 1 kHz: worst angle error per 100 ms (Jakobović and Jelenković (2002) Figs. 9-10)",
         "track_B_three_six.png",
     )
 
@@ -102,7 +102,11 @@ def singular_passage_figure() -> None:
         ax.set_title(f"predictor {predictor}", fontsize=9)
         ax.legend(loc="upper left", fontsize=7)
     axes[1].set_xlabel("true yaw (deg); the spherical preset is singular at 90 deg")
-    _save(fig, "1 kHz tracking through a forward-kinematics singularity (seed 002 §V)", "track_singular_passage.png")
+    _save(
+        fig,
+        "1 kHz tracking through a forward-kinematics singularity (Jakobović and Jelenković 2002, §V)",
+        "track_singular_passage.png",
+    )
 
 
 def three_six_figure() -> None:

@@ -1,4 +1,4 @@
-"""Write seed 002's two hexapods (Table I) as geometry files docs/geometries/seed002_model{1,2}.toml.
+"""Write Jakobović and Jelenković's two hexapods (Table I) as geometry files docs/geometries/seed002_model{1,2}.toml.
 
 Reading of the paper (see docs/evaluate.md): one paper length unit = 1 cm = 0.01 m; angles alpha,
 beta = 0 put the two anchors of a pair at the same point (3-3 layouts); model 2's r1, r2 are
@@ -51,7 +51,7 @@ def model1() -> HexapodGeometry:
         legs=tuple(legs),
         home_height=h * UNIT,
         cardan_limit=math.radians(45.0),
-        description="seed 002 Table I model 1: 3-3 Stewart platform, struts 45-85 cm, r1 50 cm, r2 25 cm",
+        description="Jakobović and Jelenković's Table I model 1: 3-3 platform, struts 45-85 cm, r1 50 cm, r2 25 cm",
     )
 
 
@@ -90,7 +90,7 @@ def model2() -> HexapodGeometry:
         legs=tuple(LegGeometry(**leg) for leg in legs),
         home_height=heights[0] * UNIT,
         cardan_limit=math.radians(45.0),
-        description="seed 002 Table I model 2: 70 cm struts on guideways r 75->10 cm, h 20 cm, platform r 30 cm",
+        description="Jakobović and Jelenković's Table I model 2: 70 cm struts on guideways r 75->10 cm, platform 30 cm",
     )
 
 

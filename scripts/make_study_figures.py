@@ -2,7 +2,7 @@
 
     python scripts/make_study_figures.py [--poses 3000]
 
-Writes ``docs/img/reproduce_*.png`` (seed 000 Figs. 4-7 re-run on the ``reference`` preset:
+Writes ``docs/img/reproduce_*.png`` (Bem et al. (2026) Figs. 4-7 re-run on the ``reference`` preset:
 3000 poses, seed 0, 10 um encoder noise, exact reference poses) and
 ``docs/examples/measured.csv`` (40 simulated "measurements": 10 um encoder noise, 0.3 mm / r
 reference-pose noise, seed 7) that ``docs/reproduce.md`` uses as the ``--data`` example.

@@ -1,6 +1,6 @@
-"""Seed 000's full closure formulation (eq.
+"""Bem et al.'s full closure formulation (eq.
 
-6) next to the reduced one (eq. 14), for the convergence and conditioning study (seed 000 §4.7, §5.3-5.4).
+6) next to the reduced one (eq. 14), for the convergence and conditioning study (Bem et al. (2026) §4.7, §5.3-5.4).
 
 Full formulation, per leg (closure tip frame ``T_tip``, platform anchor frame ``T_anchor``,
 both in the base/world frame): the 9 entries of ``R_tip - R_anchor`` (row-major) and the 3 of
@@ -13,7 +13,7 @@ velocity, both read from Pinocchio's ``LOCAL_WORLD_ALIGNED`` frame Jacobians.
 Reduced formulation: the package's :class:`~hexapod_model.solver.NewtonSolver` residual
 (3 translation + 3 ``vex(skew(R_tip R_anchor^T))`` rows per leg, 36 in all).
 
-Both are iterated here with the same pseudo-inverse Newton step (seed 000 eq. 17),
+Both are iterated here with the same pseudo-inverse Newton step (Bem et al. (2026) eq. 17),
 ``dx = -J^+ f`` from one SVD (which also gives the condition number, eq. 25), and the same
 stop rule (eq. 18: ``||dx|| < step_tol``, or the residual already below ``tol``). Each
 iteration's ``||dx||`` (mixed metres / radians, eq. 28), condition number and wall time are
@@ -108,7 +108,7 @@ def _assemble(Jf, masks, R, p, rot, r, G):
 
 
 class FullFormulation:
-    """Residual and Jacobian of seed 000 eq. 6 on a :class:`ClosedLoopModel`.
+    """Residual and Jacobian of Bem et al. (2026) eq. 6 on a :class:`ClosedLoopModel`.
 
     Args:
         clm: the loaded hexapod.
@@ -167,7 +167,7 @@ def pinv_newton(
     max_iter: int = 30,
     accept: float = 1e-9,
 ) -> Trace:
-    """Pseudo-inverse Newton iteration (seed 000 eqs. 17-18) on the constraint manifold.
+    """Pseudo-inverse Newton iteration (Bem et al. (2026) eqs. 17-18) on the constraint manifold.
 
     ``evaluate(q) -> (f, J)``; the step ``dx = -J^+ f`` is scattered into the free velocities
     and applied with ``pin.integrate``. Stops when ``||dx|| < step_tol``, when ``||f|| <= tol``

@@ -1,7 +1,7 @@
 """Kinematic evaluation: the 6x6 leg-rate / platform-twist relation of the closed-loop model.
 
-For a hexapod with ideal legs (seed 002 eq. 4) the relation is the textbook one,
-``dl_i = w_i . v + (p_i x w_i) . w``. With offset Cardan joints (seed 000) or guideway legs it
+For a hexapod with ideal legs (Jakobović and Jelenković (2002) eq. 4) the relation is the textbook one,
+``dl_i = w_i . v + (p_i x w_i) . w``. With offset Cardan joints (Bem et al. (2026)) or guideway legs it
 is not; here it is derived from the closure constraints of any URDF by eliminating the
 passive joints.
 
@@ -14,7 +14,7 @@ passive joint rates and ``dl_i`` its reading rate. ``B_i`` has one column fewer 
 a vector ``n_i`` spans its left null space; ``n_i^T A_i xi + (n_i^T c_i) dl_i = 0`` gives row
 ``i`` of the Jacobian.
 
-Convention exposed (as seed 002): ``dl = J @ [v; w]`` where ``v`` (m/s) is the velocity of the
+Convention exposed (as Jakobović and Jelenković (2002)): ``dl = J @ [v; w]`` where ``v`` (m/s) is the velocity of the
 platform frame origin and ``w`` (rad/s) the angular velocity, BOTH EXPRESSED IN THE BASE FRAME;
 ``dl`` in m/s. Singular values therefore mix units (m/m and m/rad): scale lengths by
 ``length_unit`` to compare hexapods of different size.
@@ -31,7 +31,7 @@ from ..kinematics.hexapod import Hexapod
 
 @dataclass(frozen=True)
 class KinematicEvaluation:
-    """The seed 002 §III figures of one configuration.
+    """The Jakobović and Jelenković (2002) §III figures of one configuration.
 
     Attributes:
         jacobian: (6, 6) ``dl = J [v; w]`` (base frame, see module doc), in ``length_unit``.
@@ -101,12 +101,12 @@ def evaluate_jacobian(J: np.ndarray, length_unit: float = 1.0) -> KinematicEvalu
 
 
 def kinematic_evaluation(hexa: Hexapod, q: np.ndarray, length_unit: float = 1.0) -> KinematicEvaluation:
-    """Seed 002 §III figures (singular values, condition number, sigma_min, |det J|) at ``q``."""
+    """Jakobović and Jelenković (2002) §III figures (singular values, condition number, sigma_min, |det J|) at ``q``."""
     return evaluate_jacobian(leg_jacobian(hexa, q), length_unit)
 
 
 def textbook_jacobian(base_points: np.ndarray, platform_points: np.ndarray, pose: np.ndarray) -> np.ndarray:
-    """Seed 002 eq.
+    """Jakobović and Jelenković (2002) eq.
 
     4 for ideal legs between ``b_i`` (base frame) and ``p_i`` (platform frame): rows ``[w_i^T, (R p_i x w_i)^T]``
     with ``w_i`` the unit leg vector, base frame, SI.

@@ -1,8 +1,8 @@
-"""The textbook spherical-joint Stewart-Gough model (seed 000 eqs.
+"""The textbook spherical-joint Stewart-Gough model, vectorised over many poses.
 
-1-4, seed 002 eqs. 14-16), vectorised over many poses: leg vectors, lengths and residuals are numpy array
-operations on chunks of poses; the per-pose 6x6 Newton solve and update run in a small numba kernel
-(``benchmarks/standard_model.py`` prints the throughput).
+Bem et al. (2026) eqs. 1-4, Jakobović and Jelenković (2002) eqs. 14-16: leg vectors, lengths and
+residuals are numpy array operations on chunks of poses; the per-pose 6x6 Newton solve and update
+run in a small numba kernel (``benchmarks/standard_model.py`` prints the throughput).
 
 Frames and units: poses are 4x4 base -> platform transforms (metres); ``base_points`` are the
 joint centres ``b_i`` in the base frame, ``platform_points`` the centres ``p_i`` in the platform
@@ -15,7 +15,7 @@ anchors, which for a Cardan joint with offset (non-intersecting) axes are by def
 midpoint of the common normal of its two axes. For ideal universal joints (zero offset) and
 ball joints this is the exact joint centre and the model is exact; with offset axes the true
 distance between the two midpoints is no longer ``home + reading`` once the joints bend, which
-is the ~mm error that seed 000 measures (Table 1).
+is the ~mm error that Bem et al. (2026) measures (Table 1).
 
 Velocities (Jacobian columns, Newton steps) are ``(dt, dtheta)``: ``dt`` moves the platform
 origin in the base frame (m), ``dtheta`` is a base-frame rotation vector (rad) applied as

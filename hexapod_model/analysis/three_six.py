@@ -1,4 +1,4 @@
-"""Geometric direct kinematics of the 3-6 hexapod sensor (seed 003 eqs. 1-11).
+"""Geometric direct kinematics of the 3-6 hexapod sensor (Shi, She and Duan (2016) eqs. 1-11).
 
 Legs ``2k`` and ``2k+1`` meet at platform point ``A_k`` (k = 0, 1, 2). With both leg lengths
 known, ``A_k`` lies on a circle about the line through the base points ``B_2k``, ``B_2k+1``
@@ -26,7 +26,7 @@ Hence **at most 16 assemblies** (``MAX_ASSEMBLIES``, the degree of the polynomia
 gives them in mirror pairs about the base plane), all of them, in 1 to 2 ms.
 :meth:`ThreeSixFK.solve` picks the one nearest a reference from this complete set.
 
-The pose (eqs. 10-11): seed 003 takes ``v`` as the centroid of the ``A_k`` and
+The pose (eqs. 10-11): Shi, She and Duan (2016) takes ``v`` as the centroid of the ``A_k`` and
 ``R = ([A] - [v v v]) [A^0]^-1``, which is singular as printed when the centred home points
 are used; here ``R`` maps an orthonormal frame built on the home triangle to the same frame on
 the solved triangle (exact for a rigid triangle) and ``t = mean(A) - R mean(p)``.
@@ -59,7 +59,7 @@ class ThreeSixSolution:
 
     Attributes:
         pose: (4, 4) base -> platform transform (m).
-        psi: (3,) circle angles (rad), seed 003 eq. 8.
+        psi: (3,) circle angles (rad), Shi, She and Duan (2016) eq. 8.
         points: (3, 3) platform points ``A_k`` in the base frame (m).
         residual: max abs error of eq. 9 (m^2).
     """
@@ -80,7 +80,7 @@ def _frames(P: np.ndarray) -> np.ndarray:
 
 
 class ThreeSixFK:
-    """Seed 003's geometric forward kinematics for a 3-6 geometry (e.g. preset ``3-6``).
+    """Shi, She and Duan's geometric forward kinematics for a 3-6 geometry (e.g. preset ``3-6``).
 
     Raises:
         GeometryError: legs ``2k``, ``2k+1`` do not share a platform anchor, or a base pair is

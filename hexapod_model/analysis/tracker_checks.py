@@ -30,7 +30,7 @@ import numpy as np
 
 from ..exceptions import InputError
 
-DEFAULT_READING_NOISE = 10e-6  # m, the order of the LinACE encoder accuracy (seed 000 §2)
+DEFAULT_READING_NOISE = 10e-6  # m, the order of the LinACE encoder accuracy (Bem et al. (2026) §2)
 
 
 @dataclass(frozen=True)
@@ -60,7 +60,7 @@ class TrackerSettings:
             (the Jacobian amplifies the reading noise; ``None``: never).
         continuation_step: largest reading change (m) per Newton solve when re-anchoring.
         recover: re-solve from the motion model when a pose fails the branch check;
-            ``False`` keeps the seed 002 experiment's raw behaviour (a failed branch check
+            ``False`` keeps the Jakobović and Jelenković (2002) experiment's raw behaviour (a failed branch check
             latches ``branch_uncertain`` until ``reset``).
     """
 

@@ -1,6 +1,6 @@
 """The stream tracker's vocabulary: predictors, pose distances, the per-sample result.
 
-Predictors are seed 002's eqs. 22-24; :class:`TrackResult` is what clients (the CLI, the
+Predictors are Jakobović and Jelenković's eqs. 22-24; :class:`TrackResult` is what clients (the CLI, the
 fixture service) read.
 """
 

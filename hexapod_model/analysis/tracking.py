@@ -1,4 +1,4 @@
-"""Tracking a stream of leg readings (seed 002 §V): predictors, statistical checks, recovery.
+"""Tracking a stream of leg readings (Jakobović and Jelenković (2002) §V): predictors, statistical checks, recovery.
 
 Each sample is solved by Newton from a *predicted* configuration built from the last trusted
 solutions ``P0`` (newest), ``P1``, ``P2``: ``none`` (``P0``), ``eq22`` (``2 P0 - P1``),

@@ -1,7 +1,7 @@
-"""Test trajectories of seed 002 (eqs. 20-21) and the +-50 mm / +-25 deg box of seed 000.
+"""Test trajectories (Jakobović and Jelenković 2002, eqs. 20-21) and the +-50 mm / +-25 deg box (Bem et al. 2026).
 
-Angles follow seed 002: roll-pitch-yaw ``alpha, beta, gamma`` about fixed x, y, z, so
-``R = Rz(gamma) Ry(beta) Rx(alpha)``. Seed 002's positions are in the units of its model 1
+Angles follow Jakobović and Jelenković (2002): roll-pitch-yaw ``alpha, beta, gamma`` about fixed x, y, z, so
+``R = Rz(gamma) Ry(beta) Rx(alpha)``. Jakobović and Jelenković's positions are in the units of its model 1
 (base radius 50); :func:`trajectory_poses` scales them by ``scale`` (metres per paper unit)
 and centres them on the hexapod's home pose.
 """
@@ -28,7 +28,7 @@ def trajectory_coordinates(name: str, t: np.ndarray) -> np.ndarray:
     elif name == "B":
         z, a, b = 3 * np.sin(2 * t), 55 * np.sin(1.8 * t), 30 * np.sin(t / 2) + 5 * np.cos(4 * t)
     else:
-        raise InputError("trajectory", name, "seed 002 defines 'A' and 'B'")
+        raise InputError("trajectory", name, "Jakobović and Jelenković (2002) defines 'A' and 'B'")
     return np.stack([2 * np.sin(t * np.pi / 2), 2.2 * np.cos(t * np.pi / 2), z, a, b, 15 * np.arctan(2 * t - 4)], -1)
 
 
@@ -37,7 +37,7 @@ def trajectory_poses(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Sample trajectory ``name`` at ``rate_hz``; returns times (s) and (n, 4, 4) poses.
 
-    ``speed`` > 1 runs the same path faster (seed 002 accelerates B by 2, 4 and 8).
+    ``speed`` > 1 runs the same path faster (Jakobović and Jelenković (2002) accelerates B by 2, 4 and 8).
     """
     t = np.arange(0.0, DURATION_S / speed + 0.5 / rate_hz, 1.0 / rate_hz)
     c = trajectory_coordinates(name, np.minimum(t * speed, DURATION_S))
@@ -53,7 +53,7 @@ def box_poses(
     """Random poses in a box around home.
 
     (n, 4, 4) random poses: home + uniform translation in +-``translation`` (m) and
-    roll/pitch/yaw uniform in +-``angle_deg`` (seed 000 §5.2).
+    roll/pitch/yaw uniform in +-``angle_deg`` (Bem et al. (2026) §5.2).
     """
     rng = np.random.default_rng(seed)
     d = rng.uniform(-translation, translation, (n, 3))

@@ -1,8 +1,8 @@
-"""Workspace for a cone of tool orientations and its kinematic figures (seed 002 §II-III).
+"""Workspace for a cone of tool orientations and its kinematic figures (Jakobović and Jelenković (2002) §II-III).
 
-A platform position ``x`` (tool point = platform origin, seed 002's ``l_tool = 0``) belongs to
+A platform position ``x`` (tool point = platform origin, Jakobović and Jelenković's ``l_tool = 0``) belongs to
 the workspace when the inverse kinematics succeeds within the stroke and Cardan limits
-(``status == "converged"``) for EVERY orientation of a cone (seed 002 Fig. 4): the tool axis
+(``status == "converged"``) for EVERY orientation of a cone (Jakobović and Jelenković (2002) Fig. 4): the tool axis
 (platform z) upright and tilted by ``cone_deg`` towards ``cone_samples`` equally spaced
 azimuths, with no rotation about the tool axis. For ``spherical`` and ``guideway`` legs, whose
 platform ball joint has no limit in the model, the leg must also stay within ``cardan_limit``
@@ -10,7 +10,7 @@ of its home direction as seen from the platform (the paper's joint cone ``phi_ma
 
 At each workspace point the three figures of :mod:`hexapod_model.jacobian` (condition number,
 sigma_min, |det J|) are averaged over the orientations; their workspace averages are
-seed 002's Table II. Lengths are expressed in ``length_unit`` metres (see docs/evaluate.md).
+Jakobović and Jelenković's Table II. Lengths are expressed in ``length_unit`` metres (see docs/evaluate.md).
 
 The grid is computed slice by slice (one z per task) so that the work spreads over processes
 and finished slices can be checkpointed (:func:`compute_slice` is the unit of work).

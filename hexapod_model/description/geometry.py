@@ -22,10 +22,10 @@ Joint types (``joint_type``):
 
 * ``"cardan"``: base Cardan (2 revolutes, axes offset by ``base_offset``) -> roll about the
   leg axis -> prismatic (the encoder) -> platform Cardan (2 revolutes, offset
-  ``platform_offset``); closed by a 6-D frame constraint (seed 000).
+  ``platform_offset``); closed by a 6-D frame constraint (Bem et al. (2026)).
 * ``"spherical"``: base Cardan -> prismatic -> ball joint at the platform (3-D point closure).
 * ``"guideway"``: prismatic slider on a fixed guideway (the measured joint) -> Cardan ->
-  fixed-length strut -> ball joint at the platform (seed 002, model 2).
+  fixed-length strut -> ball joint at the platform (Jakobović and Jelenković (2002), model 2).
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
 """Bundled hexapod geometries. ``PRESETS`` maps a name to a zero-argument factory.
 
 All dimensions are in metres and radians. The ``reference`` hexapod is our stand-in for the
-fixture of seed 000 (its paper gives no dimensions): anchors on a 0.25 m (base) and 0.15 m
+fixture of Bem et al. (2026) (its paper gives no dimensions): anchors on a 0.25 m (base) and 0.15 m
 (platform) radius, 0.40 m between the anchor planes at home (0.45 m legs), 12 mm Cardan axis
 offsets (the order of the patented preloaded hub), 70 deg Cardan limits, +-90 deg roll and a
--0.16 / +0.20 m leg stroke, so that the whole +-50 mm / +-25 deg test box of seed 000, corners
+-0.16 / +0.20 m leg stroke, so that the whole +-50 mm / +-25 deg test box of Bem et al. (2026), corners
 included, lies inside the stroke and joint limits (the corners need up to 67 deg on the
 platform Cardan joints and -0.147 / +0.185 m of stroke).
 """
@@ -56,7 +56,7 @@ def symmetric_legs(
 
 
 def reference() -> HexapodGeometry:
-    """Offset-axis Cardan joints at both ends plus a cylindrical joint (seed 000)."""
+    """Offset-axis Cardan joints at both ends plus a cylindrical joint (Bem et al. (2026))."""
     return HexapodGeometry(
         name="reference",
         joint_type="cardan",
@@ -66,7 +66,7 @@ def reference() -> HexapodGeometry:
         platform_offset=0.012,
         cardan_limit=70 * DEG,
         roll_limit=math.pi / 2,
-        description="seed 000 design: offset-axis Cardan joints (12 mm) at both ends, cylindrical joint",
+        description="Bem et al. (2026) design: offset-axis Cardan joints (12 mm) at both ends, cylindrical joint",
     )
 
 
@@ -96,7 +96,7 @@ def spherical() -> HexapodGeometry:
 def three_six() -> HexapodGeometry:
     """The 3-6 sensor.
 
-    Seed 003's 3-6 sensor: six base points on a regular hexagon, legs meeting in pairs
+    Shi, She and Duan's 3-6 sensor: six base points on a regular hexagon, legs meeting in pairs
     at three platform points (ball joints).
     """
     rb, ra = 0.20, 0.12
@@ -113,12 +113,12 @@ def three_six() -> HexapodGeometry:
         legs=tuple(legs),
         home_height=0.22,
         cardan_limit=60 * DEG,
-        description="seed 003 3-6 sensor: ball joints, legs meet in pairs at three platform points",
+        description="Shi, She and Duan (2016) 3-6 sensor: ball joints, legs meet in pairs at three platform points",
     )
 
 
 def guideway() -> HexapodGeometry:
-    """Seed 002's second model: fixed-length struts whose base ends slide on guideways.
+    """Jakobović and Jelenković's second model: fixed-length struts whose base ends slide on guideways.
 
     Three pairs of parallel guideways, ``0.06 m`` apart, inclined like the line from radius
     0.45 m on the floor to radius 0.15 m at 0.25 m height; the slider (the measured joint) is
@@ -149,7 +149,7 @@ def guideway() -> HexapodGeometry:
         legs=tuple(legs),
         home_height=0.50,
         cardan_limit=60 * DEG,
-        description="seed 002 model 2: fixed struts, base ends slide on guideways (slider = measured joint)",
+        description="Jakobović and Jelenković's model 2: fixed struts on sliding guideways (slider = measured joint)",
     )
 
 

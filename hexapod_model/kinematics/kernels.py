@@ -4,7 +4,7 @@ Inputs come from one ``pin.computeJointJacobians`` call on the augmented solver 
 :mod:`hexapod_model.model`): ``J`` is Pinocchio's ``data.J`` (6 x nv, WORLD convention:
 column ``c`` is the spatial motion of velocity ``c`` expressed at the world origin).
 
-Residual of closure ``i`` (seed 000 eqs. 10-14, written in the base/world frame):
+Residual of closure ``i`` (Bem et al. (2026) eqs. 10-14, written in the base/world frame):
 
 * translation ``e_t = p_tip - p_anchor`` (m);
 * rotation ``e_R = vex(skew(E))`` with ``E = R_tip R_anchor^T`` (rad near closure), only for

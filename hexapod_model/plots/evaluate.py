@@ -11,7 +11,7 @@ from ..files import atomic_save_figure
 
 
 def plot_sections(r: dict, path: str | Path) -> None:
-    """Seed 002 Fig.
+    """Jakobović and Jelenković (2002) Fig.
 
     5: condition number and sigma_min over a vertical (x-z through home) and a horizontal (x-y at home height)
     section; blank = outside the workspace.
@@ -50,6 +50,9 @@ def plot_sections(r: dict, path: str | Path) -> None:
             ax.set_xlabel(xl, fontsize=8)
             ax.set_ylabel(yl, fontsize=8)
             ax.tick_params(labelsize=7)
-    fig.suptitle(f"{r['name']}: mean over a {r['cone_deg']:g} deg orientation cone (seed 002 Fig. 5)", fontsize=9)
+    fig.suptitle(
+        f"{r['name']}: mean over a {r['cone_deg']:g} deg orientation cone (Jakobović and Jelenković 2002, Fig. 5)",
+        fontsize=9,
+    )
     fig.tight_layout()
     atomic_save_figure(fig, path, dpi=80)

@@ -6,7 +6,7 @@ Shaped like the offset-Cardan paper's:
   reference pose positions (mm from home, base frame) as 3-D point clouds coloured by the
   translation error (mm) and by the rotation error (deg) of one model;
 * ``reproduce_histograms.png``: the error distributions of both models on log axes, with
-  seed 000's Table 1 means (measured on the real hexapod) as dashed lines;
+  Bem et al.'s Table 1 means (measured on the real hexapod) as dashed lines;
 * ``reproduce_convergence.png`` (Fig. 6): Newton update norm ``||dx||`` against computation
   time for the full (72-row), reduced (36-row) and standard solvers, cold start from home;
 * ``reproduce_conditioning.png`` (Fig. 7): mean +- std of the Jacobian condition number per
@@ -66,7 +66,7 @@ def error_clouds(path: Path, positions_mm: np.ndarray, err: tuple[np.ndarray, np
 
 
 def histograms(path: Path, err_cardan, err_standard) -> Path:
-    """Error distributions of both models (log-spaced bins), with seed 000's means marked."""
+    """Error distributions of both models (log-spaced bins), with Bem et al.'s means marked."""
     fig = _figure(8.0, 3.3, 80)
     axes = fig.subplots(1, 2)
     for k, (ax, unit, key) in enumerate(zip(axes, ("mm", "deg"), ("translation_mean_mm", "rotation_mean_deg"))):
@@ -92,7 +92,7 @@ def histograms(path: Path, err_cardan, err_standard) -> Path:
         ax.set_ylabel("poses")
         ax.set_ylim(0, ax.get_ylim()[1] * 1.3)  # room for the legend
         ax.legend(fontsize=7, loc="upper left")
-    fig.suptitle(f"Pose errors over {len(err_cardan[0])} poses (dashed: seed 000 Table 1 means, measured)", fontsize=10)
+    fig.suptitle(f"Pose errors over {len(err_cardan[0])} poses (dashed: Bem et al. 2026, Table 1 means)", fontsize=10)
     fig.tight_layout()
     atomic_save_figure(fig, path)
     return path
@@ -124,7 +124,7 @@ def convergence(path: Path, traces: dict) -> Path:
     ax.set_yscale("log")
     ax.set_xlabel("computation time [ms] (log)")
     ax.set_ylabel(r"update norm $\|\Delta x\|_2$")
-    ax.set_title("Newton convergence from the home pose (seed 000 Fig. 6)", fontsize=11)
+    ax.set_title("Newton convergence from the home pose (Bem et al. (2026) Fig. 6)", fontsize=11)
     ax.grid(True, which="major", alpha=0.3)
     ax.legend(fontsize=8, loc="lower left")
     fig.tight_layout()
@@ -146,7 +146,9 @@ def conditioning(path: Path, full: list, reduced: list, rows: dict | None = None
         ax.errorbar(x + dx, mean, yerr=std, fmt="o-", color=COLOURS[name], capsize=4, lw=1.5, label=_label(name, rows))
     ax.set_xlabel("iteration")
     ax.set_ylabel(r"condition number $\kappa(J)$")
-    ax.set_title(f"Jacobian conditioning, mean $\\pm$ std over {len(full)} poses (seed 000 Fig. 7)", fontsize=10)
+    ax.set_title(
+        f"Jacobian conditioning, mean $\\pm$ std over {len(full)} poses (Bem et al. 2026, Fig. 7)", fontsize=10
+    )
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -166,9 +168,14 @@ def write_figures(
     out.mkdir(parents=True, exist_ok=True)
     pos = np.asarray(positions_m) * 1e3
     paths = [
-        error_clouds(out / "reproduce_errors_cardan.png", pos, err_cardan, "Cardan-aware model (seed 000 Fig. 4)"),
         error_clouds(
-            out / "reproduce_errors_standard.png", pos, err_standard, "Standard Stewart-Gough model (seed 000 Fig. 5)"
+            out / "reproduce_errors_cardan.png", pos, err_cardan, "Cardan-aware model (Bem et al. 2026, Fig. 4)"
+        ),
+        error_clouds(
+            out / "reproduce_errors_standard.png",
+            pos,
+            err_standard,
+            "Standard Stewart-Gough model (Bem et al. 2026, Fig. 5)",
         ),
         histograms(out / "reproduce_histograms.png", err_cardan, err_standard),
     ]

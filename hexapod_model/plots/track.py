@@ -12,7 +12,7 @@ from ..studies.track import TrackingRun
 
 
 def plot_run(run: TrackingRun, path: str | Path) -> None:
-    """Seed 002 Figs. 7-10: worst angle and coordinate errors per 100 ms window (log scale)."""
+    """Jakobović and Jelenković (2002) Figs. 7-10: worst angle and coordinate errors per 100 ms window (log scale)."""
     ends, w = run.window_max()
     fig = Figure(figsize=(6.4, 4.8))
     axes = fig.subplots(2, 1, sharex=True)

@@ -1,6 +1,6 @@
 """The simulation file ``sim.toml``: simulated encoders per fixture, validated like ``fixture.toml``.
 
-Per fixture: a pose sequence (seed 002's trajectory A or B played there and back, a CSV of poses
+Per fixture: a pose sequence (Jakobović and Jelenković's trajectory A or B played there and back, a CSV of poses
 played one row per set, or a held pose), the set rate, the reading noise, optional lock phases
 (the plate slows down, stays still with the brakes on, speeds up again) and injected faults.
 Every field is documented in ``docs/service.md``; an example is ``docs/examples/sim.toml``.
@@ -94,7 +94,7 @@ class SimConfig:
 
 
 def trajectory_sequence(name: str, home: np.ndarray, scale: float, rate: float, period: float) -> np.ndarray:
-    """Trajectory ``name`` (seed 002 eqs. 20-21) there and back in ``period`` s, at ``rate`` Hz.
+    """Trajectory ``name`` (Jakobović and Jelenković (2002) eqs. 20-21) there and back in ``period`` s, at ``rate`` Hz.
 
     The trajectory's time runs as ``2 (1 - cos(2 pi t / period))`` (0 -> 4 s -> 0), so the
     turns are smooth; positions are scaled by ``scale`` (m per paper unit) about ``home``.

@@ -1,6 +1,6 @@
 """Solver timing figures (``hexapod bench``, ``benchmarks/run_benchmarks.py``).
 
-* warm FK: seed 002's trajectory A, scaled to the hexapod (paper unit = base radius / 50),
+* warm FK: Jakobović and Jelenković's trajectory A, scaled to the hexapod (paper unit = base radius / 50),
   sampled at 1 kHz; each solve starts from the previous solution, tolerance 1e-10;
 * cold FK: random poses of the +-50 mm / +-25 deg box, each solved from home;
 * IK: the same poses, each from home.
@@ -37,7 +37,7 @@ def _stats(times_s: list[float], iterations: list[int]) -> dict:
 def trajectory_readings(hexa: Hexapod, name: str = "A") -> tuple[np.ndarray, np.ndarray]:
     """Trajectory readings at 1 kHz.
 
-    Seed 002's trajectory ``name`` at 1 kHz scaled to the hexapod (paper unit = base
+    Jakobović and Jelenković's trajectory ``name`` at 1 kHz scaled to the hexapod (paper unit = base
     radius / 50): the (n, 4, 4) true poses and the (n, 6) leg readings (m) that produce them.
     """
     _, poses = trajectory_poses(name, hexa.home_pose, characteristic_length(hexa) / 50.0)

@@ -1,4 +1,4 @@
-"""``hexapod evaluate``: workspace volume and seed 002's Table II figures over it, in parallel.
+"""``hexapod evaluate``: workspace volume and Jakobović and Jelenković's Table II figures over it, in parallel.
 
 The grid (cubic cells of ``cell`` m, centred on the home pose, sized by
 :func:`~hexapod_model.workspace.probe_extent`) is split into z-slices solved by a
@@ -24,7 +24,7 @@ from ..analysis.workspace import SliceResult, compute_slice, cone_rotations, pro
 from ..files import atomic_write_bytes, atomic_write_text
 from ..kinematics.hexapod import Hexapod
 
-# seed 002 Tables I (volume) and II, in the paper's units (read as cm)
+# Jakobović and Jelenković (2002) Tables I (volume) and II, in the paper's units (read as cm)
 PAPER = {
     "seed002_model1": {"volume": 16919.0, "kappa": 1.835, "sigma_min": 1.022, "abs_det": 5.842},
     "seed002_model2": {"volume": 16677.0, "kappa": 2.655, "sigma_min": 1.225, "abs_det": 51.177},
@@ -38,7 +38,7 @@ class Settings:
 
     ``grid``: points along the longest side of the probed box; ``cone_deg``/``cone_samples``: the orientation
     cone; ``length_unit``: m per length unit of the Jacobian figures (None: the platform anchor radius, our
-    reading of seed 002).
+    reading of Jakobović and Jelenković (2002)).
     """
 
     grid: int = 21

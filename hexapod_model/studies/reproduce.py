@@ -1,8 +1,8 @@
-"""``hexapod reproduce``: seed 000's accuracy study (§5.2, Table 1, Figs.
+"""``hexapod reproduce``: Bem et al.'s accuracy study (§5.2, Table 1, Figs.
 
 4-7) in simulation or on measured data.
 
-Simulation: poses are drawn as in seed 000 §5.2 (home +- 50 mm, roll/pitch/yaw +- 25 deg,
+Simulation: poses are drawn as in Bem et al. (2026) §5.2 (home +- 50 mm, roll/pitch/yaw +- 25 deg,
 :func:`~hexapod_model.trajectories.box_poses`); a pose whose inverse kinematics leaves a stroke
 or a Cardan angle limit is discarded and redrawn. The ground truth is the Cardan-aware model
 (the URDF with its loop closures); the simulated encoder readings are the true prismatic values
@@ -202,7 +202,7 @@ def _num(v: float) -> str:
 
 
 def format_table(report: dict) -> str:
-    """Seed 000 Table 1 layout, our numbers beside the paper's."""
+    """Bem et al. (2026) Table 1 layout, our numbers beside the paper's."""
     rows = [
         ("Mean translation error mu [mm]", "translation_mean_mm"),
         ("Std. dev. translation error sigma [mm]", "translation_std_mm"),

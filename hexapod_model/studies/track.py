@@ -1,11 +1,11 @@
-"""``hexapod track``: seed 002's 1 kHz tracking experiment (trajectories A/B, predictors, speeds).
+"""``hexapod track``: Jakobović and Jelenković's 1 kHz tracking experiment (trajectories A/B, predictors, speeds).
 
-True poses follow trajectory A or B (seed 002 eqs. 20-21; positions scaled by
+True poses follow trajectory A or B (Jakobović and Jelenković (2002) eqs. 20-21; positions scaled by
 ``base radius / 50`` m per paper unit, as :mod:`hexapod_model.bench`), leg readings come from
 the model's inverse kinematics (offset-Cardan model for the ``reference`` preset), and the
 :class:`~hexapod_model.tracking.Tracker` solves them at 1 kHz. Errors are absolute differences
 of the roll/pitch/yaw angles (deg) and of x, y, z (m) between solved and true poses; the
-figures show their worst value over each 100 ms window (seed 002 Figs. 7-10).
+figures show their worst value over each 100 ms window (Jakobović and Jelenković (2002) Figs. 7-10).
 
 A sample is *off the true branch* when its pose error exceeds ``1e-5`` (m with rotations
 scaled by the base radius); a *branch jump* is a transition onto a wrong branch.
@@ -116,7 +116,7 @@ def simulate(
     readings=None,
     **tracker_options,
 ) -> TrackingRun:
-    """Run the seed 002 experiment once (see module doc)."""
+    """Run the Jakobović and Jelenković (2002) experiment once (see module doc)."""
     length = characteristic_length(hexa)
     t, poses = trajectory_poses(trajectory, hexa.home_pose, length / 50.0, rate_hz, speed)
     if readings is None:

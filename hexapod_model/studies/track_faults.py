@@ -1,4 +1,4 @@
-"""Fault injection on seed 002's trajectory B: what the stream tracker flags, and how fast.
+"""Fault injection on Jakobović and Jelenković's trajectory B: what the stream tracker flags, and how fast.
 
 A run takes the true readings of trajectory B (``true_readings``), adds Gaussian noise of
 standard deviation ``noise`` (m) and one injected fault, tracks them with a

@@ -1,4 +1,4 @@
-"""The robot cell of seed 000 §5.5: a UR10 beside the hexapod couples to the top plate.
+"""The robot cell of Bem et al. (2026) §5.5: a UR10 beside the hexapod couples to the top plate.
 
 The UR10 model and meshes come from the installed ``example-robot-data`` distribution (data
 only, no network). The robot stands on the floor of the hexapod base frame at

@@ -1,4 +1,4 @@
-"""Seed 003: geometric 3-6 direct kinematics (eqs. 1-11) and rotation angles (eqs. 12-15)."""
+"""Shi, She and Duan (2016): geometric 3-6 direct kinematics (eqs. 1-11) and rotation angles (eqs. 12-15)."""
 
 from __future__ import annotations
 
@@ -193,7 +193,7 @@ def test_nearest_assembly_within_a_distance_or_an_error(hexa, fk):
         fk.solve(lengths, reference=far, max_distance=0.01)
 
 
-# ----- angles (seed 003 eqs. 12-15) -----
+# ----- angles (Shi, She and Duan (2016) eqs. 12-15) -----
 @pytest.mark.parametrize("order", EULER_ORDERS)
 def test_euler_round_trip(order):
     rng = np.random.default_rng(len(order) + ord(order[0]))
@@ -228,7 +228,7 @@ def test_orders_are_distinct_and_ypr_is_the_rpy_convention():
     np.testing.assert_allclose(ypr_to_matrix(0.7, -0.5, 0.3), rpy_to_matrix(0.3, -0.5, 0.7), atol=1e-15)
     np.testing.assert_allclose(matrix_to_ypr(rpy_to_matrix(0.3, -0.5, 0.7)), [0.7, -0.5, 0.3], atol=1e-12)
     np.testing.assert_allclose(matrix_to_rpy(euler_to_matrix("zyx", [0.7, -0.5, 0.3])), [0.3, -0.5, 0.7], atol=1e-12)
-    # seed 003 eq. 14 (a11 = cos yaw, ...) holds for a single-axis rotation, e.g. its case study
+    # Shi, She and Duan (2016) eq. 14 (a11 = cos yaw, ...) holds for a single-axis rotation, e.g. its case study
     R = ypr_to_matrix(0.25, 0.0, 0.0)
     assert R[0, 0] == pytest.approx(np.cos(0.25)) and R[1, 1] == pytest.approx(np.cos(0.25))
     assert R[2, 2] == pytest.approx(1.0, abs=1e-15)  # to rounding (scipy composes the rotation)

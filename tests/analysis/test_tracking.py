@@ -1,4 +1,4 @@
-"""Seed 002 §IV-V: predictors, the tracker's branch flags, `hexapod track`."""
+"""Jakobović and Jelenković (2002) §IV-V: predictors, the tracker's branch flags, `hexapod track`."""
 
 from __future__ import annotations
 
@@ -106,7 +106,7 @@ def test_near_singular_passage_is_flagged_and_no_wrong_sample_passes_as_ok(passa
         assert not any(r.ok for r, e in zip(res, err) if e > 1e-5)
 
     else:
-        # linear prediction carries the solver through the bifurcation (seed 002 §V)
+        # linear prediction carries the solver through the bifurcation (Jakobović and Jelenković (2002) §V)
         assert err.max() < 1e-5
 
 
@@ -181,7 +181,7 @@ def test_table_rows(reference):
 
 
 def test_three_six_trajectory_b_division_without_prediction():
-    """Seed 002's 'division' on a real trajectory: B passes near a singularity of the 3-6
+    """Jakobović and Jelenković's 'division' on a real trajectory: B passes near a singularity of the 3-6
     preset; without prediction the solver leaves the true branch (flagged, never 'ok'), with
     eq. 22 it holds on."""
     hexa = hm.Hexapod.from_preset("3-6")

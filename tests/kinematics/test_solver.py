@@ -206,7 +206,7 @@ def test_structured_steps_equal_the_dense_step(name):
 
 
 def test_cold_starts_far_from_home_converge_or_say_why():
-    # beyond the seed 000 box (+-80 mm, +-35 deg): without the step limit, Newton from home
+    # beyond the Bem et al. (2026) box (+-80 mm, +-35 deg): without the step limit, Newton from home
     # overshot to a 180-degree flipped closure on some of these
     hexa = hexapod("reference")
     statuses = set()

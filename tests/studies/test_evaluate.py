@@ -1,4 +1,4 @@
-"""Seed 002 §II-III: eliminated leg Jacobian, workspace for a cone of orientations, `hexapod evaluate`."""
+"""Jakobović and Jelenković (2002) §II-III: eliminated leg Jacobian, workspace for an orientation cone, `evaluate`."""
 
 from __future__ import annotations
 
@@ -147,7 +147,7 @@ def test_seed002_models_load_with_table1_dimensions():
 
 
 def test_model1_averages_near_paper_table2():
-    """Our reading of seed 002 (rotations normalised by the platform radius) reproduces Table II
+    """Our reading of Jakobović and Jelenković (2002) (rotations normalised by the platform radius) reproduces Table II
     for model 1 within a few per cent even on a coarse grid."""
     r = run_evaluation(str(MODEL1), Settings(grid=9, cone_deg=15, cone_samples=4), workers=1)
     assert r["points_inside"] > 10

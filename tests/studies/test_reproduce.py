@@ -29,7 +29,7 @@ def reference():
 
 
 def feasible(hexa, n, seed, **kw):
-    """Poses of the seed 000 box that the Cardan-aware IK accepts, with their tight solutions."""
+    """Poses of the Bem et al. (2026) box that the Cardan-aware IK accepts, with their tight solutions."""
     out = []
     for T in box_poses(hexa.home_pose, 3 * n, seed=seed, **kw):
         sol = hexa.inverse(T, tol=1e-13, max_iter=50, check=False)
