@@ -11,30 +11,9 @@ import numpy as np
 
 from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
+from ..io.tables import LENGTH_COLUMNS, POSE_COLUMNS
 
-LOCK_COLUMNS = [
-    "fixture",
-    "t",
-    "time",
-    "x",
-    "y",
-    "z",
-    "qx",
-    "qy",
-    "qz",
-    "qw",
-    "roll",
-    "pitch",
-    "yaw",
-    "l1",
-    "l2",
-    "l3",
-    "l4",
-    "l5",
-    "l6",
-    "status",
-    "geometry_hash",
-]
+LOCK_COLUMNS = ["fixture", "t", "time", *POSE_COLUMNS, *LENGTH_COLUMNS, "status", "geometry_hash"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -136,13 +136,17 @@ def geometry_hash(hexa: Hexapod) -> str:
 def load_config(path: str | Path) -> ServiceConfig:
     """Read and validate ``fixture.toml``; :class:`ConfigError` names the first bad field."""
     path = Path(path)
+    return config_from_dict(read_toml(path), str(path), path.parent)
+
+
+def read_toml(path: Path) -> dict:
+    """The TOML file ``path`` as a dict; :class:`ConfigError` when unreadable or not TOML."""
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
         raise ConfigError("<file>", str(path), f"cannot read: {exc.strerror or exc}", str(path)) from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ConfigError("<file>", str(path), f"not valid TOML: {exc}", str(path)) from None
-    return config_from_dict(data, str(path), path.parent)
 
 
 def config_from_dict(data: dict, source: str = "<dict>", folder: Path | None = None) -> ServiceConfig:

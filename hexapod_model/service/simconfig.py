@@ -8,7 +8,6 @@ Every field is documented in ``docs/service.md``; an example is ``docs/examples/
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,7 +17,7 @@ from ..analysis.trajectories import DURATION_S, trajectory_coordinates
 from ..exceptions import HexapodError
 from ..io.tables import poses_from_table, read_table
 from ..kinematics.rotations import rpy_to_matrix
-from .config import ServiceConfig
+from .config import ServiceConfig, read_toml
 from .errors import ConfigError, Table
 
 FAULTS = ("dropped_frames", "silent_leg", "stuck_leg", "error_bit", "warning_bit", "spike")
@@ -111,13 +110,7 @@ def trajectory_sequence(name: str, home: np.ndarray, scale: float, rate: float, 
 def load_simulation(path: str | Path, service: ServiceConfig) -> SimConfig:
     """Read and validate ``sim.toml`` against the service configuration."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError("<file>", str(path), f"cannot read: {exc.strerror or exc}", str(path)) from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ConfigError("<file>", str(path), f"not valid TOML: {exc}", str(path)) from None
-    return simulation_from_dict(data, service, str(path), path.parent)
+    return simulation_from_dict(read_toml(path), service, str(path), path.parent)
 
 
 def simulation_from_dict(data: dict, service: ServiceConfig, source: str = "<dict>", folder: Path | None = None):

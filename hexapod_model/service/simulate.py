@@ -238,5 +238,6 @@ class Simulator:
         """Stop sending (and wait for the background thread)."""
         self._stop.set()
         if self._thread is not None:
-            self._thread.join()
+            if self._thread.ident is not None:  # Ctrl-C may land between creating and starting it
+                self._thread.join()
             self._thread = None

@@ -30,7 +30,7 @@ from ..description.geometry import HexapodGeometry
 from ..exceptions import InputError
 from ..kinematics.hexapod import Hexapod
 from ..studies.calibrate import simulate
-from ..studies.reproduce import PAPER
+from .reproduce import PAPER, TABLE1_ROWS
 
 MODELS = ("spherical", "nominal", "calibrated")
 READINGS = {
@@ -97,12 +97,7 @@ def run_table1(
 
 def format_table1(report: dict) -> str:
     """Table 1 with three models of ours beside the paper's two columns."""
-    rows = [
-        ("Mean translation error mu [mm]", "translation_mean_mm"),
-        ("Std. dev. translation error sigma [mm]", "translation_std_mm"),
-        ("Mean rotation error mu [deg]", "rotation_mean_deg"),
-        ("Std. dev. rotation error sigma [deg]", "rotation_std_deg"),
-    ]
+    rows = TABLE1_ROWS
     w = 40
     head = f"{'Metric':{w}s}{'Spherical':>11s}{'Nominal':>10s}{'Calibrated':>12s}   |"
     head += f"{'paper: Cardan':>15s}{'Standard':>10s}"

@@ -142,3 +142,13 @@ def test_stop_before_the_cycle_thread_started_is_clean(tmp_path):
     service._thread = threading.Thread(target=lambda: None)  # created, not started
     service.stop()
     assert service._thread is None
+
+
+def test_simulator_stop_before_its_thread_started_is_clean(tmp_path):
+    import threading
+
+    svc = service_config(tmp_path, [fixture_table()])
+    sim = Simulator(svc, sim_config(svc, [{"name": "left", "rate": 100.0, "trajectory": "A"}]), None)
+    sim._thread = threading.Thread(target=lambda: None)  # created, not started (Ctrl-C in between)
+    sim.stop()
+    assert sim._thread is None
