@@ -42,6 +42,12 @@ def placements(J, probe_cols, R, p):
 def residual(J, probe_cols, rows, R, p, E, r):
     """Fill ``r`` (6*rows) and ``E`` (6, 3, 3); return ``(norm(r), min trace(E))``."""
     placements(J, probe_cols, R, p)
+    return closure_residual(R, p, rows, E, r)
+
+
+@njit(cache=True)
+def closure_residual(R, p, rows, E, r):
+    """Residual of the closure frames ``R``, ``p`` (tips, then anchors): see :func:`residual`."""
     min_trace = 3.0
     for i in range(6):
         o = i * rows
@@ -63,7 +69,7 @@ def residual(J, probe_cols, rows, R, p, E, r):
     return np.sqrt(s), min_trace
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # inlined into its callers: a call per column cost more than the column
 def _column(J, c, rows, point, H, sign, out, row, col):
     """Add one column of the closure Jacobian.
 
@@ -86,7 +92,7 @@ def _add_columns(J, G, o, rows, cols, colmap, point, H, sign):
             _column(J, c, rows, point, H, sign, G, o, colmap[c])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rotation_weights(E, i, Ht, Ha):
     """``H_tip = (tr(E) I - E)/2`` and ``H_anchor = (tr(E) I - E^T)/2`` of closure ``i``."""
     tr = E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2]

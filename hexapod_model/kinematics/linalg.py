@@ -2,7 +2,8 @@
 
 * :func:`lu_factor` / :func:`lu_apply`: LU with partial pivoting, reporting the pivot ratio
   (smallest / largest pivot magnitude) that the solver uses to detect singularities.
-* :func:`block_solve`: inverse kinematics, where the closure Jacobian is block diagonal.
+* :func:`block_solve` / :func:`blocks_solve`: inverse kinematics, where the closure Jacobian is
+  block diagonal (blocks read from the reduced Jacobian, or built from the joint Jacobians).
 * :func:`schur_solve`: direct kinematics, where each leg's block is eliminated and only a
   6x6 system in the platform step remains; it also gives the sign of the constraint
   Jacobian's determinant and a bound on the condition number of the eliminated 6x6 system
@@ -17,15 +18,11 @@ from numba import njit
 from .kernels import _column, _rotation_weights
 
 
-@njit(cache=True)
-def lu_factor(A, LU, piv):
-    """LU factorisation with partial pivoting of the square ``A`` into ``LU`` / ``piv``.
-
-    Returns the ratio of the smallest to the largest pivot magnitude: 0 when ``A`` is
-    singular (then ``LU`` is unusable), tiny near a singularity.
-    """
-    n = A.shape[0]
-    LU[:, :] = A
+# The factorisation and the solves work in place on the leading n x n block; they are inlined
+# into the structured solves below (a call per 6x6 block cost as much as the arithmetic).
+@njit(cache=True, inline="always")
+def _factor(LU, piv, n):
+    """LU factorisation with partial pivoting of ``LU[:n, :n]`` in place; returns the pivot ratio."""
     pmax = 0.0
     pmin = np.inf
     for k in range(n):
@@ -53,11 +50,9 @@ def lu_factor(A, LU, piv):
     return pmin / pmax
 
 
-@njit(cache=True)
-def lu_apply(LU, piv, b, x):
-    """Solve ``A x = b`` with the factors of :func:`lu_factor`."""
-    n = LU.shape[0]
-    x[:] = b
+@njit(cache=True, inline="always")
+def _solve(LU, piv, x, n):
+    """``x <- A^-1 x`` with the factors of :func:`_factor` (``P A = L U``)."""
     for k in range(n):
         p = piv[k]
         if p != k:
@@ -74,9 +69,60 @@ def lu_apply(LU, piv, b, x):
         x[i] = s / LU[i, i]
 
 
+@njit(cache=True, inline="always")
+def _solve_transposed(LU, piv, x, n):
+    """``x <- A^-T x`` with the factors of :func:`_factor`."""
+    for i in range(n):  # U^T y = x
+        s = x[i]
+        for j in range(i):
+            s -= LU[j, i] * x[j]
+        x[i] = s / LU[i, i]
+    for i in range(n - 1, -1, -1):  # L^T z = y
+        s = x[i]
+        for j in range(i + 1, n):
+            s -= LU[j, i] * x[j]
+        x[i] = s
+    for k in range(n - 1, -1, -1):  # x = P^T z
+        p = piv[k]
+        if p != k:
+            x[k], x[p] = x[p], x[k]
+
+
 @njit(cache=True)
-def lu_det_sign(LU, piv, n):
-    """Sign (+1.0 / -1.0) of ``det A`` from the factors of :func:`lu_factor` (``n`` x ``n``)."""
+def lu_factor(A, LU, piv):
+    """LU factorisation with partial pivoting of the square ``A`` into ``LU`` / ``piv``.
+
+    Returns the ratio of the smallest to the largest pivot magnitude: 0 when ``A`` is
+    singular (then ``LU`` is unusable), tiny near a singularity.
+    """
+    n = A.shape[0]
+    for i in range(n):
+        for j in range(n):
+            LU[i, j] = A[i, j]
+    return _factor(LU, piv, n)
+
+
+@njit(cache=True)
+def lu_apply(LU, piv, b, x):
+    """Solve ``A x = b`` with the factors of :func:`lu_factor`."""
+    n = LU.shape[0]
+    for k in range(n):
+        x[k] = b[k]
+    _solve(LU, piv, x, n)
+
+
+@njit(cache=True)
+def lu_apply_transposed(LU, piv, b, x):
+    """Solve ``A^T x = b`` with the factors of :func:`lu_factor` (``P A = L U``)."""
+    n = LU.shape[0]
+    for k in range(n):
+        x[k] = b[k]
+    _solve_transposed(LU, piv, x, n)
+
+
+@njit(cache=True, inline="always")
+def _det_sign(LU, piv, n):
+    """Sign (+1.0 / -1.0) of ``det A`` from the factors of :func:`_factor` (``n`` x ``n``)."""
     s = 1.0
     for k in range(n):
         if piv[k] != k:
@@ -84,6 +130,12 @@ def lu_det_sign(LU, piv, n):
         if LU[k, k] < 0.0:
             s = -s
     return s
+
+
+@njit(cache=True)
+def lu_det_sign(LU, piv, n):
+    """Sign (+1.0 / -1.0) of ``det A`` from the factors of :func:`lu_factor` (``n`` x ``n``)."""
+    return _det_sign(LU, piv, n)
 
 
 @njit(cache=True)
@@ -101,35 +153,30 @@ def block_solve(G, r, rows, block_cols, LUb, piv, rb, xb, x):
             rb[a] = r[o + a]
             for b in range(rows):
                 LUb[a, b] = G[o + a, block_cols[i, b]]
-        ratio = lu_factor(LUb, LUb, piv)  # in place: LU[:, :] = A is a no-op
+        ratio = _factor(LUb, piv, rows)
         if ratio == 0.0:
             return 0.0
         worst = min(worst, ratio)
-        lu_apply(LUb, piv, rb, xb)
+        for a in range(rows):
+            xb[a] = rb[a]
+        _solve(LUb, piv, xb, rows)
         for b in range(rows):
             x[block_cols[i, b]] = xb[b]
     return worst
 
 
-@njit(cache=True)
-def lu_apply_transposed(LU, piv, b, x):
-    """Solve ``A^T x = b`` with the factors of :func:`lu_factor` (``P A = L U``)."""
-    n = LU.shape[0]
-    x[:] = b
-    for i in range(n):  # U^T y = b
-        s = x[i]
-        for j in range(i):
-            s -= LU[j, i] * x[j]
-        x[i] = s / LU[i, i]
-    for i in range(n - 1, -1, -1):  # L^T z = y
-        s = x[i]
-        for j in range(i + 1, n):
-            s -= LU[j, i] * x[j]
-        x[i] = s
-    for k in range(n - 1, -1, -1):  # x = P^T z
-        p = piv[k]
-        if p != k:
-            x[k], x[p] = x[p], x[k]
+@njit(cache=True, inline="always")
+def _block(J, cols, rows, point, H, sign, B, ncols):
+    """Fill ``B[:rows, :ncols]`` with the closure Jacobian's columns ``cols``.
+
+    The columns of :func:`.kernels.jacobian` for the closure at ``point`` with rotation
+    weights ``H``, times ``sign``.
+    """
+    for a in range(rows):  # _column adds into a zeroed block
+        for k in range(ncols):
+            B[a, k] = 0.0
+    for k in range(ncols):
+        _column(J, cols[k], rows, point, H, sign, B, 0, k)
 
 
 @njit(cache=True)
@@ -154,20 +201,16 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
         o = i * rows
         if rows == 6:
             _rotation_weights(E, i, Ht, Ha)
-        LB[i, :, :] = 0.0
-        A[i, :, :] = 0.0
-        for k in range(rows):
-            _column(J, leg_cols[i, k], rows, p[i], Ht, 1.0, LB[i], 0, k)
-        for k in range(6):
-            _column(J, ff_cols[k], rows, p[6 + i], Ha, -1.0, A[i], 0, k)
-        ratio = lu_factor(LB[i], LB[i], PB[i])
+        _block(J, leg_cols[i], rows, p[i], Ht, 1.0, LB[i], rows)  # L_i: the leg's joints
+        _block(J, ff_cols, rows, p[6 + i], Ha, -1.0, A[i], 6)  # A_i: the platform's velocity
+        ratio = _factor(LB[i], PB[i], rows)
         if ratio == 0.0:
             return 0.0, np.inf
         worst = min(worst, ratio)
-        sign *= lu_det_sign(LB[i], PB[i], rows)
-        w[:rows] = 0.0
-        w[held_pos[i]] = 1.0
-        lu_apply_transposed(LB[i], PB[i], w[:rows], n[:rows])
+        sign *= _det_sign(LB[i], PB[i], rows)
+        for a in range(rows):
+            n[a] = 1.0 if a == held_pos[i] else 0.0
+        _solve_transposed(LB[i], PB[i], n, rows)
         s = 0.0
         for a in range(rows):
             s += n[a] * r[o + a]
@@ -181,17 +224,17 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
     for i in range(6):
         for k in range(6):
             fro2 += M[i, k] * M[i, k]
-    ratio = lu_factor(M, M, pm)
+    ratio = _factor(M, pm, 6)
     if ratio == 0.0:
         return 0.0, np.inf
     worst = min(worst, ratio)
-    sign *= lu_det_sign(M, pm, 6)
+    sign *= _det_sign(M, pm, 6)
     det = 1.0
     for k in range(6):
         det *= M[k, k]
     kappa = 2.0 * (fro2 / 6.0) ** 3 / abs(det)
-    v = np.empty(6)
-    lu_apply(M, pm, rhs, v)
+    v = rhs
+    _solve(M, pm, v, 6)
     for k in range(6):
         x[colmap[ff_cols[k]]] = -v[k]
     for i in range(6):
@@ -201,9 +244,37 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
             for k in range(6):
                 s += A[i, a, k] * v[k]
             w[a] = -s
-        lu_apply(LB[i], PB[i], w[:rows], n[:rows])
+        _solve(LB[i], PB[i], w, rows)
         for k in range(rows):
             c = colmap[leg_cols[i, k]]
             if c >= 0:
-                x[c] = -n[k]
+                x[c] = -w[k]
     return sign * worst, kappa
+
+
+@njit(cache=True)
+def blocks_solve(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w):
+    """:func:`block_solve` with the blocks built from ``J`` directly (inverse kinematics).
+
+    The platform is held, so closure ``i``'s block is ``L_i`` over its leg's joints in leg order
+    (the columns ``block_cols[i]`` of the solver's ``G``, the same numbers): ``L_i x_i = r_i``.
+    Writes ``x`` (``G x = r``) and returns the smallest pivot ratio (0 = singular).
+    """
+    Ht = np.empty((3, 3))
+    Ha = np.empty((3, 3))
+    worst = 1.0
+    for i in range(6):
+        o = i * rows
+        if rows == 6:
+            _rotation_weights(E, i, Ht, Ha)
+        _block(J, leg_cols[i], rows, p[i], Ht, 1.0, LB[i], rows)
+        ratio = _factor(LB[i], PB[i], rows)
+        if ratio == 0.0:
+            return 0.0
+        worst = min(worst, ratio)
+        for a in range(rows):
+            w[a] = r[o + a]
+        _solve(LB[i], PB[i], w, rows)
+        for k in range(rows):
+            x[colmap[leg_cols[i, k]]] = w[k]
+    return worst
