@@ -36,6 +36,7 @@ from .checks import (
     check_vector,
     free_directions,
 )
+from .newton import solver_for
 from .solver import NewtonSolver, Solution
 
 DEFAULT_TOL = 1e-12  # closure residual (m, rad): pose errors stay below 1e-9 on every preset
@@ -182,7 +183,7 @@ class Hexapod:
             solvers = self._local.solvers = {}
         solver = solvers.get(held)
         if solver is None:
-            solver = solvers[held] = NewtonSolver(self.closed_loop, held)
+            solver = solvers[held] = solver_for(self.closed_loop, held)
         return solver
 
     def _check_home_conditioning(self) -> float:

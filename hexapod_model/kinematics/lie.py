@@ -1,0 +1,118 @@
+"""Compiled SE(3) pieces of the fast Newton path, written as Pinocchio computes them.
+
+* :func:`quat_to_matrix`: rotation of a unit quaternion ``(x, y, z, w)`` (Eigen's
+  ``toRotationMatrix``: ``R = I + 2 w [u] + 2 [u]^2`` with ``u = (x, y, z)``, no normalisation);
+* :func:`matrix_to_quat`: Eigen's branch on the trace (Shepperd's method);
+* :func:`exp6`: ``exp`` of a twist ``(v, w)`` (Murray-Li-Sastry eq. 2.36:
+  ``R = I + sin t/t [w] + (1 - cos t)/t^2 [w]^2``, ``p = V v`` with
+  ``V = I + (1 - cos t)/t^2 [w] + (t - sin t)/t^3 [w]^2``), Taylor-expanded for small ``t``
+  with Pinocchio's threshold;
+* :func:`integrate_free_flyer`: Pinocchio's ``integrate`` on a free flyer's ``(p, quat)``:
+  ``M1 = M0 exp6(v)`` (body velocity), the quaternion kept on ``q0``'s side and normalised to
+  first order (``q *= (3 - |q|^2) / 2``).
+
+Test: ``tests/kinematics/test_chains.py`` against ``pin.exp6`` and ``pin.integrate``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+_EPS = np.finfo(np.float64).eps
+_TAYLOR_T = _EPS ** (1.0 / 3.0)  # Pinocchio's TaylorSeriesExpansion<double>::precision<3>()
+
+
+@njit(cache=True, inline="always")
+def quat_to_matrix(x, y, z, w, R):
+    """Write ``R`` (3x3) of the quaternion ``(x, y, z, w)`` (assumed unit, as Pinocchio does)."""
+    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
+    twx, twy, twz = tx * w, ty * w, tz * w
+    txx, txy, txz = tx * x, ty * x, tz * x
+    tyy, tyz, tzz = ty * y, tz * y, tz * z
+    R[0, 0], R[0, 1], R[0, 2] = 1.0 - (tyy + tzz), txy - twz, txz + twy
+    R[1, 0], R[1, 1], R[1, 2] = txy + twz, 1.0 - (txx + tzz), tyz - twx
+    R[2, 0], R[2, 1], R[2, 2] = txz - twy, tyz + twx, 1.0 - (txx + tyy)
+
+
+@njit(cache=True, inline="always")
+def matrix_to_quat(R, out):
+    """Write the quaternion ``out = (x, y, z, w)`` of rotation ``R`` (Eigen's algorithm)."""
+    t = R[0, 0] + R[1, 1] + R[2, 2]
+    if t > 0.0:
+        t = np.sqrt(t + 1.0)
+        out[3] = 0.5 * t
+        t = 0.5 / t
+        out[0] = (R[2, 1] - R[1, 2]) * t
+        out[1] = (R[0, 2] - R[2, 0]) * t
+        out[2] = (R[1, 0] - R[0, 1]) * t
+        return
+    i = 0
+    if R[1, 1] > R[0, 0]:
+        i = 1
+    if R[2, 2] > R[i, i]:
+        i = 2
+    j = (i + 1) % 3
+    k = (j + 1) % 3
+    t = np.sqrt(R[i, i] - R[j, j] - R[k, k] + 1.0)
+    out[i] = 0.5 * t
+    t = 0.5 / t
+    out[3] = (R[k, j] - R[j, k]) * t
+    out[j] = (R[j, i] + R[i, j]) * t
+    out[k] = (R[k, i] + R[i, k]) * t
+
+
+@njit(cache=True, inline="always")
+def exp6(v, R, p):
+    """Write ``R`` (3x3) and ``p`` (3,) of ``exp6(v)``, ``v = (linear, angular)`` (Pinocchio's ``exp6``)."""
+    wx, wy, wz = v[3], v[4], v[5]
+    t2 = wx * wx + wy * wy + wz * wz + _EPS * _EPS
+    t = np.sqrt(t2)
+    if t < _TAYLOR_T:
+        a_wxv = 0.5 - t2 / 24.0  # (1 - cos t) / t^2
+        a_v = 1.0 - t2 / 6.0  # sin t / t
+        a_w = 1.0 / 6.0 - t2 / 120.0  # (t - sin t) / t^3
+        diag = 1.0 - t2 / 2.0  # cos t
+    else:
+        st, ct = np.sin(t), np.cos(t)
+        a_wxv = (1.0 - ct) / t2
+        a_v = st / t
+        a_w = (1.0 - a_v) / t2
+        diag = ct
+    vx, vy, vz = v[0], v[1], v[2]
+    wv = wx * vx + wy * vy + wz * vz
+    p[0] = a_v * vx + a_w * wv * wx + a_wxv * (wy * vz - wz * vy)
+    p[1] = a_v * vy + a_w * wv * wy + a_wxv * (wz * vx - wx * vz)
+    p[2] = a_v * vz + a_w * wv * wz + a_wxv * (wx * vy - wy * vx)
+    w = (wx, wy, wz)
+    for a in range(3):
+        for b in range(3):
+            R[a, b] = a_wxv * w[a] * w[b]
+        R[a, a] += diag
+    R[0, 1] -= a_v * wz
+    R[1, 0] += a_v * wz
+    R[0, 2] += a_v * wy
+    R[2, 0] -= a_v * wy
+    R[1, 2] -= a_v * wx
+    R[2, 1] += a_v * wx
+
+
+@njit(cache=True)
+def integrate_free_flyer(x, v, R0, R1, Re, pe, quat):
+    """``x <- x (+) v`` for a free flyer ``x = (p, quat)`` and body velocity ``v`` (6,), in place.
+
+    ``R0``, ``R1``, ``Re`` (3x3), ``pe`` (3,) and ``quat`` (4,) are scratch buffers.
+    """
+    quat_to_matrix(x[3], x[4], x[5], x[6], R0)
+    exp6(v, Re, pe)
+    for a in range(3):  # M1 = M0 exp6(v): p1 = p0 + R0 pe, R1 = R0 Re
+        x[a] += R0[a, 0] * pe[0] + R0[a, 1] * pe[1] + R0[a, 2] * pe[2]
+        for b in range(3):
+            R1[a, b] = R0[a, 0] * Re[0, b] + R0[a, 1] * Re[1, b] + R0[a, 2] * Re[2, b]
+    matrix_to_quat(R1, quat)
+    dot = quat[0] * x[3] + quat[1] * x[4] + quat[2] * x[5] + quat[3] * x[6]
+    sign = -1.0 if dot < 0.0 else 1.0
+    n2 = quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]
+    alpha = sign * (3.0 - n2) / 2.0  # first-order normalisation
+    for a in range(4):
+        x[3 + a] = alpha * quat[a]

@@ -1,0 +1,225 @@
+"""The whole Newton iteration of the fast path in one compiled call.
+
+For hexapods whose six legs are chains of ``rows`` one-dof joints (6 for ``6d`` closures, 3
+for ball joints) and the two structured problems: one joint held per leg, the platform free
+(direct kinematics: the Schur elimination of :func:`.linalg.schur_solve`), or the platform held
+(inverse kinematics: the blocks of :func:`.linalg.blocks_solve`). :func:`iterate` is
+:meth:`.solver.NewtonSolver.iterate` with Pinocchio replaced by :mod:`.chains`; per iteration:
+
+1. closure frames and WORLD Jacobian columns at ``q`` (:func:`.chains.evaluate_chains`);
+2. residual, Bem et al. (2026) eqs. 10-14 (:func:`.kernels.closure_residual`), minus
+   ``scale * offset`` on a homotopy path; stop when its norm is at most ``tol`` (a 180-degree
+   flipped closure, ``trace(R_tip R_anchor^T) < 1``, is refused; a first step above
+   ``one_step`` is followed by a second, to measure a contraction), after ``max_iter`` steps
+   or on NaN; a start that closes at once is checked for singularity by one step;
+3. Newton step ``G dq = -r`` by the structured solve; singular below ``singular_ratio``
+   (smallest / largest pivot); the Schur step also gives the determinant sign and the
+   condition bound (``state``);
+4. with ``certify``: the step's determinant sign equals the start's, it is not shortened and
+   the contraction ``|dx_k+1| / |dx_k|`` stays below ``theta_max`` (the certificate of
+   :mod:`.assembly`); otherwise the solve stops, ``UNCERTIFIED``;
+5. the step limited to ``max_step`` along its direction (:func:`.kernels.scatter_step`) and
+   applied on the manifold: ``q_j += dq_j`` for the leg joints, ``M_p <- M_p exp6(v_p)`` for the
+   platform (:func:`.lie.integrate_free_flyer`).
+
+:class:`CompiledSolver` is a :class:`.solver.NewtonSolver` whose buffers are the packed ones
+(:mod:`.packing`) and whose ``iterate`` / ``evaluate`` run compiled; :func:`solver_for` picks it
+when the layout allows.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..description.model import ClosedLoopModel
+from .chains import evaluate_chains
+from .kernels import closure_residual, jacobian, scatter_step, shift_residual
+from .legs import ChainTables
+from .lie import integrate_free_flyer
+from .linalg import blocks_solve, schur_solve
+from .packing import Packed, unpack_floats, unpack_ints, unpack_iwork, unpack_work
+from .solver import _ONE_STEP, _THETA_FLOOR, MAX_STEP, SINGULAR_PIVOT_RATIO, THETA_MAX, NewtonSolver
+
+# outcome codes of :func:`iterate` (:func:`outcome` turns them into statuses and messages)
+CONVERGED, NO_CONVERGENCE, FLIPPED, SINGULAR, START_SINGULAR, UNCERTIFIED = 0, 1, 2, 3, 4, 5
+
+
+@njit(cache=True, inline="always")
+def _integrate(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat):
+    """``q <- q (+) dv``: leg joints add their velocity, the platform's free flyer integrates on SE(3)."""
+    for i in range(leg_q.shape[0]):
+        for k in range(leg_q.shape[1]):
+            q[leg_q[i, k]] += dv[leg_v[i, k]]
+    v = dv[platform_v[0] : platform_v[0] + 6]
+    integrate_free_flyer(q[platform_q : platform_q + 7], v, Rs[0], Rs[1], Rs[2], ps[0], quat)
+
+
+@njit(cache=True, inline="always")
+def _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state):
+    """Solve ``G x = r`` (Schur elimination or blocks); returns the smallest pivot ratio.
+
+    ``frames = (J, p, E, r, x)``, ``blocks = (LB, PB, A, M, pm, nb, wb)``. The Schur step leaves
+    the determinant sign (``-1`` when singular, as the general path) and the condition bound in
+    ``state``.
+    """
+    J, p, E, r, x = frames
+    LB, PB, A, M, pm, nb, wb = blocks
+    if schur:
+        ratio, kappa = schur_solve(J, leg_v, held_pos, platform_v, colmap, rows, p, E, r, x, LB, PB, A, M, pm, nb, wb)
+        state[0], state[1] = (1.0 if ratio > 0.0 else -1.0), kappa
+        return abs(ratio)
+    return blocks_solve(J, leg_v, colmap, rows, p, E, r, x, LB, PB, wb)
+
+
+@njit(cache=True)
+def iterate(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
+    """Newton from ``q0`` into ``q`` (see the module docstring).
+
+    Returns ``(code, iterations, norm, ratio, theta, sign, certified)``: the outcome code, the
+    last residual norm and pivot ratio, the largest contraction, the determinant sign the
+    solve kept (``sign``, or the first step's when 0) and whether every check passed.
+    """
+    rows, platform_q, schur = ints[0], ints[3], ints[4] == 1
+    max_step, singular_ratio, theta_max, theta_floor, one_step = floats[0], floats[1], floats[2], floats[3], floats[4]
+    (leg_q, leg_v, platform_v, held_pos, colmap, free_v), _ = unpack_ints(ints)
+    (placements, motions, closure, home), _ = unpack_floats(ints, floats)
+    (oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, Rs, ps, quat, state), _ = unpack_work(ints, work)
+    (PB, pm), _ = unpack_iwork(ints, iwork)
+    frames, blocks = (J, p, E, r, x), (LB, PB, A, M, pm, nb, wb)  # the step's inputs and buffers
+    for k in range(q.shape[0]):
+        q[k] = q0[k]
+    it, ratio, theta, previous, certified = 0, 1.0, 0.0, 0.0, True
+    while True:
+        evaluate_chains(q, placements, motions, leg_q, leg_v, closure, home, platform_q, platform_v, oR, op, J, R, p)
+        norm, min_trace = closure_residual(R, p, rows, E, r)
+        if scale != 0.0:
+            norm = shift_residual(r, offset, scale)
+        if norm <= tol and (it != 1 or previous <= one_step):
+            code = CONVERGED
+            if min_trace < 1.0:
+                code, certified = FLIPPED, False
+            elif it == 0:  # no step factored the Jacobian: check the start itself is not singular
+                ratio = _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state)
+                if ratio < singular_ratio:
+                    code, certified = START_SINGULAR, False
+            break
+        if it >= max_iter or not norm < np.inf:  # also stops on NaN
+            code = NO_CONVERGENCE
+            break
+        ratio = _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state)
+        if ratio < singular_ratio:
+            code, certified = SINGULAR, False
+            break
+        biggest = scatter_step(x, free_v, dv, max_step)
+        if certify:
+            certified = sign == 0.0 or state[0] == sign  # the sign is only known on the Schur path
+            sign = sign if sign != 0.0 else state[0]
+            if previous > theta_floor and biggest > theta * previous:
+                theta = biggest / previous
+            previous = biggest
+            if not (certified and biggest <= max_step and theta <= theta_max):
+                code, certified = UNCERTIFIED, False
+                break
+        _integrate(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat)
+        it += 1
+    return code, it, norm, ratio, theta, sign, certified
+
+
+@njit(cache=True)
+def evaluate_at(q, ints, floats, work, iwork):
+    """Residual ``r`` and reduced Jacobian ``G`` (work buffers) at ``q``; returns ``norm(r)`` (``iwork`` unused)."""
+    rows, platform_q = ints[0], ints[3]
+    (leg_q, leg_v, platform_v, held_pos, colmap, free_v), _ = unpack_ints(ints)
+    (placements, motions, closure, home), _ = unpack_floats(ints, floats)
+    (oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, Rs, ps, quat, state), _ = unpack_work(ints, work)
+    evaluate_chains(q, placements, motions, leg_q, leg_v, closure, home, platform_q, platform_v, oR, op, J, R, p)
+    norm, _ = closure_residual(R, p, rows, E, r)
+    jacobian(J, leg_v, platform_v, colmap, rows, p, E, G)
+    return norm
+
+
+def outcome(code: int, tol: float, iterations: int, norm: float, ratio: float) -> tuple[str, str]:
+    """Status and message of an :func:`iterate` outcome code (the general path's words)."""
+    if code == CONVERGED:
+        return "converged", ""
+    if code == FLIPPED:
+        return "max_iterations", "converged to a spurious closure flipped by 180 deg"
+    if code == NO_CONVERGENCE:
+        return "max_iterations", f"no convergence to {tol:g} in {iterations} iterations (residual {norm:.3g})"
+    if code == SINGULAR:
+        return "singular", f"constraint Jacobian singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g})"
+    if code == START_SINGULAR:
+        return "singular", f"start is singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g}), no step taken"
+    return "uncertified", "contraction or determinant sign check failed"
+
+
+_BUFFERS = ("J", "R", "p", "E", "r", "x", "G", "dv", "LB", "PB", "A", "M", "pm", "nb", "wb")
+
+
+class CompiledSolver(NewtonSolver):
+    """A :class:`.solver.NewtonSolver` whose ``iterate`` and ``evaluate`` run compiled.
+
+    Its buffers (``J``, ``r``, ``G``, ``x``, the Schur blocks, ...) are views on the packed
+    arrays, so everything that reads them after a solve (``run``, :mod:`.assembly`,
+    ``_solve_step``) sees the compiled path's values; ``q_aug[:nq]`` holds the last iterate.
+    """
+
+    def __init__(self, clm: ClosedLoopModel, held_joints: tuple[int, ...], tables: ChainTables):
+        self.packed: Packed | None = None  # NewtonSolver.__init__ iterates once, on the general path
+        super().__init__(clm, held_joints)
+        constants = (MAX_STEP, SINGULAR_PIVOT_RATIO, THETA_MAX, _THETA_FLOOR, _ONE_STEP)
+        schur = self.held_pos is not None
+        if not schur and self.block_cols is None:  # solver_for checks the layout first
+            raise ValueError("no structured step for these held joints")
+        packed = Packed(tables, constants, schur, self.held_pos, self.colmap[: clm.nv], self.free_v, clm.nv)
+        for name in _BUFFERS:
+            setattr(self, name, packed.views[name])
+        self._state = packed.views["state"]
+        self._q = self.q_aug[: clm.nq]  # the compiled path writes its iterate here, in place
+        self._no_offset = np.zeros(self.r.size)
+        self._arrays = (packed.ints, packed.floats, packed.work, packed.iwork)
+        self._jac_args = (self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
+        if schur:
+            s = self
+            a = [s.J, s.leg_cols, s.held_pos, s.ff_cols, s.colmap, s.rows, s.p, s.E, s.r, s.x, s.LB, s.PB]
+            self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb])
+        self.packed = packed
+        if schur:  # home's sign and condition bound, now from the compiled path
+            self.iterate(clm.q_home, np.inf, 0)
+            self.home_sign, self.home_kappa = self.sign, self.kappa
+
+    def iterate(self, q0, tol, max_iter, sign=0.0, offset=None, scale=0.0, certify=False):
+        """:meth:`.solver.NewtonSolver.iterate`, compiled (same arguments, results and state)."""
+        if self.packed is None:
+            return super().iterate(q0, tol, max_iter, sign, offset, scale, certify)
+        offset = self._no_offset if offset is None else offset
+        out = iterate(q0, self._q, tol, max_iter, sign, offset, scale, certify, *self._arrays)
+        code, it, norm, ratio, self.theta, self.det_sign, self.certified = out
+        self.sign, self.kappa = self._state.tolist()
+        status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
+        return status, it, norm, message
+
+    def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``, compiled."""
+        self._q[:] = q
+        evaluate_at(self._q, *self._arrays)
+        return self.r.copy(), self.G.copy()
+
+
+def solver_for(clm: ClosedLoopModel, held_joints: tuple[int, ...]) -> NewtonSolver:
+    """The compiled solver when the model and the held joints allow it, else the general one.
+
+    Compiled: every leg a chain of ``rows`` one-dof joints (``rows`` = 6 for ``6d`` closures, 3
+    for ``3d``), no other joint but the platform's, and either exactly one joint held per leg
+    with the platform free (the Schur path), or the platform alone held (the blocks).
+    """
+    rows = 6 if clm.kind == "6d" else 3
+    tables = ChainTables.of(clm)
+    if tables is None or tables.placements.shape[1] != rows or clm.nv != 6 + 6 * rows:
+        return NewtonSolver(clm, held_joints)
+    held = set(held_joints)
+    per_leg = [sum(j in held for j in leg.joints) for leg in clm.legs]
+    if held == {clm.platform_joint} or (clm.platform_joint not in held and per_leg == [1] * 6 and len(held) == 6):
+        return CompiledSolver(clm, held_joints, tables)
+    return NewtonSolver(clm, held_joints)

@@ -1,0 +1,155 @@
+"""The fast path's tables and work buffers, packed in four flat arrays.
+
+A compiled call pays ~60 ns per array argument; the Newton iteration needs about forty arrays.
+They travel instead as four flat arrays (integer tables, float tables, float and integer work
+buffers) and :func:`unpack` cuts them into views again inside the compiled code, with no copy.
+The same function builds the views that :class:`Packed` fills from Python, so the layout is
+written once.
+
+Layout (``n`` joints per leg, ``nv`` velocities, ``nf`` free velocities, all C order):
+
+* ``ints``: header ``(n, nv, nf, platform_q, schur)``, ``leg_q`` (6, n), ``leg_v`` (6, n),
+  ``platform_v`` (6,), ``held_pos`` (6,), ``colmap`` (nv,), ``free_v`` (nf,);
+* ``floats``: the solver's constants ``(max_step, singular_ratio, theta_max, theta_floor,
+  one_step)``, then ``placements`` (6, n, 4, 4), ``motions`` (6, n, 6), ``closure`` (12, 4, 4),
+  ``home`` (4, 4) (:class:`.chains.ChainTables`);
+* ``work``: ``oR`` (6, n, 3, 3), ``op`` (6, n, 3), ``J`` (6, nv), ``R`` (12, 3, 3), ``p`` (12, 3),
+  ``E`` (6, 3, 3), ``r`` (6n,), ``x`` (nf,), ``dv`` (nv,), ``G`` (6n, nf), ``LB`` (6, n, n),
+  ``A`` (6, n, 6), ``M`` (6, 6), ``nb``, ``wb`` (6,), ``Rs`` (3, 3, 3), ``ps`` (2, 3), ``quat`` (4,),
+  ``state`` (2,): the determinant sign and condition bound of the last Schur step
+  (``NewtonSolver.sign``, ``kappa``);
+* ``iwork``: ``PB`` (6, n), ``pm`` (6,).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .legs import ChainTables
+
+HEADER = 5
+FHEADER = 5
+WORK_NAMES = tuple("oR op J R p E r x dv G LB A M nb wb Rs ps quat state".split())
+
+
+# Each view is ``buf[o : o + size]`` reshaped, ``o`` advancing: written out rather than through a
+# helper so that Packed can run the same functions as plain Python (``.py_func``) to fill the
+# tables, without compiling them.
+@njit(cache=True, inline="always")
+def unpack_ints(ints):
+    """Views ``(leg_q, leg_v, platform_v, held_pos, colmap, free_v)`` of the integer tables, and their end."""
+    n, nv, nf = ints[0], ints[1], ints[2]
+    o = HEADER
+    leg_q = ints[o : o + 6 * n].reshape((6, n))
+    o += 6 * n
+    leg_v = ints[o : o + 6 * n].reshape((6, n))
+    o += 6 * n
+    platform_v, held_pos = ints[o : o + 6], ints[o + 6 : o + 12]
+    o += 12
+    colmap = ints[o : o + nv]
+    o += nv
+    free_v = ints[o : o + nf]
+    return (leg_q, leg_v, platform_v, held_pos, colmap, free_v), o + nf
+
+
+@njit(cache=True, inline="always")
+def unpack_floats(ints, floats):
+    """Views ``(placements, motions, closure, home)`` of the float tables, and their end."""
+    n = ints[0]
+    o = FHEADER
+    placements = floats[o : o + 96 * n].reshape((6, n, 4, 4))
+    o += 96 * n
+    motions = floats[o : o + 36 * n].reshape((6, n, 6))
+    o += 36 * n
+    closure = floats[o : o + 192].reshape((12, 4, 4))
+    home = floats[o + 192 : o + 208].reshape((4, 4))
+    return (placements, motions, closure, home), o + 208
+
+
+@njit(cache=True, inline="always")
+def unpack_work(ints, work):
+    """Views of the float work buffers (see the module docstring), and their end."""
+    n, nv, nf = ints[0], ints[1], ints[2]
+    oR = work[: 54 * n].reshape((6, n, 3, 3))
+    o = 54 * n
+    op = work[o : o + 18 * n].reshape((6, n, 3))
+    o += 18 * n
+    J = work[o : o + 6 * nv].reshape((6, nv))
+    o += 6 * nv
+    R = work[o : o + 108].reshape((12, 3, 3))
+    p = work[o + 108 : o + 144].reshape((12, 3))
+    E = work[o + 144 : o + 198].reshape((6, 3, 3))
+    o += 198
+    r = work[o : o + 6 * n]
+    o += 6 * n
+    x = work[o : o + nf]
+    o += nf
+    dv = work[o : o + nv]
+    o += nv
+    G = work[o : o + 6 * n * nf].reshape((6 * n, nf))
+    o += 6 * n * nf
+    LB = work[o : o + 6 * n * n].reshape((6, n, n))
+    o += 6 * n * n
+    A = work[o : o + 36 * n].reshape((6, n, 6))
+    o += 36 * n
+    M = work[o : o + 36].reshape((6, 6))
+    nb, wb = work[o + 36 : o + 42], work[o + 42 : o + 48]
+    Rs = work[o + 48 : o + 75].reshape((3, 3, 3))
+    ps = work[o + 75 : o + 81].reshape((2, 3))
+    quat = work[o + 81 : o + 85]
+    state = work[o + 85 : o + 87]
+    return (oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, Rs, ps, quat, state), o + 87
+
+
+@njit(cache=True, inline="always")
+def unpack_iwork(ints, iwork):
+    """Views ``(PB, pm)`` of the integer work buffers, and their end."""
+    n = ints[0]
+    return (iwork[: 6 * n].reshape((6, n)), iwork[6 * n : 6 * n + 6]), 6 * n + 6
+
+
+class Packed:
+    """The four arrays of one solver (one thread, one set of held joints).
+
+    Args:
+        tables: the leg chains read from the Pinocchio model.
+        constants: ``(max_step, singular_ratio, theta_max, theta_floor, one_step)`` of the solver.
+        schur: direct kinematics (Schur elimination); else inverse kinematics (blocks).
+        held_pos: held joint of each leg (direct kinematics) or None.
+        colmap: column of each velocity in the reduced Jacobian (-1 when held).
+        free_v: the free velocities.
+        nv: velocity dimension of the model.
+    """
+
+    def __init__(
+        self,
+        tables: ChainTables,
+        constants: tuple,
+        schur: bool,
+        held_pos: np.ndarray | None,
+        colmap: np.ndarray,
+        free_v: np.ndarray,
+        nv: int,
+    ):
+        n, nf = tables.placements.shape[1], free_v.size
+        self.ints = np.zeros(HEADER + 12 * n + 12 + nv + nf, dtype=np.int64)
+        self.ints[:HEADER] = (n, nv, nf, tables.platform_q, int(schur))
+        self.floats = np.zeros(FHEADER + 6 * n * 22 + 12 * 16 + 16)
+        self.floats[:FHEADER] = constants
+        self.work = np.zeros(6 * n * (9 + 3 + 1 + nf + n + 6) + 6 * nv + 108 + 36 + 54 + nf + nv + 36 + 12 + 39)
+        self.iwork = np.zeros(6 * n + 6, dtype=np.int64)
+        # the compiled functions' Python source: the same layout, nothing compiled here
+        (leg_q, leg_v, platform_v, held, cmap, free), end_i = unpack_ints.py_func(self.ints)
+        (placements, motions, closure, home), end_f = unpack_floats.py_func(self.ints, self.floats)
+        views, end_w = unpack_work.py_func(self.ints, self.work)
+        (PB, pm), end_iw = unpack_iwork.py_func(self.ints, self.iwork)
+        ends = (end_i, end_f, end_w, end_iw)
+        if ends != (self.ints.size, self.floats.size, self.work.size, self.iwork.size):
+            raise RuntimeError(f"packing layout mismatch: {ends}")  # a bug, never bad input
+        leg_q[:], leg_v[:], platform_v[:] = tables.leg_q, tables.leg_v, tables.platform_v
+        held[:] = -1 if held_pos is None else held_pos
+        cmap[:], free[:] = colmap, free_v
+        placements[:], motions[:], closure[:], home[:] = tables.placements, tables.motions, tables.closure, tables.home
+        #: the work buffers by name (views on ``work`` and ``iwork``)
+        self.views = dict(zip(WORK_NAMES, views)) | {"PB": PB, "pm": pm}

@@ -1,0 +1,109 @@
+"""The compiled chain evaluation and SE(3) kernels against Pinocchio's own kinematics."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from hexapod_model.kinematics.chains import evaluate_chains
+from hexapod_model.kinematics.legs import ChainTables
+from hexapod_model.kinematics.lie import exp6, integrate_free_flyer, matrix_to_quat, quat_to_matrix
+
+from ..conftest import PRESET_NAMES, hexapod
+from .test_newton import idle_roll_hexapod
+
+
+def chain_buffers(tables: ChainTables, nv: int) -> tuple[np.ndarray, ...]:
+    n = tables.placements.shape[1]
+    return np.zeros((6, n, 3, 3)), np.zeros((6, n, 3)), np.zeros((6, nv)), np.zeros((12, 3, 3)), np.zeros((12, 3))
+
+
+def random_q(hexa, rng: np.random.Generator) -> np.ndarray:
+    """Leg joints anywhere in [-pi, pi] (beyond their limits: kinematics do not care), any platform pose."""
+    q = rng.uniform(-np.pi, np.pi, hexa.nq)
+    i = hexa.closed_loop.platform_q
+    quat = rng.normal(size=4)
+    q[i : i + 3], q[i + 3 : i + 7] = rng.normal(0.0, 0.3, 3), quat / np.linalg.norm(quat)
+    return q
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_chain_evaluation_matches_pinocchio(name):
+    hexa = hexapod(name)
+    clm, m = hexa.closed_loop, hexa.model
+    data = m.createData()
+    tables = ChainTables.of(clm)
+    assert tables is not None and tables.placements.shape[1] == len(clm.legs[0].joints)
+    oR, op, J, R, p = chain_buffers(tables, m.nv)
+    rng = np.random.default_rng(20)
+    for _ in range(200):
+        q = random_q(hexa, rng)
+        J[:] = np.nan  # every column must be written
+        evaluate_chains(
+            q, tables.placements, tables.motions, tables.leg_q, tables.leg_v, tables.closure, tables.home,
+            tables.platform_q, tables.platform_v, oR, op, J, R, p,
+        )  # fmt: skip
+        pin.forwardKinematics(m, data, q)
+        pin.computeJointJacobians(m, data, q)
+        pin.updateFramePlacements(m, data)
+        np.testing.assert_allclose(J, data.J, rtol=0, atol=1e-12)
+        for i, leg in enumerate(clm.legs):
+            for k, j in enumerate(leg.joints):
+                np.testing.assert_allclose(oR[i, k], data.oMi[j].rotation, rtol=0, atol=1e-12)
+                np.testing.assert_allclose(op[i, k], data.oMi[j].translation, rtol=0, atol=1e-12)
+            for frame, row in ((leg.tip_frame, i), (leg.anchor_frame, 6 + i)):
+                np.testing.assert_allclose(R[row], data.oMf[frame].rotation, rtol=0, atol=1e-12)
+                np.testing.assert_allclose(p[row], data.oMf[frame].translation, rtol=0, atol=1e-12)
+
+
+def test_tables_refuse_legs_of_different_joint_counts():
+    assert ChainTables.of(idle_roll_hexapod().closed_loop) is None
+
+
+def test_exp6_matches_pinocchio():
+    rng = np.random.default_rng(21)
+    R, p = np.empty((3, 3)), np.empty(3)
+    for scale in (1e-9, 1e-6, 1e-3, 0.3, 2.0):  # both sides of the Taylor threshold
+        for _ in range(50):
+            v = rng.normal(0.0, scale, 6)
+            exp6(v, R, p)
+            M = pin.exp6(pin.Motion(v))
+            np.testing.assert_allclose(R, M.rotation, rtol=0, atol=1e-15)
+            np.testing.assert_allclose(p, M.translation, rtol=0, atol=1e-15)
+
+
+def test_quaternions_match_pinocchio():
+    pin.seed(22)
+    R, quat = np.empty((3, 3)), np.empty(4)
+    for _ in range(200):
+        M = pin.SE3.Random()
+        x = pin.SE3ToXYZQUAT(M)
+        quat_to_matrix(x[3], x[4], x[5], x[6], R)
+        np.testing.assert_allclose(R, M.rotation, rtol=0, atol=1e-15)
+        matrix_to_quat(M.rotation, quat)
+        assert min(np.abs(quat - x[3:]).max(), np.abs(quat + x[3:]).max()) < 1e-15
+    for angle in (np.pi, np.pi - 1e-9):  # negative traces take the other branches
+        for axis in np.eye(3):
+            M = pin.exp3(angle * axis)
+            matrix_to_quat(M, quat)
+            quat_to_matrix(quat[0], quat[1], quat[2], quat[3], R)
+            np.testing.assert_allclose(R, M, rtol=0, atol=1e-15)
+
+
+def test_free_flyer_integration_matches_pinocchio():
+    hexa = hexapod("reference")
+    m, i = hexa.model, hexa.closed_loop.platform_q
+    iv = hexa.closed_loop.platform_v
+    rng = np.random.default_rng(23)
+    scratch = np.empty((3, 3, 3)), np.empty(3), np.empty(4)
+    for scale in (1e-8, 1e-3, 0.5):
+        for _ in range(100):
+            q = random_q(hexa, rng)
+            dv = np.zeros(m.nv)
+            dv[iv : iv + 6] = rng.normal(0.0, scale, 6)
+            x = q[i : i + 7].copy()
+            integrate_free_flyer(
+                x, dv[iv : iv + 6], scratch[0][0], scratch[0][1], scratch[0][2], scratch[1], scratch[2]
+            )
+            np.testing.assert_allclose(x, pin.integrate(m, q, dv)[i : i + 7], rtol=0, atol=1e-15)
