@@ -29,6 +29,7 @@ from .exceptions import (
     ViewError,
     WorkspaceError,
 )
+from .kinematics.batch import BatchResult
 from .kinematics.hexapod import Hexapod, load_hexapod
 from .kinematics.solver import STATUSES, Solution
 
@@ -52,6 +53,7 @@ __all__ = [
     "geometry_from_dict",
     "load_geometry",
     "Hexapod",
+    "BatchResult",
     "load_hexapod",
     "DEFAULT_PRESET",
     "PRESETS",

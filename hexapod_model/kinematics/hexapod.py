@@ -22,8 +22,9 @@ from ..description.model import ClosedLoopModel
 from ..description.presets import PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
 from ..exceptions import AssemblyError, ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
-from . import assembly, kernels
+from . import assembly, batch, kernels
 from .assembly import Outcome
+from .batch import BatchResult
 from .checks import (
     MAX_TOL,
     POSE_TOLERANCE,
@@ -341,6 +342,55 @@ class Hexapod:
             error = _ERRORS.get(status, ConvergenceError)
             raise error(sol, f"{status}: {msg}")
         return sol
+
+    def forward_batch(
+        self,
+        lengths: ArrayLike,
+        guess=None,
+        *,
+        warm: bool = False,
+        tol: float = DEFAULT_TOL,
+        max_iter: int = DEFAULT_MAX_ITER,
+    ) -> BatchResult:
+        """Direct kinematics of N rows of readings in one call, the loop over rows compiled.
+
+        Args:
+            lengths: (N, 6) readings, leg order, metres.
+            guess: where every row starts (:class:`Solution` or configuration; default home).
+            warm: start each row from the last row that converged instead (a time series, as
+                ``hexapod fk`` reads its rows), the first from ``guess``.
+            tol: closure residual to reach, as :meth:`forward`.
+            max_iter: Newton step limit per row, as :meth:`forward`.
+
+        Returns:
+            A :class:`~.batch.BatchResult`: per row what :meth:`forward` with ``check=False``
+            gives (``invalid_input`` where it raises: NaN, out of stroke); never raises on a row.
+        """
+        return batch.forward_batch(self, lengths, guess, warm, tol, max_iter, _LIMIT_SLACK)
+
+    def inverse_batch(
+        self,
+        poses: ArrayLike,
+        guess=None,
+        *,
+        warm: bool = False,
+        tol: float = DEFAULT_TOL,
+        max_iter: int = DEFAULT_MAX_ITER,
+    ) -> BatchResult:
+        """Inverse kinematics of N poses in one call, the loop over rows compiled.
+
+        Args:
+            poses: (N, 4, 4) base -> platform transforms, or (N, 7) rows ``x, y, z, qx, qy, qz, qw``
+                (metres; the quaternion of norm 1 within 1e-6).
+            guess: where every row starts (default home).
+            warm: start each row from the last row that converged instead.
+            tol: closure residual to reach.
+            max_iter: Newton step limit per row.
+
+        Returns:
+            A :class:`~.batch.BatchResult`: per row what :meth:`inverse` with ``check=False`` gives.
+        """
+        return batch.inverse_batch(self, poses, guess, warm, tol, max_iter, _LIMIT_SLACK)
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:
         """Per-leg closure error at ``q`` computed by Pinocchio's constraint models."""

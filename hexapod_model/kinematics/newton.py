@@ -178,7 +178,8 @@ class CompiledSolver(NewtonSolver):
         self._state = packed.views["state"]
         self._q = self.q_aug[: clm.nq]  # the compiled path writes its iterate here, in place
         self._no_offset = np.zeros(self.r.size)
-        self._arrays = (packed.ints, packed.floats, packed.work, packed.iwork)
+        #: ``(ints, floats, work, iwork)`` of the packed tables and buffers
+        self.arrays = packed.arrays
         self._jac_args = (self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
         if schur:
             s = self
@@ -194,7 +195,7 @@ class CompiledSolver(NewtonSolver):
         if self.packed is None:
             return super().iterate(q0, tol, max_iter, sign, offset, scale, certify)
         offset = self._no_offset if offset is None else offset
-        out = iterate(q0, self._q, tol, max_iter, sign, offset, scale, certify, *self._arrays)
+        out = iterate(q0, self._q, tol, max_iter, sign, offset, scale, certify, *self.arrays)
         code, it, norm, ratio, self.theta, self.det_sign, self.certified = out
         self.sign, self.kappa = self._state.tolist()
         status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
@@ -203,7 +204,7 @@ class CompiledSolver(NewtonSolver):
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``, compiled."""
         self._q[:] = q
-        evaluate_at(self._q, *self._arrays)
+        evaluate_at(self._q, *self.arrays)
         return self.r.copy(), self.G.copy()
 
 

@@ -151,5 +151,7 @@ class Packed:
         held[:] = -1 if held_pos is None else held_pos
         cmap[:], free[:] = colmap, free_v
         placements[:], motions[:], closure[:], home[:] = tables.placements, tables.motions, tables.closure, tables.home
+        #: ``(ints, floats, work, iwork)``: the arguments of the compiled functions
+        self.arrays = (self.ints, self.floats, self.work, self.iwork)
         #: the work buffers by name (views on ``work`` and ``iwork``)
         self.views = dict(zip(WORK_NAMES, views)) | {"PB": PB, "pm": pm}

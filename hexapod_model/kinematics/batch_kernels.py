@@ -1,0 +1,124 @@
+"""Compiled loops over rows of readings or poses for the batch solves.
+
+Per row: the input checks, the Newton iteration (:func:`.newton.iterate`) and the joint-limit
+check of :meth:`.hexapod.Hexapod.forward` / :meth:`~.hexapod.Hexapod.inverse`. Direct kinematics
+runs the certified first attempt of :func:`.assembly.solve_forward`; a row it does not settle
+(the readings path must be followed, or the assembly is ambiguous) ends the loop, and the
+caller solves that row with ``forward`` before resuming at the next one.
+
+Each row starts from ``start`` with determinant sign ``carry[0]`` (home or a guess); with
+``warm`` from the last row that converged instead (a time series, as ``hexapod fk`` reads its
+rows), ``start`` and ``carry`` being updated in place (``carry[1] = 1`` once they were). Per
+row the loops write ``out = (Q, poses, codes, iterations, residuals, ratios, kappas, signs,
+bad)``: the final configuration, the platform pose (NaN unless converged), an outcome code
+(:mod:`.newton`'s, :data:`OUT_OF_LIMITS`, :data:`INVALID_INPUT`), iterations, residual norm,
+last pivot ratio, condition bound of the last Schur step, determinant sign reported, and the
+configuration index of the first joint outside its limits (-1 if none).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .kernels import first_outside, first_outside_at, pose_to_xyzquat, rigid_error, xyzquat_to_pose
+from .newton import CONVERGED, NO_CONVERGENCE, iterate
+from .packing import unpack_work
+
+OUT_OF_LIMITS, INVALID_INPUT = 6, 7
+
+
+@njit(cache=True, inline="always")
+def _finish_row(k, q, code, it, norm, ratio, kappa, sign, limits, platform_q, home, out):
+    """Limit check (``limits = (limited q indices, lower, upper, slack)``) and the outputs of row ``k``."""
+    limited, lo, hi, slack = limits
+    Q, poses, codes, iterations, residuals, ratios, kappas, signs, bad = out
+    bad[k] = -1
+    if code == CONVERGED:
+        b = first_outside_at(q, limited, lo, hi, slack)
+        if b >= 0:
+            code, bad[k] = OUT_OF_LIMITS, limited[b]
+    codes[k], iterations[k], residuals[k], ratios[k], kappas[k], signs[k] = code, it, norm, ratio, kappa, sign
+    Q[k] = q
+    if code == CONVERGED:
+        xyzquat_to_pose(q[platform_q : platform_q + 7], home, poses[k])
+    else:
+        poses[k] = np.nan
+    return code
+
+
+@njit(cache=True, inline="always")
+def _invalid_row(k, out):
+    """Outputs of row ``k`` rejected before solving (NaN, out of stroke, not a rigid transform)."""
+    Q, poses, codes, iterations, residuals, ratios, kappas, signs, bad = out
+    codes[k], iterations[k], residuals[k], ratios[k], kappas[k], signs[k], bad[k] = (
+        INVALID_INPUT,
+        0,
+        np.nan,
+        0,
+        0,
+        0,
+        -1,
+    )
+    Q[k] = np.nan
+    poses[k] = np.nan
+
+
+@njit(cache=True)
+def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q, stroke, limits, home, packed, out):
+    """Direct kinematics of rows ``k0:`` of ``readings`` (N, 6) (``joints``: their prismatic values).
+
+    ``settings = (tol, max_iter, near_singular_kappa)``; ``stroke = (lower, upper)`` of the
+    readings; ``packed``: the solver's :class:`.packing.Packed` arrays. Returns the first row
+    left to the caller (the certified attempt failed), or N.
+    """
+    tol, max_iter, near_kappa = settings
+    ints, floats, work, iwork = packed
+    platform_q, state = ints[3], unpack_work(ints, work)[0][18]  # the last Schur step's sign and condition bound
+    q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
+    for k in range(k0, readings.shape[0]):
+        if first_outside(readings[k], stroke[0], stroke[1], limits[3]) >= 0:  # NaN, inf or out of stroke
+            _invalid_row(k, out)
+            continue
+        q0[:] = start
+        for i in range(prismatic_q.shape[0]):
+            q0[prismatic_q[i]] = joints[k, i]
+        code, it, norm, ratio, theta, sign, certified = iterate(
+            q0, q, tol, max_iter, carry[0], no_offset, 0.0, True, ints, floats, work, iwork
+        )
+        if not certified or (code != CONVERGED and code != NO_CONVERGENCE):
+            return k  # the readings path or the candidates: assembly.solve_forward's other branches
+        kappa, sign = (state[1], state[0]) if code == CONVERGED else (np.inf, 0.0)
+        code = _finish_row(k, q, code, it, norm, ratio, kappa, sign, limits, platform_q, home, out)
+        if warm and code == CONVERGED:
+            start[:] = q
+            carry[0], carry[1] = sign, 1.0
+    return readings.shape[0]
+
+
+@njit(cache=True)
+def inverse_rows(targets, start, warm, settings, limits, home, packed, out):
+    """Inverse kinematics of every pose of ``targets`` (N, 4, 4); arguments as :func:`forward_rows`.
+
+    ``settings = (tol, max_iter, pose_tolerance, max_position)``: a row whose matrix is not a
+    rigid transform within ``pose_tolerance`` (NaN, inf) or lies farther than ``max_position``
+    is rejected. ``poses[k]`` is the pose of the final configuration, as ``Solution.pose``.
+    """
+    tol, max_iter, pose_tolerance, max_position = settings
+    ints, floats, work, iwork = packed
+    platform_q = ints[3]
+    q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
+    for k in range(targets.shape[0]):
+        T = targets[k]
+        far = abs(T[0, 3]) > max_position or abs(T[1, 3]) > max_position or abs(T[2, 3]) > max_position
+        if not rigid_error(T) <= pose_tolerance or far:
+            _invalid_row(k, out)
+            continue
+        q0[:] = start
+        pose_to_xyzquat(T, home, q0[platform_q : platform_q + 7])
+        code, it, norm, ratio, _, _, _ = iterate(
+            q0, q, tol, max_iter, 0.0, no_offset, 0.0, False, ints, floats, work, iwork
+        )
+        code = _finish_row(k, q, code, it, norm, ratio, np.inf, 0.0, limits, platform_q, home, out)
+        if warm and code == CONVERGED:
+            start[:] = q
