@@ -1,59 +1,114 @@
-"""Rotation matrix <-> angles and quaternions, vectorised over leading axes (scipy ``Rotation``).
+"""Rotation matrix <-> angles and quaternions, vectorised over leading axes.
 
 Convention used for printing and parsing everywhere (CLI, CSV): ``roll, pitch, yaw`` with
 ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (rotations about the fixed x, y, z axes, in that order; the
 same as Pinocchio's ``pin.rpy``). Quaternions are ``(qx, qy, qz, qw)``, as in Pinocchio's
-``XYZQUAT`` and ROS. These conversions are outside the solver's hot path; the solver's own
-pose <-> free-flyer conversions are compiled kernels (:mod:`hexapod_model.kinematics.kernels`).
+``XYZQUAT`` and ROS. Roll-pitch-yaw and quaternions are closed forms in numpy (the ``hexapod
+fk`` / ``ik`` path imports no scipy); the other Euler orders use scipy's ``Rotation``, imported
+when first needed. The solver's own pose <-> free-flyer conversions are compiled kernels
+(:mod:`hexapod_model.kinematics.kernels`).
 """
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.spatial.transform import Rotation
 
 from ..exceptions import InputError
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
 
 EULER_ORDERS = ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx")
 
 
 def _matrices(R: ArrayLike) -> tuple[Rotation, tuple[int, ...]]:
+    from scipy.spatial.transform import Rotation
+
     R = np.asarray(R, dtype=float)
     return Rotation.from_matrix(R.reshape(-1, 3, 3)), R.shape[:-2]
 
 
 def rpy_to_matrix(roll: ArrayLike, pitch: ArrayLike, yaw: ArrayLike) -> np.ndarray:
     """(..., 3, 3) rotation ``Rz(yaw) Ry(pitch) Rx(roll)``; angles in radians."""
-    angles = np.stack(np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (roll, pitch, yaw))), -1)
-    return Rotation.from_euler("xyz", angles.reshape(-1, 3)).as_matrix().reshape(angles.shape[:-1] + (3, 3))
+    r, p, y = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (roll, pitch, yaw)))
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    R = np.empty(r.shape + (3, 3))
+    R[..., 0, 0], R[..., 0, 1], R[..., 0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+    R[..., 1, 0], R[..., 1, 1], R[..., 1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+    R[..., 2, 0], R[..., 2, 1], R[..., 2, 2] = -sp, cp * sr, cp * cr
+    return R
 
 
 def matrix_to_rpy(R: ArrayLike) -> np.ndarray:
-    """(..., 3) ``roll, pitch, yaw`` (rad) of rotation matrices; pitch in [-pi/2, pi/2]."""
-    rot, shape = _matrices(R)
-    return _euler(rot, "xyz").reshape(shape + (3,))
+    """(..., 3) ``roll, pitch, yaw`` (rad) of rotation matrices; pitch in [-pi/2, pi/2].
+
+    ``pitch = atan2(-R20, hypot(R00, R10))``, ``yaw = atan2(R10, R00)`` (0 at gimbal lock, where
+    ``hypot(R00, R10)`` vanishes), then roll from ``Rx(roll) = Ry(pitch)^T Rz(yaw)^T R``, so that
+    the angles reproduce ``R`` to rounding even next to the lock.
+    """
+    R = np.asarray(R, dtype=float)
+    c = np.hypot(R[..., 0, 0], R[..., 1, 0])
+    pitch = np.arctan2(-R[..., 2, 0], c)
+    yaw = np.where(c <= 1e-14, 0.0, np.arctan2(R[..., 1, 0], R[..., 0, 0]))
+    cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
+    n01 = cy * R[..., 0, 1] + sy * R[..., 1, 1]  # rows of Rz(yaw)^T R
+    n11 = cy * R[..., 1, 1] - sy * R[..., 0, 1]
+    roll = np.arctan2(sp * n01 + cp * R[..., 2, 1], n11)
+    return np.stack([roll, pitch, yaw], -1)
 
 
 def quaternion_to_matrix(q: ArrayLike) -> np.ndarray:
     """(..., 3, 3) rotation of quaternions ``(qx, qy, qz, qw)``.
 
     The quaternion is divided by its norm: callers that must not accept a non-unit
-    quaternion check its norm first.
+    quaternion check its norm first. Zero, NaN or infinite quaternions give NaN matrices.
     """
     q = np.asarray(q, dtype=float)
-    flat = q.reshape(-1, 4)
-    with np.errstate(invalid="ignore", over="ignore"):
-        bad = ~(np.isfinite(np.linalg.norm(flat, axis=1)) & np.any(flat != 0, axis=1))
-    R = Rotation.from_quat(np.where(bad[:, None], [0.0, 0.0, 0.0, 1.0], flat)).as_matrix()
-    R[bad] = np.nan  # zero, NaN or infinite quaternions have no rotation: NaN, rejected downstream
-    return R.reshape(q.shape[:-1] + (3, 3))
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        n = np.sqrt(np.sum(q * q, axis=-1))
+        n = np.where(np.isfinite(n) & (n > 0), n, np.nan)
+        x, y, z, w = (q[..., k] / n for k in range(4))
+    R = np.empty(q.shape[:-1] + (3, 3))
+    R[..., 0, 0], R[..., 0, 1], R[..., 0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
+    R[..., 1, 0], R[..., 1, 1], R[..., 1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+    R[..., 2, 0], R[..., 2, 1], R[..., 2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+    return R
 
 
 def matrix_to_quaternion(R: ArrayLike) -> np.ndarray:
-    """(..., 4) unit quaternions ``(qx, qy, qz, qw)`` with ``qw >= 0``."""
-    rot, shape = _matrices(R)
-    return rot.as_quat(canonical=True).reshape(shape + (4,))
+    """(..., 4) unit quaternions ``(qx, qy, qz, qw)`` with ``qw >= 0``.
+
+    Shepperd's method: the branch of the largest of ``trace, R00, R11, R22`` (the best
+    conditioned). Where ``qw = 0`` the first nonzero of ``qx, qy, qz`` is positive (scipy's
+    canonical form).
+    """
+    R = np.asarray(R, dtype=float)
+    m = R.reshape(-1, 3, 3)
+    d = np.stack([m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2], m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]], -1)
+    k = np.argmax(d, axis=-1)
+    s = 2.0 * np.sqrt(np.maximum(1.0 + 2.0 * d[np.arange(len(m)), k] - d[:, 0], 0.0))  # 4 |q_k|
+    s = np.where(s > 0, s, 1.0)
+    a21, a12 = m[:, 2, 1] - m[:, 1, 2], m[:, 0, 2] - m[:, 2, 0]
+    a10 = m[:, 1, 0] - m[:, 0, 1]
+    b01, b02, b12 = m[:, 0, 1] + m[:, 1, 0], m[:, 0, 2] + m[:, 2, 0], m[:, 1, 2] + m[:, 2, 1]
+    branches = np.stack(
+        [
+            np.stack([a21, a12, a10, s * s / 4], -1),  # qw largest
+            np.stack([s * s / 4, b01, b02, a21], -1),  # qx largest
+            np.stack([b01, s * s / 4, b12, a12], -1),  # qy largest
+            np.stack([b02, b12, s * s / 4, a10], -1),  # qz largest
+        ],
+        1,
+    )
+    q = branches[np.arange(len(m)), k] / s[:, None]
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    first = np.take_along_axis(q, np.argmax(q[:, :3] != 0, axis=-1)[:, None], -1)[:, 0]
+    flip = (q[:, 3] < 0) | ((q[:, 3] == 0) & (first < 0))
+    q[flip] *= -1
+    return q.reshape(R.shape[:-2] + (4,))
 
 
 def rotation_angle(Ra: ArrayLike, Rb: ArrayLike) -> np.ndarray:
@@ -68,6 +123,8 @@ def rotation_angle(Ra: ArrayLike, Rb: ArrayLike) -> np.ndarray:
 
 def axis_rotation(axis: str, angle: ArrayLike) -> np.ndarray:
     """(..., 3, 3) rotation by ``angle`` (rad) about the fixed ``axis`` (``"x"``, ``"y"`` or ``"z"``)."""
+    from scipy.spatial.transform import Rotation
+
     if axis not in ("x", "y", "z"):
         raise InputError("rotation axis", axis, "choose x, y or z")
     a = np.asarray(angle, dtype=float)
@@ -95,6 +152,8 @@ def euler_to_matrix(order: str, angles: ArrayLike) -> np.ndarray:
     ``angles[..., 0:3]`` are ``t1, t2, t3`` in radians, in the order of the factors; e.g.
     ``euler_to_matrix("zyx", [yaw, pitch, roll])`` equals ``rpy_to_matrix(roll, pitch, yaw)``.
     """
+    from scipy.spatial.transform import Rotation
+
     seq = _check_order(order)
     a = np.asarray(angles, dtype=float)
     return Rotation.from_euler(seq, a.reshape(-1, 3)).as_matrix().reshape(a.shape[:-1] + (3, 3))

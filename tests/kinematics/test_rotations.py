@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from contextlib import nullcontext
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -81,3 +83,30 @@ def test_unknown_order_is_an_input_error():
 def test_quaternions_without_a_rotation_give_nan():
     R = quaternion_to_matrix([[0, 0, 0, 0], [np.nan, 0, 0, 1], [0, 0, 0, 1]])
     assert np.isnan(R[:2]).all() and np.array_equal(R[2], np.eye(3))
+
+
+def edge_rotations() -> np.ndarray:
+    """Half turns (qw = 0), gimbal lock (pitch = +-90 deg) and its neighbourhood, near identity."""
+    axes = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [0, -1, 1]], dtype=float)
+    out = [pin.exp3(np.pi * a / np.linalg.norm(a)) for a in axes]
+    for pitch in (np.pi / 2, -np.pi / 2, np.pi / 2 - 1e-9, -np.pi / 2 + 1e-7, np.pi / 2 - 1e-4):
+        out += [pin.rpy.rpyToMatrix(0.3, pitch, -1.2), pin.rpy.rpyToMatrix(-2.9, pitch, 0.0)]
+    out += [pin.exp3(np.array([1e-12, -2e-12, 0.0])), np.eye(3)]
+    return np.array(out)
+
+
+def test_closed_forms_agree_with_scipy_and_round_trip_at_the_edges():
+    from scipy.spatial.transform import Rotation
+
+    R = np.concatenate([random_rotations(300, 5), edge_rotations()])
+    q = matrix_to_quaternion(R)
+    np.testing.assert_allclose(q, Rotation.from_matrix(R).as_quat(canonical=True), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(quaternion_to_matrix(q), R, rtol=0, atol=1e-15)
+    rpy = matrix_to_rpy(R)
+    np.testing.assert_allclose(rpy_to_matrix(*rpy.T), R, rtol=0, atol=1e-15)
+    assert np.all(np.abs(rpy[:, 1]) <= np.pi / 2)
+    regular = np.hypot(R[:, 0, 0], R[:, 1, 0]) > 1e-3
+    with pytest.warns(UserWarning) if not regular.all() else nullcontext():  # scipy warns at gimbal lock
+        ref = Rotation.from_matrix(R).as_euler("xyz")
+    wrapped = np.angle(np.exp(1j * (rpy[regular] - ref[regular])))  # -pi and pi are the same angle
+    np.testing.assert_allclose(wrapped, 0.0, rtol=0, atol=1e-12)
