@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import sys
 
 from .. import __version__
 from ..exceptions import HexapodError, SolverError
-from . import calibrate, core, evaluate, fixture, mjcf, reproduce, serve, track, view
 
 EXIT_CODES = {
     0: "all good",
@@ -17,7 +17,12 @@ EXIT_CODES = {
     130: "interrupted (Ctrl-C)",
     141: "standard output closed early (e.g. piped into head)",
 }
-COMMANDS = (core, mjcf, reproduce, calibrate, evaluate, track, view, serve, fixture)
+MODULES = ("core", "mjcf", "reproduce", "calibrate", "evaluate", "track", "view", "serve", "fixture")
+#: the module registering each sub-command: ``hexapod fk`` imports ``core`` only, not the studies'
+#: scipy, matplotlib or meshcat (tests/cli check this table against the modules)
+OWNER = {"urdf": "core", "fk": "core", "ik": "core", "bench": "core", "mjcf": "mjcf", "reproduce": "reproduce"}
+OWNER |= {"calibrate": "calibrate", "evaluate": "evaluate", "track": "track", "view": "view", "snapshot": "view"}
+OWNER |= {"serve": "serve", "simulate-encoders": "serve", "fixture": "fixture"}
 
 DESCRIPTION = """\
 Leg readings <-> platform pose for Stewart-Gough hexapods with offset-axis Cardan joints.
@@ -42,19 +47,20 @@ class _Formatter(argparse.RawDescriptionHelpFormatter):
                 self._action_max_length = max(self._action_max_length, len(sub.metavar or sub.dest) + 8)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``hexapod`` parser with every sub-command."""
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``hexapod`` parser: with every sub-command, or only those of the module owning ``command``."""
     parser = argparse.ArgumentParser(prog="hexapod", description=DESCRIPTION, epilog=EPILOG, formatter_class=_Formatter)
     parser.add_argument("--version", action="version", version=f"hexapod_model {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for module in COMMANDS:
-        module.register(sub)
+    for name in (OWNER[command],) if command in OWNER else MODULES:
+        importlib.import_module(f"{__package__}.{name}").register(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run ``hexapod`` with ``argv`` (default: ``sys.argv[1:]``); returns the exit code."""
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = build_parser(argv[0] if argv else None).parse_args(argv)
     try:
         return int(args.func(args) or 0)
     except SolverError as exc:
