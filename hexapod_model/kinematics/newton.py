@@ -126,19 +126,6 @@ def iterate(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, wo
     return code, it, norm, ratio, theta, sign, certified
 
 
-@njit(cache=True)
-def evaluate_at(q, ints, floats, work, iwork):
-    """Residual ``r`` and reduced Jacobian ``G`` (work buffers) at ``q``; returns ``norm(r)`` (``iwork`` unused)."""
-    rows, platform_q = ints[0], ints[3]
-    (leg_q, leg_v, platform_v, held_pos, colmap, free_v), _ = unpack_ints(ints)
-    (placements, motions, closure, home), _ = unpack_floats(ints, floats)
-    (oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, Rs, ps, quat, state), _ = unpack_work(ints, work)
-    evaluate_chains(q, placements, motions, leg_q, leg_v, closure, home, platform_q, platform_v, oR, op, J, R, p)
-    norm, _ = closure_residual(R, p, rows, E, r)
-    jacobian(J, leg_v, platform_v, colmap, rows, p, E, G)
-    return norm
-
-
 def outcome(code: int, tol: float, iterations: int, norm: float, ratio: float) -> tuple[str, str]:
     """Status and message of an :func:`iterate` outcome code (the general path's words)."""
     if code == CONVERGED:
@@ -192,10 +179,14 @@ class CompiledSolver(NewtonSolver):
 
     def iterate(self, q0, tol, max_iter, sign=0.0, offset=None, scale=0.0, certify=False):
         """:meth:`.solver.NewtonSolver.iterate`, compiled (same arguments, results and state)."""
-        if self.packed is None:
-            return super().iterate(q0, tol, max_iter, sign, offset, scale, certify)
+        if self.packed is None:  # NewtonSolver.__init__'s solve at home: done on the compiled path below
+            return "converged", 0, 0.0, ""
         offset = self._no_offset if offset is None else offset
-        out = iterate(q0, self._q, tol, max_iter, sign, offset, scale, certify, *self.arrays)
+        q0 = q0 if q0.dtype == np.float64 and q0.flags.c_contiguous else np.ascontiguousarray(q0, dtype=float)
+        # one compiled signature: callers pass ints or floats (det_sign, scale, ...)
+        out = iterate(
+            q0, self._q, float(tol), int(max_iter), float(sign), offset, float(scale), bool(certify), *self.arrays
+        )
         code, it, norm, ratio, self.theta, self.det_sign, self.certified = out
         self.sign, self.kappa = self._state.tolist()
         status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
@@ -203,8 +194,9 @@ class CompiledSolver(NewtonSolver):
 
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``, compiled."""
-        self._q[:] = q
-        evaluate_at(self._q, *self.arrays)
+        q = np.ascontiguousarray(q, dtype=float)
+        iterate(q, self._q, np.inf, 0, 0.0, self._no_offset, 0.0, False, *self.arrays)  # frames and residual at q
+        jacobian(*self._jac_args)
         return self.r.copy(), self.G.copy()
 
 
