@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from .kernels import first_outside, first_outside_at, pose_to_xyzquat, rigid_error, xyzquat_to_pose
-from .newton import CONVERGED, NO_CONVERGENCE, iterate
+from .newton import CONVERGED, NO_CONVERGENCE, iterate_blocks, iterate_schur
 from .packing import unpack_work
 
 OUT_OF_LIMITS, INVALID_INPUT = 6, 7
@@ -83,7 +83,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q
         q0[:] = start
         for i in range(prismatic_q.shape[0]):
             q0[prismatic_q[i]] = joints[k, i]
-        code, it, norm, ratio, theta, sign, certified = iterate(
+        code, it, norm, ratio, theta, sign, certified = iterate_schur(
             q0, q, tol, max_iter, carry[0], no_offset, 0.0, True, ints, floats, work, iwork
         )
         if not certified or (code != CONVERGED and code != NO_CONVERGENCE):
@@ -116,7 +116,7 @@ def inverse_rows(targets, start, warm, settings, limits, home, packed, out):
             continue
         q0[:] = start
         pose_to_xyzquat(T, home, q0[platform_q : platform_q + 7])
-        code, it, norm, ratio, _, _, _ = iterate(
+        code, it, norm, ratio, _, _, _ = iterate_blocks(
             q0, q, tol, max_iter, 0.0, no_offset, 0.0, False, ints, floats, work, iwork
         )
         code = _finish_row(k, q, code, it, norm, ratio, np.inf, 0.0, limits, platform_q, home, out)

@@ -72,15 +72,15 @@ def _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, stat
     return blocks_solve(J, leg_v, colmap, rows, p, E, r, x, LB, PB, wb)
 
 
-@njit(cache=True)
-def iterate(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
-    """Newton from ``q0`` into ``q`` (see the module docstring).
+@njit(cache=True, inline="always")
+def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
+    """Newton from ``q0`` into ``q`` (see the module docstring), by the Schur or the block step.
 
     Returns ``(code, iterations, norm, ratio, theta, sign, certified)``: the outcome code, the
     last residual norm and pivot ratio, the largest contraction, the determinant sign the
     solve kept (``sign``, or the first step's when 0) and whether every check passed.
     """
-    rows, platform_q, schur = ints[0], ints[3], ints[4] == 1
+    rows, platform_q = ints[0], ints[3]
     max_step, singular_ratio, theta_max, theta_floor, one_step = floats[0], floats[1], floats[2], floats[3], floats[4]
     (leg_q, leg_v, platform_v, held_pos, colmap, free_v), _ = unpack_ints(ints)
     (placements, motions, closure, home), _ = unpack_floats(ints, floats)
@@ -124,6 +124,19 @@ def iterate(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, wo
         _integrate(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat)
         it += 1
     return code, it, norm, ratio, theta, sign, certified
+
+
+# Two entry points, ``schur`` a constant in each: a command compiles only the step it uses.
+@njit(cache=True)
+def iterate_schur(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
+    """:func:`_iterate` with the Schur step (one joint held per leg, the platform free)."""
+    return _iterate(True, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork)
+
+
+@njit(cache=True)
+def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
+    """:func:`_iterate` with the block step (the platform held)."""
+    return _iterate(False, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork)
 
 
 def outcome(code: int, tol: float, iterations: int, norm: float, ratio: float) -> tuple[str, str]:
@@ -173,6 +186,7 @@ class CompiledSolver(NewtonSolver):
             a = [s.J, s.leg_cols, s.held_pos, s.ff_cols, s.colmap, s.rows, s.p, s.E, s.r, s.x, s.LB, s.PB]
             self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb])
         self.packed = packed
+        self._kernel = iterate_schur if schur else iterate_blocks
         if schur:  # home's sign and condition bound, now from the compiled path
             self.iterate(clm.q_home, np.inf, 0)
             self.home_sign, self.home_kappa = self.sign, self.kappa
@@ -184,7 +198,7 @@ class CompiledSolver(NewtonSolver):
         offset = self._no_offset if offset is None else offset
         q0 = q0 if q0.dtype == np.float64 and q0.flags.c_contiguous else np.ascontiguousarray(q0, dtype=float)
         # one compiled signature: callers pass ints or floats (det_sign, scale, ...)
-        out = iterate(
+        out = self._kernel(
             q0, self._q, float(tol), int(max_iter), float(sign), offset, float(scale), bool(certify), *self.arrays
         )
         code, it, norm, ratio, self.theta, self.det_sign, self.certified = out
@@ -195,7 +209,7 @@ class CompiledSolver(NewtonSolver):
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``, compiled."""
         q = np.ascontiguousarray(q, dtype=float)
-        iterate(q, self._q, np.inf, 0, 0.0, self._no_offset, 0.0, False, *self.arrays)  # frames and residual at q
+        self._kernel(q, self._q, np.inf, 0, 0.0, self._no_offset, 0.0, False, *self.arrays)  # frames, residual at q
         jacobian(*self._jac_args)
         return self.r.copy(), self.G.copy()
 
