@@ -198,3 +198,33 @@ def test_three_six_benchmark_runs():
     )
     assert out.returncode == 0, out.stdout + out.stderr
     assert "solve_all  median" in out.stdout and "missed 0 times" in out.stdout
+
+
+def test_compiled_newton_benchmark_runs():
+    out = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "benchmarks" / "compiled_newton.py"),
+            "spherical",
+            "--rounds",
+            "1",
+            "--samples",
+            "20",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert out.returncode == 0, out.stderr
+    assert "Pinocchio Newton" in out.stdout and "forward_batch" in out.stdout
+
+
+def test_startup_benchmark_runs():
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "startup.py"), "--runs", "1"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert out.returncode == 0, out.stderr
+    assert "peak MB" in out.stdout and "x1.00 wall" in out.stdout  # the baseline row
