@@ -11,7 +11,7 @@ by ``forward`` itself. Other hexapods and held sets are solved row by row.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
@@ -22,8 +22,7 @@ from .checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_toleranc
 from .newton import CompiledSolver, outcome
 from .solver import Solution
 
-if TYPE_CHECKING:
-    from .hexapod import Hexapod
+Hexapod = Any  # a hexapod.Hexapod (this module is below it: hexapod.py imports it)
 
 _FALLBACK = -1  # code of a row solved by forward() itself
 _NEAR = "near a singularity: condition bound of the eliminated Jacobian {:.3g} times its home value (flag above {:g}); "
