@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 from ..files import atomic_write_text, check_output_path
 from ..kinematics.hexapod import load_hexapod
 from ..studies.evaluate import Settings, run_evaluation
-from ._common import add_hexapod_argument, note
+from ._common import add_hexapod_argument, note, stream_bar
 
 DESCRIPTION = """\
 Map the workspace reachable for a whole cone of tool orientations (within stroke and Cardan
@@ -74,17 +73,12 @@ def run(args: argparse.Namespace) -> int:
         check_output_path(args.json, args.hexapod)
     settings = Settings(args.grid, args.cone_deg, args.cone_samples, args.length_unit)
     hexa = load_hexapod(args.hexapod)  # fails here, with one line, before any worker starts
-    bar = None
-    if sys.stderr.isatty():
-        from tqdm import tqdm
-
-        bar = tqdm(desc="evaluate (z slices)", file=sys.stderr, unit="slice")
+    bar = stream_bar("evaluate (z slices)", unit="slice")  # shows itself on a terminal only
 
     def on_slice(done: int, total: int) -> None:
-        if bar is not None:
-            bar.total = total
-            bar.n = done
-            bar.refresh()
+        bar.total = total
+        bar.n = done
+        bar.refresh()
 
     try:
         r = run_evaluation(args.hexapod, settings, args.out, args.workers, on_slice)
@@ -93,8 +87,7 @@ def run(args: argparse.Namespace) -> int:
         note("evaluate", f"interrupted; finished slices saved{where}")
         return 130
     finally:
-        if bar is not None:
-            bar.close()
+        bar.close()
     r["home_z"] = float(hexa.home_pose[2, 3])
     print(format_report(r))
     if args.out:
