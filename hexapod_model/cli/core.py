@@ -27,7 +27,6 @@ from ..io.tables import (
     poses_from_table,
 )
 from ..kinematics.hexapod import Hexapod
-from ..studies.bench import run_benchmarks
 from ._common import add_hexapod_argument, hexapod_of, note, stream_bar
 
 
@@ -175,6 +174,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     """``hexapod bench``."""
     if args.json:
         check_output_path(args.json, args.hexapod)
+    from ..studies.bench import run_benchmarks  # the tracker and numba: not for fk / ik
+
     report = run_benchmarks(hexapod_of(args), samples=args.samples, seed=args.seed)
     report["hexapod"] = args.hexapod
     print(format_bench(report))

@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..description.model import ClosedLoopModel
-from . import kernels, linalg
+from .kernel_sets import KernelSet, kernel_set
 
 STATUSES = ("converged", "ambiguous_assembly", "max_iterations", "singular", "out_of_limits", "invalid_input")
 SINGULAR_PIVOT_RATIO = 1e-13
@@ -97,13 +97,19 @@ class NewtonSolver:
     Args:
         clm: the loaded hexapod.
         held_joints: Pinocchio joint ids whose values stay as given.
+        kernels: the step's kernels (default: the numba-compiled ones; see
+            :mod:`~hexapod_model.kinematics.kernel_sets`).
 
     Buffers are allocated once here; :meth:`run` allocates only the new configuration
     returned by ``pin.integrate``.
     """
 
-    def __init__(self, clm: ClosedLoopModel, held_joints: tuple[int, ...]):
+    #: whether :meth:`iterate` runs as one compiled call (:class:`.newton.CompiledSolver`)
+    compiled_loop = False
+
+    def __init__(self, clm: ClosedLoopModel, held_joints: tuple[int, ...], kernels: KernelSet | None = None):
         self.clm = clm
+        self.kernels = kernel_set(True) if kernels is None else kernels
         self.model, probe_cols = clm.solver_model()
         self.data = self.model.createData()
         self.J = self.data.J  # a view on Pinocchio's buffer, refreshed by computeJointJacobians
@@ -199,8 +205,9 @@ class NewtonSolver:
         and ``self.kappa`` a bound of the condition number of the eliminated 6x6 Jacobian
         ``M = -dl/dxi`` (leg-reading rates per platform twist).
         """
+        kernels = self.kernels
         if self.held_pos is not None:
-            ratio, self.kappa = linalg.schur_solve(*self._schur_args)
+            ratio, self.kappa = kernels.schur_solve(*self._schur_args)
             self.sign = 1.0 if ratio > 0.0 else -1.0
             return abs(ratio)
         kernels.jacobian(*self._jac_args)
@@ -208,20 +215,20 @@ class NewtonSolver:
             self.x[:] = np.linalg.lstsq(self.G, self.r, rcond=None)[0]
             return 1.0
         if self.block_cols is not None:
-            return linalg.block_solve(
+            return kernels.block_solve(
                 self.G, self.r, self.rows, self.block_cols, self.LUb, self.piv, self.rb, self.xb, self.x
             )
-        ratio = linalg.lu_factor(self.G, self.LU, self.piv)
+        ratio = kernels.lu_factor(self.G, self.LU, self.piv)
         if ratio >= SINGULAR_PIVOT_RATIO:
-            linalg.lu_apply(self.LU, self.piv, self.r, self.x)
+            kernels.lu_apply(self.LU, self.piv, self.r, self.x)
         return ratio
 
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``."""
         self.q_aug[: self.clm.nq] = q
         pin.computeJointJacobians(self.model, self.data, self.q_aug)
-        kernels.residual(self.J, self.probe_cols, self.rows, self.R, self.p, self.E, self.r)
-        kernels.jacobian(*self._jac_args)
+        self.kernels.residual(self.J, self.probe_cols, self.rows, self.R, self.p, self.E, self.r)
+        self.kernels.jacobian(*self._jac_args)
         return self.r.copy(), self.G.copy()
 
     def iterate(
@@ -244,6 +251,7 @@ class NewtonSolver:
         model, data, J = self.model, self.data, self.J
         probe_cols, rows, R, p, E, r = self.probe_cols, self.rows, self.R, self.p, self.E, self.r
         x, free_v, dv, solve_step = self.x, self.free_v, self.dv, self._solve_step
+        kernels = self.kernels
         q = self.q_aug
         q[: self.clm.nq] = q0
         status, message, it = "max_iterations", "", 0
@@ -293,5 +301,5 @@ class NewtonSolver:
         Returns ``(q, status, iterations, residual, jacobian, message)``.
         """
         status, it, norm, message = self.iterate(q0, tol, max_iter)
-        kernels.jacobian(*self._jac_args)
+        self.kernels.jacobian(*self._jac_args)
         return self.q_aug[: self.clm.nq].copy(), status, it, norm, self.G.copy(), message
