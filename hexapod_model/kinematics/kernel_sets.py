@@ -18,7 +18,7 @@ class KernelSet(NamedTuple):
     """The kernels of the Newton step, the limit checks and the free-flyer conversions (same signatures)."""
 
     compiled: bool
-    residual: Callable
+    closure_residual: Callable
     jacobian: Callable
     scatter_step: Callable
     shift_residual: Callable

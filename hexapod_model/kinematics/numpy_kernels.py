@@ -14,24 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 
-def placements(J, probe_cols, R, p):
-    """Rotation ``R[k]`` and position ``p[k]`` of every probe frame from its adjoint columns."""
-    cols = probe_cols[:, 3:6]
-    R[:] = J[3:6][:, cols].transpose(1, 0, 2)  # R[k, a, b] = J[3 + a, cols[k, b]]
-    top = J[0:3][:, cols]  # top[a, k, b] = J[a, cols[k, b]]: the block [p] R
-    p[:, 0] = np.einsum("kb,kb->k", top[2], R[:, 1])
-    p[:, 1] = np.einsum("kb,kb->k", top[0], R[:, 2])
-    p[:, 2] = np.einsum("kb,kb->k", top[1], R[:, 0])
-
-
-def residual(J, probe_cols, rows, R, p, E, r):
-    """Fill ``r`` (6*rows) and ``E`` (6, 3, 3); return ``(norm(r), min trace(E))``."""
-    placements(J, probe_cols, R, p)
-    return closure_residual(R, p, rows, E, r)
-
-
 def closure_residual(R, p, rows, E, r):
-    """Residual of the closure frames ``R``, ``p`` (tips, then anchors): :func:`.kernels.residual`."""
+    """Fill ``r``, ``E`` from the closure frames ``R``, ``p``; ``(norm(r), min trace(E))`` as the compiled kernel."""
     r6 = r.reshape(6, rows)
     r6[:, :3] = p[:6] - p[6:]
     min_trace = 3.0
