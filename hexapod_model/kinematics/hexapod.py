@@ -21,21 +21,19 @@ from ..description.mjcf_loader import MJCF_SUFFIXES, load_mjcf
 from ..description.model import ClosedLoopModel
 from ..description.presets import PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
-from ..exceptions import AssemblyError, ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
-from . import assembly, batch
+from ..exceptions import AssemblyError, ConvergenceError, LimitError, SingularityError, WorkspaceError
+from . import assembly, batch, hybrid
 from .assembly import Outcome
 from .batch import BatchResult
 from .checks import (
     MAX_TOL,
     POSE_TOLERANCE,
     check_guess,
-    check_held_set,
     check_home_conditioning,
     check_max_iter,
     check_pose,
     check_tolerance,
     check_vector,
-    free_directions,
 )
 from .kernel_sets import kernel_set
 from .solver import NewtonSolver, Solution
@@ -289,34 +287,8 @@ class Hexapod:
                 directions). Over-determined sets are solved in the least-squares sense and
                 converge when the held values are consistent.
         """
-        if not isinstance(held, Mapping) or not held:
-            raise InputError("held", held, "expected a non-empty mapping of joint name -> value")
         q = self._start(guess)
-        m = self.closed_loop.model
-        ids = []
-        for name, value in held.items():
-            if name not in self.joint_names:
-                raise InputError("held joint", name, f"not a joint of this URDF ({len(self.joint_names)} joints)")
-            j = m.getJointId(name)
-            if j == self.closed_loop.platform_joint:
-                self._set_pose(q, value)
-            else:
-                v = check_vector(name, [value], 1)[0]
-                iq = m.joints[j].idx_q
-                lo, hi = self.closed_loop.lower[iq], self.closed_loop.upper[iq]
-                if not lo - _LIMIT_SLACK <= v <= hi + _LIMIT_SLACK:
-                    raise self._limit_error(iq, v)
-                q[iq] = v
-            ids.append(j)
-        held_ids = tuple(sorted(ids))
-        if held_ids not in self._free_directions:  # rank at a generic configuration within the limits
-            rng = np.random.default_rng(12345)
-            qg = self.closed_loop.q_home.copy()
-            qg[self._limited] = rng.uniform(0.5 * self._limited_lo, 0.5 * self._limited_hi)
-            i = self.closed_loop.platform_q
-            qg[i : i + 7] = pin.SE3ToXYZQUAT(pin.exp6(rng.uniform(-0.05, 0.05, 6)))
-            self._free_directions[held_ids] = free_directions(self._solver(held_ids).evaluate(qg)[1])
-        check_held_set(sorted(held), *self._free_directions[held_ids])
+        held_ids = hybrid.hold(self, held, q)
         return self._finish(self._solver(held_ids), q, tol, max_iter, check)
 
     def _limit_error(self, iq: int, value: float) -> LimitError:
