@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import itertools
 import sys
 from collections.abc import Iterable, Iterator
 from typing import Any, TypeVar
@@ -28,9 +29,26 @@ def add_hexapod_argument(p: argparse.ArgumentParser, optional: bool = False) -> 
         p.add_argument("hexapod", metavar="HEXAPOD", help=HEXAPOD_HELP)
 
 
-def hexapod_of(args: argparse.Namespace) -> Hexapod:
-    """The :class:`Hexapod` named by ``args.hexapod`` (preset, URDF, geometry or MJCF file)."""
-    return load_hexapod(args.hexapod)
+def hexapod_of(args: argparse.Namespace, compiled: bool = True) -> Hexapod:
+    """The :class:`Hexapod` named by ``args.hexapod`` (preset, URDF, geometry or MJCF file).
+
+    ``compiled=False``: solved with the NumPy kernels (no numba start-up; see :func:`compiled_for_long`).
+    """
+    return load_hexapod(args.hexapod, compiled=compiled)
+
+
+def compiled_for_long(hexa: Hexapod, chunks: Iterator[T]) -> tuple[Hexapod, Iterator[T]]:
+    """``hexa`` with the compiled kernels when ``chunks`` has more than one, and the same chunks.
+
+    A command that streams a table loads its hexapod with ``compiled=False`` and calls this on
+    the table's chunks (of ``CHUNK_ROWS`` rows): an input of one chunk is solved with the NumPy
+    kernels, ~3 ms a row, with no numba import (~1 s, 130 MB) nor first compilation (~20 s once
+    after installation); a longer one with the compiled kernels, ~30 us a row.
+    """
+    head = list(itertools.islice(chunks, 2))
+    if len(head) > 1 and not hexa.compiled:
+        hexa = Hexapod(hexa.closed_loop, hexa.geometry, compiled=True)
+    return hexa, itertools.chain(head, chunks)
 
 
 def progress(iterable: Iterable[T], total: int, desc: str, unit: str = "row") -> Iterator[T]:

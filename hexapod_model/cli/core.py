@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Iterator
 from contextlib import nullcontext
 from typing import IO, Any
 
@@ -19,7 +20,7 @@ from ..io.tables import (
     LENGTH_COLUMNS,
     POSE_COLUMNS,
     SOLVER_COLUMNS,
-    TableReader,
+    Rows,
     TableWriter,
     open_table,
     pose_columns,
@@ -27,8 +28,7 @@ from ..io.tables import (
     poses_from_table,
 )
 from ..kinematics.hexapod import Hexapod
-from ..studies.bench import run_benchmarks
-from ._common import add_hexapod_argument, hexapod_of, note, stream_bar
+from ._common import add_hexapod_argument, compiled_for_long, hexapod_of, note, stream_bar
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -92,13 +92,14 @@ def cmd_urdf(args: argparse.Namespace) -> int:
 def _solve_rows(args: argparse.Namespace, kind: str) -> int:
     """Stream the rows of ``args.input`` through FK or IK into the output, a chunk at a time."""
     out_path = None if args.output in (None, "-") else check_output_path(args.output, args.input, args.hexapod)
-    hexa = hexapod_of(args)
+    hexa = hexapod_of(args, compiled=False)  # compiled below if the input is long
     source: Any = getattr(sys.stdin, "buffer", sys.stdin) if args.input == "-" else args.input
     with open_table(source, LENGTH_COLUMNS if kind == "fk" else (), "<stdin>" if args.input == "-" else None) as table:
         columns = LENGTH_COLUMNS if kind == "fk" else pose_input_columns(table.header)
         out_header = (POSE_COLUMNS if kind == "fk" else LENGTH_COLUMNS) + SOLVER_COLUMNS
         with atomic_writer(out_path) if out_path is not None else nullcontext(sys.stdout) as out:
-            total, failed, first = _stream(hexa, table, columns, kind, out, out_header)
+            hexa, chunks = compiled_for_long(hexa, table.chunks(columns))
+            total, failed, first = _stream(hexa, chunks, columns, kind, out, out_header)
     if failed:
         note(kind, f"{failed} of {total} rows failed; first: {first}")
         return 1
@@ -106,7 +107,7 @@ def _solve_rows(args: argparse.Namespace, kind: str) -> int:
 
 
 def _stream(
-    hexa: Hexapod, table: TableReader, columns: list[str], kind: str, out: IO[str], out_header: list[str]
+    hexa: Hexapod, chunks: Iterator[Rows], columns: list[str], kind: str, out: IO[str], out_header: list[str]
 ) -> tuple[int, int, str]:
     """Solve and write every row, each from the previous good solution, a chunk at a time.
 
@@ -117,7 +118,7 @@ def _stream(
     width = len(out_header) - len(SOLVER_COLUMNS)
     total, failed, first, guess = 0, 0, "", None
     with stream_bar(kind) as bar:
-        for rows in table.chunks(columns):
+        for rows in chunks:
             if kind == "fk":
                 inputs, errors = rows.values, rows.errors
             else:
@@ -175,6 +176,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     """``hexapod bench``."""
     if args.json:
         check_output_path(args.json, args.hexapod)
+    from ..studies.bench import run_benchmarks  # the tracker and numba: not for fk / ik
+
     report = run_benchmarks(hexapod_of(args), samples=args.samples, seed=args.seed)
     report["hexapod"] = args.hexapod
     print(format_bench(report))

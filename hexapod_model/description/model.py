@@ -9,12 +9,6 @@
 * index arrays of each leg's joints and of the measured prismatic joints;
 * ``encoder_zero``, ``encoder_scale``: (6,) each leg's encoder model from the URDF's
   ``<encoder>`` elements (reading = zero + (1 + scale) * prismatic value; zeros without one).
-
-For speed the solver works on an *augmented* copy (``solver_model``) in which a zero-motion
-free-flyer "probe" joint is attached at every closure frame: after one
-``pin.computeJointJacobians`` call, the probe's six Jacobian columns are the adjoint matrix of
-that frame's placement, so all twelve closure placements come out of one array view.
-The probes are always at identity and never move; they are invisible to the caller.
 """
 
 from __future__ import annotations
@@ -283,21 +277,6 @@ class ClosedLoopModel:
     def limited_q(self) -> np.ndarray:
         """Indices of q that carry finite joint limits (all leg joints)."""
         return np.array([m_j.idx_q for leg in self.legs for m_j in (self.model.joints[j] for j in leg.joints)])
-
-    def solver_model(self) -> tuple[pin.Model, np.ndarray]:
-        """Augmented copy with a probe free flyer at each tip and anchor frame.
-
-        Returns the model and the (12, 6) array of probe velocity columns: rows 0-5 the leg
-        tips, rows 6-11 the platform anchors, in leg order.
-        """
-        aug = self.model.copy()
-        cols = []
-        for which in ("tip_frame", "anchor_frame"):
-            for leg in self.legs:
-                f = aug.frames[getattr(leg, which)]
-                j = aug.addJoint(f.parentJoint, pin.JointModelFreeFlyer(), f.placement, f"__probe_{leg.name}_{which}")
-                cols.append(np.arange(aug.joints[j].idx_v, aug.joints[j].idx_v + 6))
-        return aug, np.array(cols)
 
 
 def read_encoders(urdf_xml: str, source: str = "<string>") -> dict[str, tuple[float, float]]:

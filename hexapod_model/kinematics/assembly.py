@@ -36,7 +36,6 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
-from . import kernels
 from .solver import THETA_MAX, NewtonSolver
 
 MIN_STEP = 1.0 / 1024  # smallest substep of the readings path before giving up
@@ -90,7 +89,7 @@ def solve_forward(
     if status == "converged" and solver.certified:
         return _certified(solver, it, res)
     if status == "max_iterations" and solver.certified:  # contracting, but max_iter too small
-        kernels.jacobian(*solver._jac_args)
+        solver.kernels.jacobian(*solver._jac_args)
         return Outcome(solver.q_aug[: solver.clm.nq].copy(), status, it, res, solver.G.copy(), msg)
     plain = start.copy()  # for the candidates, should the path be blocked
     first = solver.q_aug[: solver.clm.nq].copy() if it == 1 else None  # after the first Newton step
@@ -162,7 +161,7 @@ def _rescale(theta: float, accepted: bool, order: int) -> float:
 
 def _certified(solver: NewtonSolver, total: int, res: float, note: str = "") -> Outcome:
     """The result in the solver's buffers with its determinant sign and flag (certified unless ``note``)."""
-    kernels.jacobian(*solver._jac_args)
+    solver.kernels.jacobian(*solver._jac_args)
     q = solver.q_aug[: solver.clm.nq].copy()  # the last Schur step (iterate() takes one even at once)
     kappa = solver.kappa
     flags: tuple[str, ...] = ()
@@ -207,7 +206,7 @@ def _ambiguous(
         if all(np.abs(pin.difference(clm.model, q, c)).max() > _DISTINCT for c in distinct):
             distinct.append(q)
     idx = clm.limited_q()
-    inside = [q for q in distinct if kernels.first_outside_at(q, idx, clm.lower[idx], clm.upper[idx], 1e-12) < 0]
+    inside = [q for q in distinct if solver.kernels.first_outside_at(q, idx, clm.lower[idx], clm.upper[idx], 1e-12) < 0]
     where = f"the readings path from the start is blocked at {t:.4f} of the way (a singularity or fold)"
     if not inside:
         q = distinct[0] if distinct else solver.q_aug[: clm.nq].copy()

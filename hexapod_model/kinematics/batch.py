@@ -17,9 +17,8 @@ import numpy as np
 
 from ..exceptions import HexapodError, InputError
 from .assembly import NEAR_SINGULAR_FACTOR
-from .batch_kernels import INVALID_INPUT, OUT_OF_LIMITS, forward_rows, inverse_rows
 from .checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance
-from .newton import CompiledSolver, outcome
+from .outcomes import INVALID_INPUT, OUT_OF_LIMITS, outcome
 from .solver import Solution
 
 Hexapod = Any  # a hexapod.Hexapod (this module is below it: hexapod.py imports it)
@@ -187,8 +186,10 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, sla
         return _message_of(lambda: solve(rows[k], None))
 
     solver = hexa._solver(hexa._held_forward)
-    if not isinstance(solver, CompiledSolver):
+    if not solver.compiled_loop:
         return _per_row(hexa, solve, rows, guess, warm, retry, True)
+    from .batch_kernels import forward_rows  # numba: only for a compiled solver
+
     start = hexa._start(guess)  # a bad guess raises, as forward would on every row
     carry = np.array([solver.home_sign if guess is None else float(getattr(guess, "det_sign", 0)), 0.0])
     joints = rows if hexa._encoder is None else hexa.joints_of(rows)
@@ -246,8 +247,10 @@ def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter, slack:
         return _message_of(lambda: solve(rows[k], None))
 
     solver = hexa._solver(hexa._held_inverse)
-    if not isinstance(solver, CompiledSolver):
+    if not solver.compiled_loop:
         return _per_row(hexa, solve, rows, guess, warm, retry, False)
+    from .batch_kernels import inverse_rows  # numba: only for a compiled solver
+
     out = _outputs(len(rows), hexa.nq)
     settings = (tol, max_iter, POSE_TOLERANCE, MAX_POSITION)
     limits = (hexa._limited, hexa._limited_lo, hexa._limited_hi, slack)

@@ -22,10 +22,9 @@ import numpy as np
 from numba import njit
 
 from .kernels import first_outside, first_outside_at, pose_to_xyzquat, rigid_error, xyzquat_to_pose
-from .newton import CONVERGED, NO_CONVERGENCE, iterate_blocks, iterate_schur
+from .newton import iterate_blocks, iterate_schur
+from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
 from .packing import unpack_work
-
-OUT_OF_LIMITS, INVALID_INPUT = 6, 7
 
 
 @njit(cache=True, inline="always")

@@ -8,13 +8,14 @@ naming the value and the rule; nothing is reshaped, clipped, normalised or cast 
 from __future__ import annotations
 
 import numbers
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from ..exceptions import GeometryError, InputError
-from . import kernels
+from . import numpy_kernels
 from .solver import Solution
 
 POSE_TOLERANCE = 1e-6  # max deviation of a pose from a rigid transform, of a start quaternion from unit norm
@@ -57,11 +58,12 @@ def check_vector(name: str, values: Any, n: int) -> np.ndarray:
     return arr
 
 
-def check_pose(pose: Any) -> np.ndarray:
+def check_pose(pose: Any, rigid_error: Callable[[np.ndarray], float] = numpy_kernels.rigid_error) -> np.ndarray:
     """``pose`` (4x4 array or ``pin.SE3``) as a valid 4x4 rigid transform, or :class:`InputError`.
 
     The rotation must be orthonormal and the bottom row ``0 0 0 1`` within
     :data:`POSE_TOLERANCE`; the position coordinates at most :data:`MAX_POSITION` metres.
+    ``rigid_error`` measures the distance from a rigid transform (a solver passes its compiled kernel).
     """
     if type(pose) is np.ndarray and pose.dtype == np.float64 and pose.shape == (4, 4):
         T = pose  # the common case: no conversion
@@ -71,7 +73,7 @@ def check_pose(pose: Any) -> np.ndarray:
         T = real_array("pose", pose, "expected a 4x4 matrix of real numbers")
         if T.shape != (4, 4):
             raise InputError("pose", pose, f"expected a 4x4 matrix, got shape {T.shape}")
-    err = kernels.rigid_error(T)  # inf when an entry is NaN or inf
+    err = rigid_error(T)  # inf when an entry is NaN or inf
     if err <= POSE_TOLERANCE and abs(T[0, 3]) <= MAX_POSITION and abs(T[1, 3]) <= MAX_POSITION:
         if abs(T[2, 3]) <= MAX_POSITION:
             return T

@@ -21,23 +21,21 @@ from ..description.mjcf_loader import MJCF_SUFFIXES, load_mjcf
 from ..description.model import ClosedLoopModel
 from ..description.presets import PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
-from ..exceptions import AssemblyError, ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
-from . import assembly, batch, kernels
+from ..exceptions import AssemblyError, ConvergenceError, LimitError, SingularityError, WorkspaceError
+from . import assembly, batch, hybrid
 from .assembly import Outcome
 from .batch import BatchResult
 from .checks import (
     MAX_TOL,
     POSE_TOLERANCE,
     check_guess,
-    check_held_set,
     check_home_conditioning,
     check_max_iter,
     check_pose,
     check_tolerance,
     check_vector,
-    free_directions,
 )
-from .newton import solver_for
+from .kernel_sets import kernel_set
 from .solver import NewtonSolver, Solution
 
 DEFAULT_TOL = 1e-12  # closure residual (m, rad): pose errors stay below 1e-9 on every preset
@@ -59,10 +57,17 @@ class Hexapod:
     Leg readings (``lengths``) are the measured prismatic joints in metres, zero at home;
     poses are 4x4 base -> platform transforms in metres. One object may be shared by threads:
     each thread solves with solver buffers of its own.
+
+    ``compiled=False`` (every constructor takes it) solves with the NumPy kernels instead of the
+    numba-compiled ones (:mod:`~hexapod_model.kinematics.kernel_sets`): the same answers, several
+    times slower per solve, but no numba import (~1 s, 130 MB) nor first compilation (~20 s).
     """
 
-    def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None):
+    def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None, *, compiled: bool = True):
         self.closed_loop = model
+        #: whether the solves run the numba-compiled kernels
+        self.compiled = bool(compiled)
+        self._kernels = kernel_set(self.compiled)
         self.geometry = geometry
         m = model.model
         #: the Pinocchio model of the URDF tree (``RobotWrapper.model``)
@@ -97,38 +102,39 @@ class Hexapod:
 
     # ----- construction -----
     @classmethod
-    def from_urdf(cls, path: str | Path) -> Hexapod:
+    def from_urdf(cls, path: str | Path, *, compiled: bool = True) -> Hexapod:
         """Load a URDF file, or a preset when ``path`` is a preset name (see ``PRESETS``)."""
         if str(path) in PRESETS:
-            return cls.from_preset(str(path))
-        return cls(ClosedLoopModel.from_file(path))
+            return cls.from_preset(str(path), compiled=compiled)
+        return cls(ClosedLoopModel.from_file(path), compiled=compiled)
 
     @classmethod
-    def load(cls, spec: str | Path) -> Hexapod:
+    def load(cls, spec: str | Path, *, compiled: bool = True) -> Hexapod:
         """A preset name, or a URDF, geometry (``.toml``, ``.yaml``, ``.yml``, ``.json``) or MJCF (``.xml``) file.
 
         This is what every ``hexapod`` sub-command does with its HEXAPOD argument.
         """
         if str(spec).lower().endswith(GEOMETRY_SUFFIXES):
-            return cls.from_geometry(load_geometry(spec))
+            return cls.from_geometry(load_geometry(spec), compiled=compiled)
         if str(spec).lower().endswith(MJCF_SUFFIXES):
-            return cls.from_mjcf(spec)
-        return cls.from_urdf(spec)
+            return cls.from_mjcf(spec, compiled=compiled)
+        return cls.from_urdf(spec, compiled=compiled)
 
     @classmethod
-    def from_mjcf(cls, path: str | Path) -> Hexapod:
+    def from_mjcf(cls, path: str | Path, *, compiled: bool = True) -> Hexapod:
         """Load an MJCF file (``hexapod mjcf``, docs/mjcf.md) through Pinocchio's MJCF parser and constraint models."""
-        return cls(load_mjcf(path))
+        return cls(load_mjcf(path), compiled=compiled)
 
     @classmethod
-    def from_preset(cls, name: str = "reference") -> Hexapod:
+    def from_preset(cls, name: str = "reference", *, compiled: bool = True) -> Hexapod:
         """One of the bundled geometries: ``reference``, ``intersecting``, ``spherical``, ``3-6``, ``guideway``."""
-        return cls.from_geometry(get_preset(name))
+        return cls.from_geometry(get_preset(name), compiled=compiled)
 
     @classmethod
-    def from_geometry(cls, geometry: HexapodGeometry) -> Hexapod:
+    def from_geometry(cls, geometry: HexapodGeometry, *, compiled: bool = True) -> Hexapod:
         """Generate the URDF of ``geometry`` in memory and load it."""
-        return cls(ClosedLoopModel(geometry_to_urdf(geometry), f"<geometry {geometry.name}>"), geometry)
+        clm = ClosedLoopModel(geometry_to_urdf(geometry), f"<geometry {geometry.name}>")
+        return cls(clm, geometry, compiled=compiled)
 
     # ----- conversions -----
     @property
@@ -150,7 +156,7 @@ class Hexapod:
         """Platform pose (4x4, base frame, metres) of configuration ``q``."""
         i = self.closed_loop.platform_q
         T = np.empty((4, 4))
-        kernels.xyzquat_to_pose(q[i : i + 7], self._home_h, T)
+        self._kernels.xyzquat_to_pose(q[i : i + 7], self._home_h, T)
         return T
 
     def lengths_of(self, q: np.ndarray) -> np.ndarray:
@@ -173,9 +179,9 @@ class Hexapod:
         return (np.asarray(readings, dtype=float) - self._encoder[0]) / self._encoder[1]
 
     def _set_pose(self, q: np.ndarray, pose) -> None:
-        T = check_pose(pose)
+        T = check_pose(pose, self._kernels.rigid_error)
         i = self.closed_loop.platform_q
-        kernels.pose_to_xyzquat(T, self._home_h, q[i : i + 7])
+        self._kernels.pose_to_xyzquat(T, self._home_h, q[i : i + 7])
 
     def _solver(self, held: tuple[int, ...]) -> NewtonSolver:
         """The calling thread's solver for this set of held joints (buffers are not shared)."""
@@ -183,8 +189,12 @@ class Hexapod:
         if solvers is None:
             solvers = self._local.solvers = {}
         solver = solvers.get(held)
-        if solver is None:
+        if solver is None and self.compiled:
+            from .newton import solver_for  # numba: imported by the first compiled solve
+
             solver = solvers[held] = solver_for(self.closed_loop, held)
+        elif solver is None:
+            solver = solvers[held] = NewtonSolver(self.closed_loop, held, self._kernels)
         return solver
 
     def _check_home_conditioning(self) -> float:
@@ -227,7 +237,7 @@ class Hexapod:
         """
         if not (isinstance(lengths, np.ndarray) and lengths.shape == (6,) and lengths.dtype == np.float64):
             lengths = check_vector("lengths", lengths, 6)
-        k = kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, _LIMIT_SLACK)
+        k = self._kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, _LIMIT_SLACK)
         if k >= 0:
             check_vector("lengths", lengths, 6)  # names NaN / inf first
             raise LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
@@ -277,34 +287,8 @@ class Hexapod:
                 directions). Over-determined sets are solved in the least-squares sense and
                 converge when the held values are consistent.
         """
-        if not isinstance(held, Mapping) or not held:
-            raise InputError("held", held, "expected a non-empty mapping of joint name -> value")
         q = self._start(guess)
-        m = self.closed_loop.model
-        ids = []
-        for name, value in held.items():
-            if name not in self.joint_names:
-                raise InputError("held joint", name, f"not a joint of this URDF ({len(self.joint_names)} joints)")
-            j = m.getJointId(name)
-            if j == self.closed_loop.platform_joint:
-                self._set_pose(q, value)
-            else:
-                v = check_vector(name, [value], 1)[0]
-                iq = m.joints[j].idx_q
-                lo, hi = self.closed_loop.lower[iq], self.closed_loop.upper[iq]
-                if not lo - _LIMIT_SLACK <= v <= hi + _LIMIT_SLACK:
-                    raise self._limit_error(iq, v)
-                q[iq] = v
-            ids.append(j)
-        held_ids = tuple(sorted(ids))
-        if held_ids not in self._free_directions:  # rank at a generic configuration within the limits
-            rng = np.random.default_rng(12345)
-            qg = self.closed_loop.q_home.copy()
-            qg[self._limited] = rng.uniform(0.5 * self._limited_lo, 0.5 * self._limited_hi)
-            i = self.closed_loop.platform_q
-            qg[i : i + 7] = pin.SE3ToXYZQUAT(pin.exp6(rng.uniform(-0.05, 0.05, 6)))
-            self._free_directions[held_ids] = free_directions(self._solver(held_ids).evaluate(qg)[1])
-        check_held_set(sorted(held), *self._free_directions[held_ids])
+        held_ids = hybrid.hold(self, held, q)
         return self._finish(self._solver(held_ids), q, tol, max_iter, check)
 
     def _limit_error(self, iq: int, value: float) -> LimitError:
@@ -330,7 +314,7 @@ class Hexapod:
             out = Outcome(*solver.run(q0, tol, max_iter))
         q, status, it, res, jac, msg = out[:6]
         if status == "converged":
-            bad = kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, _LIMIT_SLACK)
+            bad = self._kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, _LIMIT_SLACK)
             if bad >= 0:
                 k = int(self._limited[bad])
                 status, msg = "out_of_limits", str(self._limit_error(k, q[k]))
@@ -397,6 +381,6 @@ class Hexapod:
         return self.closed_loop.closure_errors(np.asarray(q, dtype=float))
 
 
-def load_hexapod(spec: str | Path) -> Hexapod:
+def load_hexapod(spec: str | Path, *, compiled: bool = True) -> Hexapod:
     """:meth:`Hexapod.load`: a preset name, URDF file or geometry file as a :class:`Hexapod`."""
-    return Hexapod.load(spec)
+    return Hexapod.load(spec, compiled=compiled)

@@ -1,8 +1,9 @@
 """Numba kernels of the Newton solver's hot path (no allocation, no Python loop per call).
 
-Inputs come from one ``pin.computeJointJacobians`` call on the augmented solver model (see
-:mod:`hexapod_model.model`): ``J`` is Pinocchio's ``data.J`` (6 x nv, WORLD convention:
-column ``c`` is the spatial motion of velocity ``c`` expressed at the world origin).
+Inputs: the closure frames' rotations ``R`` and positions ``p`` (tips, then anchors) and the
+joint Jacobians ``J``: Pinocchio's ``data.J`` after ``pin.computeJointJacobians`` (6 x nv, WORLD
+convention: column ``c`` is the spatial motion of velocity ``c`` expressed at the world
+origin), or the compiled chains' equivalent (:mod:`.chains`).
 
 Residual of closure ``i`` (Bem et al. (2026) eqs. 10-14, written in the base/world frame):
 
@@ -24,30 +25,11 @@ from numba import njit
 
 
 @njit(cache=True)
-def placements(J, probe_cols, R, p):
-    """Rotation ``R[k]`` and position ``p[k]`` of every probe frame from its adjoint columns."""
-    for k in range(probe_cols.shape[0]):
-        c3, c4, c5 = probe_cols[k, 3], probe_cols[k, 4], probe_cols[k, 5]
-        for a in range(3):
-            R[k, a, 0] = J[3 + a, c3]
-            R[k, a, 1] = J[3 + a, c4]
-            R[k, a, 2] = J[3 + a, c5]
-        # [p] R = top-right block  =>  [p] = block @ R^T
-        p[k, 0] = J[2, c3] * R[k, 1, 0] + J[2, c4] * R[k, 1, 1] + J[2, c5] * R[k, 1, 2]
-        p[k, 1] = J[0, c3] * R[k, 2, 0] + J[0, c4] * R[k, 2, 1] + J[0, c5] * R[k, 2, 2]
-        p[k, 2] = J[1, c3] * R[k, 0, 0] + J[1, c4] * R[k, 0, 1] + J[1, c5] * R[k, 0, 2]
-
-
-@njit(cache=True)
-def residual(J, probe_cols, rows, R, p, E, r):
-    """Fill ``r`` (6*rows) and ``E`` (6, 3, 3); return ``(norm(r), min trace(E))``."""
-    placements(J, probe_cols, R, p)
-    return closure_residual(R, p, rows, E, r)
-
-
-@njit(cache=True)
 def closure_residual(R, p, rows, E, r):
-    """Residual of the closure frames ``R``, ``p`` (tips, then anchors): see :func:`residual`."""
+    """Fill ``r`` (6*rows) and ``E`` (6, 3, 3) from the closure frames ``R``, ``p`` (tips, then anchors).
+
+    Returns ``(norm(r), min trace(E))``.
+    """
     min_trace = 3.0
     for i in range(6):
         o = i * rows

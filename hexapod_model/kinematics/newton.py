@@ -38,11 +38,11 @@ from .kernels import closure_residual, jacobian, scatter_step, shift_residual
 from .legs import ChainTables
 from .lie import integrate_free_flyer
 from .linalg import blocks_solve, schur_solve
+from .outcomes import CONVERGED, FLIPPED, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED, outcome
 from .packing import Packed, unpack_floats, unpack_ints, unpack_iwork, unpack_work
 from .solver import _ONE_STEP, _THETA_FLOOR, MAX_STEP, SINGULAR_PIVOT_RATIO, THETA_MAX, NewtonSolver
 
 # outcome codes of :func:`iterate` (:func:`outcome` turns them into statuses and messages)
-CONVERGED, NO_CONVERGENCE, FLIPPED, SINGULAR, START_SINGULAR, UNCERTIFIED = 0, 1, 2, 3, 4, 5
 
 
 @njit(cache=True, inline="always")
@@ -139,21 +139,6 @@ def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
     return _iterate(False, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork)
 
 
-def outcome(code: int, tol: float, iterations: int, norm: float, ratio: float) -> tuple[str, str]:
-    """Status and message of an :func:`iterate` outcome code (the general path's words)."""
-    if code == CONVERGED:
-        return "converged", ""
-    if code == FLIPPED:
-        return "max_iterations", "converged to a spurious closure flipped by 180 deg"
-    if code == NO_CONVERGENCE:
-        return "max_iterations", f"no convergence to {tol:g} in {iterations} iterations (residual {norm:.3g})"
-    if code == SINGULAR:
-        return "singular", f"constraint Jacobian singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g})"
-    if code == START_SINGULAR:
-        return "singular", f"start is singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g}), no step taken"
-    return "uncertified", "contraction or determinant sign check failed"
-
-
 _BUFFERS = ("J", "R", "p", "E", "r", "x", "G", "dv", "LB", "PB", "A", "M", "pm", "nb", "wb")
 
 
@@ -164,6 +149,8 @@ class CompiledSolver(NewtonSolver):
     arrays, so everything that reads them after a solve (``run``, :mod:`.assembly`,
     ``_solve_step``) sees the compiled path's values; ``q_aug[:nq]`` holds the last iterate.
     """
+
+    compiled_loop = True
 
     def __init__(self, clm: ClosedLoopModel, held_joints: tuple[int, ...], tables: ChainTables):
         self.packed: Packed | None = None  # NewtonSolver.__init__ iterates once, on the general path

@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..description.model import ClosedLoopModel
-from . import kernels, linalg
+from .kernel_sets import KernelSet, kernel_set
 
 STATUSES = ("converged", "ambiguous_assembly", "max_iterations", "singular", "out_of_limits", "invalid_input")
 SINGULAR_PIVOT_RATIO = 1e-13
@@ -97,17 +97,24 @@ class NewtonSolver:
     Args:
         clm: the loaded hexapod.
         held_joints: Pinocchio joint ids whose values stay as given.
+        kernels: the step's kernels (default: the numba-compiled ones; see
+            :mod:`~hexapod_model.kinematics.kernel_sets`).
 
     Buffers are allocated once here; :meth:`run` allocates only the new configuration
     returned by ``pin.integrate``.
     """
 
-    def __init__(self, clm: ClosedLoopModel, held_joints: tuple[int, ...]):
+    #: whether :meth:`iterate` runs as one compiled call (:class:`.newton.CompiledSolver`)
+    compiled_loop = False
+
+    def __init__(self, clm: ClosedLoopModel, held_joints: tuple[int, ...], kernels: KernelSet | None = None):
         self.clm = clm
-        self.model, probe_cols = clm.solver_model()
-        self.data = self.model.createData()
+        self.kernels = kernel_set(True) if kernels is None else kernels
+        self.model = clm.model
+        self.data = self.model.createData()  # a Data of its own: one per solver, per thread
         self.J = self.data.J  # a view on Pinocchio's buffer, refreshed by computeJointJacobians
-        self.probe_cols = np.ascontiguousarray(probe_cols, dtype=np.int64)
+        #: Pinocchio frame ids of the closure frames: the six leg tips, then the six anchors
+        self.frame_ids = tuple(leg.tip_frame for leg in clm.legs) + tuple(leg.anchor_frame for leg in clm.legs)
         m = clm.model
         held_v = np.zeros(clm.nv, dtype=bool)
         for j in held_joints:
@@ -126,6 +133,7 @@ class NewtonSolver:
         n_res, n_free = 6 * self.rows, self.free_v.size
         self.square = n_res == n_free
         self.R = np.zeros((12, 3, 3))
+        self._H = np.zeros((12, 4, 4))
         self.p = np.zeros((12, 3))
         self.E = np.zeros((6, 3, 3))
         self.r = np.zeros(n_res)
@@ -199,8 +207,9 @@ class NewtonSolver:
         and ``self.kappa`` a bound of the condition number of the eliminated 6x6 Jacobian
         ``M = -dl/dxi`` (leg-reading rates per platform twist).
         """
+        kernels = self.kernels
         if self.held_pos is not None:
-            ratio, self.kappa = linalg.schur_solve(*self._schur_args)
+            ratio, self.kappa = kernels.schur_solve(*self._schur_args)
             self.sign = 1.0 if ratio > 0.0 else -1.0
             return abs(ratio)
         kernels.jacobian(*self._jac_args)
@@ -208,20 +217,35 @@ class NewtonSolver:
             self.x[:] = np.linalg.lstsq(self.G, self.r, rcond=None)[0]
             return 1.0
         if self.block_cols is not None:
-            return linalg.block_solve(
+            return kernels.block_solve(
                 self.G, self.r, self.rows, self.block_cols, self.LUb, self.piv, self.rb, self.xb, self.x
             )
-        ratio = linalg.lu_factor(self.G, self.LU, self.piv)
+        ratio = kernels.lu_factor(self.G, self.LU, self.piv)
         if ratio >= SINGULAR_PIVOT_RATIO:
-            linalg.lu_apply(self.LU, self.piv, self.r, self.x)
+            kernels.lu_apply(self.LU, self.piv, self.r, self.x)
         return ratio
+
+    def _frames(self) -> None:
+        """Closure frame placements into ``R``, ``p`` (after ``computeJointJacobians`` set the joints').
+
+        Twelve reads of ``data.oMf`` (a few microseconds each); the previous releases read them
+        from the Jacobian of an internal copy of the model with a free-flyer "probe" at every
+        closure frame, in one call, but its Pinocchio ``Data`` took 90 MB per solver.
+        """
+        pin.updateFramePlacements(self.model, self.data)
+        oMf, H = self.data.oMf, self._H
+        for k, f in enumerate(self.frame_ids):
+            H[k] = oMf[f].homogeneous
+        self.R[:] = H[:, :3, :3]
+        self.p[:] = H[:, :3, 3]
 
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``."""
         self.q_aug[: self.clm.nq] = q
         pin.computeJointJacobians(self.model, self.data, self.q_aug)
-        kernels.residual(self.J, self.probe_cols, self.rows, self.R, self.p, self.E, self.r)
-        kernels.jacobian(*self._jac_args)
+        self._frames()
+        self.kernels.closure_residual(self.R, self.p, self.rows, self.E, self.r)
+        self.kernels.jacobian(*self._jac_args)
         return self.r.copy(), self.G.copy()
 
     def iterate(
@@ -241,16 +265,18 @@ class NewtonSolver:
         above ``_ONE_STEP`` is followed by a second), the sign ``sign`` (or the first's) at every
         Schur step; the solve stops (status ``uncertified``) once that fails.
         """
-        model, data, J = self.model, self.data, self.J
-        probe_cols, rows, R, p, E, r = self.probe_cols, self.rows, self.R, self.p, self.E, self.r
+        model, data = self.model, self.data
+        rows, R, p, E, r, frames = self.rows, self.R, self.p, self.E, self.r, self._frames
         x, free_v, dv, solve_step = self.x, self.free_v, self.dv, self._solve_step
+        kernels = self.kernels
         q = self.q_aug
         q[: self.clm.nq] = q0
         status, message, it = "max_iterations", "", 0
         theta, previous, certified, inf = 0.0, 0.0, True, np.inf
         while True:
             pin.computeJointJacobians(model, data, q)
-            norm, min_trace = kernels.residual(J, probe_cols, rows, R, p, E, r)
+            frames()
+            norm, min_trace = kernels.closure_residual(R, p, rows, E, r)
             if scale != 0.0:
                 norm = kernels.shift_residual(r, offset, scale)
             if norm <= tol and (it != 1 or previous <= _ONE_STEP):  # one large step: measure a contraction
@@ -293,5 +319,5 @@ class NewtonSolver:
         Returns ``(q, status, iterations, residual, jacobian, message)``.
         """
         status, it, norm, message = self.iterate(q0, tol, max_iter)
-        kernels.jacobian(*self._jac_args)
+        self.kernels.jacobian(*self._jac_args)
         return self.q_aug[: self.clm.nq].copy(), status, it, norm, self.G.copy(), message

@@ -11,7 +11,7 @@ from pathlib import Path
 from hexapod_model.cli.main import MODULES, OWNER, build_parser
 
 ROOT = Path(__file__).resolve().parents[2]
-HEAVY = ("scipy.spatial", "scipy.optimize", "scipy.stats", "matplotlib", "meshcat", "yourdfpy", "trimesh", "mujoco")
+HEAVY = ("scipy", "numba", "llvmlite", "matplotlib", "meshcat", "yourdfpy", "trimesh", "mujoco")
 
 
 def test_owner_table_names_every_command_of_every_module():
@@ -25,6 +25,7 @@ def test_owner_table_names_every_command_of_every_module():
 
 
 def test_fk_and_ik_import_nothing_heavy(tmp_path):
+    """A short input (one chunk of rows) is solved with the NumPy kernels: no numba, no scipy."""
     poses = tmp_path / "poses.csv"
     code = (
         "import sys\nfrom hexapod_model.cli.main import main\n"
@@ -34,3 +35,32 @@ def test_fk_and_ik_import_nothing_heavy(tmp_path):
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)
     assert out.stdout.strip() == "[]", out.stdout[:500]
+
+
+def test_a_long_input_is_solved_compiled(tmp_path):
+    """More rows than one chunk: the compiled kernels (numba imported), the same answers as the NumPy ones."""
+    import numpy as np
+
+    from hexapod_model.io.csv_rows import CHUNK_ROWS
+
+    rows = np.loadtxt(ROOT / "docs/examples/lengths.csv", delimiter=",", skiprows=1)
+    long = tmp_path / "long.csv"
+    reps = CHUNK_ROWS // len(rows) + 1
+    long.write_text(
+        "l1,l2,l3,l4,l5,l6\n" + "".join(",".join(f"{v:.9f}" for v in r) + "\n" for r in np.tile(rows, (reps, 1)))
+    )
+    short = ROOT / "docs/examples/lengths.csv"
+    code = (
+        "import sys\nfrom hexapod_model.cli.main import main\n"
+        f"assert main(['fk', 'reference', {str(long)!r}, '-o', {str(tmp_path / 'a.csv')!r}]) == 0\n"
+        f"assert main(['fk', 'reference', {str(short)!r}, '-o', {str(tmp_path / 'b.csv')!r}]) == 0\n"
+        "print('numba' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)
+    assert out.stdout.strip() == "True"
+    a = np.genfromtxt(tmp_path / "a.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+    b = np.genfromtxt(tmp_path / "b.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+    assert len(a) == reps * len(rows)
+    for name in ("x", "y", "z", "qx", "qy", "qz", "qw"):
+        np.testing.assert_allclose(a[name][: len(b)], b[name], rtol=0, atol=1e-11)
+    assert list(a["status"][: len(b)]) == list(b["status"]) and list(a["iterations"][: len(b)]) == list(b["iterations"])

@@ -1,0 +1,51 @@
+"""Which kernels a solver runs: numba-compiled (:mod:`.kernels`, :mod:`.linalg`) or NumPy (:mod:`.numpy_kernels`).
+
+The compiled kernels are the fast path (a warm direct-kinematics solve in tens of microseconds)
+but numba costs about a second and 130 MB to import and initialise in every process, and the
+first run after installation compiles them (tens of seconds). The NumPy kernels run the same
+equations with no compilation, several times slower per solve: the right choice for a short job.
+Only :func:`kernel_set` ``(compiled=True)`` imports numba.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from typing import NamedTuple
+
+
+class KernelSet(NamedTuple):
+    """The kernels of the Newton step, the limit checks and the free-flyer conversions (same signatures)."""
+
+    compiled: bool
+    closure_residual: Callable
+    jacobian: Callable
+    scatter_step: Callable
+    shift_residual: Callable
+    schur_solve: Callable
+    block_solve: Callable
+    lu_factor: Callable
+    lu_apply: Callable
+    first_outside: Callable
+    first_outside_at: Callable
+    rigid_error: Callable
+    pose_to_xyzquat: Callable
+    xyzquat_to_pose: Callable
+
+
+@functools.cache
+def kernel_set(compiled: bool = True) -> KernelSet:
+    """The numba kernels (``compiled``, imports numba) or their NumPy twins."""
+    import importlib
+
+    k = importlib.import_module(".kernels" if compiled else ".numpy_kernels", __package__)
+    la = importlib.import_module(".linalg" if compiled else ".numpy_kernels", __package__)
+    names = [f for f in KernelSet._fields[1:] if f not in ("schur_solve", "block_solve", "lu_factor", "lu_apply")]
+    return KernelSet(
+        compiled,
+        schur_solve=la.schur_solve,
+        block_solve=la.block_solve,
+        lu_factor=la.lu_factor,
+        lu_apply=la.lu_apply,
+        **{name: getattr(k, name) for name in names},
+    )
