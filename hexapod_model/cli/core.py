@@ -14,7 +14,6 @@ import numpy as np
 from ..description.geometry import load_geometry
 from ..description.presets import DEFAULT_PRESET, PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf, validate_urdf
-from ..exceptions import HexapodError
 from ..files import atomic_write_text, atomic_writer, check_output_path
 from ..io.tables import (
     LENGTH_COLUMNS,
@@ -27,6 +26,7 @@ from ..io.tables import (
     pose_input_columns,
     poses_from_table,
 )
+from ..kinematics.batch import BatchResult
 from ..kinematics.hexapod import Hexapod
 from ._common import add_hexapod_argument, compiled_for_long, hexapod_of, note, stream_bar
 
@@ -111,55 +111,54 @@ def _stream(
 ) -> tuple[int, int, str]:
     """Solve and write every row, each from the previous good solution, a chunk at a time.
 
-    Returns (rows, failed rows, the first failure as one line).
+    Each chunk goes through ``forward_batch`` / ``inverse_batch`` with ``warm=True``, from the
+    last good solution of the chunks before: per row what ``forward`` / ``inverse`` with the
+    previous good row's solution as guess gives. Returns (rows, failed rows, the first failure
+    as one line).
     """
     writer = TableWriter(out, out_header)
-    solve = hexa.forward if kind == "fk" else hexa.inverse
     width = len(out_header) - len(SOLVER_COLUMNS)
     total, failed, first, guess = 0, 0, "", None
     with stream_bar(kind) as bar:
         for rows in chunks:
-            if kind == "fk":
-                inputs, errors = rows.values, rows.errors
-            else:
-                inputs, pose_errors = poses_from_table(columns, rows.values)
-                errors = [a or b for a, b in zip(rows.errors, pose_errors)]
-            good: list[int] = []
-            solved: list[np.ndarray] = []  # the pose (fk) or the readings (ik) of the good rows
-            tails: list[list] = []  # per row: status, iterations, residual
-            for k in range(len(rows)):
-                sol, why = None, errors[k]
-                if not why:
-                    try:
-                        sol = solve(inputs[k], guess=guess, check=False)
-                        why = sol.message
-                    except HexapodError as exc:
-                        why = str(exc)
-                if sol is not None and sol.converged:
-                    guess = sol
-                    good.append(k)
-                    solved.append(sol.pose if kind == "fk" else sol.lengths)
-                    flags = ";".join(sol.flags)  # a valid pose, but not ok (near_singular): written, counted
-                    tails.append([flags or "ok", sol.iterations, float(sol.residual)])
-                    if flags:
-                        failed += 1
-                        first = first or f"row {total + k + 1} (line {rows.lines[k]}): {flags}: {why}"
-                    continue
-                status = "invalid_input" if sol is None else sol.status
-                failed += 1
-                first = first or f"row {total + k + 1} (line {rows.lines[k]}): {status}: {why}"
-                tails.append(
-                    [status, 0, float("nan")] if sol is None else [status, sol.iterations, float(sol.residual)]
-                )
+            res, errors = _solve_chunk(hexa, kind, columns, rows, guess)
+            bad = np.array([bool(e) for e in errors], dtype=bool)
+            status = np.where(bad, "invalid_input", res.status)
+            good = status == "converged"
             table_values = np.full((len(rows), width), np.nan)
-            if good:  # fk: pose -> quaternion and angles for the whole chunk in one call
-                table_values[good] = pose_columns(np.array(solved)) if kind == "fk" else np.array(solved)
+            if good.any():  # fk: pose -> quaternion and angles for the whole chunk in one call
+                table_values[good] = pose_columns(res.poses[good]) if kind == "fk" else res.lengths[good]
+                guess = res.solution(int(np.flatnonzero(good)[-1]))  # the next chunk's first guess
+            iterations = np.where(bad, 0, res.iterations)
+            residuals = np.where(bad, np.nan, res.residual)
             for k in range(len(rows)):
-                writer.write([*map(float, table_values[k]), *tails[k]])
+                flags = ";".join(res.flags[k]) if good[k] else ""  # a valid pose, but not ok (near_singular)
+                label = (flags or "ok") if good[k] else str(status[k])
+                if label != "ok":
+                    failed += 1
+                    why = errors[k] or res.messages[k]
+                    first = first or f"row {total + k + 1} (line {rows.lines[k]}): {label}: {why}"
+                writer.write([*map(float, table_values[k]), label, int(iterations[k]), float(residuals[k])])
             total += len(rows)
             bar.update(len(rows))
             out.flush()
     return total, failed, first
+
+
+def _solve_chunk(hexa: Hexapod, kind: str, columns: list[str], rows: Rows, guess) -> tuple[BatchResult, list[str]]:
+    """One chunk solved warm from ``guess``, and per row the reason it was not read (``""``: read).
+
+    Rows that were not read go to the batch as NaN (``invalid_input``), so that they never
+    become a guess.
+    """
+    if kind == "fk":
+        inputs, errors = rows.values.copy(), rows.errors
+    else:
+        inputs, pose_errors = poses_from_table(columns, rows.values)
+        errors = [a or b for a, b in zip(rows.errors, pose_errors)]
+    inputs[[k for k, e in enumerate(errors) if e]] = np.nan
+    solve = hexa.forward_batch if kind == "fk" else hexa.inverse_batch
+    return solve(inputs, guess, warm=True), errors
 
 
 def cmd_fk(args: argparse.Namespace) -> int:

@@ -21,7 +21,8 @@ predictor along the first Newton step, then along the secant of the last two pat
 down to ``MIN_STEP`` and at most ``MAX_SUBSTEPS`` of them. When the path cannot be followed (it
 meets a singularity or a fold of the readings map), the result is ``ambiguous_assembly`` with
 the assemblies found (the plain solve's, and Newton's from the last certified point) as
-candidates, never ``converged``.
+candidates, never ``converged``. On the compiled path the path is followed in compiled code
+(:func:`.follow.follow`, the same rules); the candidates are always looked for here.
 
 A certified result whose eliminated 6x6 Jacobian ``M`` (leg-reading rates per platform twist)
 has a condition-number bound (:func:`~hexapod_model.kinematics.linalg.schur_solve`) above
@@ -31,16 +32,19 @@ connected assembly, but another one may lie close by.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple, cast
 
 import numpy as np
 import pinocchio as pin
 
-from .solver import THETA_MAX, NewtonSolver
+from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP, rescale
+from .solver import NewtonSolver
 
-MIN_STEP = 1.0 / 1024  # smallest substep of the readings path before giving up
-MAX_SUBSTEPS = 64
-INTERMEDIATE_TOL = 1e-4  # closure residual of the substeps before the last one
+if TYPE_CHECKING:
+    from .newton import CompiledSolver
+
+__all__ = ["INTERMEDIATE_TOL", "MAX_SUBSTEPS", "MIN_STEP", "NEAR_SINGULAR_FACTOR", "Outcome", "solve_forward"]
+
 NEAR_SINGULAR_FACTOR = 30.0  # flag when the condition bound of M exceeds this times its home value
 _DISTINCT = 1e-7  # configurations farther apart than this (m, rad) are different assemblies
 
@@ -99,7 +103,11 @@ def solve_forward(
         if status == "converged" and not solver.kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
             return _certified(solver, it, res, "not certified: ")
     start[pq] = l0
-    h = _rescale(solver.theta, False, 1)
+    h = rescale(solver.theta, False, 1)
+    if solver.compiled_loop:  # a newton.CompiledSolver
+        return _follow_compiled(
+            cast("CompiledSolver", solver), start, l0, lengths, tol, max_iter, sign, (plain, first), it, h
+        )
     return _follow(solver, start, l0, lengths, tol, max_iter, sign, (plain, first), it, h)
 
 
@@ -140,7 +148,7 @@ def _follow(
         total += it
         substeps += 1
         accepted = status == "converged" and solver.certified
-        h = (tn - t) * _rescale(solver.theta, accepted, 2 if predicted else 1)  # from the substep tried
+        h = (tn - t) * rescale(solver.theta, accepted, 2 if predicted else 1)  # from the substep tried
         if accepted:
             before, x, t, sign, predicted = (x, t), solver.q_aug[:nq].copy(), tn, solver.det_sign, True
     if t == 1.0:
@@ -148,15 +156,30 @@ def _follow(
     return _ambiguous(solver, x, t, lengths, tol, max_iter, tried[0], total)
 
 
-def _rescale(theta: float, accepted: bool, order: int) -> float:
-    """Factor for the next substep after one with largest contraction ``theta``.
+def _follow_compiled(
+    solver: CompiledSolver,
+    start: np.ndarray,
+    l0: np.ndarray,
+    lengths: np.ndarray,
+    tol: float,
+    max_iter: int,
+    sign: float,
+    tried: tuple[np.ndarray, np.ndarray | None],
+    total: int,
+    h: float,
+) -> Outcome:
+    """:func:`_follow` on the compiled path (:func:`.follow.follow`); the candidates, if any, here."""
+    from .follow import follow  # numba: a compiled solver's
 
-    The contraction grows like ``h ** order`` (1 from the last path point, 2 with a
-    first-order predictor); the next substep aims at ``0.8 THETA_MAX``, at most doubles and
-    at least halves after a rejection.
-    """
-    factor = (0.8 * THETA_MAX / theta) ** (1.0 / order) if theta > 0.0 else 2.0
-    return min(2.0, max(0.5, factor)) if accepted else max(0.1, min(0.5, factor))
+    first = tried[1] if tried[1] is not None else start
+    x = np.empty_like(start)
+    pq = solver.clm.prismatic_q.astype(np.int64)
+    args = (float(tol), int(max_iter), float(sign), int(total), float(h), pq, solver.arrays, x, solver._q)
+    t, total, res = follow(start, lengths, first, tried[1] is not None, *args)
+    solver.sign, solver.kappa = solver._state.tolist()  # the last Schur step's, as iterate() leaves them
+    if t == 1.0:
+        return _certified(solver, total, res)
+    return _ambiguous(solver, x, t, lengths, tol, max_iter, tried[0], total)
 
 
 def _certified(solver: NewtonSolver, total: int, res: float, note: str = "") -> Outcome:

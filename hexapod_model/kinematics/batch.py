@@ -4,8 +4,10 @@ Each row gets what :meth:`~.hexapod.Hexapod.forward` (``inverse``) with ``check=
 give it (status, message, flags, iterations, determinant sign), and ``invalid_input`` where
 those raise on the row's input (NaN, a reading outside the stroke, a matrix that is not a rigid
 transform). On the compiled path (:mod:`.newton`) the loop over rows runs compiled
-(:mod:`.batch_kernels`); a direct-kinematics row whose certified first attempt fails is solved
-by ``forward`` itself. Other hexapods and held sets are solved row by row.
+(:mod:`.batch_kernels`), the readings path of :mod:`.assembly` included; a direct-kinematics
+row whose path is blocked (``ambiguous_assembly`` and its candidates) or whose warm result is
+uncertified near a singularity is solved by ``forward`` itself. Other hexapods and held sets
+are solved row by row.
 """
 
 from __future__ import annotations
@@ -191,7 +193,8 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, sla
     from .batch_kernels import forward_rows  # numba: only for a compiled solver
 
     start = hexa._start(guess)  # a bad guess raises, as forward would on every row
-    carry = np.array([solver.home_sign if guess is None else float(getattr(guess, "det_sign", 0)), 0.0])
+    sign = solver.home_sign if guess is None else float(getattr(guess, "det_sign", 0))
+    carry = np.array([sign, 0.0, float(guess is not None)])
     joints = rows if hexa._encoder is None else hexa.joints_of(rows)
     out, fallback = _outputs(len(rows), hexa.nq), {}
     settings = (tol, max_iter, NEAR_SINGULAR_FACTOR * solver.home_kappa)
@@ -214,7 +217,7 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, sla
             solver.arrays,
             out,
         )
-        if k < len(rows):  # the certified first attempt did not settle it: forward() follows the path
+        if k < len(rows):  # the path is blocked, or a warm row is near a singularity: forward() says so
             g = (
                 guess
                 if not carry[1]
@@ -223,7 +226,7 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, sla
             fallback[k] = sol = solve(rows[k], g)
             out[2][k] = _FALLBACK
             if warm and sol.converged:
-                start[:], carry[:] = sol.q, (sol.det_sign, 1.0)
+                start[:], carry[:2] = sol.q, (sol.det_sign, 1.0)
             k += 1
     return _result(hexa, out, tol, retry, fallback, True)
 

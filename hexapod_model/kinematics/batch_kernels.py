@@ -2,13 +2,16 @@
 
 Per row: the input checks, the Newton iteration (:func:`.newton.iterate`) and the joint-limit
 check of :meth:`.hexapod.Hexapod.forward` / :meth:`~.hexapod.Hexapod.inverse`. Direct kinematics
-runs the certified first attempt of :func:`.assembly.solve_forward`; a row it does not settle
-(the readings path must be followed, or the assembly is ambiguous) ends the loop, and the
-caller solves that row with ``forward`` before resuming at the next one.
+runs :func:`.assembly.solve_forward`: the certified first attempt, then, for a row it does not
+settle, the readings path (:func:`.follow.follow`, :func:`_follow_row`). A row whose path is
+blocked (the candidates of an ambiguous assembly are looked for in Python) or whose warm plain
+result is uncertified near a singularity ends the loop, and the caller solves that row with
+``forward`` before resuming at the next one.
 
 Each row starts from ``start`` with determinant sign ``carry[0]`` (home or a guess); with
 ``warm`` from the last row that converged instead (a time series, as ``hexapod fk`` reads its
-rows), ``start`` and ``carry`` being updated in place (``carry[1] = 1`` once they were). Per
+rows), ``start`` and ``carry`` being updated in place (``carry[1] = 1`` once they were;
+``carry[2] = 1`` when the start is a guess: ``forward``'s warm solve). Per
 row the loops write ``out = (Q, poses, codes, iterations, residuals, ratios, kappas, signs,
 bad)``: the final configuration, the platform pose (NaN unless converged), an outcome code
 (:mod:`.newton`'s, :data:`OUT_OF_LIMITS`, :data:`INVALID_INPUT`), iterations, residual norm,
@@ -21,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .follow import follow, rescale
 from .kernels import first_outside, first_outside_at, pose_to_xyzquat, rigid_error, xyzquat_to_pose
 from .newton import iterate_blocks, iterate_schur
 from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
@@ -64,6 +68,33 @@ def _invalid_row(k, out):
 
 
 @njit(cache=True)
+def _follow_row(q0, q, start, target, attempt, tol, max_iter, sign, guessed, near_kappa, prismatic_q, packed):
+    """The rest of :func:`.assembly.solve_forward` after a failed certified attempt from ``q0``.
+
+    ``attempt = (iterations, theta)`` of that attempt, whose last iterate is in ``q``;
+    ``start`` holds the start's own readings. From a guess (``guessed``), first the plain uncertified solve
+    (a result near a singularity is left to the caller), then the path from ``start``.
+    Returns ``(done, iterations, residual)``: done when the path reached its end (in ``q``).
+    """
+    ints, floats, work, iwork = packed
+    state = unpack_work(ints, work)[0][18]
+    it, theta = attempt
+    first = q.copy()  # the first Newton iterate when the attempt took one step
+    if guessed:  # near a singularity no path certifies: forward() returns the plain result, flagged
+        code, n, _, _, theta, _, _ = iterate_schur(
+            q0, q, tol, max_iter, 0.0, np.zeros(6 * ints[0]), 0.0, False, ints, floats, work, iwork
+        )
+        it += n
+        if code == CONVERGED and not state[1] <= near_kappa:
+            return False, it, 0.0
+    h = rescale(theta, False, 1)
+    t, it, norm = follow(
+        start, target, first, attempt[0] == 1, tol, max_iter, sign, it, h, prismatic_q, packed, first.copy(), q
+    )
+    return t == 1.0, it, norm
+
+
+@njit(cache=True)
 def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q, stroke, limits, home, packed, out):
     """Direct kinematics of rows ``k0:`` of ``readings`` (N, 6) (``joints``: their prismatic values).
 
@@ -85,8 +116,14 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q
         code, it, norm, ratio, theta, sign, certified = iterate_schur(
             q0, q, tol, max_iter, carry[0], no_offset, 0.0, True, ints, floats, work, iwork
         )
-        if not certified or (code != CONVERGED and code != NO_CONVERGENCE):
-            return k  # the readings path or the candidates: assembly.solve_forward's other branches
+        if not certified or (code != CONVERGED and code != NO_CONVERGENCE):  # follow the readings path
+            attempt, guessed = (it, theta), carry[1] == 1.0 or carry[2] == 1.0
+            done, it, norm = _follow_row(
+                q0, q, start, joints[k], attempt, tol, max_iter, carry[0], guessed, near_kappa, prismatic_q, packed
+            )
+            if not done:
+                return k  # blocked (the candidates) or uncertified near a singularity: forward() solves it
+            code, ratio = CONVERGED, 1.0
         kappa, sign = (state[1], state[0]) if code == CONVERGED else (np.inf, 0.0)
         code = _finish_row(k, q, code, it, norm, ratio, kappa, sign, limits, platform_q, home, out)
         if warm and code == CONVERGED:

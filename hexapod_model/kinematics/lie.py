@@ -9,9 +9,17 @@
   with Pinocchio's threshold;
 * :func:`integrate_free_flyer`: Pinocchio's ``integrate`` on a free flyer's ``(p, quat)``:
   ``M1 = M0 exp6(v)`` (body velocity), the quaternion kept on ``q0``'s side and normalised to
-  first order (``q *= (3 - |q|^2) / 2``).
+  first order (``q *= (3 - |q|^2) / 2``);
+* :func:`log6`: the inverse of ``exp6`` away from a half turn (the readings path's substeps turn
+  far less), as Pinocchio's ``log3`` and ``log6``: the angle ``t`` from the trace (here by
+  ``atan2`` with the skew part, accurate near 0), ``w = t / (2 sin t) (R - R^T)^v``,
+  ``v = alpha p - [w] p / 2 + beta (w . p) w`` with ``alpha = t sin t / (2 (1 - cos t))``
+  written ``(t/2) cot(t/2)`` (no cancellation) and ``beta = (1 - alpha) / t^2``,
+  Taylor-expanded for small ``t``;
+* :func:`difference_free_flyer`: Pinocchio's ``difference``, ``log6(M0^-1 M1)``.
 
-Test: ``tests/kinematics/test_chains.py`` against ``pin.exp6`` and ``pin.integrate``.
+Tests: ``tests/kinematics/test_chains.py`` against ``pin.exp6``, ``pin.integrate``, ``pin.log6``
+and ``pin.difference``.
 """
 
 from __future__ import annotations
@@ -116,3 +124,40 @@ def integrate_free_flyer(x, v, R0, R1, Re, pe, quat):
     alpha = sign * (3.0 - n2) / 2.0  # first-order normalisation
     for a in range(4):
         x[3 + a] = alpha * quat[a]
+
+
+@njit(cache=True, inline="always")
+def log6(R, p, out):
+    """Write ``out = (v, w)`` (6,) of ``log6`` of the transform ``(R, p)`` (Pinocchio's ``log6``, no half turn)."""
+    ax, ay, az = R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]  # 2 sin t times the axis
+    sin_t = 0.5 * np.sqrt(ax * ax + ay * ay + az * az)
+    t = np.arctan2(sin_t, 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0))  # acos of the trace, well conditioned
+    half = 0.5 * t / sin_t if t > _TAYLOR_T else 0.5  # t / (2 sin t)
+    wx, wy, wz = half * ax, half * ay, half * az
+    t2 = t * t
+    if t < _TAYLOR_T:
+        alpha = 1.0 - t2 / 12.0 - t2 * t2 / 720.0
+        beta = 1.0 / 12.0 + t2 / 720.0
+    else:
+        alpha = 0.5 * t / np.tan(0.5 * t)  # t sin t / (2 (1 - cos t)), without the cancellation
+        beta = (1.0 - alpha) / t2
+    wp = beta * (wx * p[0] + wy * p[1] + wz * p[2])
+    out[0] = alpha * p[0] - 0.5 * (wy * p[2] - wz * p[1]) + wp * wx
+    out[1] = alpha * p[1] - 0.5 * (wz * p[0] - wx * p[2]) + wp * wy
+    out[2] = alpha * p[2] - 0.5 * (wx * p[1] - wy * p[0]) + wp * wz
+    out[3], out[4], out[5] = wx, wy, wz
+
+
+@njit(cache=True)
+def difference_free_flyer(x0, x1, out, R0, R1, Rd, pd):
+    """``out = x1 (-) x0`` (6,), the body velocity from free flyer ``x0`` to ``x1``: ``log6(M0^-1 M1)``.
+
+    ``R0``, ``R1``, ``Rd`` (3x3) and ``pd`` (3,) are scratch buffers.
+    """
+    quat_to_matrix(x0[3], x0[4], x0[5], x0[6], R0)
+    quat_to_matrix(x1[3], x1[4], x1[5], x1[6], R1)
+    for a in range(3):  # M0^-1 M1 = (R0^T R1, R0^T (p1 - p0))
+        pd[a] = R0[0, a] * (x1[0] - x0[0]) + R0[1, a] * (x1[1] - x0[1]) + R0[2, a] * (x1[2] - x0[2])
+        for b in range(3):
+            Rd[a, b] = R0[0, a] * R1[0, b] + R0[1, a] * R1[1, b] + R0[2, a] * R1[2, b]
+    log6(Rd, pd, out)

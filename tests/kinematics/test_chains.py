@@ -8,7 +8,13 @@ import pytest
 
 from hexapod_model.kinematics.chains import evaluate_chains
 from hexapod_model.kinematics.legs import ChainTables
-from hexapod_model.kinematics.lie import exp6, integrate_free_flyer, matrix_to_quat, quat_to_matrix
+from hexapod_model.kinematics.lie import (
+    difference_free_flyer,
+    exp6,
+    integrate_free_flyer,
+    matrix_to_quat,
+    quat_to_matrix,
+)
 
 from ..conftest import PRESET_NAMES, hexapod
 from .test_newton import idle_roll_hexapod
@@ -107,3 +113,20 @@ def test_free_flyer_integration_matches_pinocchio():
                 x, dv[iv : iv + 6], scratch[0][0], scratch[0][1], scratch[0][2], scratch[1], scratch[2]
             )
             np.testing.assert_allclose(x, pin.integrate(m, q, dv)[i : i + 7], rtol=0, atol=1e-15)
+
+
+def test_free_flyer_difference_matches_pinocchio():
+    hexa = hexapod("reference")
+    m, i = hexa.model, hexa.closed_loop.platform_q
+    iv = hexa.closed_loop.platform_v
+    rng = np.random.default_rng(24)
+    out, scratch = np.empty(6), (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3))
+    for scale in (1e-9, 1e-6, 1e-3, 0.5, 2.0):  # both sides of the Taylor threshold, up to large turns
+        for _ in range(50):
+            q0 = random_q(hexa, rng)
+            dv = np.zeros(m.nv)
+            dv[iv : iv + 6] = rng.normal(0.0, scale, 6)
+            q1 = pin.integrate(m, q0, dv)
+            difference_free_flyer(q0[i : i + 7], q1[i : i + 7], out, *scratch)
+            atol = 1e-14 if scale < 1 else 1e-12  # acos is ill-conditioned towards a half turn
+            np.testing.assert_allclose(out, pin.difference(m, q0, q1)[iv : iv + 6], rtol=0, atol=atol)

@@ -1,0 +1,120 @@
+"""The readings path of :mod:`.assembly`, followed in compiled code.
+
+:func:`follow` is :func:`.assembly._follow` on the compiled path (:mod:`.newton`): the path of
+solutions for the readings ``l(t) = l0 + t (l - l0)`` from the start, in substeps, each accepted
+only when its certified Newton corrector (:func:`.newton.iterate_schur` with ``certify``)
+converges: no shortened step (``MAX_STEP``), every contraction at most ``THETA_MAX``, the
+determinant sign kept. Same rules as the Python follower:
+
+* substep ``h`` from :func:`rescale` (aim at ``0.8 THETA_MAX``), no sliver of a last substep
+  (``t + 1.2 h >= 1`` goes to 1), down to ``MIN_STEP`` and at most ``MAX_SUBSTEPS``;
+* predictor: the secant of the last two path points, or the plain attempt's first Newton step
+  before the first accepted substep (``pin.interpolate`` / ``pin.integrate`` on the manifold:
+  leg joints add, the platform's free flyer moves by ``exp6`` of ``log6``, :mod:`.lie`);
+* closure residual ``INTERMEDIATE_TOL`` before the last substep; a start that does not close at
+  its own readings follows ``r - (1 - t) r_start``.
+
+What the path's end leaves is the caller's: a certified end (``t == 1``, the solver's buffers
+hold the last Schur step) or the last certified point ``x`` at ``t < 1``, where
+:func:`.assembly._ambiguous` looks for candidates (rare rows, in Python).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from . import path_rules
+from .lie import difference_free_flyer
+from .newton import CONVERGED, _integrate, iterate_schur
+from .packing import unpack_ints, unpack_work
+from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP
+
+rescale = njit(cache=True)(path_rules.rescale)  # the Python follower's rule, compiled
+
+
+@njit(cache=True, inline="always")
+def _difference(q0, q1, dv, ints, scratch):
+    """``dv = q1 (-) q0`` (Pinocchio's ``difference``): leg joints subtract, the platform by ``log6``."""
+    (leg_q, leg_v, platform_v, _, _, _), _ = unpack_ints(ints)
+    platform_q = ints[3]
+    for i in range(leg_q.shape[0]):
+        for k in range(leg_q.shape[1]):
+            dv[leg_v[i, k]] = q1[leg_q[i, k]] - q0[leg_q[i, k]]
+    x0, x1 = q0[platform_q : platform_q + 7], q1[platform_q : platform_q + 7]
+    difference_free_flyer(x0, x1, dv[platform_v[0] : platform_v[0] + 6], scratch[0], scratch[1], scratch[2], scratch[3])
+
+
+@njit(cache=True, inline="always")
+def _predict(x, a, b, u, q0, dv, ints, work, scratch):
+    """``q0 = x (+) u (b (-) a)``: ``pin.integrate(x, u * pin.difference(a, b))``."""
+    (leg_q, leg_v, platform_v, _, _, _), _ = unpack_ints(ints)
+    Rs, ps, quat = unpack_work(ints, work)[0][15:18]
+    _difference(a, b, dv, ints, scratch)
+    for i in range(dv.shape[0]):
+        dv[i] *= u
+    q0[:] = x
+    _integrate(q0, dv, leg_q, leg_v, ints[3], platform_v, Rs, ps, quat)
+
+
+@njit(cache=True)
+def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prismatic_q, packed, x, q):
+    """Follow the readings path from ``start`` to ``target`` in certified substeps, the first of ``h``.
+
+    Args:
+        start: configuration to start from; its prismatic entries are its own readings ``l0``.
+        target: the prismatic joint values to reach (leg order).
+        first: the plain attempt's first iterate, the first predictor when ``predicted``.
+        predicted: the plain attempt took one step (``first`` is meaningful).
+        tol: closure residual of the last substep.
+        max_iter: Newton steps per substep.
+        sign: determinant sign of the start's assembly (0 when unknown).
+        total: Newton steps taken so far (the count goes on).
+        h: the first substep.
+        prismatic_q: configuration index of each leg's prismatic joint.
+        packed: the solver's :class:`.packing.Packed` arrays.
+        x: output, the last certified point of the path (``start`` when none).
+        q: output, the last corrector's final iterate (the result when ``t == 1``).
+
+    Returns:
+        ``(t, total, residual)``: how far the path was followed (1: certified end), the Newton
+        steps counted and the last corrector's residual norm.
+    """
+    ints, floats, work, iwork = packed
+    r = unpack_work(ints, work)[0][6]
+    nq, n = start.shape[0], prismatic_q.shape[0]
+    q0, before, dv = np.empty(nq), np.empty(nq), np.empty(ints[1])
+    scratch = (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3))
+    offset = np.zeros(r.shape[0])
+    # the start's own closure residual: a start off the manifold follows r - (1 - t) r_start
+    res = iterate_schur(start, q, np.inf, 0, 0.0, offset, 0.0, False, ints, floats, work, iwork)[2]
+    shifted = res > INTERMEDIATE_TOL
+    if shifted:
+        offset[:] = r
+    x[:] = start
+    t, t_before, substeps, has_before = 0.0, 0.0, 0, False
+    while t < 1.0 and substeps < MAX_SUBSTEPS and h >= MIN_STEP:
+        tn = 1.0 if t + 1.2 * h >= 1.0 else t + h  # no sliver of a last substep
+        if has_before:  # predictor: along the secant of the last two path points
+            _predict(x, before, x, (tn - t) / (t - t_before), q0, dv, ints, work, scratch)
+        elif predicted:  # along the plain attempt's first Newton step (the tangent, to first order)
+            _predict(x, x, first, tn, q0, dv, ints, work, scratch)  # pin.interpolate(x, first, tn)
+        else:
+            q0[:] = x
+        for i in range(n):
+            l0 = start[prismatic_q[i]]
+            q0[prismatic_q[i]] = l0 + tn * (target[i] - l0)
+        scale = 1.0 - tn if shifted else 0.0
+        tol_n = tol if tn == 1.0 else INTERMEDIATE_TOL
+        code, it, res, _, theta, kept, certified = iterate_schur(
+            q0, q, tol_n, max_iter, sign, offset, scale, True, ints, floats, work, iwork
+        )
+        total += it
+        substeps += 1
+        accepted = code == CONVERGED and certified
+        h = (tn - t) * rescale(theta, accepted, 2 if predicted else 1)  # from the substep tried
+        if accepted:
+            before[:] = x
+            x[:] = q
+            t_before, t, sign, predicted, has_before = t, tn, kept, True, True
+    return t, total, res
