@@ -26,9 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..kinematics.hexapod import Hexapod
-from .codec import decode
 from .config import FixtureConfig
-from .errors import FrameError
 from .solve import PoseSolver, SolveOutcome
 from .state import LockDetector, StuckDetector
 from .store import LockEvent
@@ -65,6 +63,8 @@ class FixtureCycle:
     def __init__(self, cfg: FixtureConfig, hexa: Hexapod, geometry_hash: str, recovered: LockEvent | None, t0: float):
         self.cfg, self.hexa, self.geometry_hash = cfg, hexa, geometry_hash
         self.layout = cfg.legs[0].layout
+        self._unpack, self._min_length = self.layout.unpack, self.layout.length
+        self._metres_per_count = self.layout.metres_per_count
         self._lo, self._hi = hexa.stroke[:, 0].tolist(), hexa.stroke[:, 1].tolist()
         self._home = [leg.home_count for leg in cfg.legs]
         self._t = [-math.inf] * 6  # receipt time of each leg's newest frame (lists: faster than arrays here)
@@ -107,11 +107,11 @@ class FixtureCycle:
             silent = [k for k in range(6) if k != leg and t - self._t[k] > self.cfg.staleness]
             if silent:
                 published = self._failure(t, "silent_leg", [f"silent:leg{k + 1}" for k in silent])
-        try:
-            count, self._err[leg], self._warn[leg] = decode(self.layout, data)
+        if len(data) >= self._min_length:  # codec.decode's check, without its exception on the hot path
+            count, self._err[leg], self._warn[leg] = self._unpack(data)
             self._counts[leg], self._bad[leg] = count, False
-            self._readings[leg] = (count - self._home[leg]) * self.layout.metres_per_count
-        except FrameError:
+            self._readings[leg] = (count - self._home[leg]) * self._metres_per_count
+        else:
             self._bad[leg], self._readings[leg] = True, math.nan
         dt = t - self._t[leg]
         if 0.0 < dt <= self.cfg.staleness:  # the median ignores missed frames and bunched arrivals
