@@ -192,7 +192,7 @@ class Tracker:
         sol = self._solve(l, self._guess())
         if sol.status not in ("converged", "out_of_limits"):
             return self._failure(l, sol.status, sol.message, tuple(flags), legs, t0, sol)
-        sens = self._sens.evaluate(sol.q)
+        sens = self._sens.evaluate_solved(sol.q)  # from the solve's own Jacobians
         if checked and not suspect and not self._lost:
             sol, sens, consistent = self._branch_check(sol, sens, l, lhat, w, spread)
             if not consistent:
