@@ -12,6 +12,7 @@ and the HTTP server's. Subscribers run on the bus thread: keep them short.
 
 from __future__ import annotations
 
+import json
 import logging
 import threading
 import time
@@ -240,16 +241,18 @@ class FixtureService:
 
 def sample_row(rec: Record) -> tuple:
     """A record as a row of the store's ``samples`` table."""
-    import json
-
-    pose = rec["pose"]
-    pose_values = [None] * 7 if pose is None else [pose[k] for k in ("x", "y", "z", "qx", "qy", "qz", "qw")]
+    pose, flags = rec["pose"], rec["flags"]
+    pose_values = _NO_POSE if pose is None else [pose[k] for k in _POSE_COLUMNS]
     return (
         rec["fixture"],
         rec["t"],
         rec["status"],
-        json.dumps(rec["flags"]),
+        json.dumps(flags) if flags else "[]",  # json.dumps([]): most records carry no flag
         rec["state"],
         *rec["readings"],
         *pose_values,
     )
+
+
+_POSE_COLUMNS = ("x", "y", "z", "qx", "qy", "qz", "qw")
+_NO_POSE = (None,) * 7
