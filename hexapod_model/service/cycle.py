@@ -27,6 +27,7 @@ import pinocchio as pin
 
 from ..kinematics.hexapod import Hexapod
 from .config import FixtureConfig
+from .pose import pose_record, quaternion
 from .solve import PoseSolver, SolveOutcome
 from .state import LockDetector, StuckDetector
 from .store import LockEvent
@@ -45,7 +46,6 @@ RECORD_KEYS = (
     "sigma",
     "singularity_margin",
 )
-POSE_KEYS = ("x", "y", "z", "qx", "qy", "qz", "qw", "roll", "pitch", "yaw")
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
 
 
@@ -239,10 +239,8 @@ class FixtureCycle:
             flags.extend(sorted(self._advisory))
         pose = sigma = margin = None
         if outcome is not None and outcome.pose is not None and outcome.uncertainty is not None:
-            T, u = outcome.pose, outcome.uncertainty
-            R = T[:3, :3]
-            values = T[:3, 3].tolist() + _quaternion(R).tolist() + np.degrees(pin.rpy.matrixToRpy(R)).tolist()
-            pose = dict(zip(POSE_KEYS, values))
+            u = outcome.uncertainty
+            pose = pose_record(outcome.pose)
             if math.isfinite(u.translation) and math.isfinite(u.rotation):
                 sigma = {"translation_mm": u.translation * 1e3, "rotation_deg": math.degrees(u.rotation)}
                 margin = u.margin
@@ -271,5 +269,4 @@ class FixtureCycle:
 
 def _quaternion(R: np.ndarray) -> np.ndarray:
     """``qx, qy, qz, qw`` of ``R`` with ``qw >= 0``."""
-    q = pin.Quaternion(R).coeffs()
-    return -q if q[3] < 0 else q.copy()
+    return np.array(quaternion(R))
