@@ -27,7 +27,8 @@ import numpy as np
 from numba import njit
 
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.linalg import lu_apply, lu_apply_transposed, lu_factor
+from ..kinematics.kernels import _rotation_weights
+from ..kinematics.linalg import _block, _factor, _solve_transposed, lu_apply, lu_apply_transposed, lu_factor
 from ..kinematics.solver import NewtonSolver
 
 _JACOBI_SWEEPS = 30
@@ -151,6 +152,37 @@ def measure(G, index, rows, length, mats, vecs, piv, J, Jinv):
     return _invert_and_measure(J, length, mats[1], piv[1], vecs[2], vecs[3], Jinv, mats[2], vecs[4])
 
 
+@njit(cache=True)
+def measure_solved(J, leg_cols, held_pos, ff_cols, rows, p, E, length, blocks, mats, vecs, piv, Jout, Jinv):
+    """:func:`measure` from the joint Jacobians a Schur-path solve left at its last iterate.
+
+    ``J, leg_cols, held_pos, ff_cols, rows, p, E`` are the direct-kinematics solver's (its
+    held joint per leg is the measured one): the leg blocks ``L_i`` and platform columns
+    ``A_i`` are built as :func:`~hexapod_model.kinematics.linalg.schur_solve` builds them,
+    so no ``computeJointJacobians`` and no full closure Jacobian. ``blocks`` (7, rows, 6)
+    is a work buffer. Returns ``(trace_t, trace_r, cond, det)``.
+    """
+    Ht = np.empty((3, 3))
+    Ha = np.empty((3, 3))
+    LB, A, PB, n = blocks[6, :rows, :rows], blocks[:6, :rows, :], piv[0, :rows], vecs[0, :rows]
+    for i in range(6):
+        if rows == 6:
+            _rotation_weights(E, i, Ht, Ha)
+        _block(J, leg_cols[i], rows, p[i], Ht, 1.0, LB, rows)  # L_i: the leg's joints
+        _block(J, ff_cols, rows, p[6 + i], Ha, -1.0, A[i], 6)  # A_i: the platform's velocity
+        if _factor(LB, PB, rows) == 0.0:
+            return np.inf, np.inf, np.inf, 0.0
+        for a in range(rows):
+            n[a] = 1.0 if a == held_pos[i] else 0.0
+        _solve_transposed(LB, PB, n, rows)
+        for k in range(6):
+            s = 0.0
+            for a in range(rows):
+                s += n[a] * A[i, a, k]
+            Jout[i, k] = -s
+    return _invert_and_measure(Jout, length, mats[1], piv[1], vecs[2], vecs[3], Jinv, mats[2], vecs[4])
+
+
 @dataclass(frozen=True)
 class Sensitivity:
     """Pose sensitivity at one configuration, per unit (1 m) reading standard deviation.
@@ -204,6 +236,30 @@ class SensitivityEvaluator:
         self._piv = np.zeros((2, 6), dtype=np.int64)
         self.J = np.zeros((6, 6))
         self.Jinv = np.zeros((6, 6))
+        self._blocks: np.ndarray | None = None  # evaluate_solved's leg blocks, made on first use
+
+    def evaluate_solved(self, q: np.ndarray) -> Sensitivity:
+        """:meth:`evaluate` at ``q``, the configuration the calling thread's last direct-kinematics solve ended on.
+
+        The tracker's per-sample call: the solve left the joint Jacobians at ``q`` in its
+        solver's buffers, so the elimination starts from them (a third of :meth:`evaluate`'s
+        cost). Falls back to :meth:`evaluate` when the solver holds another configuration or
+        has no Schur step.
+        """
+        hexa = self._hexa
+        s = hexa._solver(hexa._held_forward)  # the calling thread's (Hexapod keeps one per thread)
+        nq = q.shape[0]
+        if s.held_pos is None or not self.supported or s.rows != self.rows or not (s.q_aug[:nq] == q).all():
+            return self.evaluate(q)
+        if self._blocks is None:
+            self._blocks = np.zeros((7, self.rows, 6))
+        tt, tr, cond, det = measure_solved(
+            s.J, s.leg_cols, s.held_pos, s.ff_cols, self.rows, s.p, s.E, self.length,
+            self._blocks, self._mats, self._vecs, self._piv, self.J, self.Jinv,
+        )  # fmt: skip
+        if cond == math.inf:
+            self.Jinv[:] = np.nan
+        return Sensitivity(math.sqrt(tt), math.sqrt(tr), cond, (det > 0.0) - (det < 0.0))
 
     def evaluate(self, q: np.ndarray) -> Sensitivity:
         """Fill :attr:`J` and :attr:`Jinv` at ``q``; return the figures (``inf`` when singular)."""

@@ -160,7 +160,7 @@ class Tracker:
         s = self.settings
         self._ages += 1  # every sample, readable or not, is one period
         l = np.asarray(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
-        if l.shape != (6,) or not np.all(np.isfinite(l)):
+        if l.shape != (6,) or not np.isfinite(l).all():
             msg = f"expected 6 finite readings, got {lengths!r}"
             return self._failure(l if l.shape == (6,) else np.full(6, np.nan), "invalid_input", msg, (), (), t0)
         self._update_frozen(l)
@@ -192,7 +192,7 @@ class Tracker:
         sol = self._solve(l, self._guess())
         if sol.status not in ("converged", "out_of_limits"):
             return self._failure(l, sol.status, sol.message, tuple(flags), legs, t0, sol)
-        sens = self._sens.evaluate(sol.q)
+        sens = self._sens.evaluate_solved(sol.q)  # from the solve's own Jacobians
         if checked and not suspect and not self._lost:
             sol, sens, consistent = self._branch_check(sol, sens, l, lhat, w, spread)
             if not consistent:
@@ -260,7 +260,8 @@ class Tracker:
             if sens.det_sign != self._sign and not near:
                 return False  # across a singularity without passing near one: another assembly
             e = pin.difference(model, q_model, sol.q)[self._ff] - self._sens.Jinv @ (l - lhat)
-            size = math.hypot(np.linalg.norm(e[:3]), self.length * np.linalg.norm(e[3:]))
+            et, er = e[:3], e[3:]  # norms as np.linalg.norm computes them, without its dispatch
+            size = math.hypot(math.sqrt(et @ et), self.length * math.sqrt(er @ er))
             return size <= bound * math.hypot(sens.translation, self.length * sens.rotation) + 1e-9 * self.length
 
         if consistent(sol, sens):

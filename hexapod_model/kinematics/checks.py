@@ -7,6 +7,7 @@ naming the value and the rule; nothing is reshaped, clipped, normalised or cast 
 
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Callable
 from typing import Any
@@ -90,6 +91,11 @@ def check_pose(pose: Any, rigid_error: Callable[[np.ndarray], float] = numpy_ker
 
 def check_configuration(name: str, q: Any, nq: int, platform_q: int) -> np.ndarray:
     """A start configuration: ``nq`` finite numbers whose platform quaternion has unit norm."""
+    if type(q) is np.ndarray and q.dtype == np.float64 and q.shape == (nq,):  # the trackers' guesses
+        quat = q[platform_q + 3 : platform_q + 7]
+        # q @ q is finite when every entry is (and overflows only where the full check below passes)
+        if math.isfinite(float(q @ q)) and abs(math.sqrt(float(quat @ quat)) - 1.0) <= POSE_TOLERANCE:
+            return q.copy()
     arr = real_array(name, q, f"expected a Solution or a configuration of {nq} real numbers")
     if arr.shape != (nq,):
         raise InputError(name, q, f"expected a Solution or a configuration of {nq} numbers, got shape {arr.shape}")

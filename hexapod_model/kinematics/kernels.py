@@ -104,6 +104,17 @@ def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
 
 
 @njit(cache=True)
+def copied(a):
+    """A copy of ``a`` made in compiled code, which keeps the GIL.
+
+    numpy's own copy of more than 500 elements releases the GIL for the copy loop: in a
+    threaded service another thread then takes it, and getting it back can cost a scheduler
+    round (milliseconds on a loaded machine) in the middle of a solve.
+    """
+    return a.copy()
+
+
+@njit(cache=True)
 def scatter_step(x, free_v, dv, max_step):
     """Scatter a Newton step into the full velocity space, limited in size.
 

@@ -26,9 +26,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..kinematics.hexapod import Hexapod
-from .codec import decode
 from .config import FixtureConfig
-from .errors import FrameError
+from .pose import pose_record, quaternion
 from .solve import PoseSolver, SolveOutcome
 from .state import LockDetector, StuckDetector
 from .store import LockEvent
@@ -47,7 +46,6 @@ RECORD_KEYS = (
     "sigma",
     "singularity_margin",
 )
-POSE_KEYS = ("x", "y", "z", "qx", "qy", "qz", "qw", "roll", "pitch", "yaw")
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
 
 
@@ -65,6 +63,8 @@ class FixtureCycle:
     def __init__(self, cfg: FixtureConfig, hexa: Hexapod, geometry_hash: str, recovered: LockEvent | None, t0: float):
         self.cfg, self.hexa, self.geometry_hash = cfg, hexa, geometry_hash
         self.layout = cfg.legs[0].layout
+        self._unpack, self._min_length = self.layout.unpack, self.layout.length
+        self._metres_per_count = self.layout.metres_per_count
         self._lo, self._hi = hexa.stroke[:, 0].tolist(), hexa.stroke[:, 1].tolist()
         self._home = [leg.home_count for leg in cfg.legs]
         self._t = [-math.inf] * 6  # receipt time of each leg's newest frame (lists: faster than arrays here)
@@ -107,11 +107,11 @@ class FixtureCycle:
             silent = [k for k in range(6) if k != leg and t - self._t[k] > self.cfg.staleness]
             if silent:
                 published = self._failure(t, "silent_leg", [f"silent:leg{k + 1}" for k in silent])
-        try:
-            count, self._err[leg], self._warn[leg] = decode(self.layout, data)
+        if len(data) >= self._min_length:  # codec.decode's check, without its exception on the hot path
+            count, self._err[leg], self._warn[leg] = self._unpack(data)
             self._counts[leg], self._bad[leg] = count, False
-            self._readings[leg] = (count - self._home[leg]) * self.layout.metres_per_count
-        except FrameError:
+            self._readings[leg] = (count - self._home[leg]) * self._metres_per_count
+        else:
             self._bad[leg], self._readings[leg] = True, math.nan
         dt = t - self._t[leg]
         if 0.0 < dt <= self.cfg.staleness:  # the median ignores missed frames and bunched arrivals
@@ -239,10 +239,8 @@ class FixtureCycle:
             flags.extend(sorted(self._advisory))
         pose = sigma = margin = None
         if outcome is not None and outcome.pose is not None and outcome.uncertainty is not None:
-            T, u = outcome.pose, outcome.uncertainty
-            R = T[:3, :3]
-            values = T[:3, 3].tolist() + _quaternion(R).tolist() + np.degrees(pin.rpy.matrixToRpy(R)).tolist()
-            pose = dict(zip(POSE_KEYS, values))
+            u = outcome.uncertainty
+            pose = pose_record(outcome.pose)
             if math.isfinite(u.translation) and math.isfinite(u.rotation):
                 sigma = {"translation_mm": u.translation * 1e3, "rotation_deg": math.degrees(u.rotation)}
                 margin = u.margin
@@ -271,5 +269,4 @@ class FixtureCycle:
 
 def _quaternion(R: np.ndarray) -> np.ndarray:
     """``qx, qy, qz, qw`` of ``R`` with ``qw >= 0``."""
-    q = pin.Quaternion(R).coeffs()
-    return -q if q[3] < 0 else q.copy()
+    return np.array(quaternion(R))

@@ -55,7 +55,7 @@ class LockDetector:
         """
         if self.state == "locked":
             assert self.reference is not None
-            if float(np.max(np.abs(readings - self.reference))) > self.band:
+            if float(abs(readings - self.reference).max()) > self.band:  # ndarray methods: no dispatch
                 self._outside += 1
                 if self._outside >= self.unlock_samples:
                     self.state, self.reference, self.drift, self._outside = "moving", None, False, 0
@@ -65,9 +65,9 @@ class LockDetector:
             alpha = 1.0 - math.exp(-max(t - self._t_last, 0.0) / max(self.lock_time, 1e-9))
             self._ema += alpha * (readings - self._ema)
             self._t_last = t
-            self.drift = float(np.max(np.abs(self._ema - self.reference))) > self.drift_limit
+            self.drift = float(abs(self._ema - self.reference).max()) > self.drift_limit
             return False
-        if self._run_start is None or float(np.max(np.abs(readings - self._run_start[1]))) > self.band:
+        if self._run_start is None or float(abs(readings - self._run_start[1]).max()) > self.band:
             self._restart(t, readings)
         else:
             self._sum += readings

@@ -23,9 +23,10 @@ import logging
 import queue
 import sqlite3
 import threading
-import time
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -195,59 +196,85 @@ def _since(since: float | None) -> float:
     return -1e300 if since is None else float(since)
 
 
-_STOP = object()
+MAX_PENDING = 100_000  # sample rows held for the writer at most (a stalled disk drops the oldest)
 
 
 class StoreWriter:
     """The one thread that writes to the store: samples in batches, lock events at once.
 
+    :meth:`sample` only appends to a bounded in-memory log (no wake-up of this thread per
+    record: the cycle thread keeps the GIL and the CPU); the thread takes the log every
+    ``flush_interval`` and writes it in one transaction. :meth:`lock` wakes it at once: the
+    event is committed durably together with the samples queued before it.
+
     Args:
         store: the open :class:`Store`.
         flush_interval: seconds between sample batches.
+        max_pending: sample rows kept while the store lags (the oldest are dropped beyond).
     """
 
-    def __init__(self, store: Store, flush_interval: float = 0.5):
+    def __init__(self, store: Store, flush_interval: float = 0.5, max_pending: int = MAX_PENDING):
         self.store, self.flush_interval = store, flush_interval
         self.error: str | None = None
-        self._q: queue.SimpleQueue = queue.SimpleQueue()
+        self.dropped = 0  # sample rows dropped because the log was full
+        self._rows: deque[tuple] = deque()  # append / popleft are atomic: no lock on the cycle's path
+        self._max = max_pending
+        self._locks: queue.SimpleQueue = queue.SimpleQueue()
+        self._wake = threading.Event()
+        self._stopping = False
         self._thread = threading.Thread(target=self._run, name="hexapod-store", daemon=True)
         self._thread.start()
 
     def sample(self, row: tuple) -> None:
-        """Queue a sample row (``SAMPLE_COLUMNS`` order)."""
-        self._q.put(row)
+        """Queue a sample row (``SAMPLE_COLUMNS`` order); written within ``flush_interval``."""
+        rows = self._rows
+        rows.append(row)
+        if len(rows) > self._max:
+            rows.popleft()
+            self.dropped += 1
 
     def lock(self, event: LockEvent, done: Callable[[LockEvent], None]) -> None:
         """Queue a lock event; ``done(stored_event)`` is called once it is committed durably."""
-        self._q.put((event, done))
+        self._locks.put((event, done))
+        self._wake.set()
 
     def stop(self) -> None:
         """Write what is queued and end the thread."""
-        self._q.put(_STOP)
+        self._stopping = True
+        self._wake.set()
         self._thread.join()
 
+    def _take(self) -> list[tuple]:
+        rows, out = self._rows, []
+        for _ in range(len(rows)):  # what is there now; later rows wait for the next batch
+            out.append(rows.popleft())
+        return out
+
     def _run(self) -> None:
-        pending: list[tuple] = []
-        last = time.monotonic()
         while True:
-            try:
-                item = self._q.get(timeout=self.flush_interval)
-            except queue.Empty:
-                item = None
-            try:
-                if item is _STOP:
-                    self.store.add_samples(pending)
-                    return
-                if isinstance(item, tuple) and len(item) == 2 and isinstance(item[0], LockEvent):
-                    stored = self.store.add_lock(item[0], pending)
-                    pending, last = [], time.monotonic()
-                    item[1](stored)
-                elif item is not None:
-                    pending.append(item)
-                if pending and (time.monotonic() - last >= self.flush_interval or len(pending) >= 10_000):
-                    self.store.add_samples(pending)
-                    pending, last = [], time.monotonic()
-            except (sqlite3.Error, OSError) as exc:
-                self.error = f"store {self.store.path}: {exc}"
-                log.error("%s", self.error)
-                pending = []
+            self._wake.wait(self.flush_interval)
+            self._wake.clear()  # a lock queued from here on sets it again
+            stopping = self._stopping
+            pending = self._take()
+            while True:
+                try:
+                    event, done = self._locks.get_nowait()
+                except queue.Empty:
+                    break
+                self._write(partial(self.store.add_lock, event, pending), done)
+                pending = []  # committed with the lock (or dropped with it on a store error)
+            if pending:
+                self._write(partial(self.store.add_samples, pending))
+            if stopping:
+                return
+
+    def _write(self, commit: Callable[[], LockEvent | None], done: Callable[[LockEvent], None] | None = None) -> None:
+        """Run ``commit``, then ``done`` with its result; a store error is recorded and logged instead."""
+        try:
+            result = commit()
+        except (sqlite3.Error, OSError) as exc:
+            self.error = f"store {self.store.path}: {exc}"
+            log.error("%s", self.error)
+            return
+        if done is not None and result is not None:
+            done(result)
