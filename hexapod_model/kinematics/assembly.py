@@ -195,7 +195,7 @@ def _certified(solver: NewtonSolver, total: int, res: float, note: str = "") -> 
             f"{note}near a singularity: condition bound of the eliminated Jacobian {kappa / solver.home_kappa:.3g} "
             f"times its home value (flag above {NEAR_SINGULAR_FACTOR:g}); another assembly may be close"
         )
-    return Outcome(q, "converged", total, res, kernels.copied(solver.G), msg, flags, (), int(solver.sign))
+    return Outcome(q, "converged", total, res, solver.kernels.copied(solver.G), msg, flags, (), int(solver.sign))
 
 
 def _ambiguous(

@@ -31,6 +31,7 @@ class KernelSet(NamedTuple):
     rigid_error: Callable
     pose_to_xyzquat: Callable
     xyzquat_to_pose: Callable
+    copied: Callable
 
 
 @functools.cache

@@ -247,3 +247,8 @@ def xyzquat_to_pose(x, H, T):
     T[:3, :3] = H[:3, :3] @ X
     T[:3, 3] = H[:3, :3] @ x[:3] + H[:3, 3]
     T[3] = (0.0, 0.0, 0.0, 1.0)
+
+
+def copied(a):
+    """A copy of ``a`` (the compiled kernel's twin, which keeps the GIL; here numpy's copy)."""
+    return a.copy()
