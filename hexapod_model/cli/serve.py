@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
-import json
 import logging
 import signal
 import sys
@@ -91,7 +90,7 @@ def _serve(args: argparse.Namespace) -> int:
     _stop_on_sigterm(stop)
     service = FixtureService(config)
     if args.jsonl:
-        service.subscribe(_jsonl_writer(stop))
+        service.subscribe(_jsonl_writer(stop, service.json_of))
     sim_bus = sim = None
     try:
         service.start()
@@ -124,10 +123,10 @@ def _serve(args: argparse.Namespace) -> int:
     return 0
 
 
-def _jsonl_writer(stop: threading.Event):
+def _jsonl_writer(stop: threading.Event, json_of):
     def write(record: dict) -> None:
         try:
-            sys.stdout.write(json.dumps(record, allow_nan=False) + "\n")
+            sys.stdout.write(json_of(record) + "\n")
             sys.stdout.flush()
         except (BrokenPipeError, ValueError):  # the reader went away: stop the service
             stop.set()

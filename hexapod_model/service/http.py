@@ -27,19 +27,24 @@ class Routes:
     """What the server answers: callables returning JSON-ready objects (``None``: not found)."""
 
     def __init__(
-        self, names: Callable[[], list[str]], record: Callable[[str], dict | None], health: Callable[[], dict]
+        self,
+        names: Callable[[], list[str]],
+        record: Callable[[str], dict | None],
+        health: Callable[[], dict],
+        record_json: Callable[[str], str | None] | None = None,
     ):
         self.names, self.record, self.health = names, record, health
+        self.record_json = record_json  # the latest record as JSON text, serialised once per record
 
     def get(self, path: str) -> tuple[int, object]:
-        """Status code and body of ``GET path``."""
+        """Status code and body of ``GET path`` (a ``str`` body is JSON text already)."""
         parts = [unquote(p) for p in urlsplit(path).path.split("/") if p]
         if parts == ["fixtures"]:
             return 200, {"fixtures": self.names()}
         if parts == ["health"]:
             return 200, self.health()
         if len(parts) == 3 and parts[0] == "fixtures" and parts[2] == "pose":
-            rec = self.record(parts[1])
+            rec = self.record(parts[1]) if self.record_json is None else self.record_json(parts[1])
             if rec is not None:
                 return 200, rec
             return 404, {"error": f"no fixture {parts[1]!r}", "fixtures": self.names()}
@@ -54,7 +59,8 @@ class _Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
 
     def _send(self, code: int, body: object) -> None:
-        data = json.dumps(body, allow_nan=False).encode("utf-8")
+        text = body if isinstance(body, str) else json.dumps(body, allow_nan=False)
+        data = text.encode("utf-8")
         self.send_response(code)
         self.send_header("Content-Type", "application/json")
         self.send_header("Content-Length", str(len(data)))

@@ -74,6 +74,7 @@ class FixtureService:
         self.hexapods = {f.name: hexapods.get(f.name) or f.load_hexapod() for f in config.fixtures}
         self._bus, self._own_bus, self._http = bus, bus is None, http
         self._subscribers: list[Callable[[Record], None]] = []
+        self._json: dict[str, tuple[Record, str]] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.cycles: dict[str, FixtureCycle] = {}
@@ -90,7 +91,8 @@ class FixtureService:
         self._started = time.time()
         try:  # what can fail fails first, before anything is logged or written
             if self._http:
-                self.endpoint = HttpEndpoint(cfg.http.host, cfg.http.port, Routes(self.names, self.record, self.health))
+                routes = Routes(self.names, self.record, self.health, self.record_json)
+                self.endpoint = HttpEndpoint(cfg.http.host, cfg.http.port, routes)
             if self._bus is None:
                 self._bus = open_bus(cfg)
             self.store = Store(cfg.store.path, cfg.store.samples)
@@ -170,6 +172,21 @@ class FixtureService:
         """The latest record of fixture ``name`` (None for an unknown name)."""
         cycle = self.cycles.get(name)
         return None if cycle is None else cycle.last
+
+    def record_json(self, name: str) -> str | None:
+        """The latest record of fixture ``name`` as JSON text (None for an unknown name)."""
+        cycle = self.cycles.get(name)
+        return None if cycle is None else self.json_of(cycle.last)
+
+    def json_of(self, rec: Record) -> str:
+        """``json.dumps(rec, allow_nan=False)``, made once per record (HTTP and JSON lines share it)."""
+        name = rec["fixture"]
+        hit = self._json.get(name)
+        if hit is not None and hit[0] is rec:  # the record itself is kept: its id cannot be reused
+            return hit[1]
+        text = json.dumps(rec, allow_nan=False)
+        self._json[name] = (rec, text)  # one entry per fixture; a race only serialises twice
+        return text
 
     def health(self) -> dict:
         """Service state: ``ok`` or ``degraded`` (store error, cycle stopped or a fixture without a good pose)."""
