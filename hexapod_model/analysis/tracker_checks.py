@@ -58,6 +58,10 @@ class TrackerSettings:
         max_sigma_factor: ``imprecise`` when the 1-sigma pose uncertainty
             ``hypot(sigma_translation, length * sigma_rotation)`` exceeds this many ``noise``
             (the Jacobian amplifies the reading noise; ``None``: never).
+        branch_alpha: significance at which an assembly is rejected after a passage near a
+            singularity (:mod:`~hexapod_model.analysis.tracker_branches`).
+        resolve_samples: samples after such a passage within which one assembly must be
+            singled out; after them ``branch_uncertain`` stays until ``reset``.
         continuation_step: largest reading change (m) per Newton solve when re-anchoring.
         recover: re-solve from the motion model when a pose fails the branch check;
             ``False`` keeps the Jakobović and Jelenković (2002) experiment's raw behaviour (a failed branch check
@@ -76,6 +80,8 @@ class TrackerSettings:
     cond_factor: float = 100.0
     cond_limit: float | None = None
     max_sigma_factor: float | None = 10.0
+    branch_alpha: float = 1e-6
+    resolve_samples: int = 50
     continuation_step: float = 2e-3
     recover: bool = True
 
@@ -92,7 +98,11 @@ class TrackerSettings:
         v = self.stuck_tolerance
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v >= 0):
             raise InputError("stuck_tolerance", v, "expected a finite number >= 0")
-        for name, lo in (("stuck_samples", 1), ("window", 3), ("max_gap", 0), ("settle_samples", 3)):
+        v = self.branch_alpha
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1:
+            raise InputError("branch_alpha", v, "expected a number in (0, 1)")
+        limits = (("stuck_samples", 1), ("window", 3), ("max_gap", 0), ("settle_samples", 3), ("resolve_samples", 3))
+        for name, lo in limits:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < lo:
                 raise InputError(name, v, f"expected an integer >= {lo}")

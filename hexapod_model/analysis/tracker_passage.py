@@ -1,0 +1,130 @@
+"""The stream tracker's side of a passage near a singularity: open it, feed the candidates, act on the verdict.
+
+:class:`PassageMixin` is part of :class:`~hexapod_model.analysis.tracking.Tracker`; the
+candidates and the statistics are :class:`~hexapod_model.analysis.tracker_branches.BranchResolver`.
+A passage opens on a trusted sample whose condition number exceeds the tracker's limit, or on
+a failed solve of readings without a jump or stuck leg (readings past the fold); it needs
+three certified samples before it (otherwise ``branch_uncertain`` latches until ``reset()``,
+as before). While it is open every sample is ``branch_uncertain``; when one candidate is
+singled out the sample returns its pose, the history restarts there (the poses of the
+singular neighbourhood are too imprecise for the motion model; the next samples are
+``settling``) and the flag clears. After ``resolve_samples`` samples without a verdict the
+flag latches until ``reset()``.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+import pinocchio as pin
+
+from ..kinematics.hexapod import Hexapod
+from ..kinematics.solver import Solution
+from .sensitivity import SensitivityEvaluator
+from .tracker_branches import BranchResolver
+from .tracker_checks import TrackerSettings
+
+
+class PassageMixin:
+    """Passages near a singularity, for :class:`~hexapod_model.analysis.tracking.Tracker`."""
+
+    hexa: Hexapod
+    settings: TrackerSettings
+    length: float
+    cond_limit: float
+    _sens: SensitivityEvaluator
+    _sens_b: SensitivityEvaluator | None
+    _cond_b: float
+    _calm: deque
+    _resolver: BranchResolver | None
+    _uncertified: bool
+    _lost: bool
+    _k: int
+    _ff: slice
+    _sign: int
+    _near: bool
+
+    def _solve(self, l: np.ndarray, guess: np.ndarray) -> Solution:  # the Tracker's
+        raise NotImplementedError
+
+    def _restart(self, q: np.ndarray, trusted: bool) -> None:  # the Tracker's
+        raise NotImplementedError
+
+    def _passage(self, sol, sens, l, suspect: bool):
+        """Open, follow and close a passage near a singularity (:mod:`.tracker_branches`).
+
+        Returns ``(sol, sens, open)``: the sample's solution (the other candidate's when it is
+        the one consistent with the motion) and whether its assembly is still uncertain.
+        """
+        s = self.settings
+        near = sens.condition_number > self.cond_limit
+        if self._resolver is None:
+            if not near or suspect:
+                return sol, sens, False
+            self._open()
+        r = self._resolver
+        if r is None:
+            return sol, sens, self._uncertified
+        if suspect:
+            return sol, sens, True
+        if near and not r.post:
+            return sol, sens, True
+
+        def solve(guess):
+            alt = self._solve(l, guess)
+            return alt.q if alt.status in ("converged", "out_of_limits") else None
+
+        def measure(q):
+            J = self._sens_b_eval(q)
+            return self._cond_b <= self.cond_limit, J
+
+        def moved(q, twist):
+            T = self.hexa.pose_of(q) @ pin.exp6(twist).homogeneous
+            ik = self.hexa.inverse(T, guess=q, check=False)
+            return ik.q, ik.lengths
+
+        def at(q):
+            ik = self.hexa.inverse(self.hexa.pose_of(q), guess=q, check=False)
+            return ik.q, ik.lengths, self._sens_b_eval(ik.q)
+
+        choice = r.follow(self._k, sol.q, self._sens.J, l, not near, solve, measure, moved, at)
+        if choice is None:
+            if r.post >= s.resolve_samples:
+                self._resolver, self._uncertified = None, True
+            return sol, sens, True
+        self._resolver = None
+        if choice == "alt":
+            assert r.alt is not None
+            sol = self._solve(l, r.alt.qs[-1])
+            sens = self._sens.evaluate(sol.q)
+        # the history holds poses from the singular neighbourhood, too imprecise for the
+        # motion model: it restarts here (the next samples are settling)
+        self._restart(sol.q, trusted=False)
+        self._sign, self._near = sens.det_sign, False
+        return sol, sens, False
+
+    def _sens_b_eval(self, q: np.ndarray) -> np.ndarray:
+        """The eliminated Jacobian at ``q`` from the candidates' own evaluator (condition in ``_cond_b``)."""
+        if self._sens_b is None:
+            self._sens_b = SensitivityEvaluator(self.hexa, self.length)
+        self._cond_b = self._sens_b.evaluate(q).condition_number
+        return self._sens_b.J
+
+    def _open(self) -> None:
+        """Open a passage near a singularity (or latch ``branch_uncertain`` when none can be judged)."""
+        if self._uncertified or self._lost:
+            return
+        if len(self._calm) < 3:  # no certified motion to judge the candidates against
+            self._uncertified = True
+            return
+        s = self.settings
+        self._resolver = BranchResolver(
+            self.hexa.model,
+            self._ff,
+            [(k, q, self._sens_b_eval(q).copy(), l) for k, q, l in self._calm],
+            self.length,
+            s.noise,
+            s.branch_alpha,
+        )
+        self._calm.clear()
