@@ -32,7 +32,7 @@ from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.solver import Solution
 from .sensitivity import SensitivityEvaluator
-from .tracker_checks import MotionModel, TrackerSettings, stuck_legs
+from .tracker_checks import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
 from .tracker_passage import PassageMixin
 from .tracker_types import (
     FAILED_STATUSES,
@@ -189,7 +189,8 @@ class Tracker(PassageMixin):
         frozen = int(self._frozen.max())
         suspect = False
         if zmax > s.jump_sigmas or frozen > 0 or self._stuck.any():
-            stuck = stuck_legs(self._frozen, z, self._moved(), s) | (self._stuck & (self._frozen > 0))
+            moving = motion_sigmas(np.array(self._raw), s.noise) if frozen >= s.stuck_samples else None
+            stuck = stuck_legs(self._frozen, z, self._moved(), s, moving) | (self._stuck & (self._frozen > 0))
             self._stuck = stuck  # latched while the reading stays unchanged
             jump = z > s.jump_sigmas
             legs = tuple(int(i) for i in np.flatnonzero(jump | stuck))
