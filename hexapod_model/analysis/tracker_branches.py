@@ -35,7 +35,8 @@ from .tracker_types import predict
 _MIN_POST = 3  # samples of the other candidate before a decision (the motion model needs 3)
 _PROBE = 1e-3  # m (rotations x length): the step that measures the fold's curvature
 _GAUSS_NEWTON = 3  # iterations of the fit
-_EVERY = 2  # samples between two decisions (each costs two fits)
+_EVERY = 4  # samples between two decisions (each costs two fits)
+_FIT_POINTS = 24  # post-passage samples in a fit at most
 _DISTINCT = 1e-9  # m (rotations x length): two candidates closer than this are the same pose
 
 
@@ -207,18 +208,20 @@ class BranchResolver:
     def decide(self, at) -> str | None:
         """``"main"`` or ``"alt"`` when the readings single out that candidate, else ``None``.
 
-        The smooth motion that best explains the readings (:meth:`fit`, from either candidate)
-        must be consistent (``chi^2`` under the ``1 - alpha`` quantile) and, at the newest
-        sample, lie on one candidate's side of the midpoint between the two by ``z_alpha`` of its
-        own standard deviation (its coefficients' covariance): the other is then rejected at
-        significance ``alpha``. A fit from the other candidate that ends on the other side must
-        be worse by ``2 ln(1 / alpha)`` (a likelihood ratio of ``1 / alpha``).
+        The smooth motion that best explains the readings near one candidate (:meth:`fit` from
+        its poses) must be consistent (``chi^2`` under the ``1 - alpha`` quantile), end at the
+        newest sample on that candidate's side of the midpoint between the two by ``z_alpha`` of
+        its own standard deviation (from its coefficients' covariance), and the fit from the
+        other candidate must be worse by ``2 ln(1 / alpha)`` (a likelihood ratio of
+        ``1 / alpha`` against it).
         """
         if self.alt is None or len(self.alt.qs) < _MIN_POST:
             return None
         ks = [k for k in self.alt.ks if self.main.at(k) is not None and self.alt.at(k) is not None]
         if len(ks) < _MIN_POST:
             return None
+        if len(ks) > _FIT_POINTS:  # evenly spread, the newest kept: bounded work per decision
+            ks = [ks[round(i)] for i in np.linspace(0, len(ks) - 1, _FIT_POINTS)]
         k, k0, q0 = ks[-1], self.before.ks[-1], self.before.qs[-1]
         v = np.vander([(k - k0) / 10.0], 4, increasing=True)[0]
         ya = pin.difference(self.model, q0, self.main.at(k)[0])[self.ff]  # type: ignore[index]
@@ -230,17 +233,14 @@ class BranchResolver:
             B = np.kron(v, np.eye(6))
             sd = math.sqrt(max(float(d @ B @ cov @ B.T @ d), 0.0)) / float(d @ d)
             sides.append((value, lam, sd))
-        (va, la, sa), (vb, lb, sb) = sides
         from scipy.stats import chi2, norm
 
         z, dof = float(norm.isf(self.alpha)), 6 * (len(self.before.ks) + len(ks)) - 24
-        best, other = (sides[0], sides[1]) if va <= vb else (sides[1], sides[0])
-        value, lam, sd = best
-        if not (dof > 0 and value <= float(chi2.isf(self.alpha, dof)) and sd > 0.0):
-            return None
-        if abs(lam - 0.5) < z * sd:
-            return None
-        side = "alt" if lam > 0.5 else "main"
-        if (other[1] > 0.5) != (lam > 0.5) and other[0] - value < 2.0 * math.log(1.0 / self.alpha):
-            return None
-        return side
+        limit = float(chi2.isf(self.alpha, dof)) if dof > 0 else -math.inf
+        margin = 2.0 * math.log(1.0 / self.alpha)
+        for name, own, other, target in (("main", sides[0], sides[1], 0.0), ("alt", sides[1], sides[0], 1.0)):
+            value, lam, sd = own
+            # consistent, on its own candidate's side, and the other's best fit worse by 1 / alpha
+            if value <= limit and abs(lam - target) < 0.5 - z * sd and other[0] - value >= margin:
+                return name
+        return None

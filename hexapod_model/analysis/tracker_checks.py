@@ -87,7 +87,7 @@ class TrackerSettings:
     cond_limit: float | None = None
     max_sigma_factor: float | None = 10.0
     branch_alpha: float = 1e-6
-    resolve_samples: int = 50
+    resolve_samples: int = 200
     continuation_step: float = 2e-3
     recover: bool = True
 
