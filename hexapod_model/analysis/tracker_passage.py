@@ -3,13 +3,13 @@
 :class:`PassageMixin` is part of :class:`~hexapod_model.analysis.tracking.Tracker`; the
 candidates and the statistics are :class:`~hexapod_model.analysis.tracker_branches.BranchResolver`.
 A passage opens on a trusted sample whose condition number exceeds the tracker's limit, or on
-a failed solve of readings without a jump or stuck leg (readings past the fold); it needs
-three certified samples before it (otherwise ``branch_uncertain`` latches until ``reset()``,
-as before). While it is open every sample is ``branch_uncertain``; when one candidate is
-singled out the sample returns its pose, the history restarts there (the poses of the
-singular neighbourhood are too imprecise for the motion model; the next samples are
-``settling``) and the flag clears. After ``resolve_samples`` samples without a verdict the
-flag latches until ``reset()``.
+a failed solve of readings without a jump or stuck leg (readings past the fold). It needs
+three certified samples before it and ``recover=True``; otherwise ``branch_uncertain``
+latches until ``reset()`` as before (the paper's raw tracker keeps its behaviour). While it
+is open every sample is ``branch_uncertain``; when one candidate is singled out the sample
+returns its pose, the history restarts there (the poses of the singular neighbourhood are too
+imprecise for the motion model; the next samples are ``settling``) and the flag clears.
+After ``resolve_samples`` samples without a verdict the flag latches until ``reset()``.
 """
 
 from __future__ import annotations
@@ -115,7 +115,7 @@ class PassageMixin:
         """Open a passage near a singularity (or latch ``branch_uncertain`` when none can be judged)."""
         if self._uncertified or self._lost:
             return
-        if len(self._calm) < 3:  # no certified motion to judge the candidates against
+        if len(self._calm) < 3 or not self.settings.recover:  # nothing to judge by / the raw tracker
             self._uncertified = True
             return
         s = self.settings
