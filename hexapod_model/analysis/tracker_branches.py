@@ -40,6 +40,37 @@ _FIT_POINTS = 24  # post-passage samples in a fit at most
 _DISTINCT = 1e-9  # m (rotations x length): two candidates closer than this are the same pose
 
 
+def mirror_guess(model, ff: slice, length: float, q: np.ndarray, J: np.ndarray, moved) -> np.ndarray | None:
+    """A configuration near the other assembly that meets ``q``'s at a fold.
+
+    Along the singular direction ``v`` of ``J`` (smallest singular value, rotations scaled
+    by the length) the reading along the matching left direction ``u`` is locally
+    ``r(c) = sigma c + a c^2``, zero at ``c = 0`` (``q``) and at ``c = -sigma / a`` (the
+    mirror); ``sigma`` and ``a`` come from the readings at ``c = +-h``.
+
+    Args:
+        model: the hexapod's Pinocchio model (unused; for symmetry with the resolver).
+        ff: the platform's velocity slice (unused).
+        length: m per rad.
+        q: a configuration.
+        J: the eliminated Jacobian at ``q``.
+        moved: ``moved(q, twist)`` -> ``(configuration, readings)`` of ``q``'s platform
+            pose moved by the LOCAL ``twist`` (inverse kinematics).
+    """
+    if not np.all(np.isfinite(J)):
+        return None
+    scale = np.r_[np.ones(3), np.full(3, length)]
+    U, _, Vt = np.linalg.svd(J / scale)
+    u, v = U[:, -1], Vt[-1] / scale
+    h = _PROBE * max(length, 1.0)
+    l0 = moved(q, np.zeros(6))[1]
+    rp, rm = (float(u @ (moved(q, c * v)[1] - l0)) for c in (h, -h))
+    a, sigma = (rp + rm) / (2.0 * h * h), (rp - rm) / (2.0 * h)
+    if not (math.isfinite(a) and abs(a) > 0.0):
+        return None
+    return moved(q, (-sigma / a) * v)[0]
+
+
 @dataclass
 class Candidate:
     """One assembly's samples: indices, configurations, eliminated Jacobians, calm or not."""
@@ -92,31 +123,8 @@ class BranchResolver:
         self.readings: dict[int, np.ndarray] = {}
 
     def mirror_guess(self, q: np.ndarray, J: np.ndarray, moved) -> np.ndarray | None:
-        """A configuration near the other assembly that meets ``q``'s at a fold.
-
-        Along the singular direction ``v`` of ``J`` (smallest singular value, rotations scaled
-        by the length) the reading along the matching left direction ``u`` is locally
-        ``r(c) = sigma c + a c^2``, zero at ``c = 0`` (``q``) and at ``c = -sigma / a`` (the
-        mirror); ``sigma`` and ``a`` come from the readings at ``c = +-h``.
-
-        Args:
-            q: a configuration.
-            J: the eliminated Jacobian at ``q``.
-            moved: ``moved(q, twist)`` -> ``(configuration, readings)`` of ``q``'s platform
-                pose moved by the LOCAL ``twist`` (inverse kinematics).
-        """
-        if not np.all(np.isfinite(J)):
-            return None
-        scale = np.r_[np.ones(3), np.full(3, self.length)]
-        U, _, Vt = np.linalg.svd(J / scale)
-        u, v = U[:, -1], Vt[-1] / scale
-        h = _PROBE * max(self.length, 1.0)
-        l0 = moved(q, np.zeros(6))[1]
-        rp, rm = (float(u @ (moved(q, c * v)[1] - l0)) for c in (h, -h))
-        a, sigma = (rp + rm) / (2.0 * h * h), (rp - rm) / (2.0 * h)
-        if not (math.isfinite(a) and abs(a) > 0.0):
-            return None
-        return moved(q, (-sigma / a) * v)[0]
+        """:func:`mirror_guess` with this resolver's model."""
+        return mirror_guess(self.model, self.ff, self.length, q, J, moved)
 
     def distinct(self, qa: np.ndarray, qb: np.ndarray) -> bool:
         """Whether two configurations are different platform poses."""

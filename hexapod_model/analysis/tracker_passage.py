@@ -3,13 +3,15 @@
 :class:`PassageMixin` is part of :class:`~hexapod_model.analysis.tracking.Tracker`; the
 candidates and the statistics are :class:`~hexapod_model.analysis.tracker_branches.BranchResolver`.
 A passage opens on a trusted sample whose condition number exceeds the tracker's limit, or on
-a failed solve of readings without a jump or stuck leg (readings past the fold). It needs
-three certified samples before it and ``recover=True``; otherwise ``branch_uncertain``
+a failed solve of readings without a jump or stuck leg while the newest trusted sample's
+condition number is above a quarter of the limit (readings past the fold). It needs
+twelve certified samples before it and ``recover=True``; otherwise ``branch_uncertain``
 latches until ``reset()`` as before (the paper's raw tracker keeps its behaviour). While it
 is open every sample is ``branch_uncertain``; when one candidate is singled out the sample
 returns its pose, the history restarts there (the poses of the singular neighbourhood are too
 imprecise for the motion model; the next samples are ``settling``) and the flag clears.
-After ``resolve_samples`` samples without a verdict the flag latches until ``reset()``.
+After ``resolve_samples`` samples without a verdict, or on a ``jump`` or ``stuck`` sample
+within the passage, the flag latches until ``reset()``.
 """
 
 from __future__ import annotations
@@ -22,8 +24,11 @@ import pinocchio as pin
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.solver import Solution
 from .sensitivity import SensitivityEvaluator
-from .tracker_branches import BranchResolver
+from .tracker_branches import BranchResolver, mirror_guess
 from .tracker_checks import TrackerSettings
+from .tracker_types import pose_distance
+
+_MIN_BEFORE = 12  # certified samples before a passage: fewer cannot anchor the smooth motion
 
 
 class PassageMixin:
@@ -44,6 +49,7 @@ class PassageMixin:
     _ff: slice
     _sign: int
     _near: bool
+    _cond_last: float
 
     def _solve(self, l: np.ndarray, guess: np.ndarray) -> Solution:  # the Tracker's
         raise NotImplementedError
@@ -66,7 +72,8 @@ class PassageMixin:
         r = self._resolver
         if r is None:
             return sol, sens, self._uncertified
-        if suspect:
+        if suspect:  # a faulty reading within the passage: the candidates' sequences break off
+            self._resolver, self._uncertified = None, True
             return sol, sens, True
         if near and not r.post:
             return sol, sens, True
@@ -79,16 +86,11 @@ class PassageMixin:
             J = self._sens_b_eval(q)
             return self._cond_b <= self.cond_limit, J
 
-        def moved(q, twist):
-            T = self.hexa.pose_of(q) @ pin.exp6(twist).homogeneous
-            ik = self.hexa.inverse(T, guess=q, check=False)
-            return ik.q, ik.lengths
-
         def at(q):
             ik = self.hexa.inverse(self.hexa.pose_of(q), guess=q, check=False)
             return ik.q, ik.lengths, self._sens_b_eval(ik.q)
 
-        choice = r.follow(self._k, sol.q, self._sens.J, l, not near, solve, measure, moved, at)
+        choice = r.follow(self._k, sol.q, self._sens.J, l, not near, solve, measure, self._displaced, at)
         if choice is None:
             if r.post >= s.resolve_samples:
                 self._resolver, self._uncertified = None, True
@@ -111,12 +113,16 @@ class PassageMixin:
         self._cond_b = self._sens_b.evaluate(q).condition_number
         return self._sens_b.J
 
-    def _open(self) -> None:
-        """Open a passage near a singularity (or latch ``branch_uncertain`` when none can be judged)."""
-        if self._uncertified or self._lost:
+    def _open(self, latch: bool = True) -> None:
+        """Open a passage near a singularity.
+
+        Args:
+            latch: when no passage can be judged, latch ``branch_uncertain`` (otherwise do nothing).
+        """
+        if self._resolver is not None or self._uncertified or self._lost:
             return
-        if len(self._calm) < 3 or not self.settings.recover:  # nothing to judge by / the raw tracker
-            self._uncertified = True
+        if len(self._calm) < _MIN_BEFORE or not self.settings.recover:  # too little to judge by / raw tracker
+            self._uncertified = latch
             return
         s = self.settings
         self._resolver = BranchResolver(
@@ -128,3 +134,33 @@ class PassageMixin:
             s.branch_alpha,
         )
         self._calm.clear()
+
+    def _displaced(self, q: np.ndarray, twist: np.ndarray):
+        """``(configuration, readings)`` of ``q``'s platform pose moved by the LOCAL ``twist``."""
+        T = self.hexa.pose_of(q) @ pin.exp6(twist).homogeneous
+        ik = self.hexa.inverse(T, guess=q, check=False)
+        return ik.q, ik.lengths
+
+    def _may_have_crossed(self, q_before: np.ndarray, q: np.ndarray, l: np.ndarray) -> bool:
+        """Whether a platform re-anchored at ``q`` after a gap may have crossed a fold meanwhile.
+
+        Continuation along the straight reading path keeps the assembly of ``q_before``; the
+        platform itself may have crossed a singular surface during the gap. It may have when
+        the mirror of ``q`` across its nearest fold is another assembly of the readings ``l``
+        no farther from ``q`` than twice the distance moved since ``q_before``, and the newest
+        trusted sample or ``q`` has a condition number above a tenth of the limit (a platform
+        that crossed during the gap with both ends better conditioned is not detected).
+        """
+        cond = max(self._cond_last, self._sens.evaluate(q).condition_number)
+        if not self.settings.recover or cond <= self.cond_limit / 10:  # no fold near either end
+            return False
+        guess = mirror_guess(self.hexa.model, self._ff, self.length, q, self._sens.J, self._displaced)
+        if guess is None:
+            return False
+        alt = self._solve(l, guess)
+        if alt.status not in ("converged", "out_of_limits"):
+            return False
+        pose = self.hexa.pose_of(q)
+        apart = pose_distance(pose, alt.pose, self.length)
+        moved = pose_distance(self.hexa.pose_of(q_before), pose, self.length)
+        return 1e-9 * self.length < apart <= 2.0 * moved

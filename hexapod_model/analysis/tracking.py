@@ -131,6 +131,7 @@ class Tracker(PassageMixin):
         self._lost = False  # recover=False: a failed branch check latches branch_uncertain
         self._uncertified = False  # passed near a singularity without singling out the assembly
         self._resolver = None  # the candidates of the current passage
+        self._cond_last = self.home_condition  # of the newest trusted sample
         self._calm.clear()
         self._sign, self._near = self._sens.evaluate(q).det_sign, False  # of the newest trusted sample
         self._z2, self._scale = 1.0, 1.0  # observed / stated noise (mean square, root), <= 1
@@ -200,8 +201,8 @@ class Tracker(PassageMixin):
             return self._reanchor(l, flags, legs, t0)
         sol = self._solve(l, self._guess())
         if sol.status not in ("converged", "out_of_limits"):
-            if not suspect and self._resolver is None and sol.status != "invalid_input":
-                self._open()  # no assembly near the prediction: readings past a singularity's fold?
+            if not suspect and sol.status != "invalid_input" and self._cond_last > self.cond_limit / 4:
+                self._open(latch=False)  # no assembly near the prediction: readings past a fold?
             return self._failure(l, sol.status, sol.message, tuple(flags), legs, t0, sol)
         sens = self._sens.evaluate(sol.q)
         if checked and not suspect and not self._lost:
@@ -309,7 +310,10 @@ class Tracker(PassageMixin):
         # assembly already, so the re-anchored one cannot be certified (until reset)
         # (within a passage near a singularity the candidates are judged there instead)
         self._lost = self._lost or (self._doubt and self._resolver is None)
+        crossed = self._resolver is None and self._may_have_crossed(self._hist[0], sol.q, l)
         self._restart(sol.q, trusted=True)
+        if crossed:  # the assembly is judged as after a passage near a singularity
+            self._open()
         self._sign, self._near = sens.det_sign, sens.condition_number > self.cond_limit
         uncertain = self._lost or self._uncertified or self._resolver is not None
         out = [*flags] + (["branch_uncertain"] if uncertain else []) + ["settling"]
@@ -345,6 +349,7 @@ class Tracker(PassageMixin):
         if trusted:
             self._push_trusted(sol.q)
             self._sign, self._near = sens.det_sign, sens.condition_number > self.cond_limit
+            self._cond_last = sens.condition_number
             if not (self._near or self._lost or self._uncertified or self._resolver):
                 self._calm.append((self._k, sol.q, sol.lengths))
         elif trusted is not None:
