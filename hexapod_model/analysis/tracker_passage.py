@@ -147,6 +147,7 @@ class PassageMixin:
         Continuation along the straight reading path keeps the assembly of ``q_before``; the
         platform itself may have crossed a singular surface during the gap. It may have when
         the mirror of ``q`` across its nearest fold is another assembly of the readings ``l``
+        within the joint limits
         no farther from ``q`` than twice the distance moved since ``q_before``, and the newest
         trusted sample or ``q`` has a condition number above a tenth of the limit (a platform
         that crossed during the gap with both ends better conditioned is not detected).
@@ -158,7 +159,7 @@ class PassageMixin:
         if guess is None:
             return False
         alt = self._solve(l, guess)
-        if alt.status not in ("converged", "out_of_limits"):
+        if alt.status != "converged":  # none, or one outside the joint limits: not the platform's
             return False
         pose = self.hexa.pose_of(q)
         apart = pose_distance(pose, alt.pose, self.length)
