@@ -16,7 +16,9 @@ samples the history is reset: the next sample with no stuck leg is solved by con
 (readings moved in steps of at most ``continuation_step``) from the last trusted
 configuration, and the next ``settle_samples`` samples, unchecked, are flagged ``settling``
 (also at the start and after :meth:`Tracker.reset`). Each sample carries its 1-sigma pose
-uncertainty propagated from the reading noise and its condition number.
+uncertainty propagated from the reading noise and its condition number. A passage near a
+singularity (two assemblies meet) is ``branch_uncertain`` until the readings single out one
+assembly (:mod:`~hexapod_model.analysis.tracker_passage`).
 """
 
 from __future__ import annotations
