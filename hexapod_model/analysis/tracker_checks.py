@@ -16,7 +16,10 @@ Per leg, ``z = |nu| / (noise * spread)``:
 * ``stuck``: the reading has not changed (by more than ``stuck_tolerance``, default 0: a
   frozen value) while the motion implies it must move: its own prediction moved by more than
   ``stuck_sigmas`` (default 3), or, after ``stuck_samples`` (default 3) unchanged samples,
-  another leg moved by more than ``stuck_sigmas * sqrt(2) * noise`` meanwhile. A working
+  another leg moved by more than ``stuck_sigmas * sqrt(2) * noise`` meanwhile, or moves at a
+  rate (least-squares slope over the readings kept, ``stuck_samples + 8``) of more than
+  ``stuck_motion_sigmas`` (default 5) of its standard deviation: at 50 um noise and 1x a slow
+  leg needs 5-6 samples to move by ``3 sqrt(2)`` noise, its slope is significant at once. A working
   encoder with noise repeats its value with probability ~ resolution / noise per sample; at
   rest (no motion) nothing is flagged. The flag stays while the reading stays unchanged.
 """
@@ -44,6 +47,8 @@ class TrackerSettings:
         stuck_samples: unchanged readings before the other legs' motion can raise ``stuck``.
         stuck_sigmas: how clearly the motion must imply that a frozen leg moves.
         stuck_tolerance: largest change (m) that counts as "unchanged" (0: identical value).
+        stuck_motion_sigmas: how significant another leg's rate of motion must be for a
+            reading unchanged ``stuck_samples`` times to be ``stuck``.
         window: trusted samples in the least-squares quadratic (>= 3).
         max_gap: untrusted samples the motion model may bridge; after more, the history is
             reset and the tracker re-anchors (see :class:`~hexapod_model.analysis.tracking.Tracker`).
@@ -58,6 +63,10 @@ class TrackerSettings:
         max_sigma_factor: ``imprecise`` when the 1-sigma pose uncertainty
             ``hypot(sigma_translation, length * sigma_rotation)`` exceeds this many ``noise``
             (the Jacobian amplifies the reading noise; ``None``: never).
+        branch_alpha: significance at which an assembly is rejected after a passage near a
+            singularity (:mod:`~hexapod_model.analysis.tracker_branches`).
+        resolve_samples: samples after such a passage within which one assembly must be
+            singled out; after them ``branch_uncertain`` stays until ``reset``.
         continuation_step: largest reading change (m) per Newton solve when re-anchoring.
         recover: re-solve from the motion model when a pose fails the branch check;
             ``False`` keeps the Jakobović and Jelenković (2002) experiment's raw behaviour (a failed branch check
@@ -69,6 +78,7 @@ class TrackerSettings:
     stuck_samples: int = 3
     stuck_sigmas: float = 3.0
     stuck_tolerance: float = 0.0
+    stuck_motion_sigmas: float = 5.0
     window: int = 6
     max_gap: int = 3
     settle_samples: int = 3
@@ -76,11 +86,21 @@ class TrackerSettings:
     cond_factor: float = 100.0
     cond_limit: float | None = None
     max_sigma_factor: float | None = 10.0
+    branch_alpha: float = 1e-6
+    resolve_samples: int = 200
     continuation_step: float = 2e-3
     recover: bool = True
 
     def __post_init__(self) -> None:
-        positive = ("noise", "jump_sigmas", "stuck_sigmas", "branch_sigmas", "cond_factor", "continuation_step")
+        positive = (
+            "noise",
+            "jump_sigmas",
+            "stuck_sigmas",
+            "stuck_motion_sigmas",
+            "branch_sigmas",
+            "cond_factor",
+            "continuation_step",
+        )
         for name in positive:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v > 0):
@@ -92,7 +112,11 @@ class TrackerSettings:
         v = self.stuck_tolerance
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v >= 0):
             raise InputError("stuck_tolerance", v, "expected a finite number >= 0")
-        for name, lo in (("stuck_samples", 1), ("window", 3), ("max_gap", 0), ("settle_samples", 3)):
+        v = self.branch_alpha
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1:
+            raise InputError("branch_alpha", v, "expected a number in (0, 1)")
+        limits = (("stuck_samples", 1), ("window", 3), ("max_gap", 0), ("settle_samples", 3), ("resolve_samples", 3))
+        for name, lo in limits:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < lo:
                 raise InputError(name, v, f"expected an integer >= {lo}")
@@ -138,7 +162,23 @@ class MotionModel:
         return hit
 
 
-def stuck_legs(frozen: np.ndarray, z: np.ndarray, moved: np.ndarray, settings: TrackerSettings) -> np.ndarray:
+def motion_sigmas(raw: np.ndarray, noise: float) -> np.ndarray:
+    """Per leg: the largest ``|slope| / sd(slope)`` of the *other* legs' readings ``raw`` (n, 6).
+
+    The slope is the least-squares rate over the ``n`` readings (oldest first), its standard
+    deviation ``noise / sqrt(sum (t - mean t)^2)`` under the noise model; 0 with fewer than 3.
+    """
+    n = raw.shape[0]
+    if n < 3:
+        return np.zeros(6)
+    t = np.arange(n) - (n - 1) / 2.0
+    z = np.abs(t @ raw) / (noise * math.sqrt(float(t @ t)))
+    return np.array([np.max(np.delete(z, i)) for i in range(6)])
+
+
+def stuck_legs(
+    frozen: np.ndarray, z: np.ndarray, moved: np.ndarray, settings: TrackerSettings, moving: np.ndarray | None = None
+) -> np.ndarray:
     """Boolean (6,): frozen legs that the motion implies move.
 
     A leg is stuck when its reading is unchanged while its own prediction moves by more than
@@ -150,7 +190,11 @@ def stuck_legs(frozen: np.ndarray, z: np.ndarray, moved: np.ndarray, settings: T
         z: normalised innovations (``nan`` when the motion model is not available).
         moved: largest change of the *other* legs' readings over each leg's frozen run (m).
         settings: the tracker's settings.
+        moving: :func:`motion_sigmas` of the readings kept (``None``: not used).
     """
     predicted = (frozen > 0) & (np.nan_to_num(z, nan=0.0) > settings.stuck_sigmas)
-    others = (frozen >= settings.stuck_samples) & (moved > settings.stuck_sigmas * math.sqrt(2.0) * settings.noise)
+    evidence = moved > settings.stuck_sigmas * math.sqrt(2.0) * settings.noise
+    if moving is not None:
+        evidence |= moving > settings.stuck_motion_sigmas
+    others = (frozen >= settings.stuck_samples) & evidence
     return predicted | others

@@ -16,7 +16,9 @@ samples the history is reset: the next sample with no stuck leg is solved by con
 (readings moved in steps of at most ``continuation_step``) from the last trusted
 configuration, and the next ``settle_samples`` samples, unchecked, are flagged ``settling``
 (also at the start and after :meth:`Tracker.reset`). Each sample carries its 1-sigma pose
-uncertainty propagated from the reading noise and its condition number.
+uncertainty propagated from the reading noise and its condition number. A passage near a
+singularity (two assemblies meet) is ``branch_uncertain`` until the readings single out one
+assembly (:mod:`~hexapod_model.analysis.tracker_passage`).
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.solver import Solution
 from .sensitivity import SensitivityEvaluator
-from .tracker_checks import MotionModel, TrackerSettings, stuck_legs
+from .tracker_checks import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
+from .tracker_passage import PassageMixin
 from .tracker_types import (
     FAILED_STATUSES,
     FLAGS,
@@ -48,6 +51,7 @@ _NO_Z.flags.writeable = False
 _SCALE_RATE = 0.02  # weight of a sample in the observed innovation scale (~50 samples)
 _SCALE_FLOOR = 1e-3  # the branch check never assumes readings better than 1e-3 noise
 _STUCK_LOOKBACK = 8  # readings kept beyond stuck_samples to see the other legs move
+_BEFORE = 24  # certified samples before a passage near a singularity that the candidates are judged by
 
 __all__ = [
     "FAILED_STATUSES",
@@ -62,7 +66,7 @@ __all__ = [
 ]
 
 
-class Tracker:
+class Tracker(PassageMixin):
     """Solve a stream of readings, each from a predicted guess, and flag doubtful samples.
 
     Args:
@@ -107,6 +111,9 @@ class Tracker:
         self._L = np.zeros((s.window, 6))
         self._ages = np.zeros(s.window, dtype=np.int64)  # samples since each trusted one
         self._raw: deque[np.ndarray] = deque(maxlen=s.stuck_samples + _STUCK_LOOKBACK)
+        self._calm: deque[tuple[int, np.ndarray, np.ndarray]] = deque(maxlen=_BEFORE)  # certified, not near-singular
+        self._sens_b: SensitivityEvaluator | None = None  # for the candidates of a passage
+        self._k = 0  # samples since the start
         self.reset(initial)
 
     def reset(self, initial=None) -> None:
@@ -124,7 +131,10 @@ class Tracker:
         self._frozen = np.zeros(6, dtype=np.int64)
         self._stuck = np.zeros(6, dtype=bool)
         self._lost = False  # recover=False: a failed branch check latches branch_uncertain
-        self._uncertified = False  # passed near a singularity since the anchor
+        self._uncertified = False  # passed near a singularity without singling out the assembly
+        self._resolver = None  # the candidates of the current passage
+        self._cond_last = self.home_condition  # of the newest trusted sample
+        self._calm.clear()
         self._sign, self._near = self._sens.evaluate(q).det_sign, False  # of the newest trusted sample
         self._z2, self._scale = 1.0, 1.0  # observed / stated noise (mean square, root), <= 1
 
@@ -159,6 +169,7 @@ class Tracker:
         t0 = time.perf_counter()
         s = self.settings
         self._ages += 1  # every sample, readable or not, is one period
+        self._k += 1
         l = np.asarray(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
         if l.shape != (6,) or not np.isfinite(l).all():
             msg = f"expected 6 finite readings, got {lengths!r}"
@@ -181,7 +192,8 @@ class Tracker:
         frozen = int(self._frozen.max())
         suspect = False
         if zmax > s.jump_sigmas or frozen > 0 or self._stuck.any():
-            stuck = stuck_legs(self._frozen, z, self._moved(), s) | (self._stuck & (self._frozen > 0))
+            moving = motion_sigmas(np.array(self._raw), s.noise) if frozen >= s.stuck_samples else None
+            stuck = stuck_legs(self._frozen, z, self._moved(), s, moving) | (self._stuck & (self._frozen > 0))
             self._stuck = stuck  # latched while the reading stays unchanged
             jump = z > s.jump_sigmas
             legs = tuple(int(i) for i in np.flatnonzero(jump | stuck))
@@ -191,6 +203,8 @@ class Tracker:
             return self._reanchor(l, flags, legs, t0)
         sol = self._solve(l, self._guess())
         if sol.status not in ("converged", "out_of_limits"):
+            if not suspect and sol.status != "invalid_input" and self._cond_last > self.cond_limit / 4:
+                self._open(latch=False)  # no assembly near the prediction: readings past a fold?
             return self._failure(l, sol.status, sol.message, tuple(flags), legs, t0, sol)
         sens = self._sens.evaluate_solved(sol.q)  # from the solve's own Jacobians
         if checked and not suspect and not self._lost:
@@ -199,7 +213,8 @@ class Tracker:
                 flags.append("branch_uncertain")
                 self._lost = not s.recover
                 self._doubt = suspect = s.recover
-        if (self._lost or self._uncertified) and "branch_uncertain" not in flags:
+        sol, sens, open_ = self._passage(sol, sens, l, bool(legs) or self._lost)
+        if (self._lost or self._uncertified or open_) and "branch_uncertain" not in flags:
             flags.append("branch_uncertain")
         if not checked and m <= s.max_gap + 1:
             flags.append("settling")
@@ -296,10 +311,15 @@ class Tracker:
         sens = self._sens.evaluate(sol.q)
         # poses that kept failing the branch check: the last trusted one may be on another
         # assembly already, so the re-anchored one cannot be certified (until reset)
-        self._lost = self._lost or self._doubt
+        # (within a passage near a singularity the candidates are judged there instead)
+        self._lost = self._lost or (self._doubt and self._resolver is None)
+        crossed = self._resolver is None and self._may_have_crossed(self._hist[0], sol.q, l)
         self._restart(sol.q, trusted=True)
+        if crossed:  # the assembly is judged as after a passage near a singularity
+            self._open()
         self._sign, self._near = sens.det_sign, sens.condition_number > self.cond_limit
-        out = [*flags] + (["branch_uncertain"] if self._lost or self._uncertified else []) + ["settling"]
+        uncertain = self._lost or self._uncertified or self._resolver is not None
+        out = [*flags] + (["branch_uncertain"] if uncertain else []) + ["settling"]
         return self._finish(sol, sens, out, legs, math.nan, trusted=None, t0=t0)
 
     def _continue(self, q0: np.ndarray, l: np.ndarray, step: float) -> Solution:
@@ -319,10 +339,8 @@ class Tracker:
         s = self.settings
         if sens.condition_number > self.cond_limit:
             flags.append("near_singular")
-            # assemblies meet here: which one the platform leaves on cannot be certified
-            # from the readings, so every later pose is branch_uncertain until reset()
-            # (not for a faulty sample: its pose is not where the platform is)
-            self._uncertified = self._uncertified or trusted is not False
+            # a re-anchored pose here: its assembly cannot be certified (until reset())
+            self._uncertified = self._uncertified or (trusted is None and self._resolver is None)
         if sol.status == "out_of_limits":
             flags.append("out_of_limits")
         sig_t, sig_r = s.noise * sens.translation, s.noise * sens.rotation
@@ -334,6 +352,9 @@ class Tracker:
         if trusted:
             self._push_trusted(sol.q)
             self._sign, self._near = sens.det_sign, sens.condition_number > self.cond_limit
+            self._cond_last = sens.condition_number
+            if not (self._near or self._lost or self._uncertified or self._resolver):
+                self._calm.append((self._k, sol.q, sol.lengths))
         elif trusted is not None:
             self._gap += 1
         self._last_q = sol.q
