@@ -77,7 +77,7 @@ def _residual(q, ints, floats, work):
     """The closure residual norm at ``q``, left in the work buffer ``r`` (``iterate(q, inf, 0)``'s)."""
     (leg_q, leg_v, platform_v, _, _, _), _ = unpack_ints(ints)
     (placements, motions, closure, home), _ = unpack_floats(ints, floats)
-    (oR, op, J, R, p, E, r), _ = unpack_work(ints, work)[0][:7], 0
+    oR, op, J, R, p, E, r = unpack_work(ints, work)[0][:7]
     evaluate_chains(q, placements, motions, leg_q, leg_v, closure, home, ints[3], platform_v, oR, op, J, R, p)
     return closure_residual(R, p, ints[0], E, r)[0]
 
