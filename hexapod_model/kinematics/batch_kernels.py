@@ -67,7 +67,7 @@ def _invalid_row(k, out):
     poses[k] = np.nan
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _follow_row(q0, q, start, target, attempt, tol, max_iter, sign, guessed, near_kappa, prismatic_q, packed):
     """The rest of :func:`.assembly.solve_forward` after a failed certified attempt from ``q0``.
 

@@ -25,15 +25,17 @@ import numpy as np
 from numba import njit
 
 from . import path_rules
+from .chains import evaluate_chains
+from .kernels import closure_residual
 from .lie import difference_free_flyer
 from .newton import CONVERGED, _integrate, iterate_schur
-from .packing import unpack_ints, unpack_work
+from .packing import unpack_floats, unpack_ints, unpack_work
 from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP
 
 rescale = njit(cache=True)(path_rules.rescale)  # the Python follower's rule, compiled
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _difference(q0, q1, dv, ints, scratch):
     """``dv = q1 (-) q0`` (Pinocchio's ``difference``): leg joints subtract, the platform by ``log6``."""
     (leg_q, leg_v, platform_v, _, _, _), _ = unpack_ints(ints)
@@ -45,7 +47,7 @@ def _difference(q0, q1, dv, ints, scratch):
     difference_free_flyer(x0, x1, dv[platform_v[0] : platform_v[0] + 6], scratch[0], scratch[1], scratch[2], scratch[3])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _predict(x, a, b, u, q0, dv, ints, work, scratch):
     """``q0 = x (+) u (b (-) a)``: ``pin.integrate(x, u * pin.difference(a, b))``."""
     (leg_q, leg_v, platform_v, _, _, _), _ = unpack_ints(ints)
@@ -58,6 +60,16 @@ def _predict(x, a, b, u, q0, dv, ints, work, scratch):
 
 
 @njit(cache=True)
+def _residual(q, ints, floats, work):
+    """The closure residual norm at ``q``, left in the work buffer ``r`` (``iterate(q, inf, 0)``'s)."""
+    (leg_q, leg_v, platform_v, _, _, _), _ = unpack_ints(ints)
+    (placements, motions, closure, home), _ = unpack_floats(ints, floats)
+    oR, op, J, R, p, E, r = unpack_work(ints, work)[0][:7]
+    evaluate_chains(q, placements, motions, leg_q, leg_v, closure, home, ints[3], platform_v, oR, op, J, R, p)
+    return closure_residual(R, p, ints[0], E, r)[0]
+
+
+@njit(cache=True, inline="always")  # inlined into batch_kernels.forward_rows: one compiled unit, not two
 def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prismatic_q, packed, x, q):
     """Follow the readings path from ``start`` to ``target`` in certified substeps, the first of ``h``.
 
@@ -87,7 +99,7 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prism
     scratch = (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3))
     offset = np.zeros(r.shape[0])
     # the start's own closure residual: a start off the manifold follows r - (1 - t) r_start
-    res = iterate_schur(start, q, np.inf, 0, 0.0, offset, 0.0, False, ints, floats, work, iwork)[2]
+    res = _residual(start, ints, floats, work)
     shifted = res > INTERMEDIATE_TOL
     if shifted:
         offset[:] = r

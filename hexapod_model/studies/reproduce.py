@@ -11,10 +11,10 @@ plus Gaussian noise (default sigma 10 um, the order of the LinACE encoder accura
 (``--reference-noise`` sigma in metres on each position coordinate, and sigma / r radians on
 each rotation-vector component, with r the RMS platform anchor radius).
 
-Every set of readings is solved with the Cardan-aware model (``Hexapod.forward``, cold start
-from home, retried from the standard model's pose if needed) and with the standard spherical
-model (:mod:`hexapod_model.standard`, batch). Errors are eqs. 26-27: ``||p_ref - p_est||`` and
-the rotation angle of ``R_ref^T R_est``.
+Every set of readings is solved with the Cardan-aware model (``Hexapod.forward_batch``, cold
+start from home, retried with ``Hexapod.forward`` from the standard model's pose if needed)
+and with the standard spherical model (:mod:`hexapod_model.standard`, batch). Errors are
+eqs. 26-27: ``||p_ref - p_est||`` and the rotation angle of ``R_ref^T R_est``.
 """
 
 from __future__ import annotations
@@ -93,14 +93,11 @@ def simulate(
     drawn = 0
     while len(poses) < n:
         batch = box_poses(hexa.home_pose, max(16, int(1.3 * (n - len(poses)))), seed=int(rng.integers(2**63)))
-        for T in batch:
-            drawn += 1
-            sol = hexa.inverse(T, check=False)
-            if sol.converged:
-                poses.append(T)
-                lengths.append(sol.lengths)
-                if len(poses) == n:
-                    break
+        need = n - len(poses)
+        good = np.flatnonzero((sol := hexa.inverse_batch(batch)).converged)[:need]  # each row from home
+        poses.extend(batch[good])
+        lengths.extend(sol.lengths[good])
+        drawn += int(good[-1]) + 1 if good.size == need else len(batch)  # drawn until the n-th feasible one
         if drawn > 50 * n:
             raise InputError("poses", n, f"only {len(poses)} of {drawn} drawn poses lie inside the limits")
     truth = np.array(poses)
@@ -149,20 +146,19 @@ def solve_cardan(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Cardan-aware direct kinematics of every row; returns (N, 4, 4) poses and an ok mask.
 
-    Starts from home; a row that fails is retried from the IK configuration of ``fallback[k]``
-    (the standard model's pose).
+    Starts from home (one ``forward_batch``); a row that fails is retried from the IK
+    configuration of ``fallback[k]`` (the standard model's pose).
     """
-    out, ok = np.full((len(readings), 4, 4), np.nan), np.zeros(len(readings), bool)
-    for k in progress(range(len(readings)), len(readings), "Cardan-aware FK"):
-        for attempt in range(2):
-            try:
-                guess = None if attempt == 0 else hexa.inverse(fallback[k], check=False).q
-                sol = hexa.forward(readings[k], guess=guess, check=False)
-            except HexapodError:
-                continue
-            if sol.converged:
-                out[k], ok[k] = sol.pose, True
-                break
+    cold = hexa.forward_batch(readings)  # each row from home, as forward() from home
+    out, ok = cold.poses.copy(), cold.converged.copy()
+    retry = np.flatnonzero(~ok & (cold.status != "invalid_input"))  # invalid readings fail from any start
+    for k in progress(retry, len(retry), "Cardan-aware FK, retried rows"):
+        try:
+            sol = hexa.forward(readings[k], guess=hexa.inverse(fallback[k], check=False).q, check=False)
+        except HexapodError:
+            continue
+        if sol.converged:
+            out[k], ok[k] = sol.pose, True
     return out, ok
 
 
