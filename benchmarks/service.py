@@ -1,6 +1,7 @@
 """Throughput, CPU and latency of the fixture pose service (not a test: figures are printed).
 
 python benchmarks/service.py [--seconds S] [--one 250,500,1000,2000] [--many 50,100,200] [--fixtures 20]
+                             [--capacity]
 
 A feeder thread plays trajectory A (reference hexapod, 10 um reading noise, frames encoded with
 each fixture's layout and CAN ids) on python-can's virtual bus at a set rate per fixture; the
@@ -14,7 +15,9 @@ subscriber's call; a backlog counts), and the CPU time
 of the service's threads (cycle + store + HTTP) and of the whole process (feeder included), in
 percent of one core. A rate is *sustained* when at least 99 % of the sets sent are solved and
 the p99 latency stays under 10 ms (no backlog). The machine's other load is part of the figures:
-run it on an idle machine for the capacity.
+run it on an idle machine for the capacity. ``--capacity`` also queues the frames of 3 s of
+sets before the cycle thread reads them and prints its CPU per set with no idle gaps (1 x 1000 Hz
+and FIXTURES x 100 Hz): the cost of a set when the thread's caches stay warm.
 """
 
 from __future__ import annotations
@@ -67,8 +70,8 @@ def thread_cpu(threads: list[threading.Thread]) -> float:
     return total
 
 
-def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> dict:
-    """One run: ``fixtures`` fixtures at ``rate`` sets per second each for ``seconds``."""
+def make_config(fixtures: int, folder: Path):
+    """A fresh virtual channel and a configuration of ``fixtures`` reference fixtures on it."""
     channel = f"bench-{uuid.uuid4().hex}"
     tables = [
         {"name": f"f{i:02d}", "hexapod": "reference", "can_ids": [0x100 + 8 * i + k for k in range(6)]}
@@ -82,6 +85,55 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
             "fixtures": tables,
         }
     )
+    return channel, config
+
+
+def capacity(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, sets: int, folder: Path) -> float:
+    """Cycle-thread CPU (us) per set when the frames of ``sets`` periods are queued before they are read.
+
+    No feeder thread and no idle gaps: the thread runs from a full queue, as it would under a
+    sustained load; the frames carry the timestamps of ``rate`` sets per second per fixture.
+    """
+    channel, config = make_config(fixtures, folder)
+    bus = can.Bus(interface="virtual", channel=channel)
+    service = FixtureService(config, bus=bus, hexapods={f.name: hexa for f in config.fixtures})
+    count = [0]
+    service.subscribe(lambda rec: count.__setitem__(0, count[0] + 1))
+    wall = time.time()
+
+    def queue(k0: int, k1: int) -> None:
+        for k in range(k0, k1):
+            for fl in (f.legs for f in config.fixtures):
+                for j, leg in enumerate(fl):
+                    m = leg.message(float(readings[k % len(readings), j]))
+                    m.timestamp = wall + k / rate + j * 130e-6
+                    bus.queue.put(m)
+
+    def settle(target: float) -> None:
+        end = time.monotonic() + 60.0
+        while count[0] < target and time.monotonic() < end:
+            time.sleep(0.01)
+
+    warm = 200
+    queue(0, warm)
+    service.start()
+    try:
+        settle(0.98 * warm * fixtures)  # warm-up: caches, first solves
+        time.sleep(0.2)
+        clock = time.pthread_getcpuclockid(service._thread.ident)
+        queue(warm, warm + sets)
+        r0, c0 = count[0], time.clock_gettime(clock)
+        settle(r0 + 0.99 * sets * fixtures)
+        done, cpu = count[0] - r0, time.clock_gettime(clock) - c0
+    finally:
+        service.stop()
+        bus.shutdown()
+    return 1e6 * cpu / max(done, 1)
+
+
+def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> dict:
+    """One run: ``fixtures`` fixtures at ``rate`` sets per second each for ``seconds``."""
+    channel, config = make_config(fixtures, folder)
     legs = [f.legs for f in config.fixtures]
     names = [f.name for f in config.fixtures]
     frames = [[[leg.message(float(r[k])) for k, leg in enumerate(fl)] for fl in legs] for r in readings]
@@ -180,6 +232,9 @@ def main(argv=None) -> int:
     ap.add_argument("--many", default="50,100,200", help="set rates (Hz) per fixture for --fixtures fixtures")
     ap.add_argument("--fixtures", type=int, default=20)
     ap.add_argument("--json", help="also write the runs as JSON")
+    ap.add_argument(
+        "--capacity", action="store_true", help="also the cycle thread's CPU per set from a full queue (no idle gaps)"
+    )
     args = ap.parse_args(argv)
     hexa = Hexapod.from_preset("reference")
     readings = readings_sequence(hexa)
@@ -189,6 +244,13 @@ def main(argv=None) -> int:
             for rate in (float(v) for v in rates.split(",") if v):
                 reports.append(run(hexa, readings, n, rate, args.seconds, Path(tmp)))
                 print(line(reports[-1]), flush=True)
+        if args.capacity:
+            for n, rate in ((1, 1000.0), (args.fixtures, 100.0)):
+                us = capacity(hexa, readings, n, rate, int(3 * rate), Path(tmp))
+                share = us * n * rate / 1e4  # percent of one core at that rate
+                print(
+                    f"capacity {n:3d} x {rate:6.0f} Hz  cycle thread CPU {us:5.0f} us a set  ({share:.0f} % of a core)"
+                )
     for n in (1, args.fixtures):
         ok = [r["rate_hz"] for r in reports if r["fixtures"] == n and r["sustained"]]
         print(f"highest sustained set rate, {n} fixture(s): {max(ok):.0f} Hz" if ok else f"{n} fixture(s): none")

@@ -228,3 +228,14 @@ def test_startup_benchmark_runs():
     )
     assert out.returncode == 0, out.stderr
     assert "peak MB" in out.stdout and "x1.00 wall" in out.stdout  # the baseline row
+
+
+def test_service_benchmark_runs():
+    """A short run of both modes: a fed run per fixture count and the full-queue capacity."""
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "service.py"), "--seconds", "0.5", "--one", "100"]
+    out = subprocess.run(
+        [*cmd, "--many", "20", "--fixtures", "2", "--capacity"], capture_output=True, text=True, timeout=600
+    )
+    assert out.returncode == 0, out.stderr
+    assert "1 x    100 Hz" in out.stdout and "2 x     20 Hz" in out.stdout
+    assert "capacity   1 x   1000 Hz" in out.stdout and "capacity   2 x    100 Hz" in out.stdout
