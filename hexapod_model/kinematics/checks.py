@@ -21,6 +21,7 @@ from .solver import Solution
 
 POSE_TOLERANCE = 1e-6  # max deviation of a pose from a rigid transform, of a start quaternion from unit norm
 MAX_POSITION = 1e6  # m: largest platform position coordinate accepted (beyond it the residual loses every digit)
+LIMIT_SLACK = 1e-12  # m or rad: how far a reading or joint may pass its limit (rounding)
 MAX_TOL = 1e-6  # largest closure residual (m, rad) a caller may accept as converged
 RANK_TOL = 1e-9  # singular values below this fraction of the largest count as zero (held sets)
 

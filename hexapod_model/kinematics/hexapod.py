@@ -26,6 +26,7 @@ from . import assembly, batch, hybrid
 from .assembly import Outcome
 from .batch import BatchResult
 from .checks import (
+    LIMIT_SLACK,
     MAX_TOL,
     POSE_TOLERANCE,
     check_guess,
@@ -40,7 +41,6 @@ from .solver import NewtonSolver, Solution
 
 DEFAULT_TOL = 1e-12  # closure residual (m, rad): pose errors stay below 1e-9 on every preset
 DEFAULT_MAX_ITER = 20
-_LIMIT_SLACK = 1e-12
 #: largest 2-norm condition number of the direct-kinematics constraint Jacobian at home
 #: (metres and radians; the presets have 9-67, a 20x smaller hexapod about 700, a singular
 #: layout with parallel, coplanar or coincident legs 1e13 and more)
@@ -237,7 +237,7 @@ class Hexapod:
         """
         if not (isinstance(lengths, np.ndarray) and lengths.shape == (6,) and lengths.dtype == np.float64):
             lengths = check_vector("lengths", lengths, 6)
-        k = self._kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, _LIMIT_SLACK)
+        k = self._kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, LIMIT_SLACK)
         if k >= 0:
             check_vector("lengths", lengths, 6)  # names NaN / inf first
             raise LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
@@ -314,7 +314,7 @@ class Hexapod:
             out = Outcome(*solver.run(q0, tol, max_iter))
         q, status, it, res, jac, msg = out[:6]
         if status == "converged":
-            bad = self._kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, _LIMIT_SLACK)
+            bad = self._kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, LIMIT_SLACK)
             if bad >= 0:
                 k = int(self._limited[bad])
                 status, msg = "out_of_limits", str(self._limit_error(k, q[k]))
@@ -336,7 +336,7 @@ class Hexapod:
         tol: float = DEFAULT_TOL,
         max_iter: int = DEFAULT_MAX_ITER,
     ) -> BatchResult:
-        """Direct kinematics of N rows of readings in one call, the loop over rows compiled.
+        """Direct kinematics of N rows of readings in one call (a compiled loop; row by row if not ``compiled``).
 
         Args:
             lengths: (N, 6) readings, leg order, metres.
@@ -350,7 +350,7 @@ class Hexapod:
             A :class:`~.batch.BatchResult`: per row what :meth:`forward` with ``check=False``
             gives (``invalid_input`` where it raises: NaN, out of stroke); never raises on a row.
         """
-        return batch.forward_batch(self, lengths, guess, warm, tol, max_iter, _LIMIT_SLACK)
+        return batch.forward_batch(self, lengths, guess, warm, tol, max_iter, LIMIT_SLACK)
 
     def inverse_batch(
         self,
@@ -361,7 +361,7 @@ class Hexapod:
         tol: float = DEFAULT_TOL,
         max_iter: int = DEFAULT_MAX_ITER,
     ) -> BatchResult:
-        """Inverse kinematics of N poses in one call, the loop over rows compiled.
+        """Inverse kinematics of N poses in one call (a compiled loop; row by row if not ``compiled``).
 
         Args:
             poses: (N, 4, 4) base -> platform transforms, or (N, 7) rows ``x, y, z, qx, qy, qz, qw``
@@ -374,7 +374,7 @@ class Hexapod:
         Returns:
             A :class:`~.batch.BatchResult`: per row what :meth:`inverse` with ``check=False`` gives.
         """
-        return batch.inverse_batch(self, poses, guess, warm, tol, max_iter, _LIMIT_SLACK)
+        return batch.inverse_batch(self, poses, guess, warm, tol, max_iter, LIMIT_SLACK)
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:
         """Per-leg closure error at ``q`` computed by Pinocchio's constraint models."""

@@ -16,10 +16,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import InputError
-from .checks import check_held_set, check_vector, free_directions
+from .checks import LIMIT_SLACK, check_held_set, check_vector, free_directions
 
 Hexapod = Any  # a hexapod.Hexapod (this module is below it: hexapod.py imports it)
-_LIMIT_SLACK = 1e-12
 
 
 def hold(hexa: Hexapod, held: Mapping[str, object], q: np.ndarray) -> tuple[int, ...]:
@@ -43,7 +42,7 @@ def hold(hexa: Hexapod, held: Mapping[str, object], q: np.ndarray) -> tuple[int,
         else:
             v = check_vector(name, [value], 1)[0]
             iq = m.joints[j].idx_q
-            if not clm.lower[iq] - _LIMIT_SLACK <= v <= clm.upper[iq] + _LIMIT_SLACK:
+            if not clm.lower[iq] - LIMIT_SLACK <= v <= clm.upper[iq] + LIMIT_SLACK:
                 raise hexa._limit_error(iq, v)
             q[iq] = v
         ids.append(j)

@@ -34,6 +34,9 @@ class KernelSet(NamedTuple):
     copied: Callable
 
 
+_LINALG = ("schur_solve", "block_solve", "lu_factor", "lu_apply")  # from .linalg, the rest from .kernels
+
+
 @functools.cache
 def kernel_set(compiled: bool = True) -> KernelSet:
     """The numba kernels (``compiled``, imports numba) or their NumPy twins."""
@@ -41,12 +44,4 @@ def kernel_set(compiled: bool = True) -> KernelSet:
 
     k = importlib.import_module(".kernels" if compiled else ".numpy_kernels", __package__)
     la = importlib.import_module(".linalg" if compiled else ".numpy_kernels", __package__)
-    names = [f for f in KernelSet._fields[1:] if f not in ("schur_solve", "block_solve", "lu_factor", "lu_apply")]
-    return KernelSet(
-        compiled,
-        schur_solve=la.schur_solve,
-        block_solve=la.block_solve,
-        lu_factor=la.lu_factor,
-        lu_apply=la.lu_apply,
-        **{name: getattr(k, name) for name in names},
-    )
+    return KernelSet(compiled, *(getattr(la if f in _LINALG else k, f) for f in KernelSet._fields[1:]))
