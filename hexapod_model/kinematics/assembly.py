@@ -182,10 +182,14 @@ def _follow_compiled(
     return _ambiguous(solver, x, t, lengths, tol, max_iter, tried[0], total)
 
 
-def _certified(solver: NewtonSolver, total: int, res: float, note: str = "") -> Outcome:
-    """The result in the solver's buffers with its determinant sign and flag (certified unless ``note``)."""
-    solver.kernels.jacobian(*solver._jac_args)
-    q = solver.q_aug[: solver.clm.nq].copy()  # the last Schur step (iterate() takes one even at once)
+def certified_outcome(
+    solver: NewtonSolver, q: np.ndarray, jac: np.ndarray, total: int, res: float, note: str = ""
+) -> Outcome:
+    """The converged result ``q`` (Jacobian ``jac``) of the solver's last solve, with its determinant sign and flag.
+
+    ``near_singular`` (and its message, after ``note``) when the last Schur step's condition
+    bound exceeds ``NEAR_SINGULAR_FACTOR`` times home's.
+    """
     kappa = solver.kappa
     flags: tuple[str, ...] = ()
     msg = ""
@@ -195,7 +199,14 @@ def _certified(solver: NewtonSolver, total: int, res: float, note: str = "") -> 
             f"{note}near a singularity: condition bound of the eliminated Jacobian {kappa / solver.home_kappa:.3g} "
             f"times its home value (flag above {NEAR_SINGULAR_FACTOR:g}); another assembly may be close"
         )
-    return Outcome(q, "converged", total, res, solver.kernels.copied(solver.G), msg, flags, (), int(solver.sign))
+    return Outcome(q, "converged", total, res, jac, msg, flags, (), int(solver.sign))
+
+
+def _certified(solver: NewtonSolver, total: int, res: float, note: str = "") -> Outcome:
+    """The result in the solver's buffers with its determinant sign and flag (certified unless ``note``)."""
+    solver.kernels.jacobian(*solver._jac_args)
+    q = solver.q_aug[: solver.clm.nq].copy()  # the last Schur step (iterate() takes one even at once)
+    return certified_outcome(solver, q, solver.kernels.copied(solver.G), total, res, note)
 
 
 def _ambiguous(

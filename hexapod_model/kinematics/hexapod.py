@@ -244,6 +244,16 @@ class Hexapod:
         solver = self._solver(self._held_forward)
         sign = solver.home_sign if guess is None else getattr(guess, "det_sign", 0)
         joints = lengths if self._encoder is None else self.joints_of(lengths)
+        fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
+        if fast and solver.compiled_loop:
+            # the certified first attempt in one compiled call; solve_forward takes the rest
+            g = guess.q if isinstance(guess, Solution) else None
+            start = g if isinstance(g, np.ndarray) and g.shape == (self.nq,) else self._start(guess)
+            limits = (self._limited, self._limited_lo, self._limited_hi, LIMIT_SLACK)
+            done = solver.certified_forward(start, joints, tol, max_iter, sign, limits, self._home_h)  # type: ignore[attr-defined]
+            if done is not None:
+                q, pose, jac, it, res, bad = done
+                return self._solution(assembly.certified_outcome(solver, q, jac, it, res), check, pose, bad)
         return self._finish(solver, self._start(guess), tol, max_iter, check, (joints, sign, guess is not None))
 
     def inverse(
@@ -312,15 +322,34 @@ class Hexapod:
             out = assembly.solve_forward(solver, q0, forward[0], tol, max_iter, forward[1], forward[2])
         else:
             out = Outcome(*solver.run(q0, tol, max_iter))
+        return self._solution(out, check)
+
+    def _solution(self, out: Outcome, check: bool, pose: np.ndarray | None = None, bad: int | None = None) -> Solution:
+        """The :class:`Solution` of a solve's outcome: the joint-limit check, the pose, the readings.
+
+        ``pose`` and ``bad`` (the first joint outside its limits, -1 if none) when the caller
+        has them already (the compiled first attempt of :meth:`forward`).
+        """
         q, status, it, res, jac, msg = out[:6]
         if status == "converged":
-            bad = self._kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, LIMIT_SLACK)
+            if bad is None:
+                bad = self._kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, LIMIT_SLACK)
             if bad >= 0:
                 k = int(self._limited[bad])
                 status, msg = "out_of_limits", str(self._limit_error(k, q[k]))
         poses = tuple(self.pose_of(c) for c in out.candidates) if out.candidates else ()
         sol = Solution(
-            self.pose_of(q), q, self.lengths_of(q), status, it, res, jac, msg, out.flags, poses, out.det_sign
+            self.pose_of(q) if pose is None else pose,
+            q,
+            self.lengths_of(q),
+            status,
+            it,
+            res,
+            jac,
+            msg,
+            out.flags,
+            poses,
+            out.det_sign,
         )
         if check and status != "converged":
             error = _ERRORS.get(status, ConvergenceError)

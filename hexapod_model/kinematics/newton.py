@@ -34,7 +34,7 @@ from numba import njit
 
 from ..description.model import ClosedLoopModel
 from .chains import evaluate_chains
-from .kernels import closure_residual, jacobian, scatter_step, shift_residual
+from .kernels import closure_residual, first_outside_at, jacobian, scatter_step, shift_residual, xyzquat_to_pose
 from .legs import ChainTables
 from .lie import integrate_free_flyer
 from .linalg import blocks_solve, schur_solve
@@ -139,6 +139,38 @@ def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
     return _iterate(False, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork)
 
 
+@njit(cache=True)
+def certified_forward(start, joints, prismatic_q, tol, max_iter, sign, limits, home, ints, floats, work, iwork, out):
+    """The certified first attempt of :func:`.assembly.solve_forward` and what ``forward`` builds of it.
+
+    From ``start`` with its prismatic joints set to ``joints``: the certified Newton solve
+    (:func:`iterate_schur`, determinant sign ``sign``), its last iterate left in the solver's
+    ``q_solver`` as ``iterate`` leaves it; then, only when it converged certified, into
+    ``out = (q_solver, no_offset, q, pose, G)``: the configuration, the platform pose ``home * X(q_p)`` and the
+    reduced Jacobian (:func:`.kernels.jacobian`). One call instead of the five of the Python
+    path (iterate, Jacobian, copy, limit check, pose). ``limits = (limited q indices, lower,
+    upper, slack)``. Returns ``(accepted, iterations, residual, first joint outside its
+    limits or -1)``.
+    """
+    q_solver, no_offset, q, pose, G = out
+    for k in range(q.shape[0]):
+        q[k] = start[k]
+    for i in range(prismatic_q.shape[0]):
+        q[prismatic_q[i]] = joints[i]
+    (leg_q, leg_v, platform_v, _, colmap, _), _ = unpack_ints(ints)
+    views = unpack_work(ints, work)[0]
+    J, p, E = views[2], views[4], views[5]
+    code, it, norm, _, theta, sign, certified = iterate_schur(
+        q, q_solver, tol, max_iter, sign, no_offset, 0.0, True, ints, floats, work, iwork
+    )
+    if code != CONVERGED or not certified:
+        return False, it, norm, -1, theta, sign
+    q[:] = q_solver
+    jacobian(J, leg_v, platform_v, colmap, ints[0], p, E, G)
+    xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
+    return True, it, norm, first_outside_at(q, limits[0], limits[1], limits[2], limits[3]), theta, sign
+
+
 _BUFFERS = ("J", "R", "p", "E", "r", "x", "G", "dv", "LB", "PB", "A", "M", "pm", "nb", "wb")
 
 
@@ -165,6 +197,7 @@ class CompiledSolver(NewtonSolver):
         self._state = packed.views["state"]
         self._q = self.q_aug[: clm.nq]  # the compiled path writes its iterate here, in place
         self._no_offset = np.zeros(self.r.size)
+        self._prismatic_q = clm.prismatic_q.astype(np.int64)
         #: ``(ints, floats, work, iwork)`` of the packed tables and buffers
         self.arrays = packed.arrays
         self._jac_args = (self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
@@ -192,6 +225,34 @@ class CompiledSolver(NewtonSolver):
         self.sign, self.kappa = self._state.tolist()
         status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
         return status, it, norm, message
+
+    def certified_forward(
+        self, start: np.ndarray, joints: np.ndarray, tol: float, max_iter: int, sign: float, limits: tuple, home
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, float, int] | None:
+        """The certified first attempt of direct kinematics in one compiled call (:func:`certified_forward`).
+
+        Args:
+            start: configuration to start from (not modified).
+            joints: the six prismatic joint values to hold (m).
+            tol: closure residual to reach (checked by the caller).
+            max_iter: Newton step limit (checked by the caller).
+            sign: determinant sign of the start's assembly (0 when unknown).
+            limits: ``(limited q indices, lower, upper, slack)`` of the joint-limit check.
+            home: the platform's home placement (4x4).
+
+        Returns:
+            ``(q, pose, jacobian, iterations, residual, first joint outside its limits or -1)``
+            when the attempt converged certified (``sign``, ``kappa``, ``theta``, ``det_sign``
+            and ``certified`` set as :meth:`iterate` sets them); ``None`` otherwise, when
+            :func:`.assembly.solve_forward` has to take over from ``start``.
+        """
+        out = (self._q, self._no_offset, np.empty(start.shape[0]), np.empty((4, 4)), np.empty(self.G.shape))
+        accepted, it, norm, bad, self.theta, self.det_sign = certified_forward(
+            start, joints, self._prismatic_q, tol, max_iter, float(sign), limits, home, *self.arrays, out
+        )
+        self.sign, self.kappa = self._state.tolist()
+        self.certified = accepted
+        return (out[2], out[3], out[4], it, norm, bad) if accepted else None
 
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``, compiled."""

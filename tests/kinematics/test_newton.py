@@ -11,6 +11,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.description.urdf import geometry_to_urdf
+from hexapod_model.kinematics.checks import LIMIT_SLACK
 from hexapod_model.kinematics.newton import CompiledSolver, solver_for
 from hexapod_model.kinematics.solver import NewtonSolver
 
@@ -195,3 +196,49 @@ def test_forward_solutions_equal_the_general_path():
         assert len(a.candidates) == len(b.candidates)
         statuses.add(a.status)
     assert "converged" in statuses and len(statuses) > 1
+
+
+def _fields(sol: hm.Solution) -> tuple:
+    """Everything a Solution holds, arrays as bytes (bitwise comparison)."""
+    arrays = (sol.pose, sol.q, sol.lengths, sol.jacobian, *sol.candidates)
+    return (sol.status, sol.iterations, sol.residual, sol.message, sol.flags, sol.det_sign) + tuple(
+        a.tobytes() for a in arrays
+    )
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_one_call_forward_equals_the_python_path(name):
+    # Hexapod.forward tries CompiledSolver.certified_forward (one compiled call) first; the
+    # Python path (assembly.solve_forward, then _solution) must give the same Solution, bit for bit
+    hexa = hexapod(name)
+    solver = hexa._solver(hexa._held_forward)
+    assert solver.compiled_loop
+    limits = (hexa._limited, hexa._limited_lo, hexa._limited_hi, LIMIT_SLACK)
+    rng = np.random.default_rng(37)
+    seen, flags, previous = set(), set(), None
+
+    def check(readings: np.ndarray, guess: hm.Solution | None) -> hm.Solution:
+        sign = solver.home_sign if guess is None else guess.det_sign
+        joints = hexa.joints_of(readings)
+        one_call = solver.certified_forward(hexa._start(guess), joints, 1e-10, 50, sign, limits, hexa._home_h)
+        slow = hexa._finish(solver, hexa._start(guess), 1e-10, 50, False, (joints, sign, guess is not None))
+        state = (solver.q_aug.tobytes(), solver.sign, solver.kappa, solver.det_sign, solver.certified)
+        fast = hexa.forward(readings, guess, tol=1e-10, max_iter=50, check=False)
+        assert _fields(fast) == _fields(slow)
+        assert (solver.q_aug.tobytes(), solver.sign, solver.kappa, solver.det_sign, solver.certified) == state
+        seen.add((fast.status, one_call is not None))
+        flags.update((f, one_call is not None) for f in fast.flags)
+        return fast
+
+    for T in box_poses(hexa.home_pose, 40, seed=36, translation=0.1, angle_deg=40):
+        readings = np.clip(hexa.inverse(T, check=False).lengths, *hexa.stroke.T)
+        check(readings, None)
+        sol = check(readings, previous)
+        if np.all(np.isfinite(sol.q)):  # 1 ms later at 1 kHz, from this result (even out of limits)
+            check(np.clip(readings + rng.normal(0.0, 1e-5, 6), *hexa.stroke.T), sol)
+        previous = sol if sol.converged else previous
+    assert {("converged", True), ("converged", False)} <= seen  # both paths taken
+    if name in ("reference", "intersecting"):
+        assert ("out_of_limits", True) in seen  # the joint-limit check of the compiled call
+    if name == "3-6":
+        assert ("near_singular", True) in flags
