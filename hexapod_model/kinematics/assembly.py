@@ -67,7 +67,14 @@ class Outcome(NamedTuple):
 
 
 def solve_forward(
-    solver: NewtonSolver, start: np.ndarray, lengths: np.ndarray, tol: float, max_iter: int, sign: float, warm: bool
+    solver: NewtonSolver,
+    start: np.ndarray,
+    lengths: np.ndarray,
+    tol: float,
+    max_iter: int,
+    sign: float,
+    warm: bool,
+    attempt: tuple[str, int, float, str] | None = None,
 ) -> Outcome:
     """Certified direct kinematics: the assembly connected to ``start`` for readings ``lengths``.
 
@@ -81,6 +88,10 @@ def solve_forward(
         sign: determinant sign of the start's assembly (0 when unknown).
         warm: the start is a guess, not home: an uncertified result of plain Newton that is
             near a singularity is returned flagged ``near_singular`` before the path is tried.
+        attempt: the certified first attempt's ``(status, iterations, residual, message)``
+            when the caller made it already (the solver's state is that attempt's):
+            :meth:`.newton.CompiledSolver.certified_forward`, which returns it when the attempt
+            did not converge certified.
 
     Returns:
         ``converged`` (certified, maybe flagged ``near_singular``), ``ambiguous_assembly`` with
@@ -89,7 +100,7 @@ def solve_forward(
     pq = solver.clm.prismatic_q
     l0 = start[pq]
     start[pq] = lengths
-    status, it, res, msg = solver.iterate(start, tol, max_iter, sign, certify=True)
+    status, it, res, msg = solver.iterate(start, tol, max_iter, sign, certify=True) if attempt is None else attempt
     if status == "converged" and solver.certified:
         return _certified(solver, it, res)
     if status == "max_iterations" and solver.certified:  # contracting, but max_iter too small

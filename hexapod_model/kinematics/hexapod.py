@@ -245,16 +245,19 @@ class Hexapod:
         sign = solver.home_sign if guess is None else getattr(guess, "det_sign", 0)
         joints = lengths if self._encoder is None else self.joints_of(lengths)
         fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
+        attempt = None
         if fast and solver.compiled_loop:
-            # the certified first attempt in one compiled call; solve_forward takes the rest
+            # the certified first attempt in one compiled call; solve_forward goes on from it
             g = guess.q if isinstance(guess, Solution) else None
             start = g if isinstance(g, np.ndarray) and g.shape == (self.nq,) else self._start(guess)
             limits = (self._limited, self._limited_lo, self._limited_hi, LIMIT_SLACK)
             done = solver.certified_forward(start, joints, tol, max_iter, sign, limits, self._home_h)  # type: ignore[attr-defined]
-            if done is not None:
+            if len(done) == 6:
                 q, pose, jac, it, res, bad = done
                 return self._solution(assembly.certified_outcome(solver, q, jac, it, res), check, pose, bad)
-        return self._finish(solver, self._start(guess), tol, max_iter, check, (joints, sign, guess is not None))
+            attempt = done
+        start = self._start(guess)
+        return self._finish(solver, start, tol, max_iter, check, (joints, sign, guess is not None, attempt))
 
     def inverse(
         self,
@@ -313,13 +316,13 @@ class Hexapod:
         return LimitError(clm.joint_name_of_q(iq), value, clm.lower[iq], clm.upper[iq], what)
 
     def _finish(self, solver: NewtonSolver, q0, tol, max_iter, check: bool, forward: tuple = ()) -> Solution:
-        """Solve from ``q0``: plain, or with ``forward = (joints, sign, warm)`` certified FK (``assembly``)."""
+        """Solve from ``q0``: plain, or certified FK with ``forward = (joints, sign, warm[, attempt])``."""
         if type(tol) is not float or not 0.0 < tol <= MAX_TOL:  # one comparison on the hot path
             tol = check_tolerance(tol)
         if type(max_iter) is not int or max_iter < 0:
             max_iter = check_max_iter(max_iter)
         if forward:
-            out = assembly.solve_forward(solver, q0, forward[0], tol, max_iter, forward[1], forward[2])
+            out = assembly.solve_forward(solver, q0, forward[0], tol, max_iter, *forward[1:])
         else:
             out = Outcome(*solver.run(q0, tol, max_iter))
         return self._solution(out, check)

@@ -143,14 +143,16 @@ def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
 def certified_forward(start, joints, prismatic_q, tol, max_iter, sign, limits, home, ints, floats, work, iwork, out):
     """The certified first attempt of :func:`.assembly.solve_forward` and what ``forward`` builds of it.
 
-    From ``start`` with its prismatic joints set to ``joints``: the certified Newton solve
-    (:func:`iterate_schur`, determinant sign ``sign``), its last iterate left in the solver's
-    ``q_solver`` as ``iterate`` leaves it; then, only when it converged certified, into
-    ``out = (q_solver, no_offset, q, pose, G)``: the configuration, the platform pose ``home * X(q_p)`` and the
-    reduced Jacobian (:func:`.kernels.jacobian`). One call instead of the five of the Python
-    path (iterate, Jacobian, copy, limit check, pose). ``limits = (limited q indices, lower,
-    upper, slack)``. Returns ``(accepted, iterations, residual, first joint outside its
-    limits or -1)``.
+    From ``start`` with its prismatic joints set to ``joints`` (written into ``q``): the
+    certified Newton solve (:func:`iterate_schur`, determinant sign ``sign``), its last iterate
+    left in the solver's ``q_solver`` as ``iterate`` leaves it. Only when it converged
+    certified, also the configuration into ``q``, the platform pose ``home * X(q_p)`` into
+    ``pose`` and the reduced Jacobian (:func:`.kernels.jacobian`) into ``G``; ``out = (q_solver,
+    no_offset, q, pose, G)``. One call instead of the five of the Python path (iterate,
+    Jacobian, copy, limit check, pose). ``limits = (limited q indices, lower, upper, slack)``.
+
+    Returns :func:`iterate_schur`'s ``(code, iterations, norm, ratio, theta, sign, certified)``
+    and the first joint outside its limits (-1 if none or not converged certified).
     """
     q_solver, no_offset, q, pose, G = out
     for k in range(q.shape[0]):
@@ -160,15 +162,16 @@ def certified_forward(start, joints, prismatic_q, tol, max_iter, sign, limits, h
     (leg_q, leg_v, platform_v, _, colmap, _), _ = unpack_ints(ints)
     views = unpack_work(ints, work)[0]
     J, p, E = views[2], views[4], views[5]
-    code, it, norm, _, theta, sign, certified = iterate_schur(
+    code, it, norm, ratio, theta, sign, certified = iterate_schur(
         q, q_solver, tol, max_iter, sign, no_offset, 0.0, True, ints, floats, work, iwork
     )
-    if code != CONVERGED or not certified:
-        return False, it, norm, -1, theta, sign
-    q[:] = q_solver
-    jacobian(J, leg_v, platform_v, colmap, ints[0], p, E, G)
-    xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
-    return True, it, norm, first_outside_at(q, limits[0], limits[1], limits[2], limits[3]), theta, sign
+    bad = -1
+    if code == CONVERGED and certified:
+        q[:] = q_solver
+        jacobian(J, leg_v, platform_v, colmap, ints[0], p, E, G)
+        xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
+        bad = first_outside_at(q, limits[0], limits[1], limits[2], limits[3])
+    return code, it, norm, ratio, theta, sign, certified, bad
 
 
 _BUFFERS = ("J", "R", "p", "E", "r", "x", "G", "dv", "LB", "PB", "A", "M", "pm", "nb", "wb")
@@ -228,7 +231,7 @@ class CompiledSolver(NewtonSolver):
 
     def certified_forward(
         self, start: np.ndarray, joints: np.ndarray, tol: float, max_iter: int, sign: float, limits: tuple, home
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, float, int] | None:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, float, int] | tuple[str, int, float, str]:
         """The certified first attempt of direct kinematics in one compiled call (:func:`certified_forward`).
 
         Args:
@@ -241,18 +244,20 @@ class CompiledSolver(NewtonSolver):
             home: the platform's home placement (4x4).
 
         Returns:
-            ``(q, pose, jacobian, iterations, residual, first joint outside its limits or -1)``
-            when the attempt converged certified (``sign``, ``kappa``, ``theta``, ``det_sign``
-            and ``certified`` set as :meth:`iterate` sets them); ``None`` otherwise, when
-            :func:`.assembly.solve_forward` has to take over from ``start``.
+            When the attempt converged certified, ``(q, pose, jacobian, iterations, residual,
+            first joint outside its limits or -1)``; otherwise what :meth:`iterate` returns,
+            ``(status, iterations, residual, message)``, for :func:`.assembly.solve_forward` to
+            go on from (its ``attempt``). The solver's state is :meth:`iterate`'s either way.
         """
         out = (self._q, self._no_offset, np.empty(start.shape[0]), np.empty((4, 4)), np.empty(self.G.shape))
-        accepted, it, norm, bad, self.theta, self.det_sign = certified_forward(
+        code, it, norm, ratio, self.theta, self.det_sign, self.certified, bad = certified_forward(
             start, joints, self._prismatic_q, tol, max_iter, float(sign), limits, home, *self.arrays, out
         )
         self.sign, self.kappa = self._state.tolist()
-        self.certified = accepted
-        return (out[2], out[3], out[4], it, norm, bad) if accepted else None
+        if code == CONVERGED and self.certified:
+            return out[2], out[3], out[4], it, norm, bad
+        status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
+        return status, it, norm, message
 
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``, compiled."""
