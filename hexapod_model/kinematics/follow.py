@@ -38,7 +38,7 @@ rescale = njit(cache=True)(path_rules.rescale)  # the Python follower's rule, co
 @njit(cache=True)
 def _difference(q0, q1, dv, ints, scratch):
     """``dv = q1 (-) q0`` (Pinocchio's ``difference``): leg joints subtract, the platform by ``log6``."""
-    (leg_q, leg_v, platform_v, _, _, _), _ = unpack_ints(ints)
+    (leg_q, leg_v, platform_v, _, _, _, kinds), _ = unpack_ints(ints)
     platform_q = ints[3]
     for i in range(leg_q.shape[0]):
         for k in range(leg_q.shape[1]):
@@ -50,7 +50,7 @@ def _difference(q0, q1, dv, ints, scratch):
 @njit(cache=True)
 def _predict(x, a, b, u, q0, dv, ints, work, scratch):
     """``q0 = x (+) u (b (-) a)``: ``pin.integrate(x, u * pin.difference(a, b))``."""
-    (leg_q, leg_v, platform_v, _, _, _), _ = unpack_ints(ints)
+    (leg_q, leg_v, platform_v, _, _, _, kinds), _ = unpack_ints(ints)
     Rs, ps, quat = unpack_work(ints, work)[0][15:18]
     _difference(a, b, dv, ints, scratch)
     for i in range(dv.shape[0]):
@@ -62,10 +62,10 @@ def _predict(x, a, b, u, q0, dv, ints, work, scratch):
 @njit(cache=True)
 def _residual(q, ints, floats, work):
     """The closure residual norm at ``q``, left in the work buffer ``r`` (``iterate(q, inf, 0)``'s)."""
-    (leg_q, leg_v, platform_v, _, _, _), _ = unpack_ints(ints)
+    (leg_q, leg_v, platform_v, _, _, _, kinds), _ = unpack_ints(ints)
     (placements, motions, closure, home), _ = unpack_floats(ints, floats)
     oR, op, J, R, p, E, r = unpack_work(ints, work)[0][:7]
-    evaluate_chains(q, placements, motions, leg_q, leg_v, closure, home, ints[3], platform_v, oR, op, J, R, p)
+    evaluate_chains(q, placements, kinds, motions, leg_q, leg_v, closure, home, ints[3], platform_v, oR, op, J, R, p)
     return closure_residual(R, p, ints[0], E, r)[0]
 
 

@@ -9,6 +9,15 @@ import pinocchio as pin
 
 from ..description.model import ClosedLoopModel
 
+GENERAL, SHIFT, IDENTITY = 0, 1, 2  # placement kinds (URDF joints mostly have rpy="0 0 0")
+
+
+def placement_kinds(placements: np.ndarray) -> np.ndarray:
+    """:attr:`ChainTables.kinds` of joint placements (..., 4, 4): exact comparisons, no tolerance."""
+    rotation = np.all(placements[..., :3, :3] == np.eye(3), axis=(-2, -1))
+    shift = np.any(placements[..., :3, 3] != 0.0, axis=-1)
+    return np.where(rotation, np.where(shift, SHIFT, IDENTITY), GENERAL).astype(np.int64)
+
 
 @dataclass(frozen=True)
 class ChainTables:
@@ -16,6 +25,9 @@ class ChainTables:
 
     Attributes:
         placements: (6, n, 4, 4) joint placements in the parent joint's frame.
+        kinds: (6, n) what each placement holds: :data:`GENERAL`, :data:`SHIFT` (a translation,
+            the rotation exactly the identity) or :data:`IDENTITY` (both exactly zero), so
+            that :func:`.chains.evaluate_chains` skips the products by exact ones and zeros.
         motions: (6, n, 6) motion subspaces ``[v; w]`` in the joint's frame.
         leg_q: (6, n) configuration index of each leg joint.
         leg_v: (6, n) velocity index (column of ``J``) of each leg joint.
@@ -27,6 +39,7 @@ class ChainTables:
     """
 
     placements: np.ndarray
+    kinds: np.ndarray
     motions: np.ndarray
     leg_q: np.ndarray
     leg_v: np.ndarray
@@ -74,6 +87,7 @@ class ChainTables:
         )
         return cls(
             placements,
+            placement_kinds(placements),
             motions,
             leg_q,
             leg_v,

@@ -82,7 +82,7 @@ def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, fl
     """
     rows, platform_q = ints[0], ints[3]
     max_step, singular_ratio, theta_max, theta_floor, one_step = floats[0], floats[1], floats[2], floats[3], floats[4]
-    (leg_q, leg_v, platform_v, held_pos, colmap, free_v), _ = unpack_ints(ints)
+    (leg_q, leg_v, platform_v, held_pos, colmap, free_v, kinds), _ = unpack_ints(ints)
     (placements, motions, closure, home), _ = unpack_floats(ints, floats)
     (oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, Rs, ps, quat, state), _ = unpack_work(ints, work)
     (PB, pm), _ = unpack_iwork(ints, iwork)
@@ -91,7 +91,9 @@ def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, fl
         q[k] = q0[k]
     it, ratio, theta, previous, certified = 0, 1.0, 0.0, 0.0, True
     while True:
-        evaluate_chains(q, placements, motions, leg_q, leg_v, closure, home, platform_q, platform_v, oR, op, J, R, p)
+        evaluate_chains(
+            q, placements, kinds, motions, leg_q, leg_v, closure, home, platform_q, platform_v, oR, op, J, R, p
+        )
         norm, min_trace = closure_residual(R, p, rows, E, r)
         if scale != 0.0:
             norm = shift_residual(r, offset, scale)
@@ -159,7 +161,7 @@ def certified_forward(start, joints, prismatic_q, tol, max_iter, sign, limits, h
         q[k] = start[k]
     for i in range(prismatic_q.shape[0]):
         q[prismatic_q[i]] = joints[i]
-    (leg_q, leg_v, platform_v, _, colmap, _), _ = unpack_ints(ints)
+    (leg_q, leg_v, platform_v, _, colmap, _, _), _ = unpack_ints(ints)
     views = unpack_work(ints, work)[0]
     J, p, E = views[2], views[4], views[5]
     code, it, norm, ratio, theta, sign, certified = iterate_schur(

@@ -9,7 +9,8 @@ written once.
 Layout (``n`` joints per leg, ``nv`` velocities, ``nf`` free velocities, all C order):
 
 * ``ints``: header ``(n, nv, nf, platform_q, schur)``, ``leg_q`` (6, n), ``leg_v`` (6, n),
-  ``platform_v`` (6,), ``held_pos`` (6,), ``colmap`` (nv,), ``free_v`` (nf,);
+  ``platform_v`` (6,), ``held_pos`` (6,), ``colmap`` (nv,), ``free_v`` (nf,), ``kinds`` (6, n)
+  (:attr:`.legs.ChainTables.kinds`);
 * ``floats``: the solver's constants ``(max_step, singular_ratio, theta_max, theta_floor,
   one_step)``, then ``placements`` (6, n, 4, 4), ``motions`` (6, n, 6), ``closure`` (12, 4, 4),
   ``home`` (4, 4) (:class:`.chains.ChainTables`);
@@ -38,7 +39,7 @@ WORK_NAMES = tuple("oR op J R p E r x dv G LB A M nb wb Rs ps quat state".split(
 # tables, without compiling them.
 @njit(cache=True, inline="always")
 def unpack_ints(ints):
-    """Views ``(leg_q, leg_v, platform_v, held_pos, colmap, free_v)`` of the integer tables, and their end."""
+    """Views ``(leg_q, leg_v, platform_v, held_pos, colmap, free_v, kinds)`` of the integer tables, and their end."""
     n, nv, nf = ints[0], ints[1], ints[2]
     o = HEADER
     leg_q = ints[o : o + 6 * n].reshape((6, n))
@@ -50,7 +51,9 @@ def unpack_ints(ints):
     colmap = ints[o : o + nv]
     o += nv
     free_v = ints[o : o + nf]
-    return (leg_q, leg_v, platform_v, held_pos, colmap, free_v), o + nf
+    o += nf
+    kinds = ints[o : o + 6 * n].reshape((6, n))
+    return (leg_q, leg_v, platform_v, held_pos, colmap, free_v, kinds), o + 6 * n
 
 
 @njit(cache=True, inline="always")
@@ -133,21 +136,21 @@ class Packed:
         nv: int,
     ):
         n, nf = tables.placements.shape[1], free_v.size
-        self.ints = np.zeros(HEADER + 12 * n + 12 + nv + nf, dtype=np.int64)
+        self.ints = np.zeros(HEADER + 18 * n + 12 + nv + nf, dtype=np.int64)
         self.ints[:HEADER] = (n, nv, nf, tables.platform_q, int(schur))
         self.floats = np.zeros(FHEADER + 6 * n * 22 + 12 * 16 + 16)
         self.floats[:FHEADER] = constants
         self.work = np.zeros(6 * n * (9 + 3 + 1 + nf + n + 6) + 6 * nv + 108 + 36 + 54 + nf + nv + 36 + 12 + 39)
         self.iwork = np.zeros(6 * n + 6, dtype=np.int64)
         # the compiled functions' Python source: the same layout, nothing compiled here
-        (leg_q, leg_v, platform_v, held, cmap, free), end_i = unpack_ints.py_func(self.ints)
+        (leg_q, leg_v, platform_v, held, cmap, free, kinds), end_i = unpack_ints.py_func(self.ints)
         (placements, motions, closure, home), end_f = unpack_floats.py_func(self.ints, self.floats)
         views, end_w = unpack_work.py_func(self.ints, self.work)
         (PB, pm), end_iw = unpack_iwork.py_func(self.ints, self.iwork)
         ends = (end_i, end_f, end_w, end_iw)
         if ends != (self.ints.size, self.floats.size, self.work.size, self.iwork.size):
             raise RuntimeError(f"packing layout mismatch: {ends}")  # a bug, never bad input
-        leg_q[:], leg_v[:], platform_v[:] = tables.leg_q, tables.leg_v, tables.platform_v
+        leg_q[:], leg_v[:], platform_v[:], kinds[:] = tables.leg_q, tables.leg_v, tables.platform_v, tables.kinds
         held[:] = -1 if held_pos is None else held_pos
         cmap[:], free[:] = colmap, free_v
         placements[:], motions[:], closure[:], home[:] = tables.placements, tables.motions, tables.closure, tables.home

@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 from hexapod_model.kinematics.chains import evaluate_chains
-from hexapod_model.kinematics.legs import ChainTables
+from hexapod_model.kinematics.legs import GENERAL, IDENTITY, SHIFT, ChainTables
 from hexapod_model.kinematics.lie import (
     difference_free_flyer,
     exp6,
@@ -47,7 +47,7 @@ def test_chain_evaluation_matches_pinocchio(name):
         q = random_q(hexa, rng)
         J[:] = np.nan  # every column must be written
         evaluate_chains(
-            q, tables.placements, tables.motions, tables.leg_q, tables.leg_v, tables.closure, tables.home,
+            q, tables.placements, tables.kinds, tables.motions, tables.leg_q, tables.leg_v, tables.closure, tables.home,
             tables.platform_q, tables.platform_v, oR, op, J, R, p,
         )  # fmt: skip
         pin.forwardKinematics(m, data, q)
@@ -61,6 +61,29 @@ def test_chain_evaluation_matches_pinocchio(name):
             for frame, row in ((leg.tip_frame, i), (leg.anchor_frame, 6 + i)):
                 np.testing.assert_allclose(R[row], data.oMf[frame].rotation, rtol=0, atol=1e-12)
                 np.testing.assert_allclose(p[row], data.oMf[frame].translation, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_placement_kinds_skip_only_exact_ones_and_zeros(name):
+    # the SHIFT / IDENTITY shortcuts give the numbers of the full products, bit for bit
+    hexa = hexapod(name)
+    tables = ChainTables.of(hexa.closed_loop)
+    assert tables is not None
+    if name == "reference":  # the offset Cardans: rotated, shifted and plain joint frames
+        assert set(tables.kinds.ravel()) == {GENERAL, SHIFT, IDENTITY}
+    general = np.full_like(tables.kinds, GENERAL)
+    rng = np.random.default_rng(22)
+    for _ in range(50):
+        q = random_q(hexa, rng)
+        out = []
+        for kinds in (tables.kinds, general):
+            bufs = chain_buffers(tables, hexa.model.nv)
+            evaluate_chains(
+                q, tables.placements, kinds, tables.motions, tables.leg_q, tables.leg_v, tables.closure,
+                tables.home, tables.platform_q, tables.platform_v, *bufs,
+            )  # fmt: skip
+            out.append(b"".join(np.where(b == 0.0, 0.0, b).tobytes() for b in bufs))  # -0.0 and 0.0 alike
+        assert out[0] == out[1]
 
 
 def test_tables_refuse_legs_of_different_joint_counts():
