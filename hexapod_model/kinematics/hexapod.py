@@ -94,6 +94,8 @@ class Hexapod:
         self._stroke_hi = np.ascontiguousarray(self.stroke[:, 1])
         self._limited_lo = model.lower[self._limited].copy()
         self._limited_hi = model.upper[self._limited].copy()
+        #: the joint-limit check's arguments (limited q indices, lower, upper, slack)
+        self._limits = (self._limited, self._limited_lo, self._limited_hi, LIMIT_SLACK)
         self._held_forward = tuple(leg.prismatic for leg in model.legs)
         self._held_inverse = (model.platform_joint,)
         self._free_directions: dict[tuple[int, ...], tuple[int, int]] = {}  # held set -> (free, rank)
@@ -250,8 +252,7 @@ class Hexapod:
             # the certified first attempt in one compiled call; solve_forward goes on from it
             g = guess.q if isinstance(guess, Solution) else None
             start = g if isinstance(g, np.ndarray) and g.shape == (self.nq,) else self._start(guess)
-            limits = (self._limited, self._limited_lo, self._limited_hi, LIMIT_SLACK)
-            done = solver.certified_forward(start, joints, tol, max_iter, sign, limits, self._home_h)  # type: ignore[attr-defined]
+            done = solver.certified_forward(start, joints, tol, max_iter, sign, self._limits, self._home_h)  # type: ignore[attr-defined]
             if len(done) == 6:
                 q, pose, jac, it, res, bad = done
                 return self._solution(assembly.certified_outcome(solver, q, jac, it, res), check, pose, bad)
@@ -322,10 +323,12 @@ class Hexapod:
         if type(max_iter) is not int or max_iter < 0:
             max_iter = check_max_iter(max_iter)
         if forward:
-            out = assembly.solve_forward(solver, q0, forward[0], tol, max_iter, *forward[1:])
-        else:
-            out = Outcome(*solver.run(q0, tol, max_iter))
-        return self._solution(out, check)
+            return self._solution(assembly.solve_forward(solver, q0, forward[0], tol, max_iter, *forward[1:]), check)
+        if solver.compiled_loop:  # inverse kinematics: the solve, pose and limit check in one compiled call
+            done = solver.run_checked(q0, tol, max_iter, self._limits, self._home_h)  # type: ignore[attr-defined]
+            if done is not None:
+                return self._solution(Outcome(*done[0]), check, done[1], done[2])
+        return self._solution(Outcome(*solver.run(q0, tol, max_iter)), check)
 
     def _solution(self, out: Outcome, check: bool, pose: np.ndarray | None = None, bad: int | None = None) -> Solution:
         """The :class:`Solution` of a solve's outcome: the joint-limit check, the pose, the readings.

@@ -176,6 +176,29 @@ def certified_forward(start, joints, prismatic_q, tol, max_iter, sign, limits, h
     return code, it, norm, ratio, theta, sign, certified, bad
 
 
+@njit(cache=True)
+def solve_blocks(q0, tol, max_iter, limits, home, ints, floats, work, iwork, out):
+    """:meth:`.solver.NewtonSolver.run` on the block step (the platform held), with what ``_solution`` needs.
+
+    Newton from ``q0`` (:func:`iterate_blocks`, its last iterate in ``q_solver``), then into
+    ``out = (q_solver, no_offset, q, pose, G)`` the configuration, its platform pose and the
+    reduced Jacobian; the first joint outside its ``limits`` when converged. Returns
+    :func:`iterate_blocks`'s ``(code, iterations, norm, ratio, theta, sign, certified)`` and that joint (-1 if none).
+    """
+    q_solver, no_offset, q, pose, G = out
+    (leg_q, leg_v, platform_v, _, colmap, _, _), _ = unpack_ints(ints)
+    views = unpack_work(ints, work)[0]
+    J, p, E = views[2], views[4], views[5]
+    code, it, norm, ratio, theta, sign, certified = iterate_blocks(
+        q0, q_solver, tol, max_iter, 0.0, no_offset, 0.0, False, ints, floats, work, iwork
+    )
+    q[:] = q_solver
+    jacobian(J, leg_v, platform_v, colmap, ints[0], p, E, G)
+    xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
+    bad = first_outside_at(q, limits[0], limits[1], limits[2], limits[3]) if code == CONVERGED else -1
+    return code, it, norm, ratio, theta, sign, certified, bad
+
+
 _BUFFERS = ("J", "R", "p", "E", "r", "x", "G", "dv", "LB", "PB", "A", "M", "pm", "nb", "wb")
 
 
@@ -260,6 +283,25 @@ class CompiledSolver(NewtonSolver):
             return out[2], out[3], out[4], it, norm, bad
         status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
         return status, it, norm, message
+
+    def run_checked(
+        self, q0: np.ndarray, tol: float, max_iter: int, limits: tuple, home: np.ndarray
+    ) -> tuple[tuple, np.ndarray, int] | None:
+        """:meth:`run` and the pose and limit check of its result in one compiled call (:func:`solve_blocks`).
+
+        Returns ``(run's tuple, pose, first joint outside its limits or -1)`` on the block step
+        (inverse kinematics), ``None`` on the Schur step (the caller uses :meth:`run`).
+        """
+        if self.held_pos is not None:
+            return None
+        q0 = q0 if q0.dtype == np.float64 and q0.flags.c_contiguous else np.ascontiguousarray(q0, dtype=float)
+        out = (self._q, self._no_offset, np.empty(q0.shape[0]), np.empty((4, 4)), np.empty(self.G.shape))
+        code, it, norm, ratio, self.theta, self.det_sign, self.certified, bad = solve_blocks(
+            q0, tol, max_iter, limits, home, *self.arrays, out
+        )
+        self.sign, self.kappa = self._state.tolist()
+        status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
+        return (out[2], status, it, norm, out[4], message), out[3], bad
 
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``, compiled."""

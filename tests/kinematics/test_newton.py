@@ -11,6 +11,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.description.urdf import geometry_to_urdf
+from hexapod_model.kinematics.assembly import Outcome
 from hexapod_model.kinematics.checks import LIMIT_SLACK
 from hexapod_model.kinematics.newton import CompiledSolver, solver_for
 from hexapod_model.kinematics.solver import NewtonSolver
@@ -243,3 +244,24 @@ def test_one_call_forward_equals_the_python_path(name):
         assert ("out_of_limits", True) in seen  # the joint-limit check of the compiled call
     if name == "3-6":
         assert ("near_singular", True) in flags
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_one_call_inverse_equals_the_python_path(name):
+    # Hexapod.inverse solves, checks limits and builds the pose in one call (CompiledSolver.run_checked);
+    # NewtonSolver.run then _solution must give the same Solution and solver state, bit for bit
+    hexa = hexapod(name)
+    solver = hexa._solver(hexa._held_inverse)
+    assert solver.compiled_loop
+    statuses = set()
+    for T in box_poses(hexa.home_pose, 60, seed=38, translation=0.15, angle_deg=50):
+        for max_iter in (50, 1):
+            q0 = hexa._start(None)
+            hexa._set_pose(q0, T)
+            slow = hexa._solution(Outcome(*solver.run(q0, 1e-10, max_iter)), False)
+            state = (solver.q_aug.tobytes(), solver.theta, solver.det_sign, solver.certified)
+            fast = hexa.inverse(T, tol=1e-10, max_iter=max_iter, check=False)
+            assert _fields(fast) == _fields(slow)
+            assert (solver.q_aug.tobytes(), solver.theta, solver.det_sign, solver.certified) == state
+            statuses.add(fast.status)
+    assert {"converged", "max_iterations", "out_of_limits"} <= statuses
