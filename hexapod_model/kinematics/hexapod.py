@@ -163,7 +163,8 @@ class Hexapod:
 
     def lengths_of(self, q: np.ndarray) -> np.ndarray:
         """Leg readings (m) of configuration ``q``, leg order."""
-        return self.readings_of(q[self.closed_loop.prismatic_q])
+        joints = q[self.closed_loop.prismatic_q]  # a new array already
+        return joints if self._encoder is None and joints.dtype == np.float64 else self.readings_of(joints)
 
     def readings_of(self, joints: np.ndarray) -> np.ndarray:
         """Leg readings (m) of prismatic joint values (m, leg order, last axis).
