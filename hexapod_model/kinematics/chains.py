@@ -256,6 +256,6 @@ def evaluate_chains(
     platform columns of ``J`` (6 x nv, WORLD) and the 12 closure frames ``R`` (12, 3, 3) /
     ``p`` (12, 3).
     """
-    for i in range(6):
+    for i in range(leg_q.shape[0]):  # 6 as a variable: unrolled, every unit that holds it compiled longer
         _leg(q, i, placements, kinds, motions, leg_q, leg_v, closure, oR, op, J, R, p)
     _platform(q, platform_q, platform_v, home, closure, J, R, p)

@@ -239,10 +239,10 @@ def _tip_weights(E, i):
 
 @njit(cache=True, inline="always")
 def _schur(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w, rhs):
-    """:func:`schur_solve`'s body; inlined with ``rows`` a constant (the 6x6 loops unroll)."""
+    """:func:`schur_solve`'s body (``rhs``: scratch for the eliminated right-hand side)."""
     worst = 1.0
     sign = 1.0
-    for i in range(6):
+    for i in range(leg_cols.shape[0]):
         o = i * rows
         ht = _tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         ha = (ht[0], ht[3], ht[6], ht[1], ht[4], ht[7], ht[2], ht[5], ht[8])
@@ -282,7 +282,7 @@ def _schur(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, 
     _solve(M, pm, v, 6)
     for k in range(6):
         x[colmap[ff_cols[k]]] = -v[k]
-    for i in range(6):
+    for i in range(leg_cols.shape[0]):
         o = i * rows
         for a in range(rows):
             s = r[o + a]
@@ -310,20 +310,19 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
     constant of the layout, and ``2 (|M|_F / sqrt 6)^6 / |det M|``, an upper bound of the 2-norm
     condition number of ``M`` (Guggenheimer, Edelman and Johnson, 1995) at no extra solve.
 
-    ``rows`` (6 or 3) is passed on as a constant, so that the compiler unrolls the small loops:
-    26 % less time than with ``rows`` a variable, measured in ``benchmarks/compiled_newton.py``.
+    The loops run over ``rows`` and the legs as variables: with them constants (unrolled) a
+    Schur step took 15 % less time, but every compiled unit that holds the Newton iteration
+    took 10 s longer to compile (``benchmarks/compiled_newton.py``; first run after installation).
     """
     rhs = np.empty(6)
-    if rows == 6:
-        return _schur(J, leg_cols, held_pos, ff_cols, colmap, 6, p, E, r, x, LB, PB, A, M, pm, n, w, rhs)
-    return _schur(J, leg_cols, held_pos, ff_cols, colmap, 3, p, E, r, x, LB, PB, A, M, pm, n, w, rhs)
+    return _schur(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w, rhs)
 
 
 @njit(cache=True, inline="always")
 def _blocks(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w):
-    """:func:`blocks_solve`'s body; inlined with ``rows`` a constant."""
+    """:func:`blocks_solve`'s body."""
     worst = 1.0
-    for i in range(6):
+    for i in range(leg_cols.shape[0]):
         o = i * rows
         ht = _tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         _leg_block(J, leg_cols[i], rows, p[i], ht, LB[i])
@@ -345,9 +344,6 @@ def blocks_solve(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w):
 
     The platform is held, so closure ``i``'s block is ``L_i`` over its leg's joints in leg order
     (the columns ``block_cols[i]`` of the solver's ``G``, the same numbers): ``L_i x_i = r_i``.
-    Writes ``x`` (``G x = r``) and returns the smallest pivot ratio (0 = singular). ``rows``
-    is passed on as a constant, as in :func:`schur_solve`.
+    Writes ``x`` (``G x = r``) and returns the smallest pivot ratio (0 = singular).
     """
-    if rows == 6:
-        return _blocks(J, leg_cols, colmap, 6, p, E, r, x, LB, PB, w)
-    return _blocks(J, leg_cols, colmap, 3, p, E, r, x, LB, PB, w)
+    return _blocks(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w)

@@ -128,7 +128,7 @@ def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, fl
     return code, it, norm, ratio, theta, sign, certified
 
 
-# Two entry points, ``schur`` a constant in each: a command compiles only the step it uses.
+# For the compiled loops of .follow and .batch_kernels, ``schur`` a constant in each.
 @njit(cache=True)
 def iterate_schur(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
     """:func:`_iterate` with the Schur step (one joint held per leg, the platform free)."""
@@ -141,62 +141,57 @@ def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
     return _iterate(False, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork)
 
 
-@njit(cache=True)
-def certified_forward(start, joints, prismatic_q, tol, max_iter, sign, limits, home, ints, floats, work, iwork, out):
-    """The certified first attempt of :func:`.assembly.solve_forward` and what ``forward`` builds of it.
+@njit(cache=True, inline="always")
+def _solve(
+    schur, start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
+):  # noqa: E501
+    """:func:`_iterate` from ``start`` (prismatic joints set to ``joints`` unless empty), and a ``Solution``'s arrays.
 
-    From ``start`` with its prismatic joints set to ``joints`` (written into ``q``): the
-    certified Newton solve (:func:`iterate_schur`, determinant sign ``sign``), its last iterate
-    left in the solver's ``q_solver`` as ``iterate`` leaves it. Only when it converged
-    certified, also the configuration into ``q``, the platform pose ``home * X(q_p)`` into
-    ``pose`` and the reduced Jacobian (:func:`.kernels.jacobian`) into ``G``; ``out = (q_solver,
-    no_offset, q, pose, G)``. One call instead of the five of the Python path (iterate,
-    Jacobian, copy, limit check, pose). ``limits = (limited q indices, lower, upper, slack)``.
-
-    Returns :func:`iterate_schur`'s ``(code, iterations, norm, ratio, theta, sign, certified)``
-    and the first joint outside its limits (-1 if none or not converged certified).
+    ``arrays = (ints, floats, work, iwork, q_solver, q, pose, G)``. The iteration runs from
+    ``q`` (``start``'s copy) and leaves its last iterate in ``q_solver``, as :func:`_iterate`
+    does. With ``finish``, unless a ``certify``-ing solve did not converge certified, it also
+    writes the configuration into ``q``, the platform pose ``home * X(q_p)`` into ``pose``, the
+    reduced Jacobian (:func:`.kernels.jacobian`) into ``G`` and, when converged, finds the first
+    joint outside ``limits = (limited q indices, lower, upper, slack)``. Returns
+    :func:`_iterate`'s tuple and that joint (-1 if none or not looked for).
     """
-    q_solver, no_offset, q, pose, G = out
+    ints, floats, work, iwork, q_solver, q, pose, G = arrays
     for k in range(q.shape[0]):
         q[k] = start[k]
-    for i in range(prismatic_q.shape[0]):
-        q[prismatic_q[i]] = joints[i]
-    (leg_q, leg_v, platform_v, _, colmap, _, _), _ = unpack_ints(ints)
-    views = unpack_work(ints, work)[0]
-    J, p, E = views[2], views[4], views[5]
-    code, it, norm, ratio, theta, sign, certified = iterate_schur(
-        q, q_solver, tol, max_iter, sign, no_offset, 0.0, True, ints, floats, work, iwork
+    if joints.shape[0] == prismatic_q.shape[0]:
+        for i in range(prismatic_q.shape[0]):
+            q[prismatic_q[i]] = joints[i]
+    code, it, norm, ratio, theta, sign, certified = _iterate(
+        schur, q, q_solver, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork
     )
     bad = -1
-    if code == CONVERGED and certified:
+    if finish and (not certify or (code == CONVERGED and certified)):
+        (_, leg_v, platform_v, _, colmap, _, _), _ = unpack_ints(ints)
+        views = unpack_work(ints, work)[0]
         q[:] = q_solver
-        jacobian(J, leg_v, platform_v, colmap, ints[0], p, E, G)
+        jacobian(views[2], leg_v, platform_v, colmap, ints[0], views[4], views[5], G)
         xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
-        bad = first_outside_at(q, limits[0], limits[1], limits[2], limits[3])
+        if code == CONVERGED:
+            bad = first_outside_at(q, limits[0], limits[1], limits[2], limits[3])
     return code, it, norm, ratio, theta, sign, certified, bad
+
+
+# The entry points from Python: one per step, the iteration inlined in each (numba re-optimises
+# a called compiled function in every caller's unit, so a second entry would compile it again).
+@njit(cache=True)
+def solve_schur(start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays):
+    """:func:`_solve` with the Schur step (direct kinematics: the certified first attempt, plain solves)."""
+    return _solve(
+        True, start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
+    )
 
 
 @njit(cache=True)
-def solve_blocks(q0, tol, max_iter, limits, home, ints, floats, work, iwork, out):
-    """:meth:`.solver.NewtonSolver.run` on the block step (the platform held), with what ``_solution`` needs.
-
-    Newton from ``q0`` (:func:`iterate_blocks`, its last iterate in ``q_solver``), then into
-    ``out = (q_solver, no_offset, q, pose, G)`` the configuration, its platform pose and the
-    reduced Jacobian; the first joint outside its ``limits`` when converged. Returns
-    :func:`iterate_blocks`'s ``(code, iterations, norm, ratio, theta, sign, certified)`` and that joint (-1 if none).
-    """
-    q_solver, no_offset, q, pose, G = out
-    (leg_q, leg_v, platform_v, _, colmap, _, _), _ = unpack_ints(ints)
-    views = unpack_work(ints, work)[0]
-    J, p, E = views[2], views[4], views[5]
-    code, it, norm, ratio, theta, sign, certified = iterate_blocks(
-        q0, q_solver, tol, max_iter, 0.0, no_offset, 0.0, False, ints, floats, work, iwork
+def solve_blocks(start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays):
+    """:func:`_solve` with the block step (inverse kinematics)."""
+    return _solve(
+        False, start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
     )
-    q[:] = q_solver
-    jacobian(J, leg_v, platform_v, colmap, ints[0], p, E, G)
-    xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
-    bad = first_outside_at(q, limits[0], limits[1], limits[2], limits[3]) if code == CONVERGED else -1
-    return code, it, norm, ratio, theta, sign, certified, bad
 
 
 _BUFFERS = ("J", "R", "p", "E", "r", "x", "G", "dv", "LB", "PB", "A", "M", "pm", "nb", "wb")
@@ -234,10 +229,24 @@ class CompiledSolver(NewtonSolver):
             a = [s.J, s.leg_cols, s.held_pos, s.ff_cols, s.colmap, s.rows, s.p, s.E, s.r, s.x, s.LB, s.PB]
             self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb])
         self.packed = packed
-        self._kernel = iterate_schur if schur else iterate_blocks
+        self._kernel = solve_schur if schur else solve_blocks
+        self._home = tables.home
+        nq = clm.nq
+        # the entries' other arguments when a plain iterate() does not use them
+        self._no_joints, self._no_limits = np.zeros(0), (np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), 0.0)
+        self._scratch = (*packed.arrays, self._q, np.empty(nq), np.empty((4, 4)), np.empty(self.G.shape))
         if schur:  # home's sign and condition bound, now from the compiled path
             self.iterate(clm.q_home, np.inf, 0)
             self.home_sign, self.home_kappa = self.sign, self.kappa
+
+    def _call(self, start, joints, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays):
+        """Call the step's entry (:func:`solve_schur` / :func:`solve_blocks`); set the solver's state as ``iterate``."""
+        out = self._kernel(
+            start, joints, self._prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
+        )
+        code, it, norm, ratio, self.theta, self.det_sign, self.certified, bad = out
+        self.sign, self.kappa = self._state.tolist()
+        return code, it, norm, ratio, bad
 
     def iterate(self, q0, tol, max_iter, sign=0.0, offset=None, scale=0.0, certify=False):
         """:meth:`.solver.NewtonSolver.iterate`, compiled (same arguments, results and state)."""
@@ -246,18 +255,21 @@ class CompiledSolver(NewtonSolver):
         offset = self._no_offset if offset is None else offset
         q0 = q0 if q0.dtype == np.float64 and q0.flags.c_contiguous else np.ascontiguousarray(q0, dtype=float)
         # one compiled signature: callers pass ints or floats (det_sign, scale, ...)
-        out = self._kernel(
-            q0, self._q, float(tol), int(max_iter), float(sign), offset, float(scale), bool(certify), *self.arrays
-        )
-        code, it, norm, ratio, self.theta, self.det_sign, self.certified = out
-        self.sign, self.kappa = self._state.tolist()
+        code, it, norm, ratio, _ = self._call(
+            q0, self._no_joints, float(tol), int(max_iter), float(sign), offset, float(scale), bool(certify),
+            False, self._no_limits, self._home, self._scratch,
+        )  # fmt: skip
         status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
         return status, it, norm, message
+
+    def _outputs(self, nq: int) -> tuple:
+        """The entries' ``arrays`` with new output arrays ``q``, ``pose``, ``G`` (a Solution keeps them)."""
+        return (*self.arrays, self._q, np.empty(nq), np.empty((4, 4)), np.empty(self.G.shape))
 
     def certified_forward(
         self, start: np.ndarray, joints: np.ndarray, tol: float, max_iter: int, sign: float, limits: tuple, home
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, float, int] | tuple[str, int, float, str]:
-        """The certified first attempt of direct kinematics in one compiled call (:func:`certified_forward`).
+        """The certified first attempt of direct kinematics in one compiled call (:func:`solve_schur`).
 
         Args:
             start: configuration to start from (not modified).
@@ -274,13 +286,12 @@ class CompiledSolver(NewtonSolver):
             ``(status, iterations, residual, message)``, for :func:`.assembly.solve_forward` to
             go on from (its ``attempt``). The solver's state is :meth:`iterate`'s either way.
         """
-        out = (self._q, self._no_offset, np.empty(start.shape[0]), np.empty((4, 4)), np.empty(self.G.shape))
-        code, it, norm, ratio, self.theta, self.det_sign, self.certified, bad = certified_forward(
-            start, joints, self._prismatic_q, tol, max_iter, float(sign), limits, home, *self.arrays, out
+        arrays = self._outputs(start.shape[0])
+        code, it, norm, ratio, bad = self._call(
+            start, joints, tol, max_iter, float(sign), self._no_offset, 0.0, True, True, limits, home, arrays
         )
-        self.sign, self.kappa = self._state.tolist()
         if code == CONVERGED and self.certified:
-            return out[2], out[3], out[4], it, norm, bad
+            return arrays[5], arrays[6], arrays[7], it, norm, bad
         status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
         return status, it, norm, message
 
@@ -295,18 +306,20 @@ class CompiledSolver(NewtonSolver):
         if self.held_pos is not None:
             return None
         q0 = q0 if q0.dtype == np.float64 and q0.flags.c_contiguous else np.ascontiguousarray(q0, dtype=float)
-        out = (self._q, self._no_offset, np.empty(q0.shape[0]), np.empty((4, 4)), np.empty(self.G.shape))
-        code, it, norm, ratio, self.theta, self.det_sign, self.certified, bad = solve_blocks(
-            q0, tol, max_iter, limits, home, *self.arrays, out
+        arrays = self._outputs(q0.shape[0])
+        code, it, norm, ratio, bad = self._call(
+            q0, self._no_joints, tol, max_iter, 0.0, self._no_offset, 0.0, False, True, limits, home, arrays
         )
-        self.sign, self.kappa = self._state.tolist()
         status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
-        return (out[2], status, it, norm, out[4], message), out[3], bad
+        return (arrays[5], status, it, norm, arrays[7], message), arrays[6], bad
 
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``, compiled."""
         q = np.ascontiguousarray(q, dtype=float)
-        self._kernel(q, self._q, np.inf, 0, 0.0, self._no_offset, 0.0, False, *self.arrays)  # frames, residual at q
+        self._kernel(
+            q, self._no_joints, self._prismatic_q, np.inf, 0, 0.0, self._no_offset, 0.0, False, False,
+            self._no_limits, self._home, self._scratch,
+        )  # fmt: skip  # frames and residual at q; the solver's state untouched
         jacobian(*self._jac_args)
         return self.r.copy(), self.G.copy()
 
