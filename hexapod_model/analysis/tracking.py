@@ -35,6 +35,7 @@ from ..kinematics.hexapod import Hexapod
 from ..kinematics.solver import Solution
 from .sensitivity import SensitivityEvaluator
 from .tracker_checks import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
+from .tracker_kernels import branch_residual
 from .tracker_passage import PassageMixin
 from .tracker_types import (
     FAILED_STATUSES,
@@ -104,11 +105,14 @@ class Tracker(PassageMixin):
         self._sens = SensitivityEvaluator(hexa, self.length)
         clm = hexa.closed_loop
         self._prism_q, self._ff = clm.prismatic_q, slice(clm.platform_v, clm.platform_v + 6)
+        self._ffq = slice(clm.platform_q, clm.platform_q + 7)  # the platform's free-flyer coordinates
         home = self._sens.evaluate(hexa.q_home)
         self.home_condition = home.condition_number
         self.cond_limit = float(s.cond_limit) if s.cond_limit is not None else s.cond_factor * self.home_condition
         self._hist: deque[np.ndarray] = deque(maxlen=s.window)
         self._L = np.zeros((s.window, 6))
+        self._F = np.zeros((s.window, 7))  # free-flyer coordinates of _hist, newest first
+        self._e = np.zeros(6)  # the branch check's residual
         self._ages = np.zeros(s.window, dtype=np.int64)  # samples since each trusted one
         self._raw: deque[np.ndarray] = deque(maxlen=s.stuck_samples + _STUCK_LOOKBACK)
         self._calm: deque[tuple[int, np.ndarray, np.ndarray]] = deque(maxlen=_BEFORE)  # certified, not near-singular
@@ -142,6 +146,7 @@ class Tracker(PassageMixin):
         """History = ``q`` only (``trusted``: ``q`` is a sample of the stream)."""
         self._hist.clear()
         self._hist.appendleft(q)
+        self._F[0] = q[self._ffq]
         self._n = 0
         self._gap = 0
         self._doubt = False  # a pose failed the branch check since the newest trusted sample
@@ -152,6 +157,8 @@ class Tracker(PassageMixin):
     def _push_trusted(self, q: np.ndarray) -> None:
         if self._n > 0 or len(self._hist) > 1 or self._hist[0] is not q:
             self._hist.appendleft(q)
+            self._F[1:] = self._F[:-1].copy()
+            self._F[0] = q[self._ffq]
         self._L[1:] = self._L[:-1].copy()
         self._L[0] = q[self._prism_q]
         self._ages[1:] = self._ages[:-1].copy()
@@ -255,17 +262,13 @@ class Tracker(PassageMixin):
     def _branch_check(self, sol, sens, l, lhat, w, spread):
         """Compare the pose with the motion model's pose plus ``J^-1`` (reading innovation).
 
-        On a mismatch re-solve from the motion model's configuration (``recover``).
+        On a mismatch re-solve from the motion model's configuration (``recover``). The
+        comparison needs the platform's pose only (:func:`.tracker_kernels.branch_residual`);
+        the whole configuration of the motion model is made for a re-solve only.
         """
-        model = self.hexa.model
-        q0 = self._hist[0]
-        dv = np.zeros(model.nv)
-        for j in range(1, w.size):
-            dv += w[j] * pin.difference(model, q0, self._hist[j])
-        q_model = pin.integrate(model, q0, dv)
         if self.settings.recover and sens.condition_number > self.cond_limit:
             # near a singularity assemblies meet: keep the one the motion continues to
-            alt = self._solve(l, q_model)
+            alt = self._solve(l, self._model_q(w))
             if alt.status in ("converged", "out_of_limits") and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
                 sol, sens = alt, self._sens.evaluate(alt.q)
         bound = self.settings.branch_sigmas * self.settings.noise * self._scale * spread
@@ -274,7 +277,8 @@ class Tracker(PassageMixin):
             near = self._near or sens.condition_number > self.cond_limit
             if sens.det_sign != self._sign and not near:
                 return False  # across a singularity without passing near one: another assembly
-            e = pin.difference(model, q_model, sol.q)[self._ff] - self._sens.Jinv @ (l - lhat)
+            e = self._e  # log6(Mm^-1 Ms) - J^-1 (l - l^), Mm the motion model's pose
+            branch_residual(self._F, w.size, w, sol.q[self._ffq], self._sens.Jinv, l, lhat, e)
             et, er = e[:3], e[3:]  # norms as np.linalg.norm computes them, without its dispatch
             size = math.hypot(math.sqrt(et @ et), self.length * math.sqrt(er @ er))
             return size <= bound * math.hypot(sens.translation, self.length * sens.rotation) + 1e-9 * self.length
@@ -283,13 +287,21 @@ class Tracker(PassageMixin):
             return sol, sens, True
         if not self.settings.recover:
             return sol, sens, False
-        retry = self._solve(l, q_model)
+        retry = self._solve(l, self._model_q(w))
         if retry.status in ("converged", "out_of_limits"):
             rsens = self._sens.evaluate(retry.q)
             if consistent(retry, rsens):
                 return retry, rsens, True
             self._sens.evaluate(sol.q)
         return sol, sens, False
+
+    def _model_q(self, w: np.ndarray) -> np.ndarray:
+        """The motion model's configuration ``P0 (+) sum_j w_j (P_j (-) P0)`` (a Newton guess)."""
+        model, q0 = self.hexa.model, self._hist[0]
+        dv = np.zeros(model.nv)
+        for j in range(1, w.size):
+            dv += w[j] * pin.difference(model, q0, self._hist[j])
+        return pin.integrate(model, q0, dv)
 
     def _reanchor(self, l: np.ndarray, flags: list[str], legs: tuple, t0: float) -> TrackResult:
         """Continuation to ``l`` from the last trusted configuration; restart the history there.
