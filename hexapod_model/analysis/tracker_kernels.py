@@ -1,4 +1,8 @@
-"""Compiled per-sample arithmetic of the stream tracker: the branch check's pose residual in one call.
+"""Compiled per-sample arithmetic of the stream tracker: the reading statistics and the branch check's pose residual.
+
+:func:`reading_checks` replaces a dozen NumPy calls on 6-vectors per sample (finite readings,
+frozen runs, normalised innovations, their maximum and sum of squares) with one call, in the
+same floating-point operations (the results are bitwise the NumPy ones; a test checks).
 
 The branch check (:meth:`hexapod_model.analysis.tracking.Tracker._branch_check`) compares the
 solved platform pose with the motion model's pose plus the reading innovation mapped through
@@ -156,3 +160,42 @@ def branch_residual(F, n, w, fs, Jinv, l, lhat, e):
         for k in range(6):
             s += Jinv[i, k] * (l[k] - lhat[k])
         e[i] = xi[i] - s
+
+
+@njit(cache=True)
+def reading_checks(l, last, tol, frozen, stuck, lhat, sd, z):
+    """One sample's reading statistics in one call (:meth:`~hexapod_model.analysis.tracking.Tracker.step`).
+
+    Args:
+        l: (6,) the readings (m).
+        last: (6,) the previous sample's readings, or a (0,) array when there is none.
+        tol: largest change (m) that counts as unchanged (``stuck_tolerance``).
+        frozen: (6,) int64, consecutive unchanged samples per leg: updated in place.
+        stuck: (6,) bool, the legs latched ``stuck``.
+        lhat: (6,) the motion model's readings, or a (0,) array when the sample is not checked.
+        sd: innovation standard deviation (m): ``noise * spread``.
+        z: (6,) out: ``|l - lhat| / sd`` (untouched when not checked).
+
+    Returns:
+        ``(finite, zmax, zz, frozen_max, any_stuck)``: every reading finite (when not, nothing
+        else is computed or updated), the largest ``z`` and ``z . z`` (``nan`` and 0 when not
+        checked), the longest frozen run and whether a leg is latched ``stuck``.
+    """
+    for k in range(6):
+        if not math.isfinite(l[k]):
+            return False, math.nan, 0.0, 0, False
+    if last.size:  # frozen[k] + 1 where |l - last| <= tol, else 0
+        for k in range(6):
+            frozen[k] = frozen[k] + 1 if abs(l[k] - last[k]) <= tol else 0
+    zmax, zz = math.nan, 0.0
+    if lhat.size:
+        zmax = -math.inf
+        for k in range(6):
+            z[k] = abs(l[k] - lhat[k]) / sd
+            zmax = max(zmax, z[k])
+            zz += z[k] * z[k]
+    fmax, any_stuck = 0, False
+    for k in range(6):
+        fmax = max(fmax, frozen[k])
+        any_stuck = any_stuck or stuck[k]
+    return True, zmax, zz, fmax, any_stuck

@@ -35,7 +35,7 @@ from ..kinematics.hexapod import Hexapod
 from ..kinematics.solver import Solution
 from .sensitivity import SensitivityEvaluator
 from .tracker_checks import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
-from .tracker_kernels import branch_residual
+from .tracker_kernels import branch_residual, reading_checks
 from .tracker_passage import PassageMixin
 from .tracker_types import (
     FAILED_STATUSES,
@@ -49,6 +49,7 @@ from .tracker_types import (
 
 _NO_Z = np.full(6, np.nan)  # innovations when the motion model is not available (read-only)
 _NO_Z.flags.writeable = False
+_NONE = np.zeros(0)  # no previous readings / no motion model (writeable: one compiled signature)
 _SCALE_RATE = 0.02  # weight of a sample in the observed innovation scale (~50 samples)
 _SCALE_FLOOR = 1e-3  # the branch check never assumes readings better than 1e-3 noise
 _STUCK_LOOKBACK = 8  # readings kept beyond stuck_samples to see the other legs move
@@ -113,6 +114,7 @@ class Tracker(PassageMixin):
         self._L = np.zeros((s.window, 6))
         self._F = np.zeros((s.window, 7))  # free-flyer coordinates of _hist, newest first
         self._e = np.zeros(6)  # the branch check's residual
+        self._z = np.zeros(6)  # the sample's normalised innovations
         self._ages = np.zeros(s.window, dtype=np.int64)  # samples since each trusted one
         self._raw: deque[np.ndarray] = deque(maxlen=s.stuck_samples + _STUCK_LOOKBACK)
         self._calm: deque[tuple[int, np.ndarray, np.ndarray]] = deque(maxlen=_BEFORE)  # certified, not near-singular
@@ -178,27 +180,29 @@ class Tracker(PassageMixin):
         self._ages += 1  # every sample, readable or not, is one period
         self._k += 1
         l = np.asarray(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
-        if l.shape != (6,) or not np.isfinite(l).all():
-            msg = f"expected 6 finite readings, got {lengths!r}"
-            return self._failure(l if l.shape == (6,) else np.full(6, np.nan), "invalid_input", msg, (), (), t0)
-        self._update_frozen(l)
         n, m = self._n, self._gap + 1
-        checked = n >= s.settle_samples and m <= s.max_gap + 1
-        z, zmax = _NO_Z, math.nan
-        lhat, w, spread = None, None, 0.0
+        checked = l.shape == (6,) and n >= s.settle_samples and m <= s.max_gap + 1
+        lhat, w, spread = _NONE, None, 0.0
         if checked:
             w, spread = self._motion.weights(tuple(self._ages[:n].tolist()))
             lhat = w @ self._L[:n]
-            z = np.abs(l - lhat) / (s.noise * spread)
-            zmax = float(z.max())
-            if zmax <= s.jump_sigmas:  # observed noise scale, for the branch check
-                self._z2 += _SCALE_RATE * (min(float(z @ z) / 6.0, 1.0) - self._z2)
-                self._scale = max(math.sqrt(self._z2), _SCALE_FLOOR)
+        # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
+        last = self._raw[-1] if self._raw else _NONE
+        finite, zmax, zz, frozen, any_stuck = (False, math.nan, 0.0, 0, False) if l.shape != (6,) else (
+            reading_checks(l, last, s.stuck_tolerance, self._frozen, self._stuck, lhat, s.noise * spread, self._z)
+        )  # fmt: skip
+        if not finite:
+            msg = f"expected 6 finite readings, got {lengths!r}"
+            return self._failure(l if l.shape == (6,) else np.full(6, np.nan), "invalid_input", msg, (), (), t0)
+        self._raw.append(l)
+        z = self._z if checked else _NO_Z
+        if zmax <= s.jump_sigmas:  # observed noise scale, for the branch check (False for NaN)
+            self._z2 += _SCALE_RATE * (min(zz / 6.0, 1.0) - self._z2)
+            self._scale = max(math.sqrt(self._z2), _SCALE_FLOOR)
         flags: list[str] = []
         legs: tuple[int, ...] = ()
-        frozen = int(self._frozen.max())
         suspect = False
-        if zmax > s.jump_sigmas or frozen > 0 or self._stuck.any():
+        if zmax > s.jump_sigmas or frozen > 0 or any_stuck:
             moving = motion_sigmas(np.array(self._raw), s.noise) if frozen >= s.stuck_samples else None
             stuck = stuck_legs(self._frozen, z, self._moved(), s, moving) | (self._stuck & (self._frozen > 0))
             self._stuck = stuck  # latched while the reading stays unchanged
@@ -226,12 +230,6 @@ class Tracker(PassageMixin):
         if not checked and m <= s.max_gap + 1:
             flags.append("settling")
         return self._finish(sol, sens, flags, legs, zmax, trusted=not suspect, t0=t0)
-
-    def _update_frozen(self, l: np.ndarray) -> None:
-        if self._raw:
-            unchanged = np.abs(l - self._raw[-1]) <= self.settings.stuck_tolerance
-            self._frozen = np.where(unchanged, self._frozen + 1, 0)
-        self._raw.append(l)
 
     def _moved(self) -> np.ndarray:
         """Largest change of the other legs over each leg's frozen run (m).

@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from hexapod_model.analysis.tracker_kernels import branch_residual
+from hexapod_model.analysis.tracker_kernels import branch_residual, reading_checks
 
 
 def _free_flyer() -> pin.Model:
@@ -57,3 +57,35 @@ def test_branch_residual_is_zero_on_a_constant_twist_motion():
     e = np.zeros(6)
     branch_residual(F, 3, w, fs, np.eye(6), np.zeros(6), np.zeros(6), e)
     assert np.abs(e).max() < 1e-15
+
+
+def test_reading_checks_match_the_numpy_statistics_bitwise():
+    """Frozen runs, ``z = |l - lhat| / sd``, its maximum and ``z . z`` as the tracker computed them with NumPy."""
+    rng = np.random.default_rng(4)
+    frozen = np.zeros(6, dtype=np.int64)
+    last = rng.normal(0.0, 1e-3, 6)
+    for k in range(500):
+        l = last.copy()
+        moved = rng.random(6) < 0.7
+        l[moved] += rng.normal(0.0, 1e-5, int(moved.sum()))
+        lhat = l + rng.normal(0.0, 2e-5, 6) if k % 5 else np.zeros(0)  # every fifth sample unchecked
+        stuck = rng.random(6) < 0.1
+        tol, sd = (0.0, 5e-6) if k % 2 else (3e-6, 2.05e-5)
+        expected_frozen = np.where(np.abs(l - last) <= tol, frozen + 1, 0)
+        z = np.zeros(6)
+        finite, zmax, zz, fmax, any_stuck = reading_checks(l, last, tol, frozen, stuck, lhat, sd, z)
+        assert finite and np.array_equal(frozen, expected_frozen)
+        assert fmax == int(expected_frozen.max()) and any_stuck == bool(stuck.any())
+        if lhat.size:
+            expected = np.abs(l - lhat) / sd
+            assert np.array_equal(z, expected) and zmax == float(expected.max()) and zz == float(expected @ expected)
+        else:
+            assert np.isnan(zmax) and zz == 0.0
+        last = l
+
+
+def test_reading_checks_stop_at_a_non_finite_reading():
+    frozen = np.array([1, 2, 3, 0, 0, 0], dtype=np.int64)
+    l = np.array([0.0, np.nan, 0.0, 0.0, 0.0, 0.0])
+    out = reading_checks(l, np.zeros(6), 0.0, frozen, np.zeros(6, dtype=bool), np.zeros(6), 1.0, np.zeros(6))
+    assert out[0] is False and list(frozen) == [1, 2, 3, 0, 0, 0]  # nothing updated
