@@ -35,6 +35,7 @@ from ..kinematics.hexapod import Hexapod
 from ..kinematics.solver import Solution
 from .sensitivity import SensitivityEvaluator
 from .tracker_checks import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
+from .tracker_kernels import branch_residual, reading_checks
 from .tracker_passage import PassageMixin
 from .tracker_types import (
     FAILED_STATUSES,
@@ -48,6 +49,7 @@ from .tracker_types import (
 
 _NO_Z = np.full(6, np.nan)  # innovations when the motion model is not available (read-only)
 _NO_Z.flags.writeable = False
+_NONE = np.zeros(0)  # no previous readings / no motion model (writeable: one compiled signature)
 _SCALE_RATE = 0.02  # weight of a sample in the observed innovation scale (~50 samples)
 _SCALE_FLOOR = 1e-3  # the branch check never assumes readings better than 1e-3 noise
 _STUCK_LOOKBACK = 8  # readings kept beyond stuck_samples to see the other legs move
@@ -104,11 +106,15 @@ class Tracker(PassageMixin):
         self._sens = SensitivityEvaluator(hexa, self.length)
         clm = hexa.closed_loop
         self._prism_q, self._ff = clm.prismatic_q, slice(clm.platform_v, clm.platform_v + 6)
+        self._ffq = slice(clm.platform_q, clm.platform_q + 7)  # the platform's free-flyer coordinates
         home = self._sens.evaluate(hexa.q_home)
         self.home_condition = home.condition_number
         self.cond_limit = float(s.cond_limit) if s.cond_limit is not None else s.cond_factor * self.home_condition
         self._hist: deque[np.ndarray] = deque(maxlen=s.window)
         self._L = np.zeros((s.window, 6))
+        self._F = np.zeros((s.window, 7))  # free-flyer coordinates of _hist, newest first
+        self._e = np.zeros(6)  # the branch check's residual
+        self._z = np.zeros(6)  # the sample's normalised innovations
         self._ages = np.zeros(s.window, dtype=np.int64)  # samples since each trusted one
         self._raw: deque[np.ndarray] = deque(maxlen=s.stuck_samples + _STUCK_LOOKBACK)
         self._calm: deque[tuple[int, np.ndarray, np.ndarray]] = deque(maxlen=_BEFORE)  # certified, not near-singular
@@ -142,6 +148,7 @@ class Tracker(PassageMixin):
         """History = ``q`` only (``trusted``: ``q`` is a sample of the stream)."""
         self._hist.clear()
         self._hist.appendleft(q)
+        self._F[0] = q[self._ffq]
         self._n = 0
         self._gap = 0
         self._doubt = False  # a pose failed the branch check since the newest trusted sample
@@ -152,6 +159,8 @@ class Tracker(PassageMixin):
     def _push_trusted(self, q: np.ndarray) -> None:
         if self._n > 0 or len(self._hist) > 1 or self._hist[0] is not q:
             self._hist.appendleft(q)
+            self._F[1:] = self._F[:-1].copy()
+            self._F[0] = q[self._ffq]
         self._L[1:] = self._L[:-1].copy()
         self._L[0] = q[self._prism_q]
         self._ages[1:] = self._ages[:-1].copy()
@@ -171,27 +180,29 @@ class Tracker(PassageMixin):
         self._ages += 1  # every sample, readable or not, is one period
         self._k += 1
         l = np.asarray(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
-        if l.shape != (6,) or not np.isfinite(l).all():
-            msg = f"expected 6 finite readings, got {lengths!r}"
-            return self._failure(l if l.shape == (6,) else np.full(6, np.nan), "invalid_input", msg, (), (), t0)
-        self._update_frozen(l)
         n, m = self._n, self._gap + 1
-        checked = n >= s.settle_samples and m <= s.max_gap + 1
-        z, zmax = _NO_Z, math.nan
-        lhat, w, spread = None, None, 0.0
+        checked = l.shape == (6,) and n >= s.settle_samples and m <= s.max_gap + 1
+        lhat, w, spread = _NONE, None, 0.0
         if checked:
             w, spread = self._motion.weights(tuple(self._ages[:n].tolist()))
             lhat = w @ self._L[:n]
-            z = np.abs(l - lhat) / (s.noise * spread)
-            zmax = float(z.max())
-            if zmax <= s.jump_sigmas:  # observed noise scale, for the branch check
-                self._z2 += _SCALE_RATE * (min(float(z @ z) / 6.0, 1.0) - self._z2)
-                self._scale = max(math.sqrt(self._z2), _SCALE_FLOOR)
+        # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
+        last = self._raw[-1] if self._raw else _NONE
+        finite, zmax, zz, frozen, any_stuck = (False, math.nan, 0.0, 0, False) if l.shape != (6,) else (
+            reading_checks(l, last, s.stuck_tolerance, self._frozen, self._stuck, lhat, s.noise * spread, self._z)
+        )  # fmt: skip
+        if not finite:
+            msg = f"expected 6 finite readings, got {lengths!r}"
+            return self._failure(l if l.shape == (6,) else np.full(6, np.nan), "invalid_input", msg, (), (), t0)
+        self._raw.append(l)
+        z = self._z if checked else _NO_Z
+        if zmax <= s.jump_sigmas:  # observed noise scale, for the branch check (False for NaN)
+            self._z2 += _SCALE_RATE * (min(zz / 6.0, 1.0) - self._z2)
+            self._scale = max(math.sqrt(self._z2), _SCALE_FLOOR)
         flags: list[str] = []
         legs: tuple[int, ...] = ()
-        frozen = int(self._frozen.max())
         suspect = False
-        if zmax > s.jump_sigmas or frozen > 0 or self._stuck.any():
+        if zmax > s.jump_sigmas or frozen > 0 or any_stuck:
             moving = motion_sigmas(np.array(self._raw), s.noise) if frozen >= s.stuck_samples else None
             stuck = stuck_legs(self._frozen, z, self._moved(), s, moving) | (self._stuck & (self._frozen > 0))
             self._stuck = stuck  # latched while the reading stays unchanged
@@ -219,12 +230,6 @@ class Tracker(PassageMixin):
         if not checked and m <= s.max_gap + 1:
             flags.append("settling")
         return self._finish(sol, sens, flags, legs, zmax, trusted=not suspect, t0=t0)
-
-    def _update_frozen(self, l: np.ndarray) -> None:
-        if self._raw:
-            unchanged = np.abs(l - self._raw[-1]) <= self.settings.stuck_tolerance
-            self._frozen = np.where(unchanged, self._frozen + 1, 0)
-        self._raw.append(l)
 
     def _moved(self) -> np.ndarray:
         """Largest change of the other legs over each leg's frozen run (m).
@@ -255,17 +260,13 @@ class Tracker(PassageMixin):
     def _branch_check(self, sol, sens, l, lhat, w, spread):
         """Compare the pose with the motion model's pose plus ``J^-1`` (reading innovation).
 
-        On a mismatch re-solve from the motion model's configuration (``recover``).
+        On a mismatch re-solve from the motion model's configuration (``recover``). The
+        comparison needs the platform's pose only (:func:`.tracker_kernels.branch_residual`);
+        the whole configuration of the motion model is made for a re-solve only.
         """
-        model = self.hexa.model
-        q0 = self._hist[0]
-        dv = np.zeros(model.nv)
-        for j in range(1, w.size):
-            dv += w[j] * pin.difference(model, q0, self._hist[j])
-        q_model = pin.integrate(model, q0, dv)
         if self.settings.recover and sens.condition_number > self.cond_limit:
             # near a singularity assemblies meet: keep the one the motion continues to
-            alt = self._solve(l, q_model)
+            alt = self._solve(l, self._model_q(w))
             if alt.status in ("converged", "out_of_limits") and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
                 sol, sens = alt, self._sens.evaluate(alt.q)
         bound = self.settings.branch_sigmas * self.settings.noise * self._scale * spread
@@ -274,7 +275,8 @@ class Tracker(PassageMixin):
             near = self._near or sens.condition_number > self.cond_limit
             if sens.det_sign != self._sign and not near:
                 return False  # across a singularity without passing near one: another assembly
-            e = pin.difference(model, q_model, sol.q)[self._ff] - self._sens.Jinv @ (l - lhat)
+            e = self._e  # log6(Mm^-1 Ms) - J^-1 (l - l^), Mm the motion model's pose
+            branch_residual(self._F, w.size, w, sol.q[self._ffq], self._sens.Jinv, l, lhat, e)
             et, er = e[:3], e[3:]  # norms as np.linalg.norm computes them, without its dispatch
             size = math.hypot(math.sqrt(et @ et), self.length * math.sqrt(er @ er))
             return size <= bound * math.hypot(sens.translation, self.length * sens.rotation) + 1e-9 * self.length
@@ -283,13 +285,21 @@ class Tracker(PassageMixin):
             return sol, sens, True
         if not self.settings.recover:
             return sol, sens, False
-        retry = self._solve(l, q_model)
+        retry = self._solve(l, self._model_q(w))
         if retry.status in ("converged", "out_of_limits"):
             rsens = self._sens.evaluate(retry.q)
             if consistent(retry, rsens):
                 return retry, rsens, True
             self._sens.evaluate(sol.q)
         return sol, sens, False
+
+    def _model_q(self, w: np.ndarray) -> np.ndarray:
+        """The motion model's configuration ``P0 (+) sum_j w_j (P_j (-) P0)`` (a Newton guess)."""
+        model, q0 = self.hexa.model, self._hist[0]
+        dv = np.zeros(model.nv)
+        for j in range(1, w.size):
+            dv += w[j] * pin.difference(model, q0, self._hist[j])
+        return pin.integrate(model, q0, dv)
 
     def _reanchor(self, l: np.ndarray, flags: list[str], legs: tuple, t0: float) -> TrackResult:
         """Continuation to ``l`` from the last trusted configuration; restart the history there.

@@ -173,7 +173,7 @@ class FixtureCycle:
         if stuck:
             return self._failure(t, "stuck_leg", [f"stuck:leg{k + 1}" for k in stuck])
         was_locked = self.lock.state == "locked"
-        ready = self.lock.update(t, r)
+        ready = self.lock.update(t, self._readings)
         if was_locked and self.lock.state != "locked":
             self._episode += 1
             log.info("fixture %s: moving (lock released)", self.cfg.name)

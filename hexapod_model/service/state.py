@@ -23,6 +23,10 @@ GAP_INSTANTS = 3  # sampling instants without a set after which a leg's speed es
 class LockDetector:
     """Locked / moving / drift of one fixture from its reading sets.
 
+    The per-set arithmetic is on Python floats (six of them: faster than NumPy calls on
+    6-vectors, and the same IEEE operations, so the same results); :attr:`reference` and
+    :attr:`run_mean` are arrays.
+
     Args:
         lock_time: seconds of steady readings before ``locked`` (also the drift average's
             time constant).
@@ -36,58 +40,77 @@ class LockDetector:
         self.state = "moving"
         self.reference: np.ndarray | None = None  # mean readings of the locking run (m)
         self.drift = False
-        self._run_start: tuple[float, np.ndarray] | None = None
-        self._sum = np.zeros(6)
+        self._ref: list[float] = []  # the reference as floats
+        self._run_start: tuple[float, list[float]] | None = None
+        self._sum = [0.0] * 6
         self._n = 0
         self._outside = 0
-        self._ema = np.zeros(6)
+        self._ema = [0.0] * 6
         self._t_last = 0.0
 
-    def _restart(self, t: float, readings: np.ndarray) -> None:
-        self._run_start = (t, readings.copy())
-        self._sum[:] = readings
+    def _restart(self, t: float, readings: list[float]) -> None:
+        self._run_start = (t, readings)
+        self._sum = readings.copy()
         self._n = 1
 
-    def update(self, t: float, readings: np.ndarray) -> bool:
-        """Add a reading set at time ``t`` (s); True when a moving fixture has been steady long enough.
+    def update(self, t: float, readings) -> bool:
+        """Add a set of six readings (m) at time ``t`` (s); True when a moving fixture has been steady long enough.
 
         The caller then calls :meth:`lock` (with the reference it accepted) or :meth:`restart`.
         """
+        x = [float(v) for v in readings]
         if self.state == "locked":
-            assert self.reference is not None
-            if float(abs(readings - self.reference).max()) > self.band:  # ndarray methods: no dispatch
+            ref = self._ref
+            if _beyond(x, ref, self.band):
                 self._outside += 1
                 if self._outside >= self.unlock_samples:
                     self.state, self.reference, self.drift, self._outside = "moving", None, False, 0
-                    self._restart(t, readings)
+                    self._restart(t, x)
                 return False
             self._outside = 0
             alpha = 1.0 - math.exp(-max(t - self._t_last, 0.0) / max(self.lock_time, 1e-9))
-            self._ema += alpha * (readings - self._ema)
+            ema = self._ema
+            for k in range(6):  # ema += alpha (readings - ema)
+                ema[k] += alpha * (x[k] - ema[k])
             self._t_last = t
-            self.drift = float(abs(self._ema - self.reference).max()) > self.drift_limit
+            self.drift = _beyond(ema, ref, self.drift_limit)
             return False
-        if self._run_start is None or float(abs(readings - self._run_start[1]).max()) > self.band:
-            self._restart(t, readings)
+        if self._run_start is None or _beyond(x, self._run_start[1], self.band):
+            self._restart(t, x)
         else:
-            self._sum += readings
+            total = self._sum
+            for k in range(6):
+                total[k] += x[k]
             self._n += 1
         return t - self._run_start[0] >= self.lock_time  # type: ignore[index]
 
     @property
     def run_mean(self) -> np.ndarray:
         """Mean readings (m) of the current steady run."""
-        return self._sum / max(self._n, 1)
+        return np.array(self._sum) / max(self._n, 1)
 
     def lock(self, t: float, reference: np.ndarray) -> None:
         """Enter ``locked`` with ``reference`` readings (m) at time ``t`` (s)."""
-        self.state, self.reference, self.drift, self._outside = "locked", reference.copy(), False, 0
-        self._ema[:] = reference
+        self.state, self.reference, self.drift, self._outside = "locked", np.array(reference, dtype=float), False, 0
+        self._ref = self.reference.tolist()
+        self._ema = self._ref.copy()
         self._t_last = t
 
-    def restart(self, t: float, readings: np.ndarray) -> None:
+    def restart(self, t: float, readings) -> None:
         """Start a new steady run at this set (a lock could not be taken)."""
-        self._restart(t, readings)
+        self._restart(t, [float(v) for v in readings])
+
+
+def _beyond(a: list[float], b: list[float], limit: float) -> bool:
+    """``max |a - b| > limit`` as NumPy's ``abs(a - b).max() > limit`` decides it (False when a difference is NaN)."""
+    worst = 0.0
+    for u, v in zip(a, b):
+        d = abs(u - v)
+        if d != d:  # NaN: NumPy's maximum is NaN, and NaN > limit is False
+            return False
+        if d > worst:
+            worst = d
+    return worst > limit
 
 
 class StuckDetector:

@@ -97,3 +97,56 @@ def test_noisy_still_legs_repeating_counts_are_not_stuck():
         r = 0.01 + rng.normal(0, NOISE, 6)
         hits += len(det.update(k, [round(v / 1e-6) for v in r], r))
     assert hits == 0
+
+
+class _NumpyLockDetector(LockDetector):
+    """The detector's per-set arithmetic as it was written with NumPy arrays (the reference for the float version)."""
+
+    def update(self, t: float, readings) -> bool:
+        r = np.asarray(readings, dtype=float)
+        if self.state == "locked":
+            ref = np.array(self._ref)
+            if float(abs(r - ref).max()) > self.band:
+                self._outside += 1
+                if self._outside >= self.unlock_samples:
+                    self.state, self.reference, self.drift, self._outside = "moving", None, False, 0
+                    self._restart(t, r.tolist())
+                return False
+            self._outside = 0
+            alpha = 1.0 - np.exp(-max(t - self._t_last, 0.0) / max(self.lock_time, 1e-9))
+            ema = np.array(self._ema)
+            ema += alpha * (r - ema)
+            self._ema = ema.tolist()
+            self._t_last = t
+            self.drift = float(abs(ema - ref).max()) > self.drift_limit
+            return False
+        assert self._n == 0 or self._run_start is not None
+        if self._run_start is None or float(abs(r - np.array(self._run_start[1])).max()) > self.band:
+            self._restart(t, r.tolist())
+        else:
+            self._sum = (np.array(self._sum) + r).tolist()
+            self._n += 1
+        return t - self._run_start[0] >= self.lock_time  # type: ignore[index]
+
+
+def test_float_arithmetic_gives_the_numpy_detectors_states_and_values_bitwise():
+    """Steady runs, locks, a creep (drift), spikes and unlocks: the same events, reference, mean and average."""
+    rng = np.random.default_rng(5)
+    base = 0.01 + rng.normal(0, 1e-3, 6)
+    readings = [base + rng.normal(0, NOISE, 6) for _ in range(120)]  # still
+    readings += [base + 1e-6 * k + rng.normal(0, NOISE, 6) for k in range(60)]  # creeps: drift
+    readings += [base + 5e-3 + rng.normal(0, NOISE, 6) for k in range(10)]  # moved: unlocks
+    readings += [base + rng.normal(0, NOISE, 6) for _ in range(80)]  # still again: locks again
+    readings[150][2] += 1e-3  # one spike while locked
+    fast, slow = LockDetector(0.3, 10 * NOISE, 3 * NOISE, 3), _NumpyLockDetector(0.3, 10 * NOISE, 3 * NOISE, 3)
+    assert feed(fast, [r.tolist() for r in readings]) == feed(slow, readings)
+    assert fast.state == "locked" and np.array_equal(fast.reference, slow.reference)
+    assert fast._ema == slow._ema and np.array_equal(fast.run_mean, slow.run_mean)
+    events = feed(LockDetector(0.3, 10 * NOISE, 3 * NOISE, 3), readings)
+    assert any(drift for _, drift, _ in events) and sum(now for _, _, now in events) == 2
+
+
+def test_a_nan_reading_neither_unlocks_nor_counts_as_a_step_as_with_numpy():
+    det = LockDetector(0.2, 10 * NOISE, 3 * NOISE, 1)
+    det.lock(0.0, np.zeros(6))
+    assert det.update(0.1, [np.nan, 1.0, 0, 0, 0, 0]) is False and det.state == "locked"

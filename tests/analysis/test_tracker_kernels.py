@@ -1,0 +1,91 @@
+"""The tracker's compiled branch-check residual against the Pinocchio calls it replaces."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from hexapod_model.analysis.tracker_kernels import branch_residual, reading_checks
+
+
+def _free_flyer() -> pin.Model:
+    model = pin.Model()
+    model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "platform")
+    return model
+
+
+@pytest.mark.parametrize("step", [0.0, 1e-7, 1e-4, 5e-4, 1e-2, 0.3])
+@pytest.mark.parametrize("turn", [0.0, 1.0, 3.1, 3.14])  # at pi itself the axis sign is a free choice
+def test_branch_residual_matches_pinocchio_difference_and_integrate(step, turn):
+    """``log6(Mm^-1 Ms) - Jinv (l - lhat)`` with ``Mm = M0 (+) sum_j w_j (Mj (-) M0)``, as in Pinocchio.
+
+    History poses ``step`` apart (rad and m), the solved pose turned by ``turn`` rad from the
+    newest one (a far assembly); Pinocchio's own rounding near small angles is ~1e-14.
+    """
+    model = _free_flyer()
+    rng = np.random.default_rng(int(1e4 * step + 10 * turn))
+    for _ in range(50):
+        q0 = pin.randomConfiguration(model, -np.ones(7), np.ones(7))
+        n = int(rng.integers(3, 7))
+        F = np.array([q0] + [pin.integrate(model, q0, rng.normal(0.0, step, 6)) for _ in range(n - 1)])
+        w = rng.normal(0.0, 1.0, n)
+        w /= w.sum()
+        axis = rng.normal(0.0, 1.0, 3)
+        twist = np.r_[rng.normal(0.0, 0.1, 3), turn * axis / np.linalg.norm(axis)] + rng.normal(0.0, step, 6)
+        fs = pin.integrate(model, q0, twist)
+        Jinv, l = rng.normal(0.0, 1.0, (6, 6)), rng.normal(0.0, 1e-3, 6)
+        lhat = l + rng.normal(0.0, 1e-5, 6)
+        dv = np.zeros(6)
+        for j in range(1, n):
+            dv += w[j] * pin.difference(model, q0, F[j])
+        expected = pin.difference(model, pin.integrate(model, q0, dv), fs) - Jinv @ (l - lhat)
+        padded = np.vstack([F, np.full((2, 7), np.nan)])  # rows beyond n are never read
+        e = np.zeros(6)
+        branch_residual(padded, n, w, fs, Jinv, l, lhat, e)
+        assert np.abs(e - expected).max() <= 1e-12 * (1.0 + np.abs(w).sum())
+
+
+def test_branch_residual_is_zero_on_a_constant_twist_motion():
+    """Poses on a constant-twist path, the motion model's weights (sum 1, exact on it): ``e = 0``."""
+    model = _free_flyer()
+    q0 = pin.randomConfiguration(model, -np.ones(7), np.ones(7))
+    xi = np.array([1e-3, -2e-3, 5e-4, 2e-3, -1e-3, 3e-3])
+    F = np.array([pin.integrate(model, q0, -k * xi) for k in range(3)])  # newest first
+    w = np.array([3.0, -3.0, 1.0])  # quadratic extrapolation one step ahead from ages 1, 2, 3
+    fs = pin.integrate(model, q0, xi)
+    e = np.zeros(6)
+    branch_residual(F, 3, w, fs, np.eye(6), np.zeros(6), np.zeros(6), e)
+    assert np.abs(e).max() < 1e-15
+
+
+def test_reading_checks_match_the_numpy_statistics_bitwise():
+    """Frozen runs, ``z = |l - lhat| / sd``, its maximum and ``z . z`` as the tracker computed them with NumPy."""
+    rng = np.random.default_rng(4)
+    frozen = np.zeros(6, dtype=np.int64)
+    last = rng.normal(0.0, 1e-3, 6)
+    for k in range(500):
+        l = last.copy()
+        moved = rng.random(6) < 0.7
+        l[moved] += rng.normal(0.0, 1e-5, int(moved.sum()))
+        lhat = l + rng.normal(0.0, 2e-5, 6) if k % 5 else np.zeros(0)  # every fifth sample unchecked
+        stuck = rng.random(6) < 0.1
+        tol, sd = (0.0, 5e-6) if k % 2 else (3e-6, 2.05e-5)
+        expected_frozen = np.where(np.abs(l - last) <= tol, frozen + 1, 0)
+        z = np.zeros(6)
+        finite, zmax, zz, fmax, any_stuck = reading_checks(l, last, tol, frozen, stuck, lhat, sd, z)
+        assert finite and np.array_equal(frozen, expected_frozen)
+        assert fmax == int(expected_frozen.max()) and any_stuck == bool(stuck.any())
+        if lhat.size:
+            expected = np.abs(l - lhat) / sd
+            assert np.array_equal(z, expected) and zmax == float(expected.max()) and zz == float(expected @ expected)
+        else:
+            assert np.isnan(zmax) and zz == 0.0
+        last = l
+
+
+def test_reading_checks_stop_at_a_non_finite_reading():
+    frozen = np.array([1, 2, 3, 0, 0, 0], dtype=np.int64)
+    l = np.array([0.0, np.nan, 0.0, 0.0, 0.0, 0.0])
+    out = reading_checks(l, np.zeros(6), 0.0, frozen, np.zeros(6, dtype=bool), np.zeros(6), 1.0, np.zeros(6))
+    assert out[0] is False and list(frozen) == [1, 2, 3, 0, 0, 0]  # nothing updated
