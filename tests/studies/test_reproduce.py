@@ -17,7 +17,7 @@ from hexapod_model.cli.main import main
 from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.description.urdf import geometry_to_urdf
 from hexapod_model.exceptions import InputError
-from hexapod_model.studies.reproduce import load_measured, pose_errors, simulate
+from hexapod_model.studies.reproduce import load_measured, pose_errors, simulate, ttest_rel
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "measured.csv"
 REPORT_KEYS = {"translation_mean_mm", "translation_std_mm", "rotation_mean_deg", "rotation_std_deg"}
@@ -151,6 +151,21 @@ def test_reference_noise_shows_in_the_cardan_errors(reference):
     # mean norm of a 3-D Gaussian is 1.596 sigma
     assert 1.2 < np.mean(dp) / (sigma * 1e3) < 2.0
     assert np.mean(dth) > 0
+
+
+@pytest.mark.filterwarnings("ignore:Precision loss:RuntimeWarning")  # scipy on the identical samples
+def test_paired_t_test_equals_scipy_stats():
+    from scipy.stats import ttest_rel as scipy_ttest_rel
+
+    rng = np.random.default_rng(3)
+    cases = [(np.ones(5), np.ones(5)), (2 * np.ones(5), np.ones(5)), (np.arange(2.0), np.arange(2.0) + [0, 1])]
+    for n, scale in ((2, 1.0), (3, 1e-3), (60, 10.0), (3000, 1e-6), (3000, 1.0)):
+        a = np.abs(rng.normal(0, scale, n))
+        cases.append((a, np.abs(a + rng.normal(0.1 * scale, scale, n))))
+    for a, b in cases:
+        with np.errstate(all="ignore"):
+            ref = scipy_ttest_rel(a, b)
+        np.testing.assert_array_equal(ttest_rel(a, b), (ref.statistic, ref.pvalue))
 
 
 def _reproduce(tmp_path, *extra):
