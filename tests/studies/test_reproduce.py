@@ -10,7 +10,7 @@ import pinocchio as pin
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.analysis.full_formulation import ForwardComparison, FullFormulation
+from hexapod_model.analysis.full_formulation import ForwardComparison, FullFormulation, pinv_step
 from hexapod_model.analysis.standard import StandardModel, skew_exp
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.cli.main import main
@@ -115,6 +115,24 @@ def test_full_and_reduced_formulations_give_the_same_pose(reference):
             assert np.all(np.diff(tr.times) > 0) and np.all(tr.conditions >= 1)
             assert tr.step_norms[-1] < 1e-6 * tr.step_norms[0]
     assert fc.full.G.shape[0] == 72 and fc.reduced.G.shape[0] == 36
+
+
+def test_pinv_step_equals_the_svd_pseudo_inverse():
+    rng = np.random.default_rng(4)
+    for rows, decades in ((72, 0.0), (72, 2.0), (36, 1.5), (36, 3.5)):
+        J = (
+            rng.normal(size=(rows, 36))
+            @ np.diag(np.logspace(0, decades, 36))
+            @ np.linalg.qr(rng.normal(size=(36, 36)))[0]
+        )
+        f = rng.normal(size=rows)
+        dx, cond = pinv_step(J, f)
+        np.testing.assert_allclose(dx, -np.linalg.pinv(J) @ f, rtol=1e-8, atol=1e-12)
+        assert cond == pytest.approx(np.linalg.cond(J), rel=1e3 * np.finfo(float).eps * np.linalg.cond(J) ** 2)
+    J[:, 0] = J[:, 1]  # rank deficient: the SVD branch, minimum-norm step
+    dx, cond = pinv_step(J, f)
+    np.testing.assert_allclose(dx, -np.linalg.pinv(J, rcond=1e-14) @ f, rtol=1e-6, atol=1e-12)
+    assert cond > 1e12
 
 
 def test_full_jacobian_matches_finite_differences(reference):
