@@ -147,11 +147,10 @@ class FullFormulation:
         m, d = self.model, self.data
         pin.computeJointJacobians(m, d, q)
         pin.updateFramePlacements(m, d)
-        for s in range(2):
-            for i, f in enumerate(self.frames[s]):
-                M = d.oMf[f]
-                self.Rf[s, i] = M.rotation
-                self.pf[s, i] = M.translation
+        oMf = d.oMf
+        H = np.array([oMf[f].homogeneous for f in self.frames[0] + self.frames[1]])  # (12, 4, 4), one copy each
+        self.Rf[:] = H[:, :3, :3].reshape(2, 6, 3, 3)
+        self.pf[:] = H[:, :3, 3].reshape(2, 6, 3)
         _assemble(
             np.ascontiguousarray(d.J[:, self.free_v]), self.masks, self.Rf, self.pf, self.rows == 12, self.r, self.G
         )
