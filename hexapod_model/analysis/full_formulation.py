@@ -14,8 +14,9 @@ Reduced formulation: the package's :class:`~hexapod_model.solver.NewtonSolver` r
 (3 translation + 3 ``vex(skew(R_tip R_anchor^T))`` rows per leg, 36 in all).
 
 Both are iterated here with the same pseudo-inverse Newton step (Bem et al. (2026) eq. 17),
-``dx = -J^+ f`` from one SVD (which also gives the condition number, eq. 25), and the same
-stop rule (eq. 18: ``||dx|| < step_tol``, or the residual already below ``tol``). Each
+``dx = -J^+ f`` with the condition number of ``J`` (eq. 25), both from the normal equations
+(:func:`pinv_step`; an SVD when ``J`` is near rank-deficient), and the same stop rule (eq. 18:
+``||dx|| < step_tol``, or the residual already below ``tol``). Each
 iteration's ``||dx||`` (mixed metres / radians, eq. 28), condition number and wall time are
 recorded in a :class:`Trace`.
 """
