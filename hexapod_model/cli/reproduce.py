@@ -12,7 +12,8 @@ from ..analysis.conditioning import condition_numbers
 from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
 from ..kinematics.hexapod import load_hexapod
-from ..studies.reproduce import DEFAULT_ENCODER_NOISE, READINGS, format_table, load_measured, run_study, simulate
+from ..studies.paper_table import READINGS, format_table
+from ..studies.reproduce import DEFAULT_ENCODER_NOISE, load_measured, run_study, simulate
 from ._common import note, progress
 
 DESCRIPTION = """\

@@ -30,7 +30,7 @@ from ..description.geometry import HexapodGeometry
 from ..exceptions import InputError
 from ..kinematics.hexapod import Hexapod
 from ..studies.calibrate import simulate
-from .reproduce import PAPER, READINGS, TABLE1_ROWS
+from .paper_table import PAPER, READINGS, TABLE1_ROWS
 
 MODELS = ("spherical", "nominal", "calibrated")
 

@@ -17,7 +17,8 @@ from hexapod_model.cli.main import main
 from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.description.urdf import geometry_to_urdf
 from hexapod_model.exceptions import InputError
-from hexapod_model.studies.reproduce import load_measured, pose_errors, simulate, ttest_rel
+from hexapod_model.studies.paper_table import ttest_rel
+from hexapod_model.studies.reproduce import load_measured, pose_errors, simulate
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "measured.csv"
 REPORT_KEYS = {"translation_mean_mm", "translation_std_mm", "rotation_mean_deg", "rotation_std_deg"}
