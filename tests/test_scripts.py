@@ -121,6 +121,17 @@ def test_eval_figures_script_runs(tmp_path):
     assert len(list(tmp_path.glob("*.png"))) == 5
 
 
+def test_study_commands_benchmark_runs():
+    script = str(ROOT / "benchmarks" / "study_commands.py")
+    for args, words in (
+        (["reproduce", "--poses", "20"], ["traces", "figure: conditioning"]),
+        (["evaluate", "--runs", "1", "--grid", "5"], ["workers", "load average"]),
+    ):
+        out = subprocess.run([sys.executable, script, *args], capture_output=True, text=True, timeout=600)
+        assert out.returncode == 0, out.stderr
+        assert all(w in out.stdout for w in words)
+
+
 def test_baseline_benchmark_runs():
     out = subprocess.run(
         [sys.executable, str(ROOT / "benchmarks" / "baseline_newton.py"), "spherical"],

@@ -14,14 +14,16 @@ Reduced formulation: the package's :class:`~hexapod_model.solver.NewtonSolver` r
 (3 translation + 3 ``vex(skew(R_tip R_anchor^T))`` rows per leg, 36 in all).
 
 Both are iterated here with the same pseudo-inverse Newton step (Bem et al. (2026) eq. 17),
-``dx = -J^+ f`` from one SVD (which also gives the condition number, eq. 25), and the same
-stop rule (eq. 18: ``||dx|| < step_tol``, or the residual already below ``tol``). Each
+``dx = -J^+ f`` with the condition number of ``J`` (eq. 25), both from the normal equations
+(:func:`pinv_step`; an SVD when ``J`` is near rank-deficient), and the same stop rule (eq. 18:
+``||dx|| < step_tol``, or the residual already below ``tol``). Each
 iteration's ``||dx||`` (mixed metres / radians, eq. 28), condition number and wall time are
 recorded in a :class:`Trace`.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -29,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 from numba import njit
+from scipy.linalg.lapack import dsterf, dsytrd
 
 from ..description.model import ClosedLoopModel
 from ..kinematics.solver import NewtonSolver
@@ -145,33 +148,52 @@ class FullFormulation:
         m, d = self.model, self.data
         pin.computeJointJacobians(m, d, q)
         pin.updateFramePlacements(m, d)
-        for s in range(2):
-            for i, f in enumerate(self.frames[s]):
-                M = d.oMf[f]
-                self.Rf[s, i] = M.rotation
-                self.pf[s, i] = M.translation
+        oMf = d.oMf
+        H = np.array([oMf[f].homogeneous for f in self.frames[0] + self.frames[1]])  # (12, 4, 4), one copy each
+        self.Rf[:] = H[:, :3, :3].reshape(2, 6, 3, 3)
+        self.pf[:] = H[:, :3, 3].reshape(2, 6, 3)
         _assemble(
             np.ascontiguousarray(d.J[:, self.free_v]), self.masks, self.Rf, self.pf, self.rows == 12, self.r, self.G
         )
         return self.r.copy(), self.G.copy()
 
 
+def _extreme_eigenvalues(A: np.ndarray) -> tuple[float, float]:
+    """Smallest and largest eigenvalue of the symmetric ``A``.
+
+    LAPACK's ``dsytrd`` (tridiagonal form) and ``dsterf`` (its eigenvalues), the two routines
+    ``np.linalg.eigvalsh`` runs, called directly: 15-20 us less per call on a 36 x 36 matrix
+    (NumPy's checks and dispatch). Equal to ``eigvalsh`` to ``eps * cond(A)`` (both are backward
+    stable; the libraries differ in rounding only).
+    """
+    _, d, e, _, info = dsytrd(A, lower=1)
+    w, info2 = dsterf(d, e)
+    if info or info2:
+        w = np.linalg.eigvalsh(A)
+    return float(w[0]), float(w[-1])
+
+
 def pinv_step(J: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, float]:
     """The step ``dx = -J^+ f`` (eq. 17) and the 2-norm condition number of ``J`` (eq. 25).
 
     For a Jacobian of full column rank and condition below 1e4, from the normal equations:
-    ``J^T J dx = -J^T f``, the condition number from the eigenvalues of ``J^T J`` (the squared
-    singular values), three times cheaper than the SVD of a 72 x 36 Jacobian and equal to it
-    to ``eps * cond^2`` (1e-12 here). Otherwise from the SVD, singular values below
+    ``J^T J dx = -J^T f``, the condition number from the extreme eigenvalues of ``J^T J`` (the
+    squared singular values), several times cheaper than the SVD of a 72 x 36 Jacobian and
+    equal to it to ``eps * cond^2`` (1e-12 here). Otherwise from the SVD, singular values below
     ``1e-14 s_max`` dropped.
     """
     A = J.T @ J
-    w = np.linalg.eigvalsh(A)  # ascending
-    if w[0] > 1e-8 * w[-1]:
-        return -np.linalg.solve(A, J.T @ f), float(np.sqrt(w[-1] / w[0]))
+    lo, hi = _extreme_eigenvalues(A)
+    if lo > 1e-8 * hi:
+        return -np.linalg.solve(A, J.T @ f), math.sqrt(hi / lo)
     U, s, Vt = np.linalg.svd(J, full_matrices=False)
     keep = s > s[0] * 1e-14
     return -(Vt[keep].T @ ((U[:, keep].T @ f) / s[keep])), float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
+
+
+def _norm(x: np.ndarray) -> float:
+    """``np.linalg.norm`` of a real vector (the same ``sqrt(x @ x)``) without its dispatch."""
+    return math.sqrt(x @ x)
 
 
 def pinv_newton(
@@ -200,17 +222,17 @@ def pinv_newton(
     start = time.perf_counter()
     for _ in range(max_iter + 1):
         f, J = evaluate(q)
-        res.append(float(np.linalg.norm(f)))
-        if res[-1] <= tol or len(norms) == max_iter or not np.isfinite(res[-1]):
+        res.append(_norm(f))
+        if res[-1] <= tol or len(norms) == max_iter or not math.isfinite(res[-1]):
             break
         dx, cond = pinv_step(J, f)
         dv[free_v] = dx
         q = pin.integrate(model, q, dv)
         times.append(time.perf_counter() - start)
-        norms.append(float(np.linalg.norm(dx)))
+        norms.append(_norm(dx))
         conds.append(cond)
         if norms[-1] < step_tol:
-            res.append(float(np.linalg.norm(evaluate(q)[0])))
+            res.append(_norm(evaluate(q)[0]))
             break
     return Trace(q, bool(res[-1] <= accept), np.array(times), np.array(norms), np.array(conds), np.array(res))
 

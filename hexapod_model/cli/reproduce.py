@@ -12,8 +12,8 @@ from ..analysis.conditioning import condition_numbers
 from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
 from ..kinematics.hexapod import load_hexapod
-from ..studies.reproduce import DEFAULT_ENCODER_NOISE, format_table, load_measured, run_study, simulate
-from ..studies.table1 import READINGS, format_table1, run_table1
+from ..studies.paper_table import READINGS, format_table
+from ..studies.reproduce import DEFAULT_ENCODER_NOISE, load_measured, run_study, simulate
 from ._common import note, progress
 
 DESCRIPTION = """\
@@ -174,6 +174,7 @@ def _geometric_errors(args: argparse.Namespace, name: str) -> int:
     if args.calibration_poses < 2:
         raise InputError("--calibration-poses", args.calibration_poses, "need at least 2 poses")
     from ..studies.calibrate import nominal_geometry
+    from ..studies.table1 import format_table1, run_table1  # scipy.optimize: only this scenario needs it
 
     report = run_table1(
         nominal_geometry(name),

@@ -21,7 +21,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..files import atomic_save_figure
-from ..studies.reproduce import PAPER
+from ..studies.paper_table import PAPER
 
 COLOURS = {"full": "#d62728", "reduced": "#1f77b4", "standard": "#2ca02c"}
 LABELS = {

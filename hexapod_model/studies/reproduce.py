@@ -33,24 +33,10 @@ from ..exceptions import HexapodError, InputError
 from ..io.tables import LENGTH_COLUMNS, open_table, poses_from_table, write_table
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.rotations import matrix_to_quaternion, rotation_angle
+from .paper_table import summarise
 
 DEFAULT_ENCODER_NOISE = 10e-6  # m, Gaussian sigma on each reading
 DATA_COLUMNS = LENGTH_COLUMNS + ["x", "y", "z", "qx", "qy", "qz", "qw"]
-PAPER: dict[str, dict] = {  # Bem et al. (2026), Table 1 (3000 measured poses)
-    "cardan": {
-        "translation_mean_mm": 0.6205,
-        "translation_std_mm": 0.2609,
-        "rotation_mean_deg": 0.4657,
-        "rotation_std_deg": 0.2417,
-    },
-    "spherical": {
-        "translation_mean_mm": 3.1684,
-        "translation_std_mm": 0.9094,
-        "rotation_mean_deg": 1.0037,
-        "rotation_std_deg": 0.5117,
-    },
-    "t_test": {"translation": {"t": -131.997, "p": "< 0.001"}, "rotation": {"t": -43.974, "p": "< 0.001"}},
-}
 
 
 @dataclass(frozen=True)
@@ -166,69 +152,6 @@ def pose_errors(reference: np.ndarray, estimate: np.ndarray) -> tuple[np.ndarray
     """Eqs. 26-27: translation error (mm) and rotation error (deg) per pose."""
     dp = np.linalg.norm(reference[:, :3, 3] - estimate[:, :3, 3], axis=1) * 1e3
     return dp, np.degrees(rotation_angle(reference[:, :3, :3], estimate[:, :3, :3]))
-
-
-def summarise(err_c: tuple[np.ndarray, np.ndarray], err_s: tuple[np.ndarray, np.ndarray]) -> dict:
-    """The JSON report: statistics of both models and paired t-tests (Cardan minus spherical)."""
-    from scipy.stats import ttest_rel
-
-    def stats(e):
-        return {
-            "translation_mean_mm": float(np.mean(e[0])),
-            "translation_std_mm": float(np.std(e[0], ddof=1)),
-            "rotation_mean_deg": float(np.mean(e[1])),
-            "rotation_std_deg": float(np.std(e[1], ddof=1)),
-        }
-
-    def test(a, b):
-        with np.errstate(all="ignore"):
-            r = ttest_rel(a, b)
-        return {k: (float(v) if np.isfinite(v) else None) for k, v in (("t", r.statistic), ("p", r.pvalue))}
-
-    return {
-        "poses": int(err_c[0].size),
-        "cardan": stats(err_c),
-        "spherical": stats(err_s),
-        "t_test": {"translation": test(err_c[0], err_s[0]), "rotation": test(err_c[1], err_s[1])},
-    }
-
-
-def _num(v: float) -> str:
-    return f"{v:.4f}" if abs(v) >= 1e-3 or v == 0 else f"{v:.3g}"
-
-
-TABLE1_ROWS = (  # label, key of the statistics
-    ("Mean translation error mu [mm]", "translation_mean_mm"),
-    ("Std. dev. translation error sigma [mm]", "translation_std_mm"),
-    ("Mean rotation error mu [deg]", "rotation_mean_deg"),
-    ("Std. dev. rotation error sigma [deg]", "rotation_std_deg"),
-)
-
-
-def format_table(report: dict) -> str:
-    """Bem et al. (2026) Table 1 layout, our numbers beside the paper's."""
-    rows = TABLE1_ROWS
-    w = 40
-    lines = [
-        f"{'Metric':{w}s}{'Cardan-aware':>14s}{'Standard':>12s}   |{'paper: Cardan':>15s}{'Standard':>10s}",
-        "-" * (w + 26) + "   +" + "-" * 25,
-    ]
-    for label, key in rows:
-        lines.append(
-            f"{label:{w}s}{_num(report['cardan'][key]):>14s}{_num(report['spherical'][key]):>12s}   |"
-            f"{PAPER['cardan'][key]:15.4f}{PAPER['spherical'][key]:10.4f}"
-        )
-    for name in ("translation", "rotation"):
-        t, p = report["t_test"][name]["t"], report["t_test"][name]["p"]
-        ours = (
-            "n/a (identical errors)" if t is None else f"t = {t:.3f}, " + ("p < 1e-300" if p == 0 else f"p = {p:.3g}")
-        )
-        lines.append(
-            f"{'Paired t-test (' + name + ')':{w}s}{ours:>26s}   |"
-            f"{'t = ' + format(PAPER['t_test'][name]['t'], '.3f') + ', p < 0.001':>25s}"
-        )
-    lines.append(f"({report['poses']} poses; negative t = Cardan-aware errors smaller)")
-    return "\n".join(lines)
 
 
 def standard_traces(sm: StandardModel, readings: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:

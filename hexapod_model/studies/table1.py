@@ -30,15 +30,9 @@ from ..description.geometry import HexapodGeometry
 from ..exceptions import InputError
 from ..kinematics.hexapod import Hexapod
 from ..studies.calibrate import simulate
-from .reproduce import PAPER, TABLE1_ROWS
+from .paper_table import PAPER, READINGS, TABLE1_ROWS
 
 MODELS = ("spherical", "nominal", "calibrated")
-READINGS = {
-    "ideal": "the model is exact: the paper's errors would be measurement noise alone",
-    "reference-noise": "the paper's 0.62 mm is motion-capture noise (the noise level is fitted to it)",
-    "geometric-errors": "the paper's errors are mostly an uncalibrated fixture: joint centres, axes, "
-    "offsets and encoder zeros off their drawing, plus 0.1 mm / 0.05 deg measurement noise",
-}
 
 
 def _solve(hexa: Hexapod, readings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -10,13 +10,14 @@ import pinocchio as pin
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.analysis.full_formulation import ForwardComparison, FullFormulation
+from hexapod_model.analysis.full_formulation import ForwardComparison, FullFormulation, pinv_step
 from hexapod_model.analysis.standard import StandardModel, skew_exp
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.cli.main import main
 from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.description.urdf import geometry_to_urdf
 from hexapod_model.exceptions import InputError
+from hexapod_model.studies.paper_table import ttest_rel
 from hexapod_model.studies.reproduce import load_measured, pose_errors, simulate
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "measured.csv"
@@ -117,6 +118,24 @@ def test_full_and_reduced_formulations_give_the_same_pose(reference):
     assert fc.full.G.shape[0] == 72 and fc.reduced.G.shape[0] == 36
 
 
+def test_pinv_step_equals_the_svd_pseudo_inverse():
+    rng = np.random.default_rng(4)
+    for rows, decades in ((72, 0.0), (72, 2.0), (36, 1.5), (36, 3.5)):
+        J = (
+            rng.normal(size=(rows, 36))
+            @ np.diag(np.logspace(0, decades, 36))
+            @ np.linalg.qr(rng.normal(size=(36, 36)))[0]
+        )
+        f = rng.normal(size=rows)
+        dx, cond = pinv_step(J, f)
+        np.testing.assert_allclose(dx, -np.linalg.pinv(J) @ f, rtol=1e-8, atol=1e-12)
+        assert cond == pytest.approx(np.linalg.cond(J), rel=1e3 * np.finfo(float).eps * np.linalg.cond(J) ** 2)
+    J[:, 0] = J[:, 1]  # rank deficient: the SVD branch, minimum-norm step
+    dx, cond = pinv_step(J, f)
+    np.testing.assert_allclose(dx, -np.linalg.pinv(J, rcond=1e-14) @ f, rtol=1e-6, atol=1e-12)
+    assert cond > 1e12
+
+
 def test_full_jacobian_matches_finite_differences(reference):
     ff = FullFormulation(reference.closed_loop, tuple(leg.prismatic for leg in reference.closed_loop.legs))
     m = reference.model
@@ -151,6 +170,21 @@ def test_reference_noise_shows_in_the_cardan_errors(reference):
     # mean norm of a 3-D Gaussian is 1.596 sigma
     assert 1.2 < np.mean(dp) / (sigma * 1e3) < 2.0
     assert np.mean(dth) > 0
+
+
+@pytest.mark.filterwarnings("ignore:Precision loss:RuntimeWarning")  # scipy on the identical samples
+def test_paired_t_test_equals_scipy_stats():
+    from scipy.stats import ttest_rel as scipy_ttest_rel
+
+    rng = np.random.default_rng(3)
+    cases = [(np.ones(5), np.ones(5)), (2 * np.ones(5), np.ones(5)), (np.arange(2.0), np.arange(2.0) + [0, 1])]
+    for n, scale in ((2, 1.0), (3, 1e-3), (60, 10.0), (3000, 1e-6), (3000, 1.0)):
+        a = np.abs(rng.normal(0, scale, n))
+        cases.append((a, np.abs(a + rng.normal(0.1 * scale, scale, n))))
+    for a, b in cases:
+        with np.errstate(all="ignore"):
+            ref = scipy_ttest_rel(a, b)
+        np.testing.assert_array_equal(ttest_rel(a, b), (ref.statistic, ref.pvalue))
 
 
 def _reproduce(tmp_path, *extra):
