@@ -27,6 +27,7 @@ from .config import ServiceConfig, geometry_hash
 from .cycle import FixtureCycle
 from .errors import ServiceError
 from .http import HttpEndpoint, Routes
+from .solve import warm_up
 from .store import Store, StoreWriter
 
 log = logging.getLogger(__name__)
@@ -109,6 +110,7 @@ class FixtureService:
             for f in cfg.fixtures
             for k, leg in enumerate(f.legs)
         }
+        self._warm_up()
         self.writer = StoreWriter(self.store)
         self._last_logged = {name: -1e300 for name in self.cycles}
         if self.endpoint is not None:
@@ -123,6 +125,26 @@ class FixtureService:
         self._thread = threading.Thread(target=self._loop, name="hexapod-cycle", daemon=True)
         self._thread.start()
         return self
+
+    def _warm_up(self) -> None:
+        """Compile the kernels a reading set runs before the cycle reads its first frame; drop what queued meanwhile.
+
+        After installation numba compiles for about a minute; frames received during it are
+        discarded (a count is logged): their poses are that old.
+        """
+        t0 = time.monotonic()
+        for f in self.config.fixtures:
+            warm_up(self.hexapods[f.name], f.noise, f.predictor)
+        seconds = time.monotonic() - t0
+        dropped = 0
+        while dropped < 10_000_000 and self._bus is not None and self._bus.recv(timeout=0.0) is not None:
+            dropped += 1
+        if seconds > 1.0 or dropped:
+            log.info(
+                "kernels ready in %.1f s (compiled on a first run); %d frames received meanwhile dropped",
+                seconds,
+                dropped,
+            )
 
     def stop(self) -> None:
         """Stop the cycle, flush the store, close HTTP and (an own) bus; unfreeze the collector's objects."""
