@@ -25,7 +25,7 @@ candidates, never ``converged``. On the compiled path the path is followed in co
 (:func:`.follow.follow`, the same rules); the candidates are always looked for here.
 
 A certified result whose eliminated 6x6 Jacobian ``M`` (leg-reading rates per platform twist)
-has a condition-number bound (:func:`~hexapod_model.kinematics.linalg.schur_solve`) above
+has a condition-number bound (:func:`~hexapod_model.kinematics.structured.schur_solve`) above
 ``NEAR_SINGULAR_FACTOR`` times its home value carries the flag ``near_singular``: it is the
 connected assembly, but another one may lie close by.
 """
@@ -41,7 +41,7 @@ from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP, rescale
 from .solver import NewtonSolver
 
 if TYPE_CHECKING:
-    from .newton import CompiledSolver
+    from .compiled_solver import CompiledSolver
 
 __all__ = ["INTERMEDIATE_TOL", "MAX_SUBSTEPS", "MIN_STEP", "NEAR_SINGULAR_FACTOR", "Outcome", "solve_forward"]
 
@@ -90,7 +90,7 @@ def solve_forward(
             near a singularity is returned flagged ``near_singular`` before the path is tried.
         attempt: the certified first attempt's ``(status, iterations, residual, message)``
             when the caller made it already (the solver's state is that attempt's):
-            :meth:`.newton.CompiledSolver.certified_forward`, which returns it when the attempt
+            :meth:`.compiled_solver.CompiledSolver.certified_forward`, which returns it when the attempt
             did not converge certified.
 
     Returns:
@@ -115,7 +115,7 @@ def solve_forward(
             return _certified(solver, it, res, "not certified: ")
     start[pq] = l0
     h = rescale(solver.theta, False, 1)
-    if solver.compiled_loop:  # a newton.CompiledSolver
+    if solver.compiled_loop:  # a compiled_solver.CompiledSolver
         return _follow_compiled(
             cast("CompiledSolver", solver), start, l0, lengths, tol, max_iter, sign, (plain, first), it, h
         )

@@ -193,7 +193,7 @@ class Hexapod:
             solvers = self._local.solvers = {}
         solver = solvers.get(held)
         if solver is None and self.compiled:
-            from .newton import solver_for  # numba: imported by the first compiled solve
+            from .compiled_solver import solver_for  # numba: imported by the first compiled solve
 
             solver = solvers[held] = solver_for(self.closed_loop, held)
         elif solver is None:

@@ -34,7 +34,7 @@ class KernelSet(NamedTuple):
     copied: Callable
 
 
-_LINALG = ("schur_solve", "block_solve", "lu_factor", "lu_apply")  # from .linalg, the rest from .kernels
+_LINALG = ("block_solve", "lu_factor", "lu_apply")  # from .linalg, schur_solve from .structured
 
 
 @functools.cache
@@ -44,4 +44,6 @@ def kernel_set(compiled: bool = True) -> KernelSet:
 
     k = importlib.import_module(".kernels" if compiled else ".numpy_kernels", __package__)
     la = importlib.import_module(".linalg" if compiled else ".numpy_kernels", __package__)
-    return KernelSet(compiled, *(getattr(la if f in _LINALG else k, f) for f in KernelSet._fields[1:]))
+    st = importlib.import_module(".structured" if compiled else ".numpy_kernels", __package__)
+    home = {f: la for f in _LINALG} | {"schur_solve": st}
+    return KernelSet(compiled, *(getattr(home.get(f, k), f) for f in KernelSet._fields[1:]))

@@ -4,7 +4,7 @@ A :class:`~hexapod_model.kinematics.hexapod.Hexapod` built with ``compiled=False
 these instead of the numba kernels, so a short job (``hexapod fk`` on a few hundred rows) neither
 imports numba nor waits for its compilation; results agree with the compiled kernels to rounding
 (same equations, same pivoting, same pivot ratios, signs and condition bounds: see the docstrings
-of :mod:`.kernels` and :func:`.linalg.schur_solve`, which these mirror). Arrays are the same
+of :mod:`.kernels` and :func:`.structured.schur_solve`, which these mirror). Arrays are the same
 buffers, filled in place; each function loops in Python only over the six legs or the rows of a
 small factorisation, vectorised over the legs where it can.
 """
@@ -155,7 +155,7 @@ def block_solve(G, r, rows, block_cols, LUb, piv, rb, xb, x):
 
 
 def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w):
-    """Newton step with each leg eliminated (:func:`.linalg.schur_solve`): ``(signed ratio, kappa)``.
+    """Newton step with each leg eliminated (:func:`.structured.schur_solve`): ``(signed ratio, kappa)``.
 
     The pivot ratios, determinant signs and condition bound come from the same pivoted
     factorisations as the compiled kernel; the solves are LAPACK's (``numpy.linalg.solve``).

@@ -104,7 +104,7 @@ class NewtonSolver:
     returned by ``pin.integrate``.
     """
 
-    #: whether :meth:`iterate` runs as one compiled call (:class:`.newton.CompiledSolver`)
+    #: whether :meth:`iterate` runs as one compiled call (:class:`.compiled_solver.CompiledSolver`)
     compiled_loop = False
 
     def __init__(self, clm: ClosedLoopModel, held_joints: tuple[int, ...], kernels: KernelSet | None = None):

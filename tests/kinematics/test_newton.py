@@ -13,7 +13,7 @@ from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.description.urdf import geometry_to_urdf
 from hexapod_model.kinematics.assembly import Outcome
 from hexapod_model.kinematics.checks import LIMIT_SLACK
-from hexapod_model.kinematics.newton import CompiledSolver, solver_for
+from hexapod_model.kinematics.compiled_solver import CompiledSolver, solver_for
 from hexapod_model.kinematics.solver import NewtonSolver
 
 from ..conftest import PRESET_NAMES, hexapod
