@@ -80,7 +80,7 @@ class CompiledSolver(NewtonSolver):
         if self.packed is None:  # NewtonSolver.__init__'s solve at home: done on the compiled path below
             return "converged", 0, 0.0, ""
         offset = self._no_offset if offset is None else offset
-        q0 = q0 if q0.dtype == np.float64 and q0.flags.c_contiguous else np.ascontiguousarray(q0, dtype=float)
+        q0 = _contiguous(q0)
         # one compiled signature: callers pass ints or floats (det_sign, scale, ...)
         code, it, norm, ratio, _ = self._call(
             q0, self._no_joints, float(tol), int(max_iter), float(sign), offset, float(scale), bool(certify),
@@ -113,6 +113,8 @@ class CompiledSolver(NewtonSolver):
             ``(status, iterations, residual, message)``, for :func:`.assembly.solve_forward` to
             go on from (its ``attempt``). The solver's state is :meth:`iterate`'s either way.
         """
+        # one compiled signature: contiguous float64 (a strided or float32 array would compile another)
+        start, joints = _contiguous(start), _contiguous(joints)
         arrays = self._outputs(start.shape[0])
         code, it, norm, ratio, bad = self._call(
             start, joints, tol, max_iter, float(sign), self._no_offset, 0.0, True, True, limits, home, arrays
@@ -132,7 +134,7 @@ class CompiledSolver(NewtonSolver):
         """
         if self.held_pos is not None:
             return None
-        q0 = q0 if q0.dtype == np.float64 and q0.flags.c_contiguous else np.ascontiguousarray(q0, dtype=float)
+        q0 = _contiguous(q0)
         arrays = self._outputs(q0.shape[0])
         code, it, norm, ratio, bad = self._call(
             q0, self._no_joints, tol, max_iter, 0.0, self._no_offset, 0.0, False, True, limits, home, arrays
@@ -149,6 +151,11 @@ class CompiledSolver(NewtonSolver):
         )  # fmt: skip  # frames and residual at q; the solver's state untouched
         jacobian(*self._jac_args)
         return self.r.copy(), self.G.copy()
+
+
+def _contiguous(a: np.ndarray) -> np.ndarray:
+    """``a`` as a C-contiguous float64 array (itself when it is one already)."""
+    return a if a.dtype == np.float64 and a.flags.c_contiguous else np.ascontiguousarray(a, dtype=np.float64)
 
 
 def solver_for(clm: ClosedLoopModel, held_joints: tuple[int, ...]) -> NewtonSolver:

@@ -265,3 +265,25 @@ def test_one_call_inverse_equals_the_python_path(name):
             assert (solver.q_aug.tobytes(), solver.theta, solver.det_sign, solver.certified) == state
             statuses.add(fast.status)
     assert {"converged", "max_iterations", "out_of_limits"} <= statuses
+
+
+def test_one_call_solves_take_strided_inputs_without_a_new_compiled_signature():
+    # a column of a table (strided) or a hand-made Solution's view: the same answers, through the
+    # one compiled signature (another would compile for a minute on a first run)
+    from hexapod_model.kinematics.newton import solve_blocks, solve_schur
+
+    hexa = hexapod("reference")
+    good = hexa.forward(np.full(6, 0.01))
+    hexa.inverse(good.pose)  # both entries compiled (or loaded) with contiguous arrays
+    table = np.zeros((6, 3))
+    table[:, 1] = np.full(6, 0.012)
+    wide = np.zeros((hexa.nq, 2))
+    wide[:, 0] = good.q
+    guess = hm.Solution(good.pose, wide[:, 0], good.lengths, "converged", 0, 0.0, det_sign=good.det_sign)
+    signatures = len(solve_schur.signatures), len(solve_blocks.signatures)
+    assert not table[:, 1].flags.c_contiguous and not guess.q.flags.c_contiguous
+    a = hexa.forward(table[:, 1], guess)
+    b = hexa.forward(np.full(6, 0.012), good)
+    assert _fields(a) == _fields(b)
+    assert hexa.inverse(b.pose, guess).q.tobytes() == hexa.inverse(b.pose, good).q.tobytes()
+    assert (len(solve_schur.signatures), len(solve_blocks.signatures)) == signatures
