@@ -67,13 +67,17 @@ class CompiledSolver(NewtonSolver):
             self.home_sign, self.home_kappa = self.sign, self.kappa
 
     def _call(self, start, joints, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays):
-        """Call the step's entry (:func:`solve_schur` / :func:`solve_blocks`); set the solver's state as ``iterate``."""
+        """Call the step's entry (:func:`solve_schur` / :func:`solve_blocks`); set the solver's state as ``iterate``.
+
+        Returns ``(status, iterations, residual, message, first joint outside its limits or -1)``.
+        """
         out = self._kernel(
             start, joints, self._prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
         )
         code, it, norm, ratio, self.theta, self.det_sign, self.certified, bad = out
         self.sign, self.kappa = self._state.tolist()
-        return code, it, norm, ratio, bad
+        status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
+        return status, it, norm, message, bad
 
     def iterate(self, q0, tol, max_iter, sign=0.0, offset=None, scale=0.0, certify=False):
         """:meth:`.solver.NewtonSolver.iterate`, compiled (same arguments, results and state)."""
@@ -82,11 +86,10 @@ class CompiledSolver(NewtonSolver):
         offset = self._no_offset if offset is None else offset
         q0 = _contiguous(q0)
         # one compiled signature: callers pass ints or floats (det_sign, scale, ...)
-        code, it, norm, ratio, _ = self._call(
+        status, it, norm, message, _ = self._call(
             q0, self._no_joints, float(tol), int(max_iter), float(sign), offset, float(scale), bool(certify),
             False, self._no_limits, self._home, self._scratch,
         )  # fmt: skip
-        status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
         return status, it, norm, message
 
     def _outputs(self, nq: int) -> tuple:
@@ -116,12 +119,11 @@ class CompiledSolver(NewtonSolver):
         # one compiled signature: contiguous float64 (a strided or float32 array would compile another)
         start, joints = _contiguous(start), _contiguous(joints)
         arrays = self._outputs(start.shape[0])
-        code, it, norm, ratio, bad = self._call(
+        status, it, norm, message, bad = self._call(
             start, joints, tol, max_iter, float(sign), self._no_offset, 0.0, True, True, limits, home, arrays
         )
-        if code == CONVERGED and self.certified:
+        if status == "converged" and self.certified:
             return arrays[5], arrays[6], arrays[7], it, norm, bad
-        status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
         return status, it, norm, message
 
     def run_checked(
@@ -136,15 +138,14 @@ class CompiledSolver(NewtonSolver):
             return None
         q0 = _contiguous(q0)
         arrays = self._outputs(q0.shape[0])
-        code, it, norm, ratio, bad = self._call(
+        status, it, norm, message, bad = self._call(
             q0, self._no_joints, tol, max_iter, 0.0, self._no_offset, 0.0, False, True, limits, home, arrays
         )
-        status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
         return (arrays[5], status, it, norm, arrays[7], message), arrays[6], bad
 
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``, compiled."""
-        q = np.ascontiguousarray(q, dtype=float)
+        q = _contiguous(q)
         self._kernel(
             q, self._no_joints, self._prismatic_q, np.inf, 0, 0.0, self._no_offset, 0.0, False, False,
             self._no_limits, self._home, self._scratch,

@@ -40,8 +40,6 @@ from .outcomes import CONVERGED, FLIPPED, NO_CONVERGENCE, SINGULAR, START_SINGUL
 from .packing import unpack_floats, unpack_ints, unpack_iwork, unpack_work
 from .structured import blocks_solve, schur_solve
 
-# outcome codes of :func:`iterate` (:func:`outcome` turns them into statuses and messages)
-
 
 @njit(cache=True, inline="always")
 def _integrate(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat):
@@ -142,7 +140,7 @@ def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
 @njit(cache=True, inline="always")
 def _solve(
     schur, start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
-):  # noqa: E501
+):
     """:func:`_iterate` from ``start`` (prismatic joints set to ``joints`` unless empty), and a ``Solution``'s arrays.
 
     ``arrays = (ints, floats, work, iwork, q_solver, q, pose, G)``. The iteration runs from
