@@ -205,12 +205,18 @@ class Hexapod:
         _, G = self._solver(self._held_forward).evaluate(self.closed_loop.q_home)
         return check_home_conditioning(G, self.closed_loop.source, HOME_CONDITION_LIMIT)
 
-    def _start(self, guess) -> np.ndarray:
+    def _start(self, guess, copy: bool = True) -> np.ndarray:
+        """The configuration to start from: home, a :class:`Solution`'s ``q`` or a checked guess.
+
+        With ``copy=False`` home's or the Solution's own array, for a caller that does not write it.
+        """
         if guess is None:
-            return self.closed_loop.q_home.copy()
-        if isinstance(guess, Solution) and isinstance(guess.q, np.ndarray) and guess.q.shape == (self.nq,):
-            return guess.q.copy()
-        return check_guess(guess, self.nq, self.closed_loop.platform_q)
+            q = self.closed_loop.q_home
+        elif isinstance(guess, Solution) and isinstance(guess.q, np.ndarray) and guess.q.shape == (self.nq,):
+            q = guess.q
+        else:
+            return check_guess(guess, self.nq, self.closed_loop.platform_q)  # a new array
+        return q.copy() if copy else q
 
     # ----- solves -----
     def forward(
@@ -247,19 +253,17 @@ class Hexapod:
         solver = self._solver(self._held_forward)
         sign = solver.home_sign if guess is None else getattr(guess, "det_sign", 0)
         joints = lengths if self._encoder is None else self.joints_of(lengths)
+        start = self._start(guess, copy=False)  # solve_forward writes its own copy
         fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
         attempt = None
         if fast and solver.compiled_loop:
             # the certified first attempt in one compiled call; solve_forward goes on from it
-            g = guess.q if isinstance(guess, Solution) else None
-            start = g if isinstance(g, np.ndarray) and g.shape == (self.nq,) else self._start(guess)
             done = solver.certified_forward(start, joints, tol, max_iter, sign, self._limits, self._home_h)  # type: ignore[attr-defined]
             if len(done) == 6:
                 q, pose, jac, it, res, bad = done
                 return self._solution(assembly.certified_outcome(solver, q, jac, it, res), check, pose, bad)
             attempt = done
-        start = self._start(guess)
-        return self._finish(solver, start, tol, max_iter, check, (joints, sign, guess is not None, attempt))
+        return self._finish(solver, start.copy(), tol, max_iter, check, (joints, sign, guess is not None, attempt))
 
     def inverse(
         self,
