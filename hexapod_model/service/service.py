@@ -133,8 +133,11 @@ class FixtureService:
         discarded (a count is logged): their poses are that old.
         """
         t0 = time.monotonic()
+        seen = set()  # numba compiles once per process: one throwaway tracker per hexapod and predictor
         for f in self.config.fixtures:
-            warm_up(self.hexapods[f.name], f.noise, f.predictor)
+            if (id(self.hexapods[f.name]), f.predictor) not in seen:
+                seen.add((id(self.hexapods[f.name]), f.predictor))
+                warm_up(self.hexapods[f.name], f.noise, f.predictor)
         seconds = time.monotonic() - t0
         dropped = 0
         while dropped < 10_000_000 and self._bus is not None and self._bus.recv(timeout=0.0) is not None:
