@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hexapod_model.analysis.calibration_frames import error_stats, pose_errors, predict
+from hexapod_model.calibration.frames import error_stats, pose_errors, predict
 from hexapod_model.description.presets import get_preset
 from hexapod_model.kinematics.hexapod import Hexapod
 from hexapod_model.studies.calibrate import run_calibration, simulate

@@ -23,7 +23,7 @@ from baseline_newton import baseline_forward
 
 from hexapod_model import Hexapod
 from hexapod_model.analysis.trajectories import box_poses
-from hexapod_model.kinematics.solver import NewtonSolver
+from hexapod_model.kinematics.newton.solver import NewtonSolver
 from hexapod_model.studies.bench import BENCH_TOL, trajectory_readings
 
 

@@ -36,10 +36,10 @@ import numpy as np
 import pinocchio as pin
 
 from hexapod_model import Hexapod
-from hexapod_model.analysis.tracking import characteristic_length, pose_distance
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.description.presets import PRESETS
-from hexapod_model.kinematics.solver import NewtonSolver
+from hexapod_model.kinematics.newton.solver import NewtonSolver
+from hexapod_model.tracking.tracker import characteristic_length, pose_distance
 
 SAME_POSE = 1e-6  # m, rotations scaled by the characteristic length
 KEYS = (

@@ -20,8 +20,8 @@ import numpy as np
 
 from hexapod_model import Hexapod
 from hexapod_model.analysis.three_six import MAX_ASSEMBLIES, ThreeSixFK
-from hexapod_model.analysis.tracking import pose_distance
 from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.tracking.tracker import pose_distance
 
 
 def main(argv=None) -> int:

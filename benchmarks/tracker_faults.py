@@ -29,11 +29,11 @@ import numpy as np
 
 from hexapod_model import Hexapod
 from hexapod_model.analysis.sensitivity import SensitivityEvaluator
-from hexapod_model.analysis.tracking import Tracker, characteristic_length
 from hexapod_model.analysis.trajectories import trajectory_poses
 from hexapod_model.description.presets import PRESETS
 from hexapod_model.studies.track import true_readings
 from hexapod_model.studies.track_faults import run_faults
+from hexapod_model.tracking.tracker import Tracker, characteristic_length
 
 STUCK_SAMPLES = 100
 

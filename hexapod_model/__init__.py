@@ -31,7 +31,7 @@ from .exceptions import (
 )
 from .kinematics.batch import BatchResult
 from .kinematics.hexapod import Hexapod, load_hexapod
-from .kinematics.solver import STATUSES, Solution
+from .kinematics.newton.solver import STATUSES, Solution
 
 __all__ = [
     "AssemblyError",

@@ -24,12 +24,12 @@ import numpy as np  # noqa: E402
 
 import hexapod_model as hm  # noqa: E402
 from hexapod_model.analysis.three_six import ThreeSixFK  # noqa: E402
-from hexapod_model.analysis.tracking import Tracker, pose_distance  # noqa: E402
 from hexapod_model.kinematics.rotations import rpy_to_matrix  # noqa: E402
 from hexapod_model.plots.evaluate import plot_sections  # noqa: E402
 from hexapod_model.plots.track import plot_run  # noqa: E402
 from hexapod_model.studies.evaluate import Settings, run_evaluation  # noqa: E402
 from hexapod_model.studies.track import simulate  # noqa: E402
+from hexapod_model.tracking.tracker import Tracker, pose_distance  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 IMG = ROOT / "docs" / "img"

@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..analysis.full_formulation import ForwardComparison
 from ..kinematics.hexapod import Hexapod
+from .full_formulation import ForwardComparison
 
 SCALINGS = ("si", "mm", "rotation_rows_over_sqrt2", "unit_rows")
 

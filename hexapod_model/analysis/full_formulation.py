@@ -34,7 +34,7 @@ from numba import njit
 from scipy.linalg.lapack import dsterf, dsytrd
 
 from ..description.model import ClosedLoopModel
-from ..kinematics.solver import NewtonSolver
+from ..kinematics.newton.solver import NewtonSolver
 
 
 @dataclass(frozen=True)

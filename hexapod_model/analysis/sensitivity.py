@@ -4,7 +4,7 @@ The tracker's uncertainty and singularity figures come without an SVD of the 36-
 constraint Jacobian.
 From the closure Jacobian ``G`` of all joints at a solved configuration (one
 ``pin.computeJointJacobians`` call), each leg's joints are eliminated exactly as in the
-solver's Schur step (:func:`hexapod_model.kinematics.structured.schur_solve`): with ``L_i`` the
+solver's Schur step (:func:`hexapod_model.kinematics.newton.structured.schur_solve`): with ``L_i`` the
 square block of leg ``i``'s joints and ``L_i^T n_i = e_reading``, ``n_i`` annihilates the
 passive columns and ``n_i . c_i = 1``, so row ``i`` of the eliminated Jacobian is
 ``-n_i^T A_i`` (``A_i`` the platform columns). ``dl = J xi`` with ``xi`` the platform
@@ -27,9 +27,9 @@ import numpy as np
 from numba import njit
 
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.kernels import _rotation_weights
-from ..kinematics.linalg import _block, _factor, _solve_transposed, lu_apply, lu_apply_transposed, lu_factor
-from ..kinematics.solver import NewtonSolver
+from ..kinematics.newton.kernels import _rotation_weights
+from ..kinematics.newton.linalg import _block, _factor, _solve_transposed, lu_apply, lu_apply_transposed, lu_factor
+from ..kinematics.newton.solver import NewtonSolver
 
 _JACOBI_SWEEPS = 30
 
@@ -158,7 +158,7 @@ def measure_solved(J, leg_cols, held_pos, ff_cols, rows, p, E, length, blocks, m
 
     ``J, leg_cols, held_pos, ff_cols, rows, p, E`` are the direct-kinematics solver's (its
     held joint per leg is the measured one): the leg blocks ``L_i`` and platform columns
-    ``A_i`` are built as :func:`~hexapod_model.kinematics.structured.schur_solve` builds them,
+    ``A_i`` are built as :func:`~hexapod_model.kinematics.newton.structured.schur_solve` builds them,
     so no ``computeJointJacobians`` and no full closure Jacobian. ``blocks`` (7, rows, 6)
     is a work buffer. Returns ``(trace_t, trace_r, cond, det)``.
     """

@@ -33,7 +33,7 @@ from numba import njit
 
 from ..description.geometry import HexapodGeometry
 from ..exceptions import GeometryError, InputError, UrdfError
-from ..kinematics.linalg import lu_apply, lu_factor
+from ..kinematics.newton.linalg import lu_apply, lu_factor
 
 
 def skew_exp(theta: np.ndarray) -> np.ndarray:

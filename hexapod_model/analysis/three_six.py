@@ -42,7 +42,7 @@ import numpy as np
 
 from ..description.geometry import HexapodGeometry
 from ..exceptions import GeometryError, InputError, WorkspaceError
-from .tracking import pose_distance
+from ..kinematics.rotations import pose_distance
 
 MAX_ASSEMBLIES = 16  # roots of the order-8 trigonometric polynomial in psi_0
 ACCEPT = 1e-12  # m^2: largest eq. 9 error of a returned assembly (about 1e-11 m in distance)

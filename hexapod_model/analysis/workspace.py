@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.solver import Solution
+from ..kinematics.newton.solver import Solution
 from .jacobian import evaluate_jacobian, leg_jacobian
 
 

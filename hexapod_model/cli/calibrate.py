@@ -9,8 +9,8 @@ import math
 import sys
 from pathlib import Path
 
-from ..analysis.calibration_frames import Noise
-from ..analysis.calibration_planning import plan_poses
+from ..calibration.frames import Noise
+from ..calibration.planning import plan_poses
 from ..description.geometry_toml import save_geometry
 from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path

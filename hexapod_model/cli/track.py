@@ -8,11 +8,11 @@ import json
 import sys
 from pathlib import Path
 
-from ..analysis.tracker_checks import DEFAULT_READING_NOISE
-from ..analysis.tracking import PREDICTORS
 from ..files import atomic_write_text, check_output_path
 from ..io.tables import LENGTH_COLUMNS, column, read_table, write_table
 from ..studies.track import SPEEDS, TRACK_LOG_COLUMNS, run_table, simulate, track_log
+from ..tracking.checks import DEFAULT_READING_NOISE
+from ..tracking.tracker import PREDICTORS
 from ._common import add_hexapod_argument, hexapod_of, note, progress
 
 DESCRIPTION = """\

@@ -12,7 +12,7 @@ from ..exceptions import HexapodError, InputError, ViewError
 from ..files import check_output_path
 from ..io.tables import LENGTH_COLUMNS, open_table, pose_input_columns, poses_from_table
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.solver import Solution
+from ..kinematics.newton.solver import Solution
 from ._common import add_hexapod_argument, hexapod_of
 
 

@@ -11,8 +11,8 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
-from ..description.geometry import HexapodGeometry
 from ..files import atomic_write_text
+from .geometry import HexapodGeometry
 
 
 def compact(geom: HexapodGeometry) -> HexapodGeometry:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..description.geometry import HexapodGeometry
+from .geometry import HexapodGeometry
 
 PERPENDICULAR = 1e-12  # |a . w| below which a real axis counts as perpendicular to the leg
 MAX_ITERATIONS = 200

@@ -29,9 +29,9 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 
-from ..description.geometry import HexapodGeometry
-from ..description.urdf import format_number, geometry_to_urdf, read_closures
 from ..exceptions import UrdfError
+from .geometry import HexapodGeometry
+from .urdf import format_number, geometry_to_urdf, read_closures
 
 #: closure constraint softness (MuJoCo ``solref``: time constant s, damping ratio); see docs/mjcf.md
 EQUALITY_SOLREF = (0.005, 1.0)

@@ -28,9 +28,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..description.model import ClosedLoopModel, same_placement
-from ..description.urdf import Closure
 from ..exceptions import MjcfError, UrdfError
+from .model import ClosedLoopModel, same_placement
+from .urdf import Closure
 
 MJCF_SUFFIXES = (".xml", ".mjcf")  # file names that Hexapod.load reads as MJCF
 _KINDS = {"weld": "6d", "connect": "3d"}

@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..description.geometry import HexapodGeometry, LegGeometry
-from ..description.model import ClosedLoopModel
-from ..description.urdf import geometry_to_urdf
 from ..exceptions import GeometryError, UrdfError
+from .geometry import HexapodGeometry, LegGeometry
+from .model import ClosedLoopModel
+from .urdf import geometry_to_urdf
 
 LAYOUT = ("R", "R", "R", "P", "R", "R")
 

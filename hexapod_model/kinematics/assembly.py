@@ -25,7 +25,7 @@ candidates, never ``converged``. On the compiled path the path is followed in co
 (:func:`.follow.follow`, the same rules); the candidates are always looked for here.
 
 A certified result whose eliminated 6x6 Jacobian ``M`` (leg-reading rates per platform twist)
-has a condition-number bound (:func:`~hexapod_model.kinematics.structured.schur_solve`) above
+has a condition-number bound (:func:`~hexapod_model.kinematics.newton.structured.schur_solve`) above
 ``NEAR_SINGULAR_FACTOR`` times its home value carries the flag ``near_singular``: it is the
 connected assembly, but another one may lie close by.
 """
@@ -37,11 +37,11 @@ from typing import TYPE_CHECKING, NamedTuple, cast
 import numpy as np
 import pinocchio as pin
 
-from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP, rescale
-from .solver import NewtonSolver
+from .newton.path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP, rescale
+from .newton.solver import NewtonSolver
 
 if TYPE_CHECKING:
-    from .compiled_solver import CompiledSolver
+    from .newton.compiled import CompiledSolver
 
 __all__ = ["INTERMEDIATE_TOL", "MAX_SUBSTEPS", "MIN_STEP", "NEAR_SINGULAR_FACTOR", "Outcome", "solve_forward"]
 
@@ -180,7 +180,7 @@ def _follow_compiled(
     h: float,
 ) -> Outcome:
     """:func:`_follow` on the compiled path (:func:`.follow.follow`); the candidates, if any, here."""
-    from .follow import follow  # numba: a compiled solver's
+    from .newton.follow import follow  # numba: a compiled solver's
 
     first = tried[1] if tried[1] is not None else start
     x = np.empty_like(start)

@@ -20,8 +20,8 @@ import numpy as np
 from ..exceptions import HexapodError, InputError
 from .assembly import NEAR_SINGULAR_FACTOR
 from .checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance
-from .outcomes import INVALID_INPUT, OUT_OF_LIMITS, outcome
-from .solver import Solution
+from .newton.outcomes import INVALID_INPUT, OUT_OF_LIMITS, outcome
+from .newton.solver import Solution
 
 Hexapod = Any  # a hexapod.Hexapod (this module is below it: hexapod.py imports it)
 
@@ -190,7 +190,7 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, sla
     solver = hexa._solver(hexa._held_forward)
     if not solver.compiled_loop:
         return _per_row(hexa, solve, rows, guess, warm, retry, True)
-    from .batch_kernels import forward_rows  # numba: only for a compiled solver
+    from .newton.batch_kernels import forward_rows  # numba: only for a compiled solver
 
     start = hexa._start(guess)  # a bad guess raises, as forward would on every row
     sign = solver.home_sign if guess is None else float(getattr(guess, "det_sign", 0))
@@ -252,7 +252,7 @@ def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter, slack:
     solver = hexa._solver(hexa._held_inverse)
     if not solver.compiled_loop:
         return _per_row(hexa, solve, rows, guess, warm, retry, False)
-    from .batch_kernels import inverse_rows  # numba: only for a compiled solver
+    from .newton.batch_kernels import inverse_rows  # numba: only for a compiled solver
 
     out = _outputs(len(rows), hexa.nq)
     settings = (tol, max_iter, POSE_TOLERANCE, MAX_POSITION)

@@ -16,8 +16,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import GeometryError, InputError
-from . import numpy_kernels
-from .solver import Solution
+from .newton import numpy_kernels
+from .newton.solver import Solution
 
 POSE_TOLERANCE = 1e-6  # max deviation of a pose from a rigid transform, of a start quaternion from unit norm
 MAX_POSITION = 1e6  # m: largest platform position coordinate accepted (beyond it the residual loses every digit)

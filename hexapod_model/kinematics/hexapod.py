@@ -36,8 +36,8 @@ from .checks import (
     check_tolerance,
     check_vector,
 )
-from .kernel_sets import kernel_set
-from .solver import NewtonSolver, Solution
+from .newton.kernel_sets import kernel_set
+from .newton.solver import NewtonSolver, Solution
 
 DEFAULT_TOL = 1e-12  # closure residual (m, rad): pose errors stay below 1e-9 on every preset
 DEFAULT_MAX_ITER = 20
@@ -59,7 +59,7 @@ class Hexapod:
     each thread solves with solver buffers of its own.
 
     ``compiled=False`` (every constructor takes it) solves with the NumPy kernels instead of the
-    numba-compiled ones (:mod:`~hexapod_model.kinematics.kernel_sets`): the same answers, several
+    numba-compiled ones (:mod:`~hexapod_model.kinematics.newton.kernel_sets`): the same answers, several
     times slower per solve, but no numba import (~1 s, 130 MB) nor first compilation (~20 s).
     """
 
@@ -193,7 +193,7 @@ class Hexapod:
             solvers = self._local.solvers = {}
         solver = solvers.get(held)
         if solver is None and self.compiled:
-            from .compiled_solver import solver_for  # numba: imported by the first compiled solve
+            from .newton.compiled import solver_for  # numba: imported by the first compiled solve
 
             solver = solvers[held] = solver_for(self.closed_loop, held)
         elif solver is None:

@@ -6,7 +6,7 @@ same as Pinocchio's ``pin.rpy``). Quaternions are ``(qx, qy, qz, qw)``, as in Pi
 ``XYZQUAT`` and ROS. Roll-pitch-yaw and quaternions are closed forms in numpy (the ``hexapod
 fk`` / ``ik`` path imports no scipy); the other Euler orders use scipy's ``Rotation``, imported
 when first needed. The solver's own pose <-> free-flyer conversions are compiled kernels
-(:mod:`hexapod_model.kinematics.kernels`).
+(:mod:`hexapod_model.kinematics.newton.kernels`).
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..exceptions import InputError
@@ -194,3 +195,10 @@ def ypr_to_matrix(yaw: ArrayLike, pitch: ArrayLike, roll: ArrayLike) -> np.ndarr
 def matrix_to_ypr(R: ArrayLike) -> np.ndarray:
     """(..., 3) ``yaw, pitch, roll`` (rad) of :func:`ypr_to_matrix`, pitch in [-pi/2, pi/2]."""
     return matrix_to_euler("zyx", R)
+
+
+def pose_distance(Ta: np.ndarray, Tb: np.ndarray, length: float) -> float:
+    """Distance ``sqrt(|dt|^2 + (length * angle)^2)`` between two 4x4 poses (m)."""
+    M = pin.SE3(Ta[:3, :3], Ta[:3, 3]).inverse() * pin.SE3(Tb[:3, :3], Tb[:3, 3])
+    xi = pin.log6(M).vector
+    return float(np.hypot(np.linalg.norm(Ta[:3, :3] @ xi[:3]), length * np.linalg.norm(xi[3:])))

@@ -17,10 +17,10 @@ from pathlib import Path
 
 import can
 
-from ..analysis.tracking import PREDICTORS
 from ..description.presets import PRESETS
 from ..exceptions import HexapodError
 from ..kinematics.hexapod import Hexapod
+from ..tracking.tracker import PREDICTORS
 from .codec import FrameLayout, LegCodec
 from .errors import ConfigError, Table
 

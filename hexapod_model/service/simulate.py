@@ -22,7 +22,7 @@ import pinocchio as pin
 
 from ..exceptions import HexapodError
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.solver import Solution
+from ..kinematics.newton.solver import Solution
 from .config import FixtureConfig, ServiceConfig
 from .errors import FrameError
 from .simconfig import SimConfig, SimFixture

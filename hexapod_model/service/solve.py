@@ -4,7 +4,7 @@ The cycle (:mod:`hexapod_model.service.cycle`) never calls the tracker directly:
 :class:`PoseSolver` — ``step(readings, instant)`` per reading set it solves (``instant``: the
 sampling instant's number, so instants without a solved set are known), ``solve_once(readings, q)``
 for a lock pose — and gets a :class:`SolveOutcome`. Only this module knows the tracker's API
-(:class:`hexapod_model.analysis.tracking.Tracker`, whose statistical, self-clearing checks
+(:class:`hexapod_model.tracking.tracker.Tracker`, whose statistical, self-clearing checks
 judge every sample against the configured reading noise; see docs/evaluate.md).
 
 * An instant without a solved set (lost frames, a faulty encoder, ...) is given to the tracker
@@ -26,9 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..analysis.sensitivity import SensitivityEvaluator
-from ..analysis.tracking import Tracker, characteristic_length
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.solver import Solution
+from ..kinematics.newton.solver import Solution
+from ..tracking.tracker import Tracker, characteristic_length
 
 _UNREADABLE = np.full(6, np.nan)
 

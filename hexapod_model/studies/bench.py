@@ -14,9 +14,9 @@ import time
 
 import numpy as np
 
-from ..analysis.tracking import characteristic_length
 from ..analysis.trajectories import box_poses, trajectory_poses
 from ..kinematics.hexapod import Hexapod
+from ..tracking.tracker import characteristic_length
 
 BENCH_TOL = 1e-10  # closure residual of every timed solve (the figure)
 TARGETS_US = {"warm_fk": 50.0, "cold_fk": 1000.0, "ik": 100.0}

@@ -23,13 +23,13 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..analysis.calibration import Identification, MeasuredPoses, identify
-from ..analysis.calibration_frames import Noise, pose_errors, predict
-from ..analysis.calibration_gauge import regauge
-from ..analysis.calibration_parameters import ParameterSet
-from ..analysis.calibration_validation import Validation, cross_validate
 from ..analysis.standard import skew_exp
 from ..analysis.trajectories import box_poses
+from ..calibration.frames import Noise, pose_errors, predict
+from ..calibration.gauge import regauge
+from ..calibration.identify import Identification, MeasuredPoses, identify
+from ..calibration.parameters import ParameterSet
+from ..calibration.validation import Validation, cross_validate
 from ..description.geometry import HexapodGeometry
 from ..description.geometry_toml import save_geometry
 from ..description.urdf_geometry import geometry_of_urdf
@@ -37,7 +37,7 @@ from ..exceptions import InputError
 from ..files import atomic_write_text
 from ..io.tables import open_table
 from ..kinematics.hexapod import Hexapod, load_hexapod
-from ..studies.reproduce import DATA_COLUMNS, StudyInput, load_measured, save_measured
+from .reproduce import DATA_COLUMNS, StudyInput, load_measured, save_measured
 
 Progress = Callable[[Iterable, int, str], Iterable]
 

@@ -1,7 +1,7 @@
 """What ``hexapod calibrate`` reports: the JSON document and the text report.
 
 JSON keys (scripts rely on them): ``before``, ``after`` and, for a simulation,
-``true_geometry`` (each with :data:`~hexapod_model.analysis.calibration_frames.ERROR_KEYS`);
+``true_geometry`` (each with :data:`~hexapod_model.calibration.frames.ERROR_KEYS`);
 ``measuring_frame`` (4x4: the base frame in the measuring device's frame), ``marker_frame``
 (4x4: the measured frame in the platform frame), ``parameters`` (a list of ``{"name",
 "nominal", "identified", "sigma", "identifiable"}``, SI units as the names say; ``sigma`` is
@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 
-from ..analysis.calibration_frames import ERROR_KEYS, Noise, error_stats
-from ..studies.calibrate import CalibrationResult
+from ..calibration.frames import ERROR_KEYS, Noise, error_stats
+from .calibrate import CalibrationResult
 
 SIGMA_LIMIT = 3.0  # the simulated study's check: identified parameters within this many sigma of the truth
 

@@ -23,13 +23,13 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..analysis.calibration import identify
-from ..analysis.calibration_frames import Noise, error_stats, fit_frames, pose_errors, predict
 from ..analysis.standard import StandardModel
+from ..calibration.frames import Noise, error_stats, fit_frames, pose_errors, predict
+from ..calibration.identify import identify
 from ..description.geometry import HexapodGeometry
 from ..exceptions import InputError
 from ..kinematics.hexapod import Hexapod
-from ..studies.calibrate import simulate
+from .calibrate import simulate
 from .paper_table import PAPER, READINGS, TABLE1_ROWS
 
 MODELS = ("spherical", "nominal", "calibrated")
@@ -57,7 +57,7 @@ def run_table1(
 
     The report has ``"poses"`` (test rows solved by every model), ``"calibration_poses"``,
     and per model of :data:`MODELS` the statistics of
-    :func:`~hexapod_model.analysis.calibration_frames.error_stats`.
+    :func:`~hexapod_model.calibration.frames.error_stats`.
     """
     if nominal.joint_type != "cardan":
         raise InputError("preset", nominal.name, "the geometric-errors scenario needs a cardan hexapod")

@@ -17,12 +17,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.tracking import PREDICTORS, Tracker, characteristic_length, pose_distance
 from ..analysis.trajectories import trajectory_poses
 from ..exceptions import InputError
 from ..io.tables import POSE_COLUMNS, pose_row
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.rotations import matrix_to_rpy
+from ..tracking.tracker import PREDICTORS, Tracker, characteristic_length, pose_distance
 
 SPEEDS = (1, 2, 4, 8)
 OFF_BRANCH = 1e-5

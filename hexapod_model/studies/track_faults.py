@@ -2,7 +2,7 @@
 
 A run takes the true readings of trajectory B (``true_readings``), adds Gaussian noise of
 standard deviation ``noise`` (m) and one injected fault, tracks them with a
-:class:`~hexapod_model.analysis.tracking.Tracker` told that noise level, and compares every
+:class:`~hexapod_model.tracking.tracker.Tracker` told that noise level, and compares every
 sample with the true pose (``pose_distance`` with the tracker's length, m):
 
 * a *stream alarm* is a sample with ``jump``, ``stuck``, ``branch_uncertain`` or a late
@@ -22,10 +22,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.tracking import Tracker, TrackResult, characteristic_length, pose_distance
 from ..analysis.trajectories import trajectory_poses
 from ..exceptions import InputError
 from ..kinematics.hexapod import Hexapod
+from ..tracking.tracker import Tracker, TrackResult, characteristic_length, pose_distance
 from .track import true_readings
 
 STREAM_FLAGS = ("jump", "stuck", "branch_uncertain")

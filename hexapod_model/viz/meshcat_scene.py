@@ -25,7 +25,7 @@ import numpy as np
 
 from ..exceptions import ViewError
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.solver import Solution
+from ..kinematics.newton.solver import Solution
 
 SCENE_CENTRE = (0.0, 0.0, 0.22)  # m, base frame: the point shown at the centre of the view
 DEFAULT_CAMERA = (0.46, 0.34, 0.46)  # m, camera position relative to the centre, meshcat's three.js axes (y up)

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import HexapodError, UnreachableError
-from ..kinematics.solver import Solution
+from ..kinematics.newton.solver import Solution
 from .meshcat_scene import HexapodScene
 
 ROBOT_BASE_XYZ = (0.80, 0.0, 0.0)  # m, UR10 base in the hexapod base frame

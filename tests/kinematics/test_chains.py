@@ -6,9 +6,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from hexapod_model.kinematics.chains import evaluate_chains
-from hexapod_model.kinematics.legs import GENERAL, IDENTITY, SHIFT, ChainTables
-from hexapod_model.kinematics.lie import (
+from hexapod_model.kinematics.newton.chains import evaluate_chains
+from hexapod_model.kinematics.newton.legs import GENERAL, IDENTITY, SHIFT, ChainTables
+from hexapod_model.kinematics.newton.lie import (
     difference_free_flyer,
     exp6,
     integrate_free_flyer,

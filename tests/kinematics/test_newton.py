@@ -13,8 +13,8 @@ from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.description.urdf import geometry_to_urdf
 from hexapod_model.kinematics.assembly import Outcome
 from hexapod_model.kinematics.checks import LIMIT_SLACK
-from hexapod_model.kinematics.compiled_solver import CompiledSolver, solver_for
-from hexapod_model.kinematics.solver import NewtonSolver
+from hexapod_model.kinematics.newton.compiled import CompiledSolver, solver_for
+from hexapod_model.kinematics.newton.solver import NewtonSolver
 
 from ..conftest import PRESET_NAMES, hexapod
 
@@ -270,7 +270,7 @@ def test_one_call_inverse_equals_the_python_path(name):
 def test_one_call_solves_take_strided_inputs_without_a_new_compiled_signature():
     # a column of a table (strided) or a hand-made Solution's view: the same answers, through the
     # one compiled signature (another would compile for a minute on a first run)
-    from hexapod_model.kinematics.newton import solve_blocks, solve_schur
+    from hexapod_model.kinematics.newton.iteration import solve_blocks, solve_schur
 
     hexa = hexapod("reference")
     good = hexa.forward(np.full(6, 0.01))

@@ -11,9 +11,9 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses
-from hexapod_model.kinematics import numpy_kernels as nk
-from hexapod_model.kinematics.kernel_sets import kernel_set
-from hexapod_model.kinematics.solver import NewtonSolver
+from hexapod_model.kinematics.newton import numpy_kernels as nk
+from hexapod_model.kinematics.newton.kernel_sets import kernel_set
+from hexapod_model.kinematics.newton.solver import NewtonSolver
 
 from ..conftest import PRESET_NAMES, hexapod
 

@@ -11,8 +11,8 @@ import pytest
 import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
 from hexapod_model.description.model import ClosedLoopModel
+from hexapod_model.kinematics.newton.solver import NewtonSolver
 from hexapod_model.kinematics.rotations import rotation_angle
-from hexapod_model.kinematics.solver import NewtonSolver
 
 from ..conftest import PRESET_NAMES, hexapod
 

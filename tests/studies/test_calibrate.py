@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.analysis.calibration_frames import Noise, error_stats, pose_errors, predict
-from hexapod_model.analysis.calibration_parameters import ParameterSet
 from hexapod_model.analysis.conditioning import condition_numbers
+from hexapod_model.calibration.frames import Noise, error_stats, pose_errors, predict
+from hexapod_model.calibration.parameters import ParameterSet
 from hexapod_model.studies.calibrate import Errors, run_calibration, simulate
 from hexapod_model.studies.calibrate_report import format_report, report_json
 from hexapod_model.studies.reproduce import simulate as simulate_reproduce

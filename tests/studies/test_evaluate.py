@@ -184,8 +184,8 @@ def test_evaluate_command_writes_figure_and_resumes(tmp_path, capsys):
 
 
 def test_urdf_without_geometry_gets_its_sizes_from_the_model(tmp_path):
-    from hexapod_model.analysis.tracking import characteristic_length
     from hexapod_model.studies.evaluate import platform_radius
+    from hexapod_model.tracking.tracker import characteristic_length
 
     path = tmp_path / "ref.urdf"
     path.write_text(hm.geometry_to_urdf(hm.get_preset("reference")))

@@ -6,7 +6,7 @@ solutions ``P0`` (newest), ``P1``, ``P2``: ``none`` (``P0``), ``eq22`` (``2 P0 -
 X = 2.5 T1 - 1.5 T2``), applied to the whole Pinocchio configuration in the tangent space at
 ``P0`` (``X = P0 (+) sum_k a_k (P_k (-) P0)``), so a constant-twist motion is predicted exactly.
 
-Every sample is then checked (statistics in :mod:`~hexapod_model.analysis.tracker_checks`):
+Every sample is then checked (statistics in :mod:`~hexapod_model.tracking.checks`):
 its readings against the motion model (``jump``, ``stuck``), its pose against the motion
 model's pose plus the reading innovation mapped through the inverse of the eliminated 6x6
 Jacobian (``branch_uncertain``), and its configuration (``near_singular``, ``out_of_limits``,
@@ -18,7 +18,7 @@ configuration, and the next ``settle_samples`` samples, unchecked, are flagged `
 (also at the start and after :meth:`Tracker.reset`). Each sample carries its 1-sigma pose
 uncertainty propagated from the reading noise and its condition number. A passage near a
 singularity (two assemblies meet) is ``branch_uncertain`` until the readings single out one
-assembly (:mod:`~hexapod_model.analysis.tracker_passage`).
+assembly (:mod:`~hexapod_model.tracking.passage`).
 """
 
 from __future__ import annotations
@@ -30,20 +30,20 @@ from collections import deque
 import numpy as np
 import pinocchio as pin
 
+from ..analysis.sensitivity import SensitivityEvaluator
 from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.solver import Solution
-from .sensitivity import SensitivityEvaluator
-from .tracker_checks import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
-from .tracker_kernels import branch_residual, reading_checks
-from .tracker_passage import PassageMixin
-from .tracker_types import (
+from ..kinematics.newton.solver import Solution
+from ..kinematics.rotations import pose_distance
+from .checks import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
+from .kernels import branch_residual, reading_checks
+from .passage import PassageMixin
+from .types import (
     FAILED_STATUSES,
     FLAGS,
     PREDICTORS,
     TrackResult,
     characteristic_length,
-    pose_distance,
     predict,
 )
 

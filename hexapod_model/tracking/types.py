@@ -14,7 +14,7 @@ import pinocchio as pin
 
 from ..exceptions import InputError
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.solver import Solution
+from ..kinematics.newton.solver import Solution
 
 PREDICTORS = ("none", "eq22", "eq23", "eq24")
 # X - P0 = sum_k a_k (P_k - P0), k = 1, 2
@@ -58,13 +58,6 @@ def predict(model: pin.Model, history, predictor: str) -> np.ndarray:
     if a2:
         dv += a2 * pin.difference(model, p0, history[2])
     return pin.integrate(model, p0, dv)
-
-
-def pose_distance(Ta: np.ndarray, Tb: np.ndarray, length: float) -> float:
-    """``sqrt(|dt|^2 + (length * angle)^2)`` between two 4x4 poses (m)."""
-    M = pin.SE3(Ta[:3, :3], Ta[:3, 3]).inverse() * pin.SE3(Tb[:3, :3], Tb[:3, 3])
-    xi = pin.log6(M).vector
-    return float(np.hypot(np.linalg.norm(Ta[:3, :3] @ xi[:3]), length * np.linalg.norm(xi[3:])))
 
 
 @dataclass(frozen=True)

@@ -9,14 +9,14 @@ import pinocchio as pin
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.analysis.calibration import MeasuredPoses, identify
-from hexapod_model.analysis.calibration_derivatives import CalibrationModel
-from hexapod_model.analysis.calibration_frames import Noise, fit_frames, initial_frames, pose_errors, predict
-from hexapod_model.analysis.calibration_gauge import move, regauge
-from hexapod_model.analysis.calibration_parameters import ParameterSet
-from hexapod_model.analysis.calibration_planning import plan_poses
-from hexapod_model.analysis.calibration_validation import cross_validate, folds_of
 from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.calibration.derivatives import CalibrationModel
+from hexapod_model.calibration.frames import Noise, fit_frames, initial_frames, pose_errors, predict
+from hexapod_model.calibration.gauge import move, regauge
+from hexapod_model.calibration.identify import MeasuredPoses, identify
+from hexapod_model.calibration.parameters import ParameterSet
+from hexapod_model.calibration.planning import plan_poses
+from hexapod_model.calibration.validation import cross_validate, folds_of
 from hexapod_model.description.geometry_toml import save_geometry
 from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.description.urdf_geometry import geometry_of_urdf

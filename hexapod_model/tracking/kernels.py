@@ -4,7 +4,7 @@
 frozen runs, normalised innovations, their maximum and sum of squares) with one call, in the
 same floating-point operations (the results are bitwise the NumPy ones; a test checks).
 
-The branch check (:meth:`hexapod_model.analysis.tracking.Tracker._branch_check`) compares the
+The branch check (:meth:`hexapod_model.tracking.tracker.Tracker._branch_check`) compares the
 solved platform pose with the motion model's pose plus the reading innovation mapped through
 ``J^-1``. Only the platform's free-flyer joint enters that comparison, so instead of five
 Pinocchio ``difference`` calls, an ``integrate`` and a sixth ``difference`` on the whole
@@ -15,7 +15,7 @@ formulas Pinocchio's free-flyer joint uses:
 * ``difference(q0, q1) = log6(M0^-1 M1)`` (platform frame, ``[v; w]``),
 * ``integrate(q0, xi) = M0 exp6(xi)``,
 * the motion model's pose ``Mm = M0 exp6(sum_j w_j log6(M0^-1 Mj))`` (``w`` the motion
-  model's weights, newest first; :mod:`~hexapod_model.analysis.tracker_checks`),
+  model's weights, newest first; :mod:`~hexapod_model.tracking.checks`),
 * the residual ``e = log6(Mm^-1 Ms) - J^-1 (l - l^)``.
 
 Rotations are handled as unit quaternions; ``log3`` goes through ``2 atan2(|v|, s)`` of the
@@ -164,7 +164,7 @@ def branch_residual(F, n, w, fs, Jinv, l, lhat, e):
 
 @njit(cache=True)
 def reading_checks(l, last, tol, frozen, stuck, lhat, sd, z):
-    """One sample's reading statistics in one call (:meth:`~hexapod_model.analysis.tracking.Tracker.step`).
+    """One sample's reading statistics in one call (:meth:`~hexapod_model.tracking.tracker.Tracker.step`).
 
     Args:
         l: (6,) the readings (m).

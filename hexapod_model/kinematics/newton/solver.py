@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..description.model import ClosedLoopModel
+from ...description.model import ClosedLoopModel
 from .kernel_sets import KernelSet, kernel_set
 
 STATUSES = ("converged", "ambiguous_assembly", "max_iterations", "singular", "out_of_limits", "invalid_input")
@@ -98,7 +98,7 @@ class NewtonSolver:
         clm: the loaded hexapod.
         held_joints: Pinocchio joint ids whose values stay as given.
         kernels: the step's kernels (default: the numba-compiled ones; see
-            :mod:`~hexapod_model.kinematics.kernel_sets`).
+            :mod:`~hexapod_model.kinematics.newton.kernel_sets`).
 
     Buffers are allocated once here; :meth:`run` allocates only the new configuration
     returned by ``pin.integrate``.

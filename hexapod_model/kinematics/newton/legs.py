@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..description.model import ClosedLoopModel
+from ...description.model import ClosedLoopModel
 
 GENERAL, SHIFT, IDENTITY = 0, 1, 2  # placement kinds (URDF joints mostly have rpy="0 0 0")
 

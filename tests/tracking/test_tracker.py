@@ -9,10 +9,10 @@ import pinocchio as pin
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.analysis.tracking import PREDICTORS, Tracker, pose_distance, predict
 from hexapod_model.cli.main import main
 from hexapod_model.kinematics.rotations import rpy_to_matrix
 from hexapod_model.studies.track import run_table, simulate
+from hexapod_model.tracking.tracker import PREDICTORS, Tracker, pose_distance, predict
 
 
 @pytest.fixture(scope="module")
@@ -216,7 +216,7 @@ def test_compiled_sensitivity_matches_the_jacobian_module(name):
 
 
 def test_motion_model_weights_extrapolate_quadratics_exactly():
-    from hexapod_model.analysis.tracker_checks import MotionModel
+    from hexapod_model.tracking.checks import MotionModel
 
     mm = MotionModel()
     for ages in [(1, 2, 3), (1, 2, 3, 4, 5, 6), (2, 3, 5, 6), (4, 5, 6, 7, 8, 9)]:

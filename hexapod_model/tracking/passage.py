@@ -1,7 +1,7 @@
 """The stream tracker's side of a passage near a singularity: open it, feed the candidates, act on the verdict.
 
-:class:`PassageMixin` is part of :class:`~hexapod_model.analysis.tracking.Tracker`; the
-candidates and the statistics are :class:`~hexapod_model.analysis.tracker_branches.BranchResolver`.
+:class:`PassageMixin` is part of :class:`~hexapod_model.tracking.tracker.Tracker`; the
+candidates and the statistics are :class:`~hexapod_model.tracking.branches.BranchResolver`.
 A passage opens on a trusted sample whose condition number exceeds the tracker's limit, or on
 a failed solve of readings without a jump or stuck leg while the newest trusted sample's
 condition number is above a quarter of the limit (readings past the fold). It needs
@@ -21,18 +21,18 @@ from collections import deque
 import numpy as np
 import pinocchio as pin
 
+from ..analysis.sensitivity import SensitivityEvaluator
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.solver import Solution
-from .sensitivity import SensitivityEvaluator
-from .tracker_branches import BranchResolver, mirror_guess
-from .tracker_checks import TrackerSettings
-from .tracker_types import pose_distance
+from ..kinematics.newton.solver import Solution
+from ..kinematics.rotations import pose_distance
+from .branches import BranchResolver, mirror_guess
+from .checks import TrackerSettings
 
 _MIN_BEFORE = 12  # certified samples before a passage: fewer cannot anchor the smooth motion
 
 
 class PassageMixin:
-    """Passages near a singularity, for :class:`~hexapod_model.analysis.tracking.Tracker`."""
+    """Passages near a singularity, for :class:`~hexapod_model.tracking.tracker.Tracker`."""
 
     hexa: Hexapod
     settings: TrackerSettings

@@ -17,11 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.calibration import MeasuredPoses, identify, solve_nominal
-from ..analysis.calibration_frames import Noise, fit_frames, pose_errors, predict
-from ..analysis.calibration_parameters import ParameterSet
 from ..description.geometry import HexapodGeometry
 from ..exceptions import InputError
+from .frames import Noise, fit_frames, pose_errors, predict
+from .identify import MeasuredPoses, identify, solve_nominal
+from .parameters import ParameterSet
 
 Progress = Callable[[Iterable, int, str], Iterable]
 
@@ -66,10 +66,10 @@ def cross_validate(
 ) -> Validation:
     """Held-out errors before and after calibration (see the module doc).
 
-    Keywords go to :func:`~hexapod_model.analysis.calibration.identify`.
+    Keywords go to :func:`~hexapod_model.calibration.identify.identify`.
 
     Raises:
-        InputError: as :func:`~hexapod_model.analysis.calibration.identify` on a training set
+        InputError: as :func:`~hexapod_model.calibration.identify.identify` on a training set
             (too few poses per fold, an outlier), or a held-out row the calibrated model
             cannot solve.
     """

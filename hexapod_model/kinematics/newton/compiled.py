@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..description.model import ClosedLoopModel
+from ...description.model import ClosedLoopModel
+from .iteration import solve_blocks, solve_schur
 from .kernels import jacobian
 from .legs import ChainTables
-from .newton import solve_blocks, solve_schur
 from .outcomes import CONVERGED, outcome
 from .packing import Packed
 from .solver import _ONE_STEP, _THETA_FLOOR, MAX_STEP, SINGULAR_PIVOT_RATIO, THETA_MAX, NewtonSolver

@@ -7,12 +7,12 @@ import pinocchio as pin
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.analysis.calibration_derivatives import CalibrationModel, site_derivatives, site_placements
-from hexapod_model.analysis.calibration_frames import Noise, predict, residual, twist_jacobian
-from hexapod_model.analysis.calibration_identifiability import free_basis
-from hexapod_model.analysis.calibration_parameters import ParameterSet
-from hexapod_model.analysis.calibration_problem import MeasuredPoses, Problem
 from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.calibration.derivatives import CalibrationModel, site_derivatives, site_placements
+from hexapod_model.calibration.frames import Noise, predict, residual, twist_jacobian
+from hexapod_model.calibration.identifiability import free_basis
+from hexapod_model.calibration.parameters import ParameterSet
+from hexapod_model.calibration.problem import MeasuredPoses, Problem
 
 
 @pytest.fixture(scope="module")

@@ -26,9 +26,9 @@ from numba import njit
 
 from . import path_rules
 from .chains import evaluate_chains
+from .iteration import CONVERGED, _integrate, iterate_schur
 from .kernels import closure_residual
 from .lie import difference_free_flyer
-from .newton import CONVERGED, _integrate, iterate_schur
 from .packing import unpack_floats, unpack_ints, unpack_work
 from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP
 

@@ -4,7 +4,7 @@ The unknowns are the free scaled corrections ``z`` (the geometry is ``delta = D 
 identifiability basis times the parameter scales, so held parameters stay exactly nominal) and
 the right twists of the measuring and marker frames (in units of :data:`FRAME_SCALE`, through
 ``pin.Jexp6``). Rows are the whitened pose residuals of
-:mod:`~hexapod_model.analysis.calibration_frames`; a trial geometry that is not valid or cannot
+:mod:`~hexapod_model.calibration.frames`; a trial geometry that is not valid or cannot
 solve a row gets :data:`PENALTY` residuals, so the step is rejected.
 """
 
@@ -15,9 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..analysis.calibration_derivatives import CalibrationModel
-from ..analysis.calibration_frames import frame_jacobian, predict, residual, twist_jacobian
 from ..exceptions import HexapodError, InputError
+from .derivatives import CalibrationModel
+from .frames import frame_jacobian, predict, residual, twist_jacobian
 
 FRAME_SCALE = 1e-3  # m and rad: expected size of the frame corrections after the initial alignment
 PENALTY = 1e8  # residual (stated sigmas) of a row a trial geometry cannot solve: the step is always rejected

@@ -1,12 +1,12 @@
 """Identify a hexapod's joint geometry from measured poses (nonlinear least squares).
 
-Unknowns: the per-leg corrections of :class:`~hexapod_model.analysis.calibration_parameters.ParameterSet`
-and the measuring and marker frames (:mod:`~hexapod_model.analysis.calibration_frames`).
+Unknowns: the per-leg corrections of :class:`~hexapod_model.calibration.parameters.ParameterSet`
+and the measuring and marker frames (:mod:`~hexapod_model.calibration.frames`).
 ``scipy.optimize.least_squares`` (Levenberg-Marquardt) minimises the whitened pose residuals
-with the exact Jacobian: :class:`~hexapod_model.analysis.calibration_derivatives.CalibrationModel`
+with the exact Jacobian: :class:`~hexapod_model.calibration.derivatives.CalibrationModel`
 for the geometry (implicit function theorem on the closures), closed forms for the frames.
 
-Before the fit, :func:`~hexapod_model.analysis.calibration_identifiability.analyse` fixes the
+Before the fit, :func:`~hexapod_model.calibration.identifiability.analyse` fixes the
 gauge and holds at nominal every parameter the data cannot determine; after it, the analysis
 is repeated at the solution. The 1-sigma of each identified parameter is from the covariance
 ``s0^2 (J^T J)^-1`` (``s0`` the a-posteriori noise factor, 1 when the stated noise is right)
@@ -23,13 +23,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..analysis.calibration_derivatives import CalibrationModel
-from ..analysis.calibration_frames import Noise, fit_frames, predict
-from ..analysis.calibration_identifiability import Combination, analyse
-from ..analysis.calibration_parameters import ParameterSet
-from ..analysis.calibration_problem import FRAME_SCALE, MeasuredPoses, Problem, jacobians
 from ..description.geometry import HexapodGeometry
 from ..exceptions import HexapodError, InputError
+from .derivatives import CalibrationModel
+from .frames import Noise, fit_frames, predict
+from .identifiability import Combination, analyse
+from .parameters import ParameterSet
+from .problem import FRAME_SCALE, MeasuredPoses, Problem, jacobians
 
 EQUATIONS_PER_UNKNOWN = 2  # at least this many residual rows per unknown
 OUTLIER_RMS = 5.0  # a row this many stated sigmas off (RMS over its 6 rows) ...
@@ -130,7 +130,7 @@ def identify(
         hold: parameter names or ``fnmatch`` patterns to keep at nominal. Offsets that are
             nominally zero (ideal universal joints) are always kept: they cannot be negative.
         max_sigma: a combination whose 1-sigma would exceed this many expected magnitudes is
-            held at nominal (see :mod:`~hexapod_model.analysis.calibration_identifiability`).
+            held at nominal (see :mod:`~hexapod_model.calibration.identifiability`).
 
     Raises:
         InputError: too few poses for the unknowns, a row the nominal hexapod cannot solve, an

@@ -25,8 +25,8 @@ import numpy as np
 from numba import njit
 
 from .follow import follow, rescale
+from .iteration import iterate_blocks, iterate_schur
 from .kernels import first_outside, first_outside_at, pose_to_xyzquat, rigid_error, xyzquat_to_pose
-from .newton import iterate_blocks, iterate_schur
 from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
 from .packing import unpack_work
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.analysis.tracking import Tracker, characteristic_length, pose_distance
 from hexapod_model.analysis.trajectories import trajectory_poses
 from hexapod_model.studies.track import true_readings
+from hexapod_model.tracking.tracker import Tracker, characteristic_length, pose_distance
 
 from ..conftest import hexapod
 

@@ -51,7 +51,7 @@ class TrackerSettings:
             reading unchanged ``stuck_samples`` times to be ``stuck``.
         window: trusted samples in the least-squares quadratic (>= 3).
         max_gap: untrusted samples the motion model may bridge; after more, the history is
-            reset and the tracker re-anchors (see :class:`~hexapod_model.analysis.tracking.Tracker`).
+            reset and the tracker re-anchors (see :class:`~hexapod_model.tracking.tracker.Tracker`).
         settle_samples: trusted samples after a reset before the checks run again (>= 3:
             the quadratic needs three); those samples are flagged ``settling``.
         branch_sigmas: the solved pose may differ from the motion model's pose plus the
@@ -64,7 +64,7 @@ class TrackerSettings:
             ``hypot(sigma_translation, length * sigma_rotation)`` exceeds this many ``noise``
             (the Jacobian amplifies the reading noise; ``None``: never).
         branch_alpha: significance at which an assembly is rejected after a passage near a
-            singularity (:mod:`~hexapod_model.analysis.tracker_branches`).
+            singularity (:mod:`~hexapod_model.tracking.branches`).
         resolve_samples: samples after such a passage within which one assembly must be
             singled out; after them ``branch_uncertain`` stays until ``reset``.
         continuation_step: largest reading change (m) per Newton solve when re-anchoring.

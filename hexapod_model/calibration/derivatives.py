@@ -6,7 +6,7 @@ with respect to every parameter. The derivative follows from the implicit functi
 
     dq_free/dtheta = -G_free^-1 (dr/dtheta + G_prismatic dq_prismatic/dtheta),
 
-with ``G`` the exact constraint Jacobian of :class:`~hexapod_model.kinematics.solver.NewtonSolver`
+with ``G`` the exact constraint Jacobian of :class:`~hexapod_model.kinematics.newton.solver.NewtonSolver`
 (``Solution.jacobian`` for the free columns; a prismatic joint's column is its axis);
 the platform rows of ``dq_free`` are the body twist of the platform pose (Pinocchio's free-flyer
 velocity). ``dr/dtheta`` comes from where each parameter moves the URDF's joint placements: a
@@ -22,10 +22,10 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..analysis.calibration_parameters import LEG_SIZE, ParameterSet
 from ..description.legs import leg_axes
 from ..exceptions import HexapodError
 from ..kinematics.hexapod import Hexapod
+from .parameters import LEG_SIZE, ParameterSet
 
 COMPLEX_STEP = 1e-30
 SITES = ("cardan_base_1", "cardan_base_2", "roll", "cardan_platform_1", "cardan_platform_2", "tip", "anchor")

@@ -4,7 +4,7 @@ Candidates are random poses of a box around home (the +-50 mm / +-25 deg test bo
 that the nominal hexapod reaches within its stroke and joint limits. Each candidate
 contributes 6 rows (its pose residual, whitened by the stated noise) to the identification
 Jacobian, in scaled parameters with the frame convention applied and both frames unknown
-(:mod:`~hexapod_model.analysis.calibration_identifiability`). Poses are picked greedily, each
+(:mod:`~hexapod_model.calibration.identifiability`). Poses are picked greedily, each
 maximising ``log det`` of the information matrix (D-optimality; the determinant lemma gives
 every candidate's gain from one 6 x 6 determinant).
 """
@@ -15,14 +15,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.calibration_derivatives import CalibrationModel
-from ..analysis.calibration_frames import Noise, frame_jacobian, twist_jacobian
-from ..analysis.calibration_identifiability import frame_free, free_basis
-from ..analysis.calibration_parameters import ParameterSet
-from ..analysis.calibration_problem import FRAME_SCALE
 from ..analysis.trajectories import box_poses
 from ..description.geometry import HexapodGeometry
 from ..exceptions import InputError
+from .derivatives import CalibrationModel
+from .frames import Noise, frame_jacobian, twist_jacobian
+from .identifiability import frame_free, free_basis
+from .parameters import ParameterSet
+from .problem import FRAME_SCALE
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 """Which parameter combinations a set of measured poses determines, and which must stay nominal.
 
 Work in the *scaled* parameters ``y = delta / scale`` (each parameter in units of its expected
-magnitude, :data:`~hexapod_model.analysis.calibration_parameters.SCALES`) and the whitened
+magnitude, :data:`~hexapod_model.calibration.parameters.SCALES`) and the whitened
 residuals (units of the stated noise). Then, with the measuring and marker frames estimated
 too (their columns projected out), a combination ``y = N v`` (unit ``v``) that the Jacobian
 maps with singular value ``s`` has a 1-sigma uncertainty of ``1 / s`` times the expected

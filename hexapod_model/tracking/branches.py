@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from .tracker_types import predict
+from .types import predict
 
 _MIN_POST = 3  # samples of the other candidate before a decision (the motion model needs 3)
 _PROBE = 1e-3  # m (rotations x length): the step that measures the fold's curvature

@@ -16,9 +16,9 @@ from dataclasses import replace
 import numpy as np
 import pinocchio as pin
 
-from ..analysis.calibration_parameters import ParameterSet
 from ..description.geometry import HexapodGeometry
 from ..description.legs import axes_of, fixed_axes, leg_axes
+from .parameters import ParameterSet
 
 
 def move(geom: HexapodGeometry, G_b: np.ndarray, G_p: np.ndarray) -> HexapodGeometry:

@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from hexapod_model.analysis.tracker_kernels import branch_residual, reading_checks
+from hexapod_model.tracking.kernels import branch_residual, reading_checks
 
 
 def _free_flyer() -> pin.Model:
