@@ -95,3 +95,29 @@ def atomic_save_figure(fig: Any, path: str | Path, **savefig_kwargs: Any) -> Pat
     buf = io.BytesIO()
     fig.savefig(buf, format=path.suffix[1:].lower() or "png", **savefig_kwargs)
     return atomic_write_bytes(path, buf.getvalue())
+
+
+@contextmanager
+def output_folder(path: str | Path, option: str = "--out") -> Iterator[Path]:
+    """Create the output folder ``path`` (and missing parents) for the block that fills it.
+
+    If the block raises (or is interrupted), the folders created here are removed again when
+    they are still empty: a stopped command leaves no empty folder behind, and never removes a
+    file or a folder that was there before. A folder that cannot be created is an
+    :class:`InputError` naming ``option``.
+    """
+    path = Path(path)
+    created = [p for p in (path, *path.parents) if not p.exists()]
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(option, str(path), f"cannot create the folder: {exc.strerror}") from None
+    try:
+        yield path
+    except BaseException:
+        for folder in created:  # deepest first
+            try:
+                folder.rmdir()  # only an empty folder
+            except OSError:
+                break
+        raise

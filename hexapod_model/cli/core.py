@@ -134,11 +134,12 @@ def _stream(
             for k in range(len(rows)):
                 flags = ";".join(res.flags[k]) if good[k] else ""  # a valid pose, but not ok (near_singular)
                 label = (flags or "ok") if good[k] else str(status[k])
+                why = ""
                 if label != "ok":
                     failed += 1
                     why = errors[k] or res.messages[k]
                     first = first or f"row {total + k + 1} (line {rows.lines[k]}): {label}: {why}"
-                writer.write([*map(float, table_values[k]), label, int(iterations[k]), float(residuals[k])])
+                writer.write([*map(float, table_values[k]), label, int(iterations[k]), float(residuals[k]), why])
             total += len(rows)
             bar.update(len(rows))
             out.flush()

@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import argparse
 import json
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
 
 from ..analysis.conditioning import condition_numbers
 from ..exceptions import InputError
-from ..files import atomic_write_text, check_output_path
-from ..kinematics.hexapod import load_hexapod
+from ..files import atomic_write_text, check_output_path, output_folder
+from ..kinematics.hexapod import Hexapod, load_hexapod
 from ..studies.paper_table import READINGS, format_table
-from ..studies.reproduce import DEFAULT_ENCODER_NOISE, load_measured, run_study, simulate
+from ..studies.reproduce import DEFAULT_ENCODER_NOISE, StudyInput, load_measured, run_study, simulate
 from ._common import note, progress
 
 DESCRIPTION = """\
@@ -110,11 +111,12 @@ def run(args: argparse.Namespace) -> int:
     else:
         enc = DEFAULT_ENCODER_NOISE if args.encoder_noise is None else args.encoder_noise
         data = simulate(hexa, args.poses, args.seed, enc, args.reference_noise or 0.0)
-    if args.out:
-        try:
-            Path(args.out).mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise InputError("--out", args.out, f"cannot create the folder: {exc.strerror}") from None
+    with output_folder(args.out) if args.out else nullcontext():  # an interrupted run leaves no empty folder
+        return _study(args, name, hexa, data)
+
+
+def _study(args: argparse.Namespace, name: str, hexa: Hexapod, data: StudyInput) -> int:
+    """Run the study on ``data`` and print, write and draw its results."""
     result = run_study(hexa, data, args.convergence_poses, progress)
     print(f"Table 1 re-run on {name}: {data.source}")
     if not args.data:

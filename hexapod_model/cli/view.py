@@ -146,7 +146,7 @@ def parse_size(text: str) -> tuple[int, int]:
 def run_snapshot(args: argparse.Namespace) -> int:
     """``hexapod snapshot``."""
     from ..viz.meshcat_scene import start_visualizer, stop_visualizer
-    from ..viz.render import render_pngs, write_html
+    from ..viz.render import find_chromium, render_pngs, write_html
 
     size = parse_size(args.size)
     check_output_path(args.output, args.hexapod)
@@ -154,6 +154,7 @@ def run_snapshot(args: argparse.Namespace) -> int:
         check_output_path(args.png, args.hexapod, args.output)
         if Path(args.png).resolve() == Path(args.output).resolve():
             raise InputError("--png", args.png, "is the HTML output too; name another file")
+        find_chromium()  # no Chromium: fail before the HTML is written
     vis = start_visualizer()
     try:
         build(args, vis)

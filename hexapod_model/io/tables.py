@@ -52,7 +52,8 @@ __all__ = [
 
 LENGTH_COLUMNS = [f"l{i}" for i in range(1, 7)]
 POSE_COLUMNS = ["x", "y", "z", "qx", "qy", "qz", "qw", "roll", "pitch", "yaw"]
-SOLVER_COLUMNS = ["status", "iterations", "residual"]
+#: the solver's columns of fk / ik output; ``message`` is empty on an ``ok`` row, else why it is not
+SOLVER_COLUMNS = ["status", "iterations", "residual", "message"]
 QUATERNION_COLUMNS = ["qx", "qy", "qz", "qw"]
 RPY_COLUMNS = ["roll", "pitch", "yaw"]
 #: largest |value| of a cell in l1..l6 or a pose column (m, deg or quaternion component):

@@ -50,7 +50,7 @@ def per_row(hexa: hm.Hexapod, path, kind: str) -> tuple[str, int, str]:
                     except hm.HexapodError as exc:
                         why = str(exc)
                 status = "invalid_input" if sol is None else sol.status
-                values = np.full(len(header) - 3, np.nan)
+                values = np.full(len(header) - 4, np.nan)
                 tail = [status, 0, float("nan")] if sol is None else [status, sol.iterations, float(sol.residual)]
                 if sol is not None and sol.converged:
                     guess = sol
@@ -59,7 +59,7 @@ def per_row(hexa: hm.Hexapod, path, kind: str) -> tuple[str, int, str]:
                 if tail[0] != "ok":
                     failed += 1
                     first = first or f"row {total + k + 1} (line {rows.lines[k]}): {tail[0]}: {why}"
-                writer.write([*map(float, values), *tail])
+                writer.write([*map(float, values), *tail, why if tail[0] != "ok" else ""])
             total += len(rows)
     return out.getvalue(), failed, first
 

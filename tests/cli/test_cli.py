@@ -71,6 +71,7 @@ def test_fk_ik_files_round_trip(name, tmp_path):
         "status",
         "iterations",
         "residual",
+        "message",
     ]
     xyz = np.array([[float(r[c]) for c in "xyz"] for r in rows])
     np.testing.assert_allclose(xyz, poses[:, :3, 3], atol=1e-9)
@@ -153,6 +154,9 @@ def test_missing_columns_and_files(tmp_path, capsys):
     assert main(["fk", "reference", str(tmp_path / "none.csv")]) == 2
     assert main(["fk", str(tmp_path / "none.urdf"), str(tmp_path / "x.csv")]) == 2
     assert "cannot read URDF" in capsys.readouterr().err
+    assert main(["fk", "referense", str(tmp_path / "x.csv")]) == 2  # a misspelt preset: the presets are named
+    err = capsys.readouterr().err
+    assert "referense" in err and all(name in err for name in hm.PRESETS) and len(err.strip().splitlines()) == 1
 
 
 def test_bench_runs_and_writes_json(tmp_path, capsys):

@@ -71,6 +71,18 @@ def test_fk_good_rows_between_bad_ones_and_blank_lines_keep_file_line_numbers(tm
     assert code == 1 and [r["status"] for r in out] == ["ok", "invalid_input", "ok"]
     assert "1 of 3 rows failed; first: row 2 (line 5): invalid_input: 3 cells, the header has 6" in err
     assert abs(float(out[2]["z"]) - box_poses(hexa.home_pose, 2, seed=4)[1][2, 3]) < 1e-9
+    assert [r["message"] for r in out] == ["", "3 cells, the header has 6", ""]  # each bad row says why
+
+
+def test_every_failed_row_carries_its_reason_and_ik_reads_fk_output_back(tmp_path, capsys):
+    (tmp_path / "l.csv").write_text(HEADER + "\n0,0,0,0,0,0\n0,0,nan,0,0,0\n5,0,0,0,0,0\n")
+    code, _, _ = run(capsys, "fk", "reference", str(tmp_path / "l.csv"), "-o", str(tmp_path / "p.csv"))
+    out = read_rows(tmp_path / "p.csv")
+    assert code == 1 and [r["status"] for r in out] == ["ok", "invalid_input", "invalid_input"]
+    assert out[0]["message"] == "" and out[1]["message"] == "l3 = 'nan' is not a finite number"
+    assert "stroke limit" in out[2]["message"] and "leg1_prismatic" in out[2]["message"]
+    code, _, _ = run(capsys, "ik", "reference", str(tmp_path / "p.csv"), "-o", str(tmp_path / "back.csv"))
+    assert code == 1 and [r["status"] for r in read_rows(tmp_path / "back.csv")][0] == "ok"
 
 
 def test_ik_and_reproduce_refuse_rows_with_the_wrong_cell_count(tmp_path, capsys):
@@ -88,7 +100,7 @@ def test_bom_is_accepted_and_a_non_utf8_file_is_one_line(tmp_path, capsys):
     code, out, _ = run(capsys, "fk", "reference", str(tmp_path / "bom.csv"))
     # the residual of the zero configuration, as solved (a one-row input: the NumPy kernels)
     home = hm.Hexapod.from_preset("reference", compiled=False).forward(np.zeros(6))
-    assert code == 0 and out.splitlines()[1].endswith(f",ok,0,{home.residual:.12g}") and home.residual < 1e-12
+    assert code == 0 and out.splitlines()[1].endswith(f",ok,0,{home.residual:.12g},") and home.residual < 1e-12
     (tmp_path / "latin.csv").write_bytes(HEADER.encode() + b"\n0,0,0,0,0,0\n\n0,0,0,0,0,0 \xb5m\n")
     code, _, err = run(capsys, "fk", "reference", str(tmp_path / "latin.csv"), "-o", str(tmp_path / "p.csv"))
     assert code == 2 and err.strip() == (

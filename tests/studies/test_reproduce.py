@@ -218,6 +218,20 @@ def test_reproduce_small_run_writes_json_and_figures(tmp_path, capsys):
     assert all((tmp_path / "fig" / n).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for n in names)
 
 
+def test_interrupted_reproduce_leaves_no_empty_figure_folder(tmp_path, monkeypatch):
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("hexapod_model.cli.reproduce.run_study", interrupted)
+    out = tmp_path / "new" / "figures"
+    assert main(["reproduce", "--poses", "10", "--out", str(out)]) == 130
+    assert not (tmp_path / "new").exists()
+    (tmp_path / "kept").mkdir()  # a folder that was there before stays, with what it holds
+    (tmp_path / "kept" / "mine.txt").write_text("x")
+    assert main(["reproduce", "--poses", "10", "--out", str(tmp_path / "kept" / "fig")]) == 130
+    assert sorted(p.name for p in (tmp_path / "kept").iterdir()) == ["mine.txt"]
+
+
 def test_reproduce_on_the_measured_example(tmp_path):
     code, report = _reproduce(tmp_path, "--data", str(EXAMPLE), "--convergence-poses", "0")
     assert code == 0

@@ -95,6 +95,14 @@ def test_missing_chromium_names_the_package(monkeypatch, tmp_path):
         render.render_pngs([tmp_path / "a.html"], [tmp_path / "a.png"])
 
 
+def test_snapshot_png_without_chromium_fails_before_writing_the_html(monkeypatch, tmp_path, capsys):
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    html, png = tmp_path / "s.html", tmp_path / "s.png"
+    assert main(["snapshot", "reference", "-o", str(html), "--png", str(png)]) == 2
+    assert "Debian package `chromium`" in capsys.readouterr().err
+    assert not html.exists() and not png.exists()
+
+
 def test_small_png_size_is_refused(tmp_path):
     with pytest.raises(render.RenderError, match="below the minimum 1024x768"):
         render.render_pngs([tmp_path / "a.html"], [tmp_path / "a.png"], size=(640, 480))
