@@ -1,4 +1,4 @@
-"""Fault-injection study of the stream tracker on trajectory B (issue 9), and its per-sample cost.
+"""Fault-injection study of the stream tracker on trajectory B, and its per-sample cost.
 
 python benchmarks/tracker_faults.py [PRESET ...] [--speeds 1 2 4 8] [--noise 10e-6 50e-6] [--json FILE]
 

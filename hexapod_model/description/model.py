@@ -158,7 +158,7 @@ class ClosedLoopModel:
             raise UrdfError(str(path), str(path), f"cannot read URDF: {exc.strerror}") from None
         return cls(text, str(path))
 
-    # ----- construction helpers -----
+    # ----- construction steps -----
     def _leg(self, c: Closure) -> Leg:
         m = self.model
         tip, anchor = m.getFrameId(c.link1), m.getFrameId(c.link2)

@@ -75,7 +75,8 @@ class Tracker(PassageMixin):
         hexa: the hexapod.
         predictor: one of :data:`PREDICTORS` (the Newton guess; the checks do not depend on it).
         initial: known starting configuration (``Solution`` or ``q``); default home.
-        tol, max_iter: Newton settings per sample (closure residual, m and rad).
+        tol: Newton tolerance per sample (closure residual, m and rad).
+        max_iter: Newton iterations per sample at most.
         length: m per rad in pose distances and condition numbers (default
             :func:`characteristic_length`).
         settings: a :class:`TrackerSettings`; keyword ``options`` replace its fields

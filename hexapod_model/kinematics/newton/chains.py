@@ -30,8 +30,8 @@ from numba import njit
 from .legs import GENERAL, SHIFT
 
 
-# A placement is a tuple of 12 floats: the rotation row by row, then the translation. The helpers
-# are inlined into evaluate_chains (numba's inlining; as separate calls they took half the time).
+# A placement is a tuple of 12 floats: the rotation row by row, then the translation. The functions
+# below are inlined into evaluate_chains (numba's inlining; as separate calls they took half the time).
 # Arrays are indexed in full (``M[i, a, b]``) rather than through views: a view costs a
 # reference count update, which would dominate these few multiplications.
 @njit(cache=True, inline="always")

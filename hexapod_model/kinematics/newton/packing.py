@@ -35,7 +35,7 @@ WORK_NAMES = tuple("oR op J R p E r x dv G LB A M nb wb Rs ps quat state".split(
 
 
 # Each view is ``buf[o : o + size]`` reshaped, ``o`` advancing: written out rather than through a
-# helper so that Packed can run the same functions as plain Python (``.py_func``) to fill the
+# shared function so that Packed can run the same functions as plain Python (``.py_func``) to fill the
 # tables, without compiling them.
 @njit(cache=True, inline="always")
 def unpack_ints(ints):

@@ -1,0 +1,154 @@
+"""The README and the docs pages are true to the code: their Python runs, their names and links resolve.
+
+Each check is a function over a text, tested here on the repository's files and on a text with
+an injected fault (a failing block, a bad dotted path, a dead link, a development-process word),
+so that a check that can no longer fail is noticed.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+README = ROOT / "README.md"
+DOC_PAGES = sorted((ROOT / "docs").rglob("*.md"))
+MARKDOWN = [README, ROOT / "CONTRIBUTING.md", *DOC_PAGES]
+
+#: words about how the product was developed, not about the product
+PROCESS_WORDS = re.compile(
+    r"\bsessions?\b|\bissues? ?#?\d+|\(issue\b|\bhelpers?\b|\bthis round\b|\bother developers?\b",
+    re.IGNORECASE,
+)
+#: the files a user reads or runs: every text file of these folders and these files
+PRODUCT_FOLDERS = ("hexapod_model", "docs", "examples", "benchmarks", "scripts")
+PRODUCT_FILES = ("README.md", "CONTRIBUTING.md", "CITATION.cff", "mkdocs.yml", "pyproject.toml")
+TEXT_SUFFIXES = {".py", ".md", ".toml", ".yml", ".yaml", ".csv", ".cff", ".txt", ".json"}
+
+
+def python_blocks(text: str) -> list[str]:
+    """The fenced ```python blocks of a Markdown text, in order."""
+    return re.findall(r"^```python\n(.*?)^```", text, re.S | re.M)
+
+
+def run_blocks(text: str, cwd: Path) -> subprocess.CompletedProcess:
+    """Run the text's Python blocks in order as one script, in a fresh interpreter in ``cwd``."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    script = "\n".join(python_blocks(text))
+    return subprocess.run([sys.executable, "-c", script], cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
+
+
+def dotted_paths(text: str) -> set[str]:
+    """Every ``hexapod_model.a.b`` named in a text."""
+    return set(re.findall(r"\bhexapod_model(?:\.[A-Za-z_]\w*)+", text))
+
+
+def resolves(dotted: str) -> bool:
+    """Whether ``dotted`` is an importable module, or an attribute reached from the longest one."""
+    parts = dotted.split(".")
+    for k in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:k]))
+        except ImportError:
+            continue
+        try:
+            for name in parts[k:]:
+                obj = getattr(obj, name)
+        except AttributeError:
+            return False
+        return True
+    return False
+
+
+def dead_links(path: Path, text: str) -> list[str]:
+    """Relative Markdown links and images of ``path`` whose target does not exist."""
+    links = re.findall(r"\]\(([^)\s#]+)(?:#[^)]*)?\)", text)
+    return [link for link in links if "://" not in link and not (path.parent / link).exists()]
+
+
+def missing_files(text: str) -> list[str]:
+    """Source files named in backquotes (``kinematics/assembly.py``) that are not in the repository."""
+    named = re.findall(r"`([\w./-]+/[\w.-]+\.py)\b", text)
+    return [p for p in named if not (ROOT / p).exists() and not (ROOT / "hexapod_model" / p).exists()]
+
+
+def process_words(text: str) -> list[str]:
+    """The development-process words of a text, with their line numbers."""
+    return [
+        f"line {n}: {m.group(0)!r}" for n, line in enumerate(text.splitlines(), 1) for m in PROCESS_WORDS.finditer(line)
+    ]
+
+
+def product_files() -> list[Path]:
+    files = [ROOT / f for f in PRODUCT_FILES if (ROOT / f).exists()]
+    for folder in PRODUCT_FOLDERS:
+        files += [p for p in (ROOT / folder).rglob("*") if p.is_file() and p.suffix in TEXT_SUFFIXES]
+    return files
+
+
+def test_readme_python_blocks_run_in_order_as_one_script(tmp_path):
+    out = run_blocks(README.read_text(), tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "converged" in out.stdout
+
+
+def test_a_failing_block_fails_the_run(tmp_path):
+    text = README.read_text() + "\n```python\nhexa.forward([0.0] * 5)  # five readings\n```\n"
+    out = run_blocks(text, tmp_path)
+    assert out.returncode != 0 and "InputError" in out.stderr
+
+
+@pytest.mark.parametrize("path", MARKDOWN, ids=lambda p: p.name)
+def test_every_dotted_path_resolves(path):
+    if not path.exists():
+        pytest.skip(f"{path.name} is not there")
+    bad = sorted(p for p in dotted_paths(path.read_text()) if not resolves(p))
+    assert not bad, f"{path.relative_to(ROOT)}: {bad}"
+
+
+def test_dotted_path_check_finds_a_bad_path():
+    text = "`hexapod_model.kinematics.hexapod.Hexapod`, `hexapod_model.kinematics.solver.NewtonSolver`"
+    assert sorted(p for p in dotted_paths(text) if not resolves(p)) == ["hexapod_model.kinematics.solver.NewtonSolver"]
+    assert not resolves("hexapod_model.kinematics.hexapod.Hexapod.no_such_method")
+    assert resolves("hexapod_model.kinematics.newton.solver.NewtonSolver.iterate")
+
+
+@pytest.mark.parametrize("path", MARKDOWN, ids=lambda p: p.name)
+def test_links_and_named_source_files_exist(path):
+    if not path.exists():
+        pytest.skip(f"{path.name} is not there")
+    text = path.read_text()
+    assert not dead_links(path, text), f"{path.relative_to(ROOT)}: dead links {dead_links(path, text)}"
+    assert not missing_files(text), f"{path.relative_to(ROOT)}: no such files {missing_files(text)}"
+
+
+def test_link_and_file_checks_find_missing_targets():
+    text = "[ok](docs/geometry.md) [gone](docs/nowhere.md) `kinematics/assembly.py` `analysis/tracker_kernels.py`"
+    assert dead_links(README, text) == ["docs/nowhere.md"]
+    assert missing_files(text) == ["analysis/tracker_kernels.py"]
+
+
+def test_no_development_process_words_in_the_product():
+    found = {
+        str(p.relative_to(ROOT)): words
+        for p in product_files()
+        if (words := process_words(p.read_text(encoding="utf-8", errors="replace")))
+    }
+    assert not found, found
+
+
+@pytest.mark.parametrize(
+    "text", ["as measured in this session", "see (issue 12)", "issue #9", "a helper found", "In this round"]
+)
+def test_process_word_check_finds_injected_words(text):
+    assert process_words("clean line\n" + text) and process_words(text)[0].startswith("line 1")
+
+
+def test_readme_stays_short():
+    assert len(README.read_text().splitlines()) <= 300
