@@ -152,3 +152,13 @@ def test_process_word_check_finds_injected_words(text):
 
 def test_readme_stays_short():
     assert len(README.read_text().splitlines()) <= 300
+
+
+def test_citation_names_this_version_and_the_papers():
+    import yaml
+
+    import hexapod_model
+
+    cff = yaml.safe_load((ROOT / "CITATION.cff").read_text())
+    assert cff["version"] == hexapod_model.__version__ and cff["type"] == "software"
+    assert {r["authors"][0]["family-names"] for r in cff["references"]} == {"Bem", "Jakobović", "Shi"}

@@ -1,0 +1,62 @@
+"""Read a fixture's locked pose from the pose service in a robot-cell script (HTTP, standard library only).
+
+    python examples/robot_cell_client.py [--url http://127.0.0.1:8765] [--fixture right] [--timeout 120]
+
+Start the service first, for instance with simulated encoders (docs/service.md):
+
+    hexapod serve docs/examples/fixture.toml --simulate docs/examples/sim.toml
+
+The script waits until the service answers (it says ``503`` while it starts), lists the
+fixtures, then polls the fixture's record until its pose is one a robot may couple to: status
+``ok``, ``locked`` and ``stored``, and recent. It never uses the pose of any other record:
+only an ``ok`` record carries a pose right to its stated ``sigma``. Reads need no token.
+"""
+
+import argparse
+import json
+import time
+import urllib.error
+import urllib.request
+
+ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+ap.add_argument("--url", default="http://127.0.0.1:8765")
+ap.add_argument("--fixture", default="right")
+ap.add_argument("--timeout", type=float, default=120.0, help="s to wait for the service and a locked pose")
+ap.add_argument("--max-age", type=float, default=1.0, help="s: an older record is not used")
+args = ap.parse_args()
+
+
+def get(path: str) -> dict:
+    """One GET of the service, as JSON."""
+    with urllib.request.urlopen(f"{args.url}{path}", timeout=2.0) as response:
+        return json.load(response)
+
+
+deadline = time.monotonic() + args.timeout
+while True:  # the service may still be starting (connection refused, or 503 while it prepares)
+    try:
+        fixtures = get("/fixtures")["fixtures"]
+        break
+    except (urllib.error.URLError, ConnectionError, TimeoutError) as exc:
+        if time.monotonic() > deadline:
+            raise SystemExit(f"no pose service at {args.url}: {exc}") from None
+        time.sleep(0.5)
+print(f"{args.url}: fixtures {', '.join(fixtures)}")
+if args.fixture not in fixtures:
+    raise SystemExit(f"--fixture {args.fixture!r}: not one of {fixtures}")
+
+while True:
+    record = get(f"/fixtures/{args.fixture}/pose")
+    fresh = record["t"] is not None and time.time() - record["t"] <= args.max_age
+    if record["status"] == "ok" and record["state"] == "locked" and record["stored"] and fresh:
+        break
+    if time.monotonic() > deadline:
+        raise SystemExit(f"{args.fixture}: no locked pose ({record['status']}, {record['state']}, {record['flags']})")
+    time.sleep(0.1)
+
+pose, sigma = record["pose"], record["sigma"]  # the platform in the hexapod's base frame: m and degrees
+print(
+    f"{args.fixture}: locked at x {pose['x']:.5f} y {pose['y']:.5f} z {pose['z']:.5f} m, "
+    f"roll {pose['roll']:.3f} pitch {pose['pitch']:.3f} yaw {pose['yaw']:.3f} deg "
+    f"(1-sigma {sigma['translation_mm']:.4f} mm, {sigma['rotation_deg']:.4f} deg)"
+)

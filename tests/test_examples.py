@@ -1,0 +1,116 @@
+"""Every script in examples/ runs as a user would run it, and does what its docstring says."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import hexapod_model as hm
+
+from .conftest import HAVE_CHROMIUM
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLES = ROOT / "examples"
+
+
+def env() -> dict[str, str]:
+    return {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+
+
+def run(script: str, *args: str, cwd: Path, timeout: float = 300) -> str:
+    out = subprocess.run(
+        [sys.executable, str(EXAMPLES / script), *args], cwd=cwd, env=env(), capture_output=True, text=True,
+        timeout=timeout,
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    return out.stdout
+
+
+def test_every_example_is_tested_and_listed_in_the_readme():
+    scripts = sorted(p.name for p in EXAMPLES.glob("*.py"))
+    tested = set(re.findall(r'run\(\s*"(\w+\.py)"', Path(__file__).read_text()))
+    readme = (ROOT / "README.md").read_text()
+    assert 4 <= len(scripts) <= 6 and set(scripts) <= tested
+    assert all(f"examples/{s}" in readme for s in scripts)
+
+
+def test_pose_stream(tmp_path):
+    text = (ROOT / "docs/examples/stream.csv").read_text().splitlines()
+    text.insert(3, "0.002,0.01,0.0,nan,0,0,0")  # a bad row keeps its place, named
+    (tmp_path / "in.csv").write_text("\n".join(text) + "\n")
+    out = run("pose_stream.py", "in.csv", "-o", "poses.csv", cwd=tmp_path)
+    assert "250 of 251 samples solved" in out and "sample 3: invalid_input" in out
+    rows = (tmp_path / "poses.csv").read_text().splitlines()
+    assert rows[0].startswith("t,x,y,z,") and len(rows) == 252
+    assert rows[3].endswith(",,,,,,,,,,invalid_input") and rows[4].endswith(",converged")
+    # the poses are those of hexapod fk (the same readings through the CLI)
+    hexa = hm.Hexapod.from_preset("reference", compiled=False)
+    first = [float(v) for v in rows[1].split(",")[1:4]]
+    readings = [float(v) for v in text[1].split(",")[1:]]
+    np.testing.assert_allclose(first, hexa.forward(readings).pose[:3, 3], atol=1e-9)
+
+
+def test_urdf_variant(tmp_path):
+    out = run("urdf_variant.py", "--raise", "0.02", "--out", "v", cwd=tmp_path)
+    assert "home height 0.420 m (was 0.400)" in out
+    hexa = hm.Hexapod.from_urdf(tmp_path / "v" / "reference_raised.urdf", compiled=False)
+    again = hm.Hexapod.load(str(tmp_path / "v" / "reference_raised.toml"), compiled=False)
+    assert abs(hexa.home_pose[2, 3] - 0.42) < 1e-12 and abs(again.home_pose[2, 3] - 0.42) < 1e-12
+    assert "meshcat" in (tmp_path / "v" / "reference_raised.html").read_text()[:200000].lower()
+    assert (tmp_path / "v" / "reference_raised.png").exists() == HAVE_CHROMIUM
+
+
+def test_calibrate_fixture(tmp_path):
+    out = run("calibrate_fixture.py", "-o", "cal.toml", cwd=tmp_path)
+    mean_mm = float(re.search(r"after calibration: mean ([\d.]+) mm", out).group(1))
+    assert "40 measured poses" in out and mean_mm < 1.0  # the example data's noise: 0.1 mm, 0.05 deg
+    calibrated = hm.Hexapod.load(str(tmp_path / "cal.toml"), compiled=False)
+    assert calibrated.geometry is not None and calibrated.geometry.name == "reference_calibrated"
+
+
+def test_mujoco_mjcf(tmp_path):
+    out = run("mujoco_mjcf.py", "-o", "h.xml", cwd=tmp_path)
+    gap_mm = float(re.search(r"mm from the target, ([\de.+-]+) mm from forward", out).group(1))
+    violation = float(re.search(r"closure violation at rest: ([\de.+-]+)", out).group(1))
+    assert gap_mm < 1e-6 and violation < 1e-9
+    assert hm.Hexapod.from_mjcf(tmp_path / "h.xml", compiled=False).nq == hm.Hexapod.from_preset("reference").nq
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_robot_cell_client(tmp_path):
+    port = free_port()
+    config = (ROOT / "docs/examples/fixture.toml").read_text()
+    config = config.replace("port = 8765", f"port = {port}").replace('channel = "fixtures"', 'channel = "cell-test"')
+    (tmp_path / "fixture.toml").write_text(config)
+    sim = str(ROOT / "docs/examples/sim.toml")
+    log = (tmp_path / "serve.log").open("w")
+    serve = subprocess.Popen(
+        [sys.executable, "-m", "hexapod_model", "serve", "fixture.toml", "--simulate", sim],
+        cwd=tmp_path, env=env(), stdout=subprocess.DEVNULL, stderr=log,
+    )  # fmt: skip
+    try:
+        out = run("robot_cell_client.py", "--url", f"http://127.0.0.1:{port}", "--timeout", "240", cwd=tmp_path)
+    finally:
+        serve.send_signal(signal.SIGINT)
+        try:
+            serve.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            serve.kill()
+            serve.wait()
+        log.close()
+    assert "fixtures left, right" in out
+    found = re.search(r"right: locked at x (\S+) y (\S+) z (\S+) m, roll (\S+) pitch (\S+) yaw (\S+) deg", out)
+    held = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]  # the simulated fixture's pose (docs/examples/sim.toml)
+    np.testing.assert_allclose([float(v) for v in found.groups()], held, atol=2e-3)
