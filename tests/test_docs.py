@@ -162,3 +162,11 @@ def test_citation_names_this_version_and_the_papers():
     cff = yaml.safe_load((ROOT / "CITATION.cff").read_text())
     assert cff["version"] == hexapod_model.__version__ and cff["type"] == "software"
     assert {r["authors"][0]["family-names"] for r in cff["references"]} == {"Bem", "Jakobović", "Shi"}
+
+
+def test_the_csv_page_names_every_status():
+    import hexapod_model as hm
+
+    text = (ROOT / "docs" / "formats.md").read_text()
+    named = {s for s in hm.STATUSES if s != "converged"} | {"ok", "near_singular"}  # converged rows say ok
+    assert not [s for s in sorted(named) if f"`{s}`" not in text]

@@ -68,11 +68,14 @@ def test_urdf_variant(tmp_path):
 
 
 def test_calibrate_fixture(tmp_path):
-    out = run("calibrate_fixture.py", "-o", "cal.toml", cwd=tmp_path)
-    mean_mm = float(re.search(r"after calibration: mean ([\d.]+) mm", out).group(1))
-    assert "40 measured poses" in out and mean_mm < 1.0  # the example data's noise: 0.1 mm, 0.05 deg
-    calibrated = hm.Hexapod.load(str(tmp_path / "cal.toml"), compiled=False)
-    assert calibrated.geometry is not None and calibrated.geometry.name == "reference_calibrated"
+    out = run("calibrate_fixture.py", "-o", "cal.toml", cwd=tmp_path)  # a simulated fixture with joint errors
+    nominal, calibrated = map(float, re.search(r"nominal ([\d.]+) mm, calibrated ([\d.]+) mm", out).groups())
+    assert calibrated < 0.6 * nominal and "wrote cal.toml" in out
+    hexa = hm.Hexapod.load(str(tmp_path / "cal.toml"), compiled=False)
+    assert hexa.geometry is not None and hexa.geometry.name == "reference_calibrated"
+    # the bundled measurements are the nominal model plus noise: nothing to gain, nothing written
+    out = run("calibrate_fixture.py", str(ROOT / "docs/examples/measured.csv"), "-o", "nominal.toml", cwd=tmp_path)
+    assert "nominal.toml not written" in out and not (tmp_path / "nominal.toml").exists()
 
 
 def test_mujoco_mjcf(tmp_path):
