@@ -16,12 +16,14 @@ import argparse
 import json
 import os
 import platform
+import shlex
 import subprocess
 import sys
 import tempfile
 from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -68,10 +70,26 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
     ]
 
 
+def calibration_rows(data: dict) -> list[tuple[str, str]]:
+    """``calibration_study.py``: held-out pose errors before and after calibration, and its time."""
+    cells = {
+        key: f"{data[key]['translation_mean_mm']:.3f} mm, {data[key]['rotation_mean_deg']:.3f}°"
+        for key in ("before (nominal, frames fitted)", "after (calibrated)", "true geometry")
+    }
+    return [(f"simulated calibration, held-out mean error {key}", value) for key, value in cells.items()] + [
+        ("simulated calibration, identification and k-fold validation", f"{data['seconds']:.1f} s wall")
+    ]
+
+
 #: (script and its quick arguments, its full arguments, the rows of its JSON)
-BENCHMARKS: list[tuple[list[str], list[str], Callable[[list[dict]], list[tuple[str, str]]]]] = [
+BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str]]]]] = [
     (["run_benchmarks.py", "reference", "--samples", "300"], ["run_benchmarks.py"], bench_rows),
     (["robustness.py", "reference", "--poses", "300"], ["robustness.py"], robustness_rows),
+    (
+        ["calibration_study.py", "--poses", "60", "--folds", "3", "--hold", "*_axis.*"],
+        ["calibration_study.py"],
+        calibration_rows,
+    ),
     (
         ["service.py", "--seconds", "2", "--one", "1000", "--many", "100"],
         ["service.py"],
@@ -114,7 +132,7 @@ def measure(full: bool) -> list[tuple[str, str, str, str, str]]:
                 check=True,
                 stdout=subprocess.DEVNULL,
             )
-            command = "python benchmarks/" + " ".join(args)
+            command = "python benchmarks/" + " ".join(shlex.quote(a) for a in args)
             rows += [(f, v, f"`{command}`", load, date) for f, v in parse(json.loads(out.read_text()))]
     return rows
 

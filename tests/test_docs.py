@@ -170,3 +170,17 @@ def test_the_csv_page_names_every_status():
     text = (ROOT / "docs" / "formats.md").read_text()
     named = {s for s in hm.STATUSES if s != "converged"} | {"ok", "near_singular"}  # converged rows say ok
     assert not [s for s in sorted(named) if f"`{s}`" not in text]
+
+
+def test_performance_page_is_generated_by_the_current_script():
+    import importlib.util
+    import shlex
+
+    spec = importlib.util.spec_from_file_location("performance_table", ROOT / "benchmarks" / "performance_table.py")
+    assert spec is not None and spec.loader is not None
+    table = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(table)
+    text = (ROOT / "docs" / "performance.md").read_text()
+    assert text.startswith("# Performance\n") and "| figure | value | command | load | date |" in text
+    for quick, _, _ in table.BENCHMARKS:  # every benchmark of the script has its rows on the page
+        assert f"`python benchmarks/{' '.join(shlex.quote(a) for a in quick)}`" in text
