@@ -13,6 +13,7 @@ before each command).
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import platform
@@ -30,31 +31,25 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def bench_rows(data: list[dict]) -> list[tuple[str, str]]:
     """``run_benchmarks.py``: median and p99 per solve of warm FK, cold FK and IK."""
-    rows = []
-    for r in data:
-        for key, label in (("warm_fk", "warm FK at 1 kHz"), ("cold_fk", "cold FK from home"), ("ik", "IK")):
-            c = r[key]
-            rows.append(
-                (
-                    f"{r['hexapod']}: {label}, time per solve",
-                    f"median {c['median_us']:.0f} µs, p99 {c['p99_us']:.0f} µs ({c['iterations_mean']:.1f} steps)",
-                )
-            )
-    return rows
+    cases = (("warm_fk", "warm FK at 1 kHz"), ("cold_fk", "cold FK from home"), ("ik", "IK"))
+    return [
+        (
+            f"{r['hexapod']}: {label}, time per solve",
+            f"median {r[key]['median_us']:.0f} µs, p99 {r[key]['p99_us']:.0f} µs "
+            f"({r[key]['iterations_mean']:.1f} steps)",
+        )
+        for r in data
+        for key, label in cases
+    ]
 
 
 def robustness_rows(data: list[dict]) -> list[tuple[str, str]]:
     """``robustness.py``: poses returned as good that are another assembly than the sampled one."""
     rows = []
-    for r in data:
-        for mode in ("cold", "warm"):
-            c = r[mode]
-            rows.append(
-                (
-                    f"{r['preset']}: {mode} solves beyond the box, wrong pose returned as good",
-                    f"{c['other_unexplained']} of {r['within_limits']} ({c['ok']} ok, median {c['median_us']:.0f} µs)",
-                )
-            )
+    for r, mode in itertools.product(data, ("cold", "warm")):
+        c, n = r[mode], r["within_limits"]
+        figure = f"{r['preset']}: {mode} solves beyond the box, wrong pose returned as good"
+        rows.append((figure, f"{c['other_unexplained']} of {n} ({c['ok']} ok, median {c['median_us']:.0f} µs)"))
     return rows
 
 
