@@ -56,7 +56,7 @@ while True:
 
 pose, sigma = record["pose"], record["sigma"]  # the platform in the hexapod's base frame: m and degrees
 print(
-    f"{args.fixture}: locked at x {pose['x']:.5f} y {pose['y']:.5f} z {pose['z']:.5f} m, "
-    f"roll {pose['roll']:.3f} pitch {pose['pitch']:.3f} yaw {pose['yaw']:.3f} deg "
+    f"{args.fixture}: locked at x {pose['x']:.6f} y {pose['y']:.6f} z {pose['z']:.6f} m, "
+    f"roll {pose['roll']:.4f} pitch {pose['pitch']:.4f} yaw {pose['yaw']:.4f} deg "
     f"(1-sigma {sigma['translation_mm']:.4f} mm, {sigma['rotation_deg']:.4f} deg)"
 )
