@@ -22,7 +22,7 @@ from hexapod_model.exceptions import MjcfError
 
 from ..conftest import PRESET_NAMES, hexapod
 
-README = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+MJCF_PAGE = (Path(__file__).resolve().parents[2] / "docs" / "mjcf.md").read_text()
 
 
 @functools.cache
@@ -270,10 +270,10 @@ def python_block(text: str, marker: str) -> str:
     return next(b for b in re.findall(r"```python\n(.*?)```", text, re.S) if marker in b)
 
 
-def test_readme_mjcf_python_block_runs(tmp_path, monkeypatch):
+def test_mjcf_page_python_block_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "reference.xml").write_text(geometry_to_mjcf(hm.get_preset("reference"), actuated=True))
     env: dict = {}
-    exec(compile(python_block(README, "buildModelAndConstraintsFromMJCF"), "README", "exec"), env)
+    exec(compile(python_block(MJCF_PAGE, "buildModelAndConstraintsFromMJCF"), "docs/mjcf.md", "exec"), env)
     assert len(env["welds"]) == 6 and len(env["connects"]) == 0 and env["model"].nq == env["hexa"].nq
     assert env["hexa"].forward(np.full(6, 0.01)).converged
