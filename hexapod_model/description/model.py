@@ -22,6 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import UrdfError
+from .presets import PRESETS
 from .urdf import Closure, read_closures, validate_urdf
 
 _REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
@@ -155,7 +156,9 @@ class ClosedLoopModel:
         try:
             text = path.read_text()
         except OSError as exc:
-            raise UrdfError(str(path), str(path), f"cannot read URDF: {exc.strerror}") from None
+            # a misspelt preset name reaches here as a file name: name the presets too
+            presets = f"; nor a preset ({', '.join(PRESETS)})" if isinstance(exc, FileNotFoundError) else ""
+            raise UrdfError(str(path), str(path), f"cannot read URDF: {exc.strerror}{presets}") from None
         return cls(text, str(path))
 
     # ----- construction steps -----

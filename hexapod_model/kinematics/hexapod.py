@@ -21,7 +21,7 @@ from ..description.mjcf_loader import MJCF_SUFFIXES, load_mjcf
 from ..description.model import ClosedLoopModel
 from ..description.presets import PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
-from ..exceptions import AssemblyError, ConvergenceError, LimitError, SingularityError, UrdfError, WorkspaceError
+from ..exceptions import AssemblyError, ConvergenceError, LimitError, SingularityError, WorkspaceError
 from . import assembly, batch, hybrid
 from .assembly import Outcome
 from .batch import BatchResult
@@ -108,10 +108,6 @@ class Hexapod:
         """Load a URDF file, or a preset when ``path`` is a preset name (see ``PRESETS``)."""
         if str(path) in PRESETS:
             return cls.from_preset(str(path), compiled=compiled)
-        if not Path(path).exists():
-            raise UrdfError(
-                str(path), str(path), f"cannot read URDF: no such file, nor a preset ({', '.join(PRESETS)})"
-            )
         return cls(ClosedLoopModel.from_file(path), compiled=compiled)
 
     @classmethod
