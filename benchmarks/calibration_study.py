@@ -7,7 +7,7 @@ Prints the held-out errors before / after calibration and of the true geometry (
 nominal geometry's errors if the frames were known exactly), the check of
 the identified parameters against the truth, and the wall time of identification plus k-fold
 validation (the study's target: under 60 s for 100 poses). ``--img`` writes the figures
-(``docs/img/calibration_*.png`` for the README). docs/calibration.md quotes its output.
+(``docs/img/calibration_*.png`` for docs/calibration.md). docs/calibration.md quotes its output.
 """
 
 from __future__ import annotations

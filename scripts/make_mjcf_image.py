@@ -1,4 +1,4 @@
-"""Render the README's MuJoCo picture: the exported MJCF, driven by its actuators to a pose.
+"""Render the MuJoCo picture of docs/mjcf.md: the exported MJCF, driven by its actuators to a pose.
 
     MUJOCO_GL=egl python scripts/make_mjcf_image.py [--out docs/img/mjcf_reference.png]
 

@@ -1,4 +1,4 @@
-"""Regenerate the `hexapod reproduce` figures of the README and the example data file.
+"""Regenerate the `hexapod reproduce` figures of docs/reproduce.md and the example data file.
 
     python scripts/make_study_figures.py [--poses 3000]
 

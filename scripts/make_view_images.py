@@ -1,6 +1,6 @@
-"""Regenerate the README's snapshots.
+"""Regenerate the snapshots of the README and docs/python.md.
 
-Regenerate the README's snapshots: docs/img/reference.png (the reference hexapod at a
+Regenerate the snapshots of the README and docs/python.md: docs/img/reference.png (the reference hexapod at a
 tilted pose) and docs/img/cell.png (the same pose with the UR10 coupled to the top plate).
 
     python scripts/make_view_images.py [--out docs/img]

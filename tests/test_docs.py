@@ -99,6 +99,13 @@ def test_readme_python_blocks_run_in_order_as_one_script(tmp_path):
     assert "converged" in out.stdout
 
 
+def test_python_api_page_blocks_run_in_order_as_one_script(tmp_path):
+    text = (ROOT / "docs" / "python.md").read_text()
+    out = run_blocks(text + "\n```python\nprint(rows.status, hybrid.status)\n```\n", tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["['converged'", "'converged']", "converged"]
+
+
 def test_a_failing_block_fails_the_run(tmp_path):
     text = README.read_text() + "\n```python\nhexa.forward([0.0] * 5)  # five readings\n```\n"
     out = run_blocks(text, tmp_path)
