@@ -15,20 +15,21 @@ from .conftest import HAVE_CHROMIUM
 
 ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text()
+PYTHON_PAGE = (ROOT / "docs" / "python.md").read_text()  # the view and snapshot commands
 
 #: the service's commands: they run until stopped, or read the store a running service wrote;
 #: tests/cli/test_service_cli.py runs them in that order
 SERVICE_COMMANDS = ("serve", "simulate-encoders", "fixture")
 
 
-def code_blocks(lang: str) -> list[str]:
-    return re.findall(rf"```{lang}\n(.*?)```", README, re.S)
+def code_blocks(lang: str, text: str = README) -> list[str]:
+    return re.findall(rf"```{lang}\n(.*?)```", text, re.S)
 
 
 def readme_commands() -> list[str]:
-    """Every `hexapod ...` command of the README: table cells and code-block lines, in order."""
+    """Every `hexapod ...` command of the README (table cells, code-block lines), then docs/python.md's."""
     found = re.findall(r"`(hexapod [^`]+)`", README)
-    for block in code_blocks("text") + code_blocks("bash"):
+    for block in code_blocks("text") + code_blocks("bash") + code_blocks("text", PYTHON_PAGE):
         found += [ln.split("#")[0].strip() for ln in block.splitlines() if ln.startswith("hexapod ")]
     return [c for c in found if len(shlex.split(c)) > 2 and shlex.split(c)[1] != "COMMAND"]  # not a bare name
 
