@@ -194,3 +194,14 @@ def test_performance_page_is_generated_by_the_current_script():
     assert text.startswith("# Performance\n") and "| figure | value | command | load | date |" in text
     for quick, _, _ in table.BENCHMARKS:  # every benchmark of the script has its rows on the page
         assert f"`python benchmarks/{' '.join(shlex.quote(a) for a in quick)}`" in text
+
+
+def test_the_sites_role_rewriting_keeps_the_names():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("griffe_rst_roles", ROOT / "scripts" / "griffe_rst_roles.py")
+    assert spec is not None and spec.loader is not None
+    roles = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(roles)
+    text = "See :class:`~hexapod_model.kinematics.hexapod.Hexapod`, :mod:`.kernels` and ``q``."
+    assert roles.markdown_roles(text) == "See `Hexapod`, `.kernels` and ``q``."
