@@ -205,3 +205,24 @@ def test_the_sites_role_rewriting_keeps_the_names():
     spec.loader.exec_module(roles)
     text = "See :class:`~hexapod_model.kinematics.hexapod.Hexapod`, :mod:`.kernels` and ``q``."
     assert roles.markdown_roles(text) == "See `Hexapod`, `.kernels` and ``q``."
+
+
+def test_every_docs_page_is_in_the_sites_nav():
+    import yaml
+
+    class Loader(yaml.SafeLoader):  # mkdocs.yml may carry !!python/name tags: read them as text
+        pass
+
+    Loader.add_multi_constructor("", lambda loader, suffix, node: None)
+    config = yaml.load((ROOT / "mkdocs.yml").read_text(), Loader=Loader)
+
+    def pages(nav) -> list[str]:
+        if isinstance(nav, str):
+            return [nav]
+        items = nav.values() if isinstance(nav, dict) else nav
+        return [p for item in items for p in pages(item)]
+
+    listed = set(pages(config["nav"]))
+    assert all((ROOT / "docs" / p).exists() for p in listed)
+    on_disk = {str(p.relative_to(ROOT / "docs")) for p in DOC_PAGES}
+    assert sorted(on_disk - listed) == [], "pages missing from the nav of mkdocs.yml"
