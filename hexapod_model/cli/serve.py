@@ -91,9 +91,12 @@ def _serve(args: argparse.Namespace) -> int:
     service = FixtureService(config)
     if args.jsonl:
         service.subscribe(_jsonl_writer(stop, service.json_of))
+    bridge = _ros_bridge(service)
     sim_bus = sim = None
     try:
         service.start()
+        if bridge is not None:
+            bridge.start()
         note("serve", f"fixtures {', '.join(service.names())}; Ctrl-C stops")
         if args.simulate:
             sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
@@ -118,9 +121,21 @@ def _serve(args: argparse.Namespace) -> int:
             sim.stop()
         if sim_bus is not None:
             sim_bus.shutdown()
+        if bridge is not None:
+            bridge.stop()
         service.stop()
     note("serve", f"stopped; store {config.store.path}")
     return 0
+
+
+def _ros_bridge(service):
+    """The ROS 2 publisher of ``[ros]`` (None without the table or with ``enabled = false``)."""
+    ros = service.config.ros
+    if ros is None or not ros.enabled:
+        return None
+    from ..ros.dds import RosBridge
+
+    return RosBridge(service, ros)
 
 
 def _jsonl_writer(stop: threading.Event, json_of):

@@ -23,6 +23,7 @@ from ..kinematics.hexapod import Hexapod
 from ..tracking.tracker import PREDICTORS
 from .codec import FrameLayout, LegCodec
 from .errors import ConfigError, Table
+from .rosconfig import RosConfig, ros_config
 
 INTERFACES = tuple(sorted(can.interfaces.VALID_INTERFACES))
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9_.-]+$")  # fixture names appear in URLs
@@ -115,6 +116,7 @@ class ServiceConfig:
     http: HttpConfig
     fixtures: tuple[FixtureConfig, ...]
     source: str = "<dict>"
+    ros: RosConfig | None = None  # the optional [ros] table (hexapod_model.ros)
 
     def fixture(self, name: str) -> FixtureConfig:
         """The fixture called ``name`` (``KeyError`` when there is none)."""
@@ -175,9 +177,10 @@ def config_from_dict(data: dict, source: str = "<dict>", folder: Path | None = N
     if not isinstance(items, list) or not items:
         raise top.error("fixtures", items, "expected one or more [[fixtures]] tables")
     fixtures = tuple(_fixture(Table(f, f"fixtures[{i}]", source), i, folder) for i, f in enumerate(items))
+    ros = None if "ros" not in data else ros_config(top.table("ros"))
     top.finish()
     _check_unique(fixtures, source)
-    return ServiceConfig(bus, store, http, fixtures, source)
+    return ServiceConfig(bus, store, http, fixtures, source, ros=ros)
 
 
 def _hexapod_spec(t: Table, folder: Path) -> str:

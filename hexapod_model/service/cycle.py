@@ -94,6 +94,8 @@ class FixtureCycle:
         self.solver = PoseSolver(hexa, cfg.noise, cfg.predictor, initial, cfg.confirm_samples)
         #: the lock to commit: the service takes it, stores it and calls :meth:`lock_stored`
         self.pending_lock: tuple[int, LockEvent] | None = None
+        #: the configuration ``q`` of the latest record's pose (None without a pose): its passive joints
+        self.last_q: np.ndarray | None = None
         self.last: dict = self._record(t0, "no_data", [], None)
 
     # ----- input -----
@@ -263,6 +265,7 @@ class FixtureCycle:
             "sigma": sigma,
             "singularity_margin": margin,
         }
+        self.last_q = None if pose is None else outcome.q  # type: ignore[union-attr]
         self.last = record
         return record
 
