@@ -1,12 +1,15 @@
 """A real ROS 2 node (rclpy) that writes what it receives as JSON lines: run by test_ros_node.py.
 
-Usage: python rclpy_listener.py NAMESPACE FIXTURE[,FIXTURE...] SECONDS OUT.jsonl
+Usage: python rclpy_listener.py NAMESPACE FIXTURE[,FIXTURE...] SECONDS OUT.jsonl STOP_FILE
 
-Subscribes to /NS/F/pose, /NS/F/joint_states, /tf and /diagnostics with the service's QoS, and
+Listens until STOP_FILE exists (at most SECONDS).
+
+Subscribes to /NS/F/pose, /NS/F/joint_states and /diagnostics with the service's QoS, and
 writes one line per message, then a line with the publishers' type hashes rclpy saw and its own.
 """
 
 import json
+import os
 import sys
 import time
 
@@ -17,18 +20,13 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 
-try:
-    from tf2_msgs.msg import TFMessage
-except ImportError:  # not among the wheels the test installs: /tf is then left out
-    TFMessage = None
-
 
 def stamp(h):
     return h.stamp.sec + h.stamp.nanosec * 1e-9
 
 
 def main() -> None:
-    ns, fixtures, seconds, out = sys.argv[1], sys.argv[2].split(","), float(sys.argv[3]), sys.argv[4]
+    ns, fixtures, seconds, out, stop = sys.argv[1], sys.argv[2].split(","), float(sys.argv[3]), sys.argv[4], sys.argv[5]
     rclpy.init()
     node = Node("hexapod_test_listener")
     qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
@@ -68,7 +66,8 @@ def main() -> None:
     node.create_subscription(DiagnosticArray, "/diagnostics", lambda m: keep("diagnostics", None, m), qos)
     hashes = {}
     end = time.monotonic() + seconds
-    while time.monotonic() < end:
+    print("listening", flush=True)
+    while time.monotonic() < end and not os.path.exists(stop):
         rclpy.spin_once(node, timeout_sec=0.05)
         if not hashes:
             topic = f"/{ns}/{fixtures[0]}/pose"
