@@ -111,9 +111,7 @@ class RosBridge:
 
     def __init__(self, service: FixtureService, cfg: RosConfig):
         self.service, self.cfg = service, cfg
-        self.names = {
-            f.name: FixtureNames.of(f.name, cfg.namespace, service.hexapods[f.name]) for f in service.config.fixtures
-        }
+        self.names: dict[str, FixtureNames] = {}  # by fixture, once the service has its hexapods
         self.error: str | None = None
         self.published = self.dropped = self.failed_writes = 0
         self._queue: queue.Queue = queue.Queue(QUEUE_LENGTH)
@@ -122,9 +120,12 @@ class RosBridge:
         self._writers: _Writers | None = None
         self._last_diag: dict[str, tuple[float, str, tuple[str, ...]]] = {}
         service.subscribe(self._on_record)
+        service.health_sections["ros"] = self.health
 
     # ----- the cycle thread -----
     def _on_record(self, rec: dict) -> None:
+        if self._thread is None:
+            return  # not publishing (yet, or DDS failed)
         cycle = self.service.cycles.get(rec["fixture"])
         q = None if cycle is None or rec["pose"] is None else cycle.last_q  # the record's own (set with it)
         try:
@@ -134,7 +135,14 @@ class RosBridge:
 
     # ----- life cycle -----
     def start(self) -> RosBridge:
-        """Create the DDS entities and the publisher thread; a failure is kept in :attr:`error`, not raised."""
+        """Create the DDS entities and the publisher thread; a failure is kept in :attr:`error`, not raised.
+
+        Call it once the service is :attr:`~hexapod_model.service.FixtureService.ready` (its hexapods are loaded).
+        """
+        self.names = {
+            f.name: FixtureNames.of(f.name, self.cfg.namespace, self.service.hexapods[f.name])
+            for f in self.service.config.fixtures
+        }
         try:
             self._writers = _Writers(self.cfg, self.names)
         except ImportError as exc:

@@ -1,0 +1,101 @@
+"""A DDS failure is on /health and never stops the service's HTTP side."""
+
+from __future__ import annotations
+
+import json
+import time
+import urllib.error
+import urllib.request
+
+import can
+import pytest
+
+from hexapod_model.service import FixtureService, Simulator
+from hexapod_model.service.rosconfig import RosConfig
+
+from ..conftest import hexapod
+from ..service.helpers import fixture_table, service_config, sim_config
+from .conftest import need_extra
+
+pytestmark = pytest.mark.ros
+
+
+def health(address) -> tuple[int, dict]:
+    host, port = address
+    try:
+        with urllib.request.urlopen(f"http://{host}:{port}/health", timeout=5) as r:
+            return r.status, json.load(r)
+    except urllib.error.HTTPError as e:
+        return e.code, json.load(e)
+
+
+def test_a_participant_that_cannot_be_created_is_on_health_and_http_goes_on(tmp_path):
+    need_extra()
+    from hexapod_model.ros.dds import RosBridge
+
+    # 192.0.2.1 (TEST-NET-1) is no interface of this machine: Cyclone DDS refuses the domain
+    ros = RosConfig(interface="192.0.2.1", peers=("192.0.2.1",))
+    config = service_config(
+        tmp_path, [fixture_table("right")], ros={"interface": ros.interface, "peers": list(ros.peers)}
+    )
+    assert config.ros == ros
+    hexapods = {"right": hexapod("reference")}
+    service = FixtureService(config, hexapods=hexapods)
+    bridge = RosBridge(service, ros)
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    sim = Simulator(
+        config,
+        sim_config(config, [{"name": "right", "rate": 50.0, "hold": [0, 0, 0.4, 0, 0, 0]}]),
+        bus,
+        hexapods=hexapods,
+    )
+    try:
+        service.start()
+        bridge.start()
+        sim.start()
+        time.sleep(1.5)
+        code, body = health(service.address)
+        record = service.record("right")
+    finally:
+        sim.stop()
+        bridge.stop()
+        service.stop()
+        bus.shutdown()
+    assert record is not None and record["status"] == "ok"  # the cycle went on
+    assert body["status"] == "degraded", body
+    assert "cannot create the DDS participant" in body["ros"]["error"] and body["ros"]["publishing"] is False
+    assert body["fixtures"]["right"]["status"] == "ok"
+    assert code in (200, 503)
+
+
+def test_a_working_bridge_is_healthy_and_counts_what_it_published(tmp_path):
+    need_extra()
+    from hexapod_model.ros.dds import RosBridge
+
+    config = service_config(tmp_path, [fixture_table("right")], ros={"namespace": f"health_{tmp_path.name}"})
+    hexapods = {"right": hexapod("reference")}
+    service = FixtureService(config, hexapods=hexapods)
+    assert config.ros is not None
+    bridge = RosBridge(service, config.ros)
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    sim = Simulator(
+        config,
+        sim_config(config, [{"name": "right", "rate": 50.0, "hold": [0, 0, 0.4, 0, 0, 0]}]),
+        bus,
+        hexapods=hexapods,
+    )
+    try:
+        service.start()
+        bridge.start()
+        sim.start()
+        time.sleep(1.5)
+        code, body = health(service.address)
+    finally:
+        sim.stop()
+        bridge.stop()
+        service.stop()
+        bus.shutdown()
+    ros = body["ros"]
+    assert ros["error"] is None and ros["publishing"] is True and ros["dropped"] == 0
+    assert ros["published"] > 3 * 40  # pose, joint states and tf of about 75 ok sets (1.5 s at 50 Hz)
+    assert body["status"] == "ok" and code == 200
