@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import functools
 import importlib.util
+import subprocess
+import sys
 
 import pytest
 
@@ -20,11 +23,25 @@ def need_extra() -> None:
         pytest.skip(f"{', '.join(absent)} not installed: pip install 'hexapod_model[ros]'")
 
 
-def need_rclpy() -> None:
-    need_extra()
+@functools.cache
+def rclpy_problem() -> str | None:
+    """Why a ROS 2 node cannot run here (None when it can): missing wheels or an rclpy that does not start."""
     absent = missing(RCLPY)
     if absent:
-        pytest.skip(
+        return (
             f"{', '.join(absent)} not installed: pip install 'ros-jazzy-rclpy[fastrtps]' ros-jazzy-geometry-msgs "
             "ros-jazzy-sensor-msgs ros-jazzy-diagnostic-msgs (unofficial ROS 2 Jazzy wheels)"
         )
+    probe = "import rclpy, geometry_msgs.msg, sensor_msgs.msg, diagnostic_msgs.msg; rclpy.init(); rclpy.shutdown()"
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    if done.returncode != 0:
+        last = (done.stderr.strip().splitlines() or ["no message"])[-1]
+        return f"the installed rclpy does not start: {last}"
+    return None
+
+
+def need_rclpy() -> None:
+    need_extra()
+    problem = rclpy_problem()
+    if problem is not None:
+        pytest.skip(problem)
