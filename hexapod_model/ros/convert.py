@@ -60,10 +60,8 @@ def pose_stamped(rec: dict, names: FixtureNames) -> PoseStamped | None:
     p = _good_pose(rec)
     if p is None:
         return None
-    return PoseStamped(
-        Header(stamp(rec["t"]), names.base),
-        Pose(Point(p["x"], p["y"], p["z"]), Quaternion(p["qx"], p["qy"], p["qz"], p["qw"])),
-    )
+    position, orientation = _pose(p)
+    return PoseStamped(Header(stamp(rec["t"]), names.base), Pose(Point(*position), orientation))
 
 
 def transform(rec: dict, names: FixtureNames) -> TransformStamped | None:
@@ -71,11 +69,14 @@ def transform(rec: dict, names: FixtureNames) -> TransformStamped | None:
     p = _good_pose(rec)
     if p is None:
         return None
+    position, orientation = _pose(p)
     return TransformStamped(
-        Header(stamp(rec["t"]), names.base),
-        names.platform,
-        Transform(Vector3(p["x"], p["y"], p["z"]), Quaternion(p["qx"], p["qy"], p["qz"], p["qw"])),
+        Header(stamp(rec["t"]), names.base), names.platform, Transform(Vector3(*position), orientation)
     )
+
+
+def _pose(p: dict) -> tuple[tuple[float, float, float], Quaternion]:
+    return (p["x"], p["y"], p["z"]), Quaternion(p["qx"], p["qy"], p["qz"], p["qw"])
 
 
 def joint_state(rec: dict, names: FixtureNames, q: np.ndarray | None) -> JointState | None:

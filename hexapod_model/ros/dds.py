@@ -128,6 +128,8 @@ class RosBridge:
             return  # not publishing (yet, or DDS failed)
         cycle = self.service.cycles.get(rec["fixture"])
         q = None if cycle is None or rec["pose"] is None else cycle.last_q  # the record's own (set with it)
+        if q is not None:
+            q = q.copy()  # the publisher thread reads it later
         try:
             self._queue.put_nowait((rec, q))
         except queue.Full:

@@ -29,38 +29,35 @@ def health(address) -> tuple[int, dict]:
         return e.code, json.load(e)
 
 
-def test_a_participant_that_cannot_be_created_is_on_health_and_http_goes_on(tmp_path):
-    need_extra()
+def serve_with_bridge(config, seconds=1.5):
+    """Run the service, its ROS bridge and a held simulated fixture ``right``; returns /health and the last record."""
     from hexapod_model.ros.dds import RosBridge
 
-    # 192.0.2.1 (TEST-NET-1) is no interface of this machine: Cyclone DDS refuses the domain
-    ros = RosConfig(interface="192.0.2.1", peers=("192.0.2.1",))
-    config = service_config(
-        tmp_path, [fixture_table("right")], ros={"interface": ros.interface, "peers": list(ros.peers)}
-    )
-    assert config.ros == ros
     hexapods = {"right": hexapod("reference")}
     service = FixtureService(config, hexapods=hexapods)
-    bridge = RosBridge(service, ros)
+    bridge = RosBridge(service, config.ros)
     bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
-    sim = Simulator(
-        config,
-        sim_config(config, [{"name": "right", "rate": 50.0, "hold": [0, 0, 0.4, 0, 0, 0]}]),
-        bus,
-        hexapods=hexapods,
-    )
+    held = sim_config(config, [{"name": "right", "rate": 50.0, "hold": [0, 0, 0.4, 0, 0, 0]}])
+    sim = Simulator(config, held, bus, hexapods=hexapods)
     try:
         service.start()
         bridge.start()
         sim.start()
-        time.sleep(1.5)
-        code, body = health(service.address)
-        record = service.record("right")
+        time.sleep(seconds)
+        return (*health(service.address), service.record("right"))
     finally:
         sim.stop()
         bridge.stop()
         service.stop()
         bus.shutdown()
+
+
+def test_a_participant_that_cannot_be_created_is_on_health_and_http_goes_on(tmp_path):
+    need_extra()
+    # 192.0.2.1 (TEST-NET-1) is no interface of this machine: Cyclone DDS refuses the domain
+    config = service_config(tmp_path, [fixture_table("right")], ros={"interface": "192.0.2.1", "peers": ["192.0.2.1"]})
+    assert config.ros == RosConfig(interface="192.0.2.1", peers=("192.0.2.1",))
+    code, body, record = serve_with_bridge(config)
     assert record is not None and record["status"] == "ok"  # the cycle went on
     assert body["status"] == "degraded", body
     assert "cannot create the DDS participant" in body["ros"]["error"] and body["ros"]["publishing"] is False
@@ -70,31 +67,8 @@ def test_a_participant_that_cannot_be_created_is_on_health_and_http_goes_on(tmp_
 
 def test_a_working_bridge_is_healthy_and_counts_what_it_published(tmp_path):
     need_extra()
-    from hexapod_model.ros.dds import RosBridge
-
     config = service_config(tmp_path, [fixture_table("right")], ros={"namespace": f"health_{tmp_path.name}"})
-    hexapods = {"right": hexapod("reference")}
-    service = FixtureService(config, hexapods=hexapods)
-    assert config.ros is not None
-    bridge = RosBridge(service, config.ros)
-    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
-    sim = Simulator(
-        config,
-        sim_config(config, [{"name": "right", "rate": 50.0, "hold": [0, 0, 0.4, 0, 0, 0]}]),
-        bus,
-        hexapods=hexapods,
-    )
-    try:
-        service.start()
-        bridge.start()
-        sim.start()
-        time.sleep(1.5)
-        code, body = health(service.address)
-    finally:
-        sim.stop()
-        bridge.stop()
-        service.stop()
-        bus.shutdown()
+    code, body, _ = serve_with_bridge(config)
     ros = body["ros"]
     assert ros["error"] is None and ros["publishing"] is True and ros["dropped"] == 0
     assert ros["published"] > 3 * 40  # pose, joint states and tf of about 75 ok sets (1.5 s at 50 Hz)
