@@ -1,4 +1,4 @@
-"""A DDS failure is on /health and never stops the service's HTTP side."""
+"""The ROS bridge in this process: a DDS failure is on /health and never stops HTTP; /tf_static for late joiners."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import urllib.error
 import urllib.request
 
 import can
+import numpy as np
 import pytest
 
 from hexapod_model.service import FixtureService, Simulator
@@ -29,8 +30,11 @@ def health(address) -> tuple[int, dict]:
         return e.code, json.load(e)
 
 
-def serve_with_bridge(config, seconds=1.5):
-    """Run the service, its ROS bridge and a held simulated fixture ``right``; returns /health and the last record."""
+def serve_with_bridge(config, seconds=1.5, meanwhile=None):
+    """Run the service, its ROS bridge and a held simulated fixture ``right``; returns /health and the last record.
+
+    ``meanwhile()`` is called while it runs.
+    """
     from hexapod_model.ros.dds import RosBridge
 
     hexapods = {"right": hexapod("reference")}
@@ -44,6 +48,8 @@ def serve_with_bridge(config, seconds=1.5):
         bridge.start()
         sim.start()
         time.sleep(seconds)
+        if meanwhile is not None:
+            meanwhile()
         return (*health(service.address), service.record("right"))
     finally:
         sim.stop()
@@ -73,3 +79,47 @@ def test_a_working_bridge_is_healthy_and_counts_what_it_published(tmp_path):
     assert ros["error"] is None and ros["publishing"] is True and ros["dropped"] == 0
     assert ros["published"] > 3 * 40  # pose, joint states and tf of about 75 ok sets (1.5 s at 50 Hz)
     assert body["status"] == "ok" and code == 200
+
+
+def test_the_cell_placement_is_on_tf_static_for_a_late_joiner(tmp_path):
+    need_extra()
+    from types import SimpleNamespace
+
+    from cyclonedds.core import Qos
+    from cyclonedds.domain import DomainParticipant
+    from cyclonedds.qos import Policy
+    from cyclonedds.sub import DataReader
+    from cyclonedds.topic import Topic
+    from cyclonedds.util import duration
+
+    from hexapod_model.kinematics.rotations import rpy_to_matrix
+    from hexapod_model.ros.messages import TFMessage
+
+    config = service_config(tmp_path, [fixture_table("right")], ros={"robot_frame": "ur10e/base_link"})
+    T = np.eye(4)
+    T[:3, :3] = rpy_to_matrix(0.0, 0.0, np.pi / 2)
+    T[:3, 3] = [0.85, -0.3, 0.02]
+    object.__setattr__(config.fixtures[0], "cell", SimpleNamespace(base_in_robot=T))  # [fixtures.cell]
+    got = []
+
+    def late_reader():  # joins after the placement was written: transient local keeps it
+        participant = DomainParticipant(0)  # in the bridge's domain (one Domain per id and process)
+        qos = Qos(
+            Policy.Reliability.Reliable(duration(seconds=1)),
+            Policy.Durability.TransientLocal,
+            Policy.History.KeepLast(1),
+        )
+        reader = DataReader(participant, Topic(participant, "rt/tf_static", TFMessage, qos=qos), qos=qos)
+        end = time.monotonic() + 5
+        while not got and time.monotonic() < end:
+            got.extend(m for m in reader.take(N=10) if isinstance(m, TFMessage))
+            time.sleep(0.05)
+        del reader, participant
+
+    serve_with_bridge(config, 0.5, late_reader)
+    ((msg,),) = [got]
+    (t,) = msg.transforms
+    assert (t.header.frame_id, t.child_frame_id) == ("ur10e/base_link", "right/base")
+    assert [t.transform.translation.x, t.transform.translation.y, t.transform.translation.z] == [0.85, -0.3, 0.02]
+    r = t.transform.rotation
+    assert np.allclose([r.x, r.y, r.z, r.w], [0.0, 0.0, np.sqrt(0.5), np.sqrt(0.5)], atol=1e-15)
