@@ -157,3 +157,42 @@ def test_cyclone_configuration_stays_on_this_machine_unless_peers_are_given():
     cell = cyclone_xml(RosConfig(interface="192.168.10.2", peers=("192.168.10.5", "192.168.10.6")))
     assert '<NetworkInterface address="192.168.10.2"/>' in cell and "<AllowMulticast>false</AllowMulticast>" in cell
     assert '<Peer address="192.168.10.5"/><Peer address="192.168.10.6"/>' in cell
+
+
+@pytest.mark.parametrize("frame", ["", "a", "abc", "abcd", "right/base"])
+def test_packed_bytes_equal_cyclonedds_own_serialiser(ros, frame):
+    """PoseStamped, TFMessage and JointState pack their CDR themselves: the bytes cyclonedds would write."""
+    from cyclonedds.idl import IdlStruct
+
+    from hexapod_model.ros.messages import (
+        Header,
+        JointState,
+        Point,
+        Pose,
+        PoseStamped,
+        Quaternion,
+        TFMessage,
+        Time,
+        Transform,
+        TransformStamped,
+        Vector3,
+    )
+
+    stamp = Time(1795672991, 519885540)
+    msgs = [PoseStamped(Header(stamp, frame), Pose(Point(0.1, -2.0, 3e-9), Quaternion(0.1, 0.2, 0.3, 0.9)))]
+    for n in range(3):
+        transforms = [
+            TransformStamped(
+                Header(Time(k, 7 * k), frame * k),
+                frame + "c" * k,
+                Transform(Vector3(1.0, 2.0, 3.0), Quaternion(0.0, 0.0, 0.6, 0.8)),
+            )
+            for k in range(n)
+        ]
+        msgs.append(TFMessage(transforms))
+    for names in ([], ["a"], ["ab", "cde", "leg1_prismatic"], [f"j{k}" for k in range(36)]):
+        for extra in ([], [0.5, -1.0]):
+            msgs.append(JointState(Header(stamp, frame), names, [0.1 * k for k in range(len(names))], extra, extra))
+    for m in msgs:
+        assert m.serialize() == IdlStruct.serialize(m), m
+    assert type(msgs[0]).deserialize(msgs[0].serialize()) == msgs[0]
