@@ -20,6 +20,7 @@ import io
 import json
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 from ..files import atomic_write_bytes
 from ..service.store import SAMPLE_COLUMNS, LockEvent
@@ -67,12 +68,12 @@ def lock_record(e: LockEvent) -> dict:
 
 def messages(
     samples: Iterable[tuple], locks: Iterable[LockEvent], names: dict[str, FixtureNames]
-) -> list[tuple[float, str, object]]:
+) -> list[tuple[float, str, Any]]:
     """``(t, topic, message)`` of the history, time order (a fixture not in ``names`` is left out)."""
     from .convert import diagnostic, joint_state, pose_stamped, stamp, transform
     from .messages import DiagnosticArray, Header, TFMessage
 
-    out: list[tuple[float, str, object]] = []
+    out: list[tuple[float, str, Any]] = []
     for row in samples:
         rec = sample_record(row)
         n = names.get(rec["fixture"])
@@ -99,7 +100,7 @@ def messages(
     return out
 
 
-def write_mcap(path: str | Path, items: list[tuple[float, str, object]]) -> int:
+def write_mcap(path: str | Path, items: list[tuple[float, str, Any]]) -> int:
     """Write ``(t, topic, message)`` items as a ROS 2 MCAP bag at ``path`` (atomically); returns the count."""
     from mcap.writer import CompressionType, Writer
     from rosbags.typesys import Stores, get_typestore
@@ -122,7 +123,7 @@ def write_mcap(path: str | Path, items: list[tuple[float, str, object]]) -> int:
             channels[topic] = writer.register_channel(topic, "cdr", schemas[cls])
         time = stamp(t)
         ns = time.sec * 1_000_000_000 + time.nanosec
-        writer.add_message(channels[topic], log_time=ns, data=msg.serialize(), publish_time=ns, sequence=seq)  # type: ignore[attr-defined]
+        writer.add_message(channels[topic], log_time=ns, data=msg.serialize(), publish_time=ns, sequence=seq)
     writer.finish()
     atomic_write_bytes(path, buffer.getvalue())
     return len(items)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import importlib.util
+import os
 import subprocess
 import sys
 
@@ -45,3 +46,8 @@ def need_rclpy() -> None:
     problem = rclpy_problem()
     if problem is not None:
         pytest.skip(problem)
+
+
+def run_domain() -> int:
+    """A ROS 2 domain of this test run (1-200): another run's or a cell's traffic on domain 0 stays apart."""
+    return 1 + os.getpid() % 200

@@ -16,7 +16,7 @@ from hexapod_model.service.rosconfig import RosConfig
 
 from ..conftest import hexapod
 from ..service.helpers import fixture_table, service_config, sim_config
-from .conftest import need_extra
+from .conftest import need_extra, run_domain
 
 pytestmark = pytest.mark.ros
 
@@ -73,7 +73,7 @@ def test_a_participant_that_cannot_be_created_is_on_health_and_http_goes_on(tmp_
 
 def test_a_working_bridge_is_healthy_and_counts_what_it_published(tmp_path):
     need_extra()
-    config = service_config(tmp_path, [fixture_table("right")], ros={"namespace": f"health_{tmp_path.name}"})
+    config = service_config(tmp_path, [fixture_table("right")], ros={"domain_id": run_domain()})
     code, body, _ = serve_with_bridge(config)
     ros = body["ros"]
     assert ros["error"] is None and ros["publishing"] is True and ros["dropped"] == 0
@@ -95,7 +95,9 @@ def test_the_cell_placement_is_on_tf_static_for_a_late_joiner(tmp_path):
     from hexapod_model.kinematics.rotations import rpy_to_matrix
     from hexapod_model.ros.messages import TFMessage
 
-    config = service_config(tmp_path, [fixture_table("right")], ros={"robot_frame": "ur10e/base_link"})
+    config = service_config(
+        tmp_path, [fixture_table("right")], ros={"robot_frame": "ur10e/base_link", "domain_id": run_domain()}
+    )
     T = np.eye(4)
     T[:3, :3] = rpy_to_matrix(0.0, 0.0, np.pi / 2)
     T[:3, 3] = [0.85, -0.3, 0.02]
@@ -103,7 +105,7 @@ def test_the_cell_placement_is_on_tf_static_for_a_late_joiner(tmp_path):
     got = []
 
     def late_reader():  # joins after the placement was written: transient local keeps it
-        participant = DomainParticipant(0)  # in the bridge's domain (one Domain per id and process)
+        participant = DomainParticipant(run_domain())  # in the bridge's domain (one Domain per id and process)
         qos = Qos(
             Policy.Reliability.Reliable(duration(seconds=1)),
             Policy.Durability.TransientLocal,

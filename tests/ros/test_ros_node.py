@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from .conftest import need_rclpy
+from .conftest import need_rclpy, run_domain
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 REPO = Path(__file__).resolve().parents[2]
@@ -51,8 +51,8 @@ def wait_for(path: Path, pattern: str, proc: subprocess.Popen, seconds: float) -
 @pytest.fixture
 def config(tmp_path):
     text = (REPO / "docs/examples/fixture.toml").read_text().replace("port = 8765", "port = 0")
-    ns = f"hexapod_test_{os.getpid()}"  # a namespace of this run: another run's topics stay apart
-    (tmp_path / "fixture.toml").write_text(text + f'\n[ros]\nnamespace = "{ns}"\n')
+    ns = f"hexapod_test_{os.getpid()}"
+    (tmp_path / "fixture.toml").write_text(text + f'\n[ros]\nnamespace = "{ns}"\ndomain_id = {run_domain()}\n')
     (tmp_path / "sim.toml").write_text((REPO / "docs/examples/sim.toml").read_text())
     return tmp_path, ns
 
@@ -67,8 +67,8 @@ def tf_reader():
     from hexapod_model.ros.messages import TFMessage
     from hexapod_model.service.rosconfig import RosConfig
 
-    domain = Domain(0, cyclone_xml(RosConfig()))
-    participant = DomainParticipant(0)
+    domain = Domain(run_domain(), cyclone_xml(RosConfig()))
+    participant = DomainParticipant(run_domain())
     return domain, participant, DataReader(participant, Topic(participant, "rt/tf", TFMessage))
 
 
@@ -79,7 +79,12 @@ def test_rclpy_node_receives_the_served_poses_joint_states_and_diagnostics(confi
     from hexapod_model import Hexapod
 
     folder, ns = config
-    env = {**os.environ, "PYTHONPATH": str(REPO), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "ROS_DOMAIN_ID": "0"}
+    env = {
+        **os.environ,
+        "PYTHONPATH": str(REPO),
+        "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+        "ROS_DOMAIN_ID": str(run_domain()),
+    }
     stop, heard = folder / "stop", folder / "heard.jsonl"
     listener = subprocess.Popen(
         [sys.executable, str(LISTENER), ns, "left,right", "600", str(heard), str(stop)],
