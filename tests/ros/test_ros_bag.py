@@ -1,4 +1,4 @@
-"""`hexapod fixture history --mcap`: the store as a ROS 2 bag, read back by mcap + mcap-ros2-support."""
+"""`hexapod fixture history --mcap`: the store as a ROS 2 bag, read back by mcap + mcap-ros2-support and rosbags."""
 
 from __future__ import annotations
 
@@ -140,6 +140,15 @@ def test_history_as_a_ros2_bag_reads_back_with_another_implementation(config, ca
     ]
     ((_, t_ns, lock),) = by_topic["/cell/right/lock_pose"]
     assert abs(t_ns - LOCK.t * 1e9) < 1e3 and lock.pose.orientation.z == 0.6 and lock.pose.position.z == 0.41
+
+    # rosbags reads the single file as a ROS 2 bag too: the same messages
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([out]) as reader:
+        again = [(c.topic, c.msgtype, t, reader.deserialize(raw, c.msgtype)) for c, t, raw in reader.messages()]
+    assert sorted((m[0], m[1], m[2]) for m in again) == sorted((m[0], m[1], m[2]) for m in msgs)
+    pose = next(m[3] for m in again if m[0] == "/cell/right/pose")
+    assert pose.pose.position.x == by_topic["/cell/right/pose"][0][2].pose.position.x
 
 
 def test_one_fixture_since_a_time(config):
