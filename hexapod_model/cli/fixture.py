@@ -23,7 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     s = actions.add_parser("status", help="the last stored lock pose of every fixture")
     s.add_argument("config", metavar="FIXTURE.toml")
     s.set_defaults(func=run_status)
-    h = actions.add_parser("history", help="stored lock events (or the sample log) as CSV")
+    h = actions.add_parser("history", help="stored lock events (or the sample log) as CSV, or both as a ROS 2 bag")
     h.add_argument("config", metavar="FIXTURE.toml")
     h.add_argument("--since", metavar="T", help="from time T: Unix seconds or ISO 8601 (local time unless it says)")
     h.add_argument("--fixture", help="only this fixture")
@@ -147,6 +147,9 @@ def run_history(args: argparse.Namespace) -> int:
 
 def _history_mcap(args: argparse.Namespace, since: float | None) -> int:
     """``hexapod fixture history --mcap``: the store as a ROS 2 bag (hexapod_model.ros.bag)."""
+    if args.output or args.samples:
+        option = "-o" if args.output else "--samples"
+        raise InputError(option, args.output or True, "--mcap writes the sample log and the lock events: leave it out")
     check_output_path(args.mcap, args.config)
     try:
         import cyclonedds  # noqa: F401 - the messages' CDR

@@ -19,8 +19,9 @@ from ._common import note
 SERVE_DESCRIPTION = """\
 Run the pose service of every fixture of FIXTURE.toml: read the encoder frames from the CAN bus,
 track each fixture's pose, publish records (GET /fixtures, /fixtures/NAME/pose, /health on the
-[http] address; JSON lines on stdout with --jsonl), store lock poses in the SQLite store and
-recover them at the next start. Ctrl-C (or SIGTERM) stops it cleanly. Format: docs/service.md."""
+[http] address; JSON lines on stdout with --jsonl; ROS 2 topics and tf with a [ros] table,
+docs/ros2.md), store lock poses in the SQLite store and recover them at the next start. Ctrl-C
+(or SIGTERM) stops it cleanly. Format: docs/service.md."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:

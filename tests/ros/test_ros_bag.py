@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import sys
 
 import numpy as np
 import pytest
@@ -166,3 +167,13 @@ def test_mcap_output_may_not_overwrite_the_config(config, capsys):
     need_extra()
     assert main(["fixture", "history", str(config), "--mcap", str(config)]) != 0
     assert "fixture.toml" in capsys.readouterr().err
+
+
+def test_mcap_with_csv_options_or_without_the_extra_is_one_clear_line(config, capsys, monkeypatch):
+    out = str(config.parent / "x.mcap")
+    assert main(["fixture", "history", str(config), "--mcap", out, "--samples"]) != 0
+    assert "--mcap writes the sample log and the lock events" in capsys.readouterr().err
+    monkeypatch.setitem(sys.modules, "mcap", None)  # as if not installed
+    assert main(["fixture", "history", str(config), "--mcap", out]) != 0
+    err = capsys.readouterr().err
+    assert "pip install 'hexapod_model[ros]'" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1

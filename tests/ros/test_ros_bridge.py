@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 import time
 import urllib.error
 import urllib.request
@@ -125,3 +126,12 @@ def test_the_cell_placement_is_on_tf_static_for_a_late_joiner(tmp_path):
     assert [t.transform.translation.x, t.transform.translation.y, t.transform.translation.z] == [0.85, -0.3, 0.02]
     r = t.transform.rotation
     assert np.allclose([r.x, r.y, r.z, r.w], [0.0, 0.0, np.sqrt(0.5), np.sqrt(0.5)], atol=1e-15)
+
+
+def test_without_the_ros_extra_health_says_what_to_install(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "cyclonedds.domain", None)  # as if cyclonedds were not installed
+    config = service_config(tmp_path, [fixture_table("right")], ros={"domain_id": run_domain()})
+    code, body, record = serve_with_bridge(config, 1.0)
+    assert record is not None and record["status"] == "ok"
+    assert body["status"] == "degraded" and body["ros"]["publishing"] is False
+    assert "pip install 'hexapod_model[ros]'" in body["ros"]["error"]
