@@ -12,6 +12,7 @@ import json
 import math
 import os
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -95,8 +96,7 @@ def test_rclpy_node_receives_the_served_poses_joint_states_and_diagnostics(confi
     err = folder / "serve.log"
     with open(folder / "records.jsonl", "w") as out, open(err, "w") as log:
         service = subprocess.Popen(
-            [sys.executable, "-m", "hexapod_model.cli", "serve", "fixture.toml", "--simulate", "sim.toml"]
-            + ["--jsonl", "--duration", str(SIM_SECONDS)],
+            [sys.executable, "-m", "hexapod_model.cli", "serve", "fixture.toml", "--simulate", "sim.toml", "--jsonl"],
             cwd=folder,
             env=env,
             stdout=out,
@@ -108,16 +108,18 @@ def test_rclpy_node_receives_the_served_poses_joint_states_and_diagnostics(confi
     try:
         assert listener.stdout is not None and listener.stdout.readline().strip() == "listening"
         port = int(wait_for(err, r"serving http://127\.0\.0\.1:(\d+)", service, 600).group(1))
-        wait_for(err, "publishing ROS 2 topics", service, 30)
+        wait_for(err, "publishing ROS 2 topics", service, 600)  # after the kernels compiled (a minute when cold)
         domain, participant, reader = tf_reader()
-        while service.poll() is None:  # the HTTP records while the service runs
+        end = time.monotonic() + SIM_SECONDS  # the simulator started with the publisher
+        while time.monotonic() < end and service.poll() is None:  # the HTTP records meanwhile
             try:
                 with urllib.request.urlopen(f"http://127.0.0.1:{port}/fixtures/right/pose", timeout=2) as r:
                     http.append(json.loads(r.read()))
             except OSError:
-                pass  # stopping
+                pass
             transforms += [tr for m in reader.take(N=100) for tr in getattr(m, "transforms", ())]  # not InvalidSample
             time.sleep(0.05)
+        service.send_signal(signal.SIGTERM)  # hexapod serve stops cleanly
         assert service.wait(60) == 0, err.read_text()[-2000:]
     finally:
         stop.touch()
