@@ -153,7 +153,10 @@ class RosBridge:
         except Exception as exc:  # noqa: BLE001 - DDSException and its like: shown on /health
             self._fail(f"cannot create the DDS participant (domain {self.cfg.domain_id}): {exc}")
             return self
-        self._publish_placements()
+        try:
+            self._publish_placements()
+        except ValueError as exc:  # a placement that is no transform: the other topics go on
+            self._fail(f"/tf_static: {exc}")
         self._stop.clear()
         self._thread = threading.Thread(target=self._loop, name="hexapod-ros", daemon=True)
         self._thread.start()
@@ -189,6 +192,7 @@ class RosBridge:
         }
 
     def _fail(self, message: str) -> None:
+        """Keep ``message`` for ``/health``; log it when it is new (not once per record)."""
         if self.error is None:
             log.error("ros: %s", message)
         self.error = message
@@ -214,7 +218,10 @@ class RosBridge:
                 rec, q = self._queue.get(timeout=0.1)
             except queue.Empty:
                 continue
-            self._publish(rec, q)
+            try:
+                self._publish(rec, q)
+            except Exception as exc:  # noqa: BLE001 - a record that cannot be converted: on /health, go on
+                self._fail(f"record of {rec.get('fixture')!r} at t={rec.get('t')!r} not published: {exc}")
 
     def _publish(self, rec: dict, q) -> None:
         from .convert import diagnostic, joint_state, pose_stamped, stamp, transform
@@ -241,7 +248,11 @@ class RosBridge:
         assert self._writers is not None
         try:
             write(self._writers)
-            self.published += 1
         except Exception as exc:  # noqa: BLE001 - a DDS failure is on /health, the service goes on
             self.failed_writes += 1
             self._fail(f"DDS write failed: {exc}")
+            return
+        self.published += 1
+        if self.error is not None and self.error.startswith("DDS write failed"):
+            self.error = None  # writing again (failed_writes keeps the count)
+            log.info("ros: writing again after %d failed writes", self.failed_writes)

@@ -135,3 +135,47 @@ def test_without_the_ros_extra_health_says_what_to_install(tmp_path, monkeypatch
     assert record is not None and record["status"] == "ok"
     assert body["status"] == "degraded" and body["ros"]["publishing"] is False
     assert "pip install 'hexapod_model[ros]'" in body["ros"]["error"]
+
+
+def test_a_failed_write_is_on_health_until_writing_works_again(tmp_path):
+    need_extra()
+    from types import SimpleNamespace
+
+    from hexapod_model.ros.dds import RosBridge
+    from hexapod_model.ros.names import FixtureNames
+
+    config = service_config(tmp_path, [fixture_table("right")], ros={})
+    service = FixtureService(config, http=False, hexapods={"right": hexapod("reference")})
+    bridge = RosBridge(service, config.ros)
+    bridge.names = {"right": FixtureNames.of("right", "hexapod", service.hexapods["right"])}
+    written = []
+
+    class Writer:
+        broken = True
+
+        def write(self, msg):
+            if self.broken:
+                raise RuntimeError("DDS_RETCODE_TIMEOUT")
+            written.append(msg)
+
+    w = Writer()
+    bridge._writers = SimpleNamespace(pose={"right": w}, joints={"right": w}, tf=w, diagnostics=w)  # type: ignore[assignment]
+    rec = {
+        "fixture": "right",
+        "t": 1795672991.5,
+        "readings": [0.0] * 6,
+        "pose": {"x": 0.0, "y": 0.0, "z": 0.4, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": 1.0},
+        "status": "ok",
+        "flags": [],
+        "state": "moving",
+        "stored": False,
+        "sigma": None,
+        "singularity_margin": None,
+    }
+    bridge._publish(rec, service.hexapods["right"].q_home)
+    h = bridge.health()
+    assert h["error"] == "DDS write failed: DDS_RETCODE_TIMEOUT" and h["failed_writes"] == 4 and h["published"] == 0
+    w.broken = False
+    bridge._publish({**rec, "t": rec["t"] + 0.02}, service.hexapods["right"].q_home)
+    h = bridge.health()
+    assert h["error"] is None and h["failed_writes"] == 4 and h["published"] == 3 and len(written) == 3
