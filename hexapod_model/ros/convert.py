@@ -6,8 +6,9 @@
   return None for any other, so that a ROS consumer never receives a pose the service would not
   call good.
 * Diagnostic levels: ``OK`` for an ``ok`` record without flags; ``WARN`` for an ``ok`` record with
-  an advisory flag, a ``flagged`` one or an unhealthy store; ``STALE`` before the first reading
-  (``no_data``); ``ERROR`` for every record without a pose (failed or faulty readings).
+  an advisory flag or an unhealthy store, and for a doubted pose (``flagged``, ``drift``);
+  ``STALE`` before the first reading (``no_data``); ``ERROR`` for every other record (no pose:
+  failed or faulty readings; or a latched fault waiting for its acknowledgement).
 """
 
 from __future__ import annotations
@@ -102,7 +103,7 @@ def level(rec: dict, store_error: str | None = None) -> int:
     status = rec["status"]
     if status == "ok":
         return WARN if rec["flags"] or store_error else OK
-    if status == "flagged":
+    if status in ("flagged", "drift"):  # a pose the service doubts
         return WARN
     return STALE if status == "no_data" else ERROR
 

@@ -80,7 +80,9 @@ def test_transform_and_joint_state_decode(ros):
     assert legs.name == list(hexa.prismatic_names) and list(legs.position) == rec["readings"]
 
 
-@pytest.mark.parametrize("status", ["flagged", "not_converged", "encoder_error", "silent_leg", "no_data"])
+@pytest.mark.parametrize(
+    "status", ["flagged", "drift", "unacknowledged_fault", "not_converged", "encoder_error", "silent_leg", "no_data"]
+)
 def test_no_pose_transform_or_joints_from_a_record_that_is_not_ok(ros, status):
     convert, names, hexa, _ = ros
     rec = record(status, ["jump"] if status == "flagged" else [])
@@ -96,6 +98,8 @@ def test_no_pose_transform_or_joints_from_a_record_that_is_not_ok(ros, status):
         ("ok", ["drift"], None, 1),
         ("ok", [], "disk full", 1),
         ("flagged", ["jump"], None, 1),
+        ("drift", ["drift:leg2"], None, 1),
+        ("unacknowledged_fault", ["step:leg1"], None, 2),
         ("encoder_error", ["encoder_error:leg3"], None, 2),
         ("not_converged", ["max_iterations"], None, 2),
         ("no_data", [], None, 3),

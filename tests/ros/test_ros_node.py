@@ -172,7 +172,7 @@ def test_rclpy_node_receives_the_served_poses_joint_states_and_diagnostics(confi
 
     # diagnostics: the level follows the record's status
     statuses = [s for d in kinds["diagnostics"] for s in d["status"]]
-    expected = {"ok": {0, 1}, "flagged": {1}, "no_data": {3}}
+    expected = {"ok": {0, 1}, "flagged": {1}, "drift": {1}, "no_data": {3}}
     for s in statuses:
         assert s["level"] in expected.get(s["values"]["status"], {2}), s
     assert any(s["name"] == "hexapod: left" and s["values"]["status"] == "encoder_error" for s in statuses)
