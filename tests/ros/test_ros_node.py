@@ -19,6 +19,7 @@ import time
 import urllib.request
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from .conftest import need_rclpy, run_domain
@@ -169,6 +170,17 @@ def test_rclpy_node_receives_the_served_poses_joint_states_and_diagnostics(confi
         legs = [j["position"][j["name"].index(n)] for n in hexa.prismatic_names]
         assert max(abs(a - b) for a, b in zip(legs, rec["readings"])) <= TOL
         assert all(math.isfinite(v) for v in j["position"])
+    # the passive joints are the pose's: the inverse kinematics of the record's pose gives them (1e-7 rad or m)
+    from hexapod_model.kinematics.rotations import quaternion_to_matrix
+
+    for j in joints[:: max(1, len(joints) // 6)]:
+        p = by_key[(j["fixture"], (j["sec"], j["nanosec"]))]["pose"]
+        T = np.eye(4)
+        T[:3, :3] = quaternion_to_matrix(np.array([p["qx"], p["qy"], p["qz"], p["qw"]]))
+        T[:3, 3] = [p["x"], p["y"], p["z"]]
+        q = hexa.inverse(T).q
+        want = [q[hexa.model.joints[hexa.model.getJointId(n)].idx_q] for n in j["name"]]
+        assert np.max(np.abs(np.array(j["position"]) - want)) < 1e-7
 
     # diagnostics: the level follows the record's status
     statuses = [s for d in kinds["diagnostics"] for s in d["status"]]
