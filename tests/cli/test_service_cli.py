@@ -150,6 +150,15 @@ def test_simulate_encoders_sends_the_fixtures_own_frames(tmp_path, capsys):
     assert np.allclose([readings[0x181 + k] for k in range(6)], truth, atol=0.6e-6)  # 1 um counts, no noise
 
 
+def test_bad_http_host_names_the_host_not_the_port(tmp_path, capsys):
+    cfg = write_config(tmp_path, extra="allow_unauthenticated_reads = true\n")
+    cfg.write_text(cfg.read_text().replace('host = "127.0.0.1"', 'host = "no-such-host.invalid"'))
+    assert main(["serve", str(cfg), "--duration", "0.1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no-such-host.invalid" in err[0] and "set [http] host" in err[0], err
+    assert "port" not in err[0].split("(")[0]
+
+
 # ----- process level -----
 def env():
     e = dict(os.environ)
