@@ -102,6 +102,8 @@ class FixtureCycle:
         self._advisory: set[str] = set()
         self._episode = self._stored_episode = 0
         self._new_lock_stored = False
+        #: the configuration ``q`` of the latest record's pose (None without a pose): its passive joints
+        self.last_q: np.ndarray | None = None
         self.recovered: LockEvent | None = None
         self.recovery = "no stored lock pose"
         if recovered is not None and recovered.geometry_hash == geometry_hash:
@@ -115,8 +117,6 @@ class FixtureCycle:
         self.solver = PoseSolver(hexa, cfg.noise, cfg.predictor, initial, cfg.confirm_samples)
         #: the lock to commit: the service takes it, stores it and calls :meth:`lock_stored`
         self.pending_lock: tuple[int, LockEvent] | None = None
-        #: the configuration ``q`` of the latest record's pose (None without a pose): its passive joints
-        self.last_q: np.ndarray | None = None
         self.last: dict = self._record(t0, "no_data", [], None)
 
     # ----- input -----
