@@ -1,4 +1,4 @@
-"""``hexapod fixture status`` and ``hexapod fixture history``: what the service's store holds."""
+"""``hexapod fixture status`` and ``hexapod fixture history``: what the service's store holds (and ``acknowledge``)."""
 
 from __future__ import annotations
 
@@ -12,24 +12,29 @@ import numpy as np
 from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
 from ..io.tables import LENGTH_COLUMNS, POSE_COLUMNS
+from .acknowledge import register_action
 
 LOCK_COLUMNS = ["fixture", "t", "time", *POSE_COLUMNS, *LENGTH_COLUMNS, "status", "geometry_hash"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``fixture status`` and ``fixture history``."""
+    """Add ``fixture status``, ``fixture history`` and ``fixture acknowledge``."""
     p = sub.add_parser("fixture", help="stored lock poses and sample log of the pose service")
     actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
     s = actions.add_parser("status", help="the last stored lock pose of every fixture")
     s.add_argument("config", metavar="FIXTURE.toml")
     s.set_defaults(func=run_status)
-    h = actions.add_parser("history", help="stored lock events (or the sample log) as CSV")
+    h = actions.add_parser("history", help="stored lock events (or the sample log) as CSV, or both as a ROS 2 bag")
     h.add_argument("config", metavar="FIXTURE.toml")
     h.add_argument("--since", metavar="T", help="from time T: Unix seconds or ISO 8601 (local time unless it says)")
     h.add_argument("--fixture", help="only this fixture")
     h.add_argument("--samples", action="store_true", help="the sample log instead of the lock events")
     h.add_argument("-o", "--output", metavar="LOG.csv", help="write the CSV here (default: stdout)")
+    h.add_argument(
+        "--mcap", metavar="OUT.mcap", help="write the sample log and lock events as a ROS 2 bag (MCAP) instead"
+    )
     h.set_defaults(func=run_history)
+    register_action(actions)
 
 
 def parse_time(text: str) -> float:
@@ -102,6 +107,8 @@ def _fmt(v) -> str:
 def run_history(args: argparse.Namespace) -> int:
     """``hexapod fixture history``."""
     since = None if args.since is None else parse_time(args.since)
+    if args.mcap:
+        return _history_mcap(args, since)
     if args.output:
         check_output_path(args.output, args.config)
     config, store = _open(args)
@@ -137,4 +144,37 @@ def run_history(args: argparse.Namespace) -> int:
         print(f"hexapod fixture history: wrote {len(rows)} rows to {args.output}", file=sys.stderr)
     else:
         sys.stdout.write(text)
+    return 0
+
+
+def _history_mcap(args: argparse.Namespace, since: float | None) -> int:
+    """``hexapod fixture history --mcap``: the store as a ROS 2 bag (hexapod_model.ros.bag)."""
+    if args.output or args.samples:
+        option = "-o" if args.output else "--samples"
+        raise InputError(option, args.output or True, "--mcap writes the sample log and the lock events: leave it out")
+    check_output_path(args.mcap, args.config)
+    try:
+        import cyclonedds  # noqa: F401 - the messages' CDR
+        import mcap  # noqa: F401
+        import rosbags  # noqa: F401 - the ROS 2 message definitions
+    except ImportError as exc:
+        raise InputError("--mcap", args.mcap, f"needs {exc.name}: pip install 'hexapod_model[ros]'") from None
+    from ..ros.bag import messages, write_mcap
+    from ..ros.names import FixtureNames
+
+    config, store = _open(args)
+    try:
+        if args.fixture is not None and args.fixture not in [f.name for f in config.fixtures]:
+            raise InputError("--fixture", args.fixture, f"not a fixture of {args.config}")
+        namespace = config.ros.namespace if config.ros is not None else "hexapod"
+        names = {
+            f.name: FixtureNames.of(f.name, namespace, f.load_hexapod())
+            for f in config.fixtures
+            if args.fixture in (None, f.name)
+        }
+        items = messages(store.samples(args.fixture, since), store.locks(args.fixture, since), names)
+    finally:
+        store.close()
+    count = write_mcap(args.mcap, items)
+    print(f"hexapod fixture history: wrote {count} messages to {args.mcap}", file=sys.stderr)
     return 0
