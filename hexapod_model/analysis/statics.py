@@ -180,8 +180,12 @@ def force_per_unit_wrench(J: np.ndarray) -> tuple[float, float]:
 
     The rows of ``J^-T`` split into force and moment columns: the largest 2-norm of a row's force part is
     the largest ``|t_i|`` a force of 1 N in the worst direction causes; the same for a moment of 1 N m.
+    ``inf`` for a singular ``J``.
     """
-    G = np.linalg.inv(J.T)
+    try:
+        G = np.linalg.inv(J.T)
+    except np.linalg.LinAlgError:
+        return float("inf"), float("inf")
     return float(np.linalg.norm(G[:, :3], axis=1).max()), float(np.linalg.norm(G[:, 3:], axis=1).max())
 
 
