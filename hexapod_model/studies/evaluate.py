@@ -259,8 +259,10 @@ def summarise(
         "volume_paper_units3": n_in * (cell / PAPER_UNIT) ** 3,
         "average": {k: (float(np.nanmean(v[inside])) if n_in else float("nan")) for k, v in figs.items()},
         "worst": {
-            name: (float(reduce(worst[:, i][inside])) if n_in else float("nan"))
-            for i, (name, reduce) in enumerate(zip(WORST, (np.max, np.min, np.max, np.max, np.max)))
+            name: (float(np.min(worst[:, i][inside]) if "_min" in name else np.max(worst[:, i][inside])))
+            if n_in
+            else float("nan")
+            for i, name in enumerate(WORST)
         },
         "home": {
             "kappa": home.condition_number,
