@@ -212,7 +212,10 @@ def stiffness_of(J: np.ndarray, leg_stiffness: ArrayLike) -> Stiffness:
     if not np.all(np.isfinite(k)) or np.any(k <= 0):
         raise InputError("leg_stiffness", leg_stiffness, "expected positive finite N/m")
     K = J.T @ (k[:, None] * J)
-    C = np.linalg.inv(K)
+    try:
+        C = np.linalg.inv(K)
+    except np.linalg.LinAlgError:
+        return Stiffness(K, 0.0, 0.0)  # singular: no stiffness in some direction
     return Stiffness(
         K, 1.0 / float(np.linalg.eigvalsh(C[:3, :3]).max()), 1.0 / float(np.linalg.eigvalsh(C[3:, 3:]).max())
     )

@@ -25,10 +25,18 @@ import numpy as np
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
 from .jacobian import evaluate_jacobian, leg_jacobian
-from .statics import force_per_unit_wrench
+from .statics import force_per_unit_wrench, stiffness_of
 
 #: the per-point worst cases over the orientations that :class:`SliceResult` keeps, in ``worst`` order
-WORST = ("kappa_max", "sigma_min_min", "sigma_max_max", "force_per_force_max", "force_per_moment_max")
+WORST = (
+    "kappa_max",
+    "sigma_min_min",
+    "sigma_max_max",
+    "force_per_force_max",
+    "force_per_moment_max",
+    "stiffness_translational_min",
+    "stiffness_rotational_min",
+)
 
 
 def cone_rotations(cone_deg: float, samples: int) -> np.ndarray:
@@ -72,10 +80,12 @@ class SliceResult:
     """One z-slice of the grid.
 
     Arrays of shape (ny, nx); figures are orientation averages (NaN outside the workspace).
-    ``worst`` (5, ny, nx) holds the worst case over the orientations of each point, in :data:`WORST`
+    ``worst`` (7, ny, nx) holds the worst case over the orientations of each point, in :data:`WORST`
     order: largest condition number, smallest and largest singular value (lengths in the evaluation's
     unit), largest leg force per unit force (N/N) and per unit moment (N per N m, SI) at the platform
-    origin (:func:`~hexapod_model.analysis.statics.force_per_unit_wrench`).
+    origin (:func:`~hexapod_model.analysis.statics.force_per_unit_wrench`), smallest translational
+    (N/m) and rotational (N m/rad) stiffness of the locked fixture per N/m of leg stiffness
+    (:func:`~hexapod_model.analysis.statics.stiffness_of`; it scales with a common leg stiffness).
     """
 
     index: int
@@ -117,12 +127,15 @@ def compute_slice(
             ev = [evaluate_jacobian(J, length_unit) for J in Js]
             figs[:, iy, ix] = np.mean([[e.condition_number, e.sigma_min, e.abs_det] for e in ev], axis=0)
             forces = np.array([force_per_unit_wrench(J) for J in Js])
+            stiff = [stiffness_of(J, 1.0) for J in Js]
             worst[:, iy, ix] = (
                 max(e.condition_number for e in ev),
                 min(e.sigma_min for e in ev),
                 max(float(e.singular_values[0]) for e in ev),
                 forces[:, 0].max(),
                 forces[:, 1].max(),
+                min(k.translational for k in stiff),
+                min(k.rotational for k in stiff),
             )
     return SliceResult(index, inside, figs[0], figs[1], figs[2], worst)
 

@@ -9,6 +9,7 @@ never a silent fallback to the local machine.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -17,7 +18,7 @@ from typing import Any
 from ..exceptions import InputError
 
 INSTALL_HINT = "pip install 'hexapod_model[sweep]'"
-CONNECT_TIMEOUT_S = 10.0
+CONNECT_TIMEOUT_S = 5.0
 
 
 def _distributed() -> Any:
@@ -58,18 +59,12 @@ def dask_client(scheduler: str | None = None, workers: int | None = None) -> Ite
     n = workers or os.cpu_count() or 1
     if n < 1:
         raise InputError("--workers", workers, "need at least 1 worker process")
-    try:
-        import bokeh  # noqa: F401  # the dashboard needs it
-
-        dashboard: str | None = "127.0.0.1:0"
-    except ImportError:
-        dashboard = None
     cluster = distributed.LocalCluster(
         n_workers=n,
         threads_per_worker=1,
         processes=True,
         host="127.0.0.1",
-        dashboard_address=dashboard,
+        dashboard_address="127.0.0.1:0",  # a free port: several clusters may run on one machine
         silence_logs=40,  # logging.ERROR
     )
     client = distributed.Client(cluster)
@@ -81,7 +76,13 @@ def dask_client(scheduler: str | None = None, workers: int | None = None) -> Ite
 
 
 def dashboard_link(client: Any) -> str | None:
-    """The dashboard URL of ``client``'s scheduler, or ``None`` when it runs none."""
+    """The dashboard URL of ``client``'s scheduler, or ``None`` when it runs none.
+
+    The dashboard's pages need bokeh (``pip install bokeh``); without it here, no link is given (the
+    scheduler then serves only its health and metrics pages).
+    """
+    if importlib.util.find_spec("bokeh") is None:
+        return None
     try:
         services = client.scheduler_info().get("services", {})
     except Exception:  # an unanswering scheduler: no link, the tasks will say more
