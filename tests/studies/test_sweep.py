@@ -170,3 +170,14 @@ def test_pareto_front():
     v = np.array([1.0, 2.0, 3.0, 2.0, np.nan])
     f = np.array([1.0, 1.5, 3.0, 2.0, 0.1])
     assert pareto_front(v, f).tolist() == [True, True, True, False, False]
+
+
+def test_benchmark_script_reports_candidates_per_second():
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "sweep.py"), "--candidates", "2", "--grid", "4", "--workers", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 0, out.stderr
+    assert "cand/s" in out.stdout and "load average" in out.stdout
