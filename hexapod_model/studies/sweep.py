@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from ..analysis.workspace import WORST
 from ..description.geometry import HexapodGeometry, geometry_from_dict
 from ..description.geometry_toml import geometry_to_toml
 from ..exceptions import HexapodError
@@ -29,17 +30,12 @@ from .evaluate import Settings, evaluate_hexapod
 from .sweep_spec import SweepSpec, apply_parameters
 
 RESULT_VERSION = 1
+#: the table's figures: the workspace, its worst cases (:data:`~hexapod_model.analysis.workspace.WORST`), home
 METRICS = (
     "volume_m3",
     "points_inside",
-    "kappa_max",
     "kappa_mean",
-    "sigma_min_min",
-    "sigma_max_max",
-    "force_per_force_max",
-    "force_per_moment_max",
-    "stiffness_translational_min",
-    "stiffness_rotational_min",
+    *WORST,
     "home_kappa",
     "home_sigma_min",
     "length_unit_m",
@@ -107,21 +103,17 @@ def evaluate_candidate(
     except HexapodError as exc:
         return {"status": "invalid", "reason": " ".join(str(exc).split())}
     r = evaluate_hexapod(hexa, settings, g.name)
-    worst = r["worst"]
+    worst = dict(r["worst"])
     k = leg_stiffness if leg_stiffness is not None else float("nan")
+    for name in ("stiffness_translational_min", "stiffness_rotational_min"):
+        worst[name] *= k  # per N/m of leg stiffness in the slices
     return {
         "status": "ok",
         "reason": "",
         "volume_m3": float(r["volume_m3"]),
         "points_inside": r["points_inside"],
-        "kappa_max": worst["kappa_max"],
         "kappa_mean": r["average"]["kappa"],
-        "sigma_min_min": worst["sigma_min_min"],
-        "sigma_max_max": worst["sigma_max_max"],
-        "force_per_force_max": worst["force_per_force_max"],
-        "force_per_moment_max": worst["force_per_moment_max"],
-        "stiffness_translational_min": k * worst["stiffness_translational_min"],
-        "stiffness_rotational_min": k * worst["stiffness_rotational_min"],
+        **worst,
         "home_kappa": r["home"]["kappa"],
         "home_sigma_min": r["home"]["sigma_min"],
         "length_unit_m": r["length_unit_m"],
