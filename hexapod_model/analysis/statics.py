@@ -110,23 +110,20 @@ def wrench_at_origin(
 def joint_centres(hexa: Hexapod, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(6, 3) platform and (6, 3) base joint centres of the legs at ``q`` (base frame, m).
 
-    Platform: the closure's tip frame (the platform Cardan centre or ball centre). Base: the geometry's
-    base anchor (for guideway legs moved along the guideway by the slider), or for a URDF/MJCF without
-    geometry the origin of the leg's first joint.
+    Platform: the closure's tip frame (the platform Cardan centre, the midpoint of the common normal of
+    its axes, or the ball's centre). Base: the midpoint of the origins of the leg's first two passive
+    joints, the base Cardan's two axes (for guideway legs the slider's Cardan, wherever the slider is).
+    The same for a geometry, a URDF or an MJCF.
     """
     m = hexa.model
     d = m.createData()
     pin.framesForwardKinematics(m, d, np.asarray(q, dtype=float))
     legs = hexa.closed_loop.legs
     platform = np.array([d.oMf[leg.tip_frame].translation for leg in legs])
-    g = hexa.geometry
-    if g is not None:
-        base = g.base_points()
-        if g.joint_type == "guideway":
-            slide = np.asarray(q, dtype=float)[hexa.closed_loop.prismatic_q]
-            base = base + slide[:, None] * np.array([leg.guideway for leg in g.legs])
-    else:
-        base = np.array([d.oMi[leg.joints[0]].translation for leg in legs])
+    base = np.empty((6, 3))
+    for i, leg in enumerate(legs):
+        a, b = [j for j in leg.joints if j != leg.prismatic][:2]
+        base[i] = (d.oMi[a].translation + d.oMi[b].translation) / 2
     return platform, base
 
 

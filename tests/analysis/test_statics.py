@@ -204,3 +204,29 @@ def test_statics_cli_margin_and_bad_input(tmp_path, capsys):
     assert len(err) == 1 and "wrench" in err[0]
     assert main(["statics", "reference", "--wrench", "0", "0", "1", "0", "0", "0", "--brake-capacity", "-3"]) == 2
     assert "--brake-capacity" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_joint_centres_at_home_are_the_geometry_anchors(name):
+    hexa = hexapod(name)
+    g = hexa.geometry
+    platform_c, base_c = joint_centres(hexa, hexa.q_home)
+    np.testing.assert_allclose(base_c, g.base_points(), atol=1e-12)
+    np.testing.assert_allclose(platform_c, g.platform_points() + g.home_translation, atol=1e-12)
+
+
+def test_urdf_and_mjcf_files_give_the_geometry_loads(tmp_path):
+    """Without a geometry (URDF, MJCF) the loads come from the model alone: the same numbers."""
+    hexa = hexapod("reference")
+    T = _pose(hexa)
+    ours = leg_forces(hexa, T, WRENCH)
+    (tmp_path / "r.urdf").write_text(hm.geometry_to_urdf(hexa.geometry))
+    (tmp_path / "r.xml").write_text(geometry_to_mjcf(hexa.geometry))
+    for path in ("r.urdf", "r.xml"):
+        other = hm.Hexapod.load(str(tmp_path / path), compiled=False)
+        assert other.geometry is None
+        theirs = leg_forces(other, T, WRENCH)
+        for field in ("axial_force", "leg_force", "platform_moment", "base_moment"):
+            np.testing.assert_allclose(
+                getattr(theirs, field), getattr(ours, field), atol=1e-9 * ours.largest_axial_force
+            )
