@@ -17,18 +17,21 @@ import json
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import can
 
+from .alarms import Acknowledgement
 from .config import ServiceConfig, geometry_hash
 from .cycle import FixtureCycle
 from .errors import ServiceError
-from .http import HttpEndpoint, Routes
 from .solve import warm_up
 from .store import Store, StoreWriter
+
+if TYPE_CHECKING:
+    from .server import HttpServer
 
 log = logging.getLogger(__name__)
 Record = dict
@@ -69,62 +72,134 @@ class FixtureService:
         ConfigError: a fixture's hexapod cannot be loaded.
     """
 
-    def __init__(self, config: ServiceConfig, bus: can.BusABC | None = None, http: bool = True, hexapods=None):
+    def __init__(
+        self,
+        config: ServiceConfig,
+        bus: can.BusABC | None = None,
+        http: bool = True,
+        hexapods: dict | None = None,
+        routes: Sequence[Any] = (),
+    ):
         self.config = config
-        hexapods = hexapods or {}
-        self.hexapods = {f.name: hexapods.get(f.name) or f.load_hexapod() for f in config.fixtures}
+        #: the fixtures' hexapods, by name: those given, the others loaded by :meth:`start`
+        self.hexapods = {f.name: hexapods[f.name] for f in config.fixtures if hexapods and f.name in hexapods}
         self._bus, self._own_bus, self._http = bus, bus is None, http
+        self._extra_routes = list(routes)
+        self._lock = threading.Lock()
+        self._ready = threading.Event()
+        self._preparing: threading.Thread | None = None
+        #: what the service does while starting (``/health`` says it with ``503 starting``)
+        self.phase = "starting"
+        #: the error that stopped a background start (``start(wait=False)``), else None
+        self.failure: Exception | None = None
         self._subscribers: list[Callable[[Record], None]] = []
         self._json: dict[str, tuple[Record, str]] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.cycles: dict[str, FixtureCycle] = {}
-        self.endpoint: HttpEndpoint | None = None
+        self.endpoint: HttpServer | None = None
         self.store: Store | None = None
         self.writer: StoreWriter | None = None
         self.frames = self.unknown_frames = 0
         self._started = 0.0
 
     # ----- life cycle -----
-    def start(self) -> FixtureService:
-        """Open the store, recover every fixture's last lock, open bus and HTTP, start the cycle thread."""
+    def start(self, wait: bool = True) -> FixtureService:
+        """Serve HTTP (``503 starting`` at first), open the bus, then prepare and start the cycle.
+
+        Preparing loads the hexapods, opens the store, recovers every fixture's last lock and
+        compiles the solver's kernels (about a minute after installation). With ``wait`` it
+        happens here (its errors are raised); without, in a thread: :attr:`ready` says when the
+        cycle runs, :attr:`failure` holds the error that stopped the preparation.
+        """
         cfg = self.config
         self._started = time.time()
+        self._stop.clear()
         try:  # what can fail fails first, before anything is logged or written
             if self._http:
-                routes = Routes(self.names, self.record, self.health, self.record_json)
-                self.endpoint = HttpEndpoint(cfg.http.host, cfg.http.port, routes)
+                from .server import HttpServer
+
+                try:
+                    from .http import build_app
+                except ImportError:
+                    from .server import INSTALL_HINT
+
+                    raise ServiceError(INSTALL_HINT) from None
+                self.endpoint = HttpServer(build_app(self, self._extra_routes), cfg.http)
             if self._bus is None:
                 self._bus = open_bus(cfg)
-            self.store = Store(cfg.store.path, cfg.store.samples)
-            for f in cfg.fixtures:
-                hexa = self.hexapods[f.name]
-                cycle = FixtureCycle(f, hexa, geometry_hash(hexa), self.store.last_lock(f.name), self._started)
-                self.cycles[f.name] = cycle
-                log.info("fixture %s: %s", f.name, cycle.recovery)
+            if self.endpoint is not None:
+                self.endpoint.start()
+                log.info("serving %s", self.endpoint.url)
+            if wait:
+                self._prepare()
         except BaseException:
             self._close()
             raise
-        self._routes = {
-            (leg.can_id, leg.extended_id): (self.cycles[f.name], k)
-            for f in cfg.fixtures
-            for k, leg in enumerate(f.legs)
-        }
-        self._warm_up()
-        self.writer = StoreWriter(self.store)
-        self._last_logged = {name: -1e300 for name in self.cycles}
-        if self.endpoint is not None:
-            self.endpoint.start()
-            log.info("serving http://%s:%d", *self.endpoint.address)
-        self._stop.clear()
-        # what is alive now (numba, pinocchio, python-can, the hexapods) lives as long as the
-        # service: out of the cyclic collector's reach, whose full passes over it stalled every
-        # thread for ~100 ms (the p99 latency); the records' garbage is still collected
-        gc.collect()
-        gc.freeze()
-        self._thread = threading.Thread(target=self._loop, name="hexapod-cycle", daemon=True)
-        self._thread.start()
+        if not wait:
+            self._preparing = threading.Thread(target=self._prepare_logged, name="hexapod-start", daemon=True)
+            self._preparing.start()
         return self
+
+    def _prepare_logged(self) -> None:
+        try:
+            self._prepare()
+        except Exception as exc:  # noqa: BLE001 - kept for the caller (one line), never a traceback
+            self.failure = exc
+            log.debug("cannot start: %s", exc)
+
+    def _prepare(self) -> None:
+        """Hexapods, store, recovered locks, kernels; then the store writer and the cycle thread."""
+        cfg = self.config
+        self.phase = "loading the hexapods"
+        for f in cfg.fixtures:
+            if f.name not in self.hexapods:
+                self.hexapods[f.name] = f.load_hexapod()
+        self.phase = "opening the store"
+        store = Store(cfg.store.path, cfg.store.samples)
+        try:
+            cycles = {}
+            for f in cfg.fixtures:
+                hexa = self.hexapods[f.name]
+                cycles[f.name] = FixtureCycle(f, hexa, geometry_hash(hexa), store.last_lock(f.name), self._started)
+                log.info("fixture %s: %s", f.name, cycles[f.name].recovery)
+            self.phase = "compiling the solver's kernels"
+            self._warm_up()
+        except BaseException:
+            store.close()
+            raise
+        with self._lock:
+            if self._stop.is_set():  # stopped meanwhile
+                store.close()
+                return
+            self.store, self.cycles = store, cycles
+            self._routes = {
+                (leg.can_id, leg.extended_id): (self.cycles[f.name], k)
+                for f in cfg.fixtures
+                for k, leg in enumerate(f.legs)
+            }
+            self.writer = StoreWriter(self.store)
+            self._last_logged = {name: -1e300 for name in self.cycles}
+            # what is alive now (numba, pinocchio, python-can, the hexapods) lives as long as the
+            # service: out of the cyclic collector's reach, whose full passes over it stalled every
+            # thread for ~100 ms (the p99 latency); the records' garbage is still collected
+            gc.collect()
+            gc.freeze()
+            self._thread = threading.Thread(target=self._loop, name="hexapod-cycle", daemon=True)
+            self._thread.start()
+            self.phase = "running"
+            self._ready.set()
+
+    @property
+    def ready(self) -> bool:
+        """Whether the cycle runs (before: HTTP answers ``503`` with :meth:`starting`)."""
+        return self._ready.is_set()
+
+    def starting(self) -> dict:
+        """What ``/health`` says before the service is ready: ``starting`` (and what it does) or ``failed``."""
+        if self.failure is not None:
+            return {"status": "failed", "error": str(self.failure)}
+        return {"status": "starting", "phase": self.phase, "uptime_s": time.time() - self._started}
 
     def _warm_up(self) -> None:
         """Compile the kernels a reading set runs before the cycle reads its first frame; drop what queued meanwhile.
@@ -150,23 +225,36 @@ class FixtureService:
             )
 
     def stop(self) -> None:
-        """Stop the cycle, flush the store, close HTTP and (an own) bus; unfreeze the collector's objects."""
+        """Stop the cycle, flush the store, close HTTP and (an own) bus; unfreeze the collector's objects.
+
+        Returns within about a second even while the kernels compile: the preparation then
+        ends on its own and closes the store it opened (see :attr:`preparing`).
+        """
         self._stop.set()
-        if self._thread is not None:
-            if self._thread.ident is not None:  # Ctrl-C may land between creating and starting it
-                self._thread.join()
-            self._thread = None
-        if self.writer is not None:
-            self.writer.stop()
-            self.writer = None
-        self._close()
+        if self._preparing is not None:
+            self._preparing.join(0.3)
+        with self._lock:  # the preparation either finished or will see _stop and clean up itself
+            self._ready.clear()
+            if self._thread is not None:
+                if self._thread.ident is not None:  # Ctrl-C may land between creating and starting it
+                    self._thread.join()
+                self._thread = None
+            if self.writer is not None:
+                self.writer.stop()
+                self.writer = None
+            self._close()
         gc.unfreeze()
+
+    @property
+    def preparing(self) -> bool:
+        """Whether the background preparation still runs (a compile cannot be interrupted)."""
+        return self._preparing is not None and self._preparing.is_alive()
 
     def _close(self) -> None:
         if self.endpoint is not None:
             self.endpoint.stop()
             self.endpoint = None
-        if self._own_bus and self._bus is not None:
+        if self._own_bus and self._bus is not None and not self.preparing:
             self._bus.shutdown()
             self._bus = None
         if self.store is not None:
@@ -213,29 +301,57 @@ class FixtureService:
         self._json[name] = (rec, text)  # one entry per fixture; a race only serialises twice
         return text
 
+    def acknowledge(self, name: str, by: str, client: str = "local", note: str = "") -> Acknowledgement | None:
+        """Acknowledge the fault latched on fixture ``name`` (None when none waits; ``KeyError``: no such fixture).
+
+        The cycle clears it at its next set (see :mod:`~hexapod_model.service.alarms`); logged
+        with who, from where and when.
+        """
+        ack = self.cycles[name].acknowledge(by, client, note)
+        if ack is not None:
+            flags = ",".join(ack.fault.flags())
+            log.warning("fixture %s: acknowledgement of %s by %s from %s", name, flags, by, client)
+        return ack
+
     def health(self) -> dict:
-        """Service state: ``ok`` or ``degraded`` (store error, cycle stopped or a fixture without a good pose)."""
+        """Service state: ``ok`` or ``degraded``, with every problem as one line in ``problems``.
+
+        Degraded: a store error, the cycle stopped, or a fixture whose latest record is not ``ok``
+        (its status and flags say why) or whose fault waits for an acknowledgement.
+        """
         now = time.time()
-        fixtures = {}
+        fixtures, problems = {}, []
         for name, c in self.cycles.items():
             rec = c.last
             fixtures[name] = {
                 "status": rec["status"],
+                "flags": rec["flags"],
                 "state": rec["state"],
                 "stored": rec["stored"],
                 "age_s": now - rec["t"],
                 "recovery": c.recovery,
                 "recovered_t": None if c.recovered is None else c.recovered.t,
+                "fault": None if c.fault is None else c.fault.describe(),
+                "acknowledged": None if c.acknowledged is None else c.acknowledged.describe(),
+                "counters": dict(c.counters),
             }
+            if rec["status"] != "ok":
+                problems.append(f"{name}: {rec['status']}" + (f" ({', '.join(rec['flags'])})" if rec["flags"] else ""))
+            if c.fault is not None and rec["status"] != "unacknowledged_fault":
+                problems.append(f"{name}: {', '.join(c.fault.flags())} waits for an acknowledgement")
         store_error = None if self.writer is None else self.writer.error
+        if store_error is not None:
+            problems.append(f"store: {store_error}")
         running = self._thread is not None and self._thread.is_alive()
-        good = running and store_error is None and all(f["status"] == "ok" for f in fixtures.values())
+        if not running:
+            problems.append("the cycle thread is not running")
         return {
-            "status": "ok" if good else "degraded",
+            "status": "ok" if not problems else "degraded",
+            "problems": problems,
             "uptime_s": now - self._started,
             "frames": self.frames,
             "unknown_frames": self.unknown_frames,
-            "store": {"path": str(self.config.store.path), "error": store_error},
+            "store": {"file": self.config.store.path.name, "error": store_error},
             "fixtures": fixtures,
         }
 

@@ -17,6 +17,7 @@ import subprocess
 import sys
 import threading
 import time
+import urllib.error
 import urllib.request
 import uuid
 from pathlib import Path
@@ -81,8 +82,9 @@ def test_bad_configuration_one_line_exit_2(tmp_path, capsys, case):
     text, words = bad_cases(tmp_path)[case]
     cfg = tmp_path / "bad.toml"
     cfg.write_text(text)
-    assert main(["serve", str(cfg), "--duration", "0.1"]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
+    assert main(["serve", str(cfg), "--duration", "30"]) == 2
+    # a hexapod file is loaded once HTTP answers "starting" (the load may compile): INFO lines first
+    err = [line for line in capsys.readouterr().err.strip().splitlines() if " INFO " not in line]
     assert len(err) == 1 and err[0].startswith("hexapod serve: error:") and words in err[0], err
 
 
@@ -148,6 +150,15 @@ def test_simulate_encoders_sends_the_fixtures_own_frames(tmp_path, capsys):
     assert np.allclose([readings[0x181 + k] for k in range(6)], truth, atol=0.6e-6)  # 1 um counts, no noise
 
 
+def test_bad_http_host_names_the_host_not_the_port(tmp_path, capsys):
+    cfg = write_config(tmp_path, extra="allow_unauthenticated_reads = true\n")
+    cfg.write_text(cfg.read_text().replace('host = "127.0.0.1"', 'host = "no-such-host.invalid"'))
+    assert main(["serve", str(cfg), "--duration", "0.1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no-such-host.invalid" in err[0] and "set [http] host" in err[0], err
+    assert "port" not in err[0].split("(")[0]
+
+
 # ----- process level -----
 def env():
     e = dict(os.environ)
@@ -187,9 +198,19 @@ class Served:
                 self._port_seen.set()
 
     def wait_port(self, timeout=90.0) -> int:
+        """The port, once the service is ready (``/health`` answers ``503 starting`` before)."""
         assert self._port_seen.wait(timeout), "".join(self.err)
         assert self.port is not None
+        self.wait_for(lambda: self.status("/health") != 503, timeout)
         return self.port
+
+    def status(self, path, headers=None) -> int:
+        req = urllib.request.Request(f"http://127.0.0.1:{self.port}{path}", headers=headers or {})
+        try:
+            with urllib.request.urlopen(req, timeout=5) as r:
+                return r.status
+        except urllib.error.HTTPError as e:
+            return e.code
 
     def get(self, path):
         with urllib.request.urlopen(f"http://127.0.0.1:{self.port}{path}", timeout=5) as r:
@@ -248,6 +269,25 @@ def test_serve_simulated_over_http_and_json_lines_then_ctrl_c_and_fixture_status
     assert float(rows[1].split(",")[1]) == first_locked["t"]
     assert main(["fixture", "history", str(cfg), "--samples", "--since", "0"]) == 0
     assert len(capsys.readouterr().out.splitlines()) > 20
+
+
+def test_first_start_answers_503_starting_at_once_and_sigint_stops_within_2_s(tmp_path):
+    cfg = write_config(tmp_path)
+    t0 = time.monotonic()
+    served = Served(str(cfg), "--simulate", str(write_sim(tmp_path, HOLD_SIM)))
+    try:
+        assert served._port_seen.wait(60), "".join(served.err)
+        first = served.status("/health")
+        answered = time.monotonic() - t0
+        assert first in (503, 200), first
+        served.proc.send_signal(signal.SIGINT)  # while starting (or just after)
+        t1 = time.monotonic()
+        code = served.proc.wait(10)
+        assert time.monotonic() - t1 < 2.0 and code == 0
+    finally:
+        served.finish()
+    assert answered < 10.0  # the port answers as the process starts: imports only, no compile, no hexapod
+    assert not any("Traceback" in line for line in served.err), "".join(served.err)
 
 
 def test_kill_9_while_committing_locks_then_restart_recovers_the_last_lock(tmp_path):
@@ -324,3 +364,33 @@ def test_view_live_shows_a_served_pose(tmp_path, capsys):
         sim_bus.shutdown()
     captured = capsys.readouterr()
     assert "meshcat: http://127.0.0.1" in captured.out and "showed 1 poses of left" in captured.err
+
+
+def test_a_step_needs_an_acknowledgement_from_the_command_line_then_ok_again(tmp_path, capsys):
+    token = tmp_path / "fixture.token"
+    token.write_text("cli-acknowledge-token-0123456789\n")
+    token.chmod(0o600)
+    cfg = write_config(tmp_path, extra='token_file = "fixture.token"\n')
+    body = '[[fixtures]]\nname = "left"\nrate = 100.0\ntrajectory = "A"\n'
+    body += '[[fixtures.faults]]\nkind = "step"\nleg = 2\nsize = 0.0005\nstart = 1.0\n'
+    served = Served(str(cfg), "--simulate", str(write_sim(tmp_path, body)), "--jsonl")
+    try:
+        served.wait_port()
+        assert served.status("/health") == 401  # a token is configured: reads need it too
+        served.wait_for(lambda: any(r["status"] == "unacknowledged_fault" for r in served.records))
+        time.sleep(0.3)
+        n = len(served.records)
+        url = ["--url", f"http://127.0.0.1:{served.port}"]  # port 0 in the configuration: the one it took
+        assert main(["fixture", "acknowledge", str(cfg), "left", "--by", "tester", "--note", "checked", *url]) == 0
+        served.wait_for(lambda: any(r["status"] == "ok" for r in served.records[n:]))
+        assert main(["fixture", "acknowledge", str(cfg), "left", "--by", "tester", *url]) == 2  # nothing waits now
+    finally:
+        code = served.finish(signal.SIGINT)
+    assert code == 0, "".join(served.err)
+    err = capsys.readouterr().err
+    assert "left: discontinuity (leg 2) acknowledged by tester" in err and "409" in err
+    log = "".join(served.err)
+    assert "acknowledged by tester (127.0.0.1:" in log and "Traceback" not in log
+    first = next(k for k, r in enumerate(served.records) if r["status"] == "unacknowledged_fault")
+    later_ok = next(k for k, r in enumerate(served.records) if k > first and r["status"] == "ok")
+    assert all(r["status"] != "ok" and "discontinuity:leg2" in r["flags"] for r in served.records[first:later_ok])
