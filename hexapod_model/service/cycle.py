@@ -32,6 +32,7 @@ import time
 import numpy as np
 import pinocchio as pin
 
+from ..analysis.statics import loads_at
 from ..kinematics.hexapod import Hexapod
 from .alarms import UNACKNOWLEDGED, Acknowledgement, LatchedFault
 from .config import FixtureConfig
@@ -53,6 +54,7 @@ RECORD_KEYS = (
     "stored",
     "sigma",
     "singularity_margin",
+    "load",
 )
 _POSE_STATUSES = ("ok", "flagged", "drift")
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
@@ -102,6 +104,7 @@ class FixtureCycle:
         self._advisory: set[str] = set()
         self._episode = self._stored_episode = 0
         self._new_lock_stored = False
+        self._load: dict | None = None  # the process wrench's loads at the lock pose
         self.recovered: LockEvent | None = None
         self.recovery = "no stored lock pose"
         if recovered is not None and recovered.geometry_hash == geometry_hash:
@@ -327,6 +330,7 @@ class FixtureCycle:
             )
         else:
             self.lock.lock(t, rec.readings)
+            self._load = self._load_at(rec.q)
             self._episode += 1
             self._stored_episode = self._episode
 
@@ -340,9 +344,26 @@ class FixtureCycle:
         status = "ok" if self.fault is None else self.fault.stored_status()  # the lock carries a waiting fault
         event = LockEvent(self.cfg.name, t, sol.pose[:3, 3].copy(), quat, mean, status, self.geometry_hash, sol.q)
         self.lock.lock(t, mean)
+        self._load = self._load_at(sol.q)
         self._episode += 1
         self.pending_lock = (self._episode, event)
         log.info("fixture %s: locked", self.cfg.name)
+
+    def _load_at(self, q: np.ndarray) -> dict | None:
+        """The record's ``load`` at the lock configuration ``q``: leg forces and brake margin (once per lock)."""
+        wrench = self.cfg.process_wrench
+        if wrench is None:
+            return None
+        loads = loads_at(self.hexa, q, wrench, "platform", self.cfg.wrench_point)
+        capacity = self.cfg.brake_capacity
+        if capacity is None and self.hexa.geometry is not None:
+            capacity = self.hexa.geometry.brake_capacity
+        return {
+            "leg_forces_N": loads.axial_force.tolist(),
+            "largest_leg_force_N": loads.largest_axial_force,
+            "brake_capacity_N": capacity,
+            "margin_N": None if capacity is None else loads.margin(capacity),
+        }
 
     # ----- records -----
     def _failure(self, t: float, status: str, flags: list[str]) -> dict:
@@ -385,6 +406,7 @@ class FixtureCycle:
             "stored": locked and self._stored_episode == self._episode,
             "sigma": sigma,
             "singularity_margin": margin,
+            "load": self._load if locked else None,
         }
         self.last = record
         return record
