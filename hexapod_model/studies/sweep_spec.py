@@ -47,7 +47,7 @@ PARAMETERS = {
     "base_radius": "radius of the base anchors (m): the legs become the three-fold symmetric layout",
     "platform_radius": "radius of the platform anchors (m), same layout",
     "base_spread_deg": "angle between the two base anchors of a pair (deg), same layout",
-    "platform_spread_deg": "angle between platform anchor pairs' neighbours (deg), same layout",
+    "platform_spread_deg": "angle between the two platform anchors of a pair (deg), same layout",
 }
 LAYOUT = ("base_radius", "platform_radius", "base_spread_deg", "platform_spread_deg")
 MODES = ("grid", "random")

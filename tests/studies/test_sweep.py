@@ -11,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import hexapod_model as hm
@@ -165,8 +166,6 @@ def test_random_sample_is_seeded_and_within_ranges(tmp_path):
 
 
 def test_pareto_front():
-    import numpy as np
-
     v = np.array([1.0, 2.0, 3.0, 2.0, np.nan])
     f = np.array([1.0, 1.5, 3.0, 2.0, 0.1])
     assert pareto_front(v, f).tolist() == [True, True, True, False, False]
@@ -181,3 +180,21 @@ def test_benchmark_script_reports_candidates_per_second():
     )
     assert out.returncode == 0, out.stderr
     assert "cand/s" in out.stdout and "load average" in out.stdout
+
+
+def test_layout_parameters_rebuild_the_base_and_a_base_file_is_relative_to_the_spec(tmp_path):
+    from hexapod_model.description.geometry_toml import save_geometry
+
+    base = hm.get_preset("reference")
+    same = apply_parameters(base, {"base_radius": 0.25, "platform_spread_deg": 24.0}, "same")
+    np.testing.assert_allclose(same.base_points(), base.base_points(), atol=1e-12)
+    np.testing.assert_allclose(same.platform_points(), base.platform_points(), atol=1e-12)
+    wider = apply_parameters(base, {"platform_radius": 0.18, "stroke_max": 0.25}, "wider")
+    np.testing.assert_allclose(np.linalg.norm(wider.platform_points()[:, :2], axis=1), 0.18)
+    assert all(leg.stroke == (-0.16, 0.25) for leg in wider.legs)
+    (tmp_path / "g").mkdir()
+    save_geometry(base, tmp_path / "g" / "mine.toml")
+    spec = tmp_path / "g" / "s.toml"
+    spec.write_text('base = "mine.toml"\n[parameters]\nhome_height = [0.4]\n')
+    loaded = load_spec(spec)
+    assert loaded.base == base and loaded.base_source == str((tmp_path / "g" / "mine.toml").resolve())
