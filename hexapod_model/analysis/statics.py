@@ -29,12 +29,14 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ..exceptions import InputError
+from ..exceptions import InputError, SingularityError
 from ..kinematics.checks import check_vector
 from ..kinematics.hexapod import Hexapod
 from .jacobian import leg_jacobian
 
 FRAMES = ("platform", "base")
+#: condition number of the leg Jacobian (m, rad) above which the legs cannot hold every wrench: singular
+SINGULAR_CONDITION = 1e12
 
 
 @dataclass(frozen=True)
@@ -130,11 +132,23 @@ def joint_centres(hexa: Hexapod, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 def loads_at(
     hexa: Hexapod, q: np.ndarray, wrench: ArrayLike, frame: str = "platform", point: ArrayLike | None = None
 ) -> LegLoads:
-    """:class:`LegLoads` at a solved configuration ``q`` (see :func:`leg_forces` for the wrench)."""
+    """:class:`LegLoads` at a solved configuration ``q`` (see :func:`leg_forces` for the wrench).
+
+    Raises:
+        SingularityError: the leg Jacobian's condition number exceeds :data:`SINGULAR_CONDITION` (or is
+            infinite): at a singularity some wrench needs unbounded leg forces.
+    """
     q = np.asarray(q, dtype=float)
     pose = hexa.pose_of(q)
     W = wrench_at_origin(pose, wrench, frame, point)
     J = leg_jacobian(hexa, q)
+    cond = float(np.linalg.cond(J)) if np.all(np.isfinite(J)) else float("inf")
+    if not cond <= SINGULAR_CONDITION:
+        raise SingularityError(
+            None,
+            f"singular: the leg Jacobian's condition number {cond:.3g} exceeds {SINGULAR_CONDITION:g} at this pose: "
+            "the locked legs cannot hold every wrench there",
+        )
     tension = np.linalg.solve(J.T, W)
     # the wrench leg i exerts on the platform: -t_i J_i (force; moment about the platform origin)
     on_platform = -tension[:, None] * J
@@ -166,7 +180,7 @@ def leg_forces(
 
     Raises:
         InputError: a bad pose, wrench, frame or point.
-        WorkspaceError, ConvergenceError, SingularityError: the pose cannot be reached.
+        WorkspaceError, ConvergenceError, SingularityError: the pose cannot be reached, or is singular.
     """
     sol = hexa.inverse(pose)
     return loads_at(hexa, sol.q, wrench, frame, point)

@@ -33,6 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..analysis.statics import loads_at
+from ..exceptions import SingularityError
 from ..kinematics.hexapod import Hexapod
 from .alarms import UNACKNOWLEDGED, Acknowledgement, LatchedFault
 from .config import FixtureConfig
@@ -354,10 +355,14 @@ class FixtureCycle:
         wrench = self.cfg.process_wrench
         if wrench is None:
             return None
-        loads = loads_at(self.hexa, q, wrench, "platform", self.cfg.wrench_point)
         capacity = self.cfg.brake_capacity
         if capacity is None and self.hexa.geometry is not None:
             capacity = self.hexa.geometry.brake_capacity
+        try:
+            loads = loads_at(self.hexa, q, wrench, "platform", self.cfg.wrench_point)
+        except SingularityError:  # unbounded leg forces: no number to give
+            log.warning("fixture %s: locked at a singular pose: no leg forces for the process wrench", self.cfg.name)
+            return {"leg_forces_N": None, "largest_leg_force_N": None, "brake_capacity_N": capacity, "margin_N": None}
         return {
             "leg_forces_N": loads.axial_force.tolist(),
             "largest_leg_force_N": loads.largest_axial_force,

@@ -230,3 +230,21 @@ def test_urdf_and_mjcf_files_give_the_geometry_loads(tmp_path):
             np.testing.assert_allclose(
                 getattr(theirs, field), getattr(ours, field), atol=1e-9 * ours.largest_axial_force
             )
+
+
+def test_singular_pose_is_refused_not_answered(capsys):
+    """The spherical preset is singular at 90 deg yaw: no finite leg forces hold every wrench there."""
+    from hexapod_model.exceptions import SingularityError
+
+    hexa = hexapod("spherical")
+    T = hexa.home_pose.copy()
+    T[:3, :3] = rpy_to_matrix(0.0, 0.0, np.radians(90.0))
+    with pytest.raises(SingularityError, match="condition number"):
+        leg_forces(hexa, T, WRENCH)
+    z = hexa.home_pose[2, 3]
+    assert (
+        main(["statics", "spherical", "--pose", "0", "0", str(z), "0", "0", "90", "--wrench", *"0 0 -1 0 0 0".split()])
+        == 1
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "singular" in err[0]
