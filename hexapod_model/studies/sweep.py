@@ -13,7 +13,7 @@ import hashlib
 import json
 import time
 import tomllib
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -160,59 +160,33 @@ def run_sweep(
     (out / "geometries").mkdir(parents=True, exist_ok=True)
     (out / "results").mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, Any]] = []
-    todo: list[tuple[int, str]] = []
+    todo: dict[str, tuple[str, list[int]]] = {}  # id -> geometry text, its rows (a value listed twice: one task)
     reused = 0
     for values in spec.candidates():
         cid = candidate_id(spec, values)
         row: dict[str, Any] = {"id": cid, **values, "geometry": ""}
+        rows.append(row)
         try:
             g = apply_parameters(spec.base, values, f"{spec.base.name}_{cid}")
         except HexapodError as exc:
             row |= {"status": "invalid", "reason": " ".join(str(exc).split())}
-            rows.append(row)
             continue
         path = out / "geometries" / f"{cid}.toml"
         if not path.exists():
             comment = f"candidate {cid} of a sweep over {spec.base_source}: " + json.dumps(values)
             atomic_write_text(path, geometry_to_toml(g, comment))
         row["geometry"] = str(path)
-        result = out / "results" / f"{cid}.json"
-        if result.exists():
-            row |= json.loads(result.read_text())
+        saved = out / "results" / f"{cid}.json"
+        if saved.exists():
+            row |= json.loads(saved.read_text())
             reused += 1
         else:
-            todo.append((len(rows), path.read_text()))
-        rows.append(row)
+            todo.setdefault(cid, (path.read_text(), []))[1].append(len(rows) - 1)
     if todo:
-        from distributed import as_completed
-
-        from .cluster import dask_client
-
-        with dask_client(scheduler, workers) as client:
-            if on_client is not None:
-                on_client(client)
-            futures = {
-                client.submit(
-                    evaluate_candidate,
-                    text,
-                    spec.settings,
-                    spec.leg_stiffness,
-                    spec.leg_clearance,
-                    key=f"candidate-{rows[k]['id']}",
-                    pure=False,
-                ): k
-                for k, text in todo
-            }
-            try:
-                for n, fut in enumerate(as_completed(futures), start=1):
-                    k, result = futures[fut], fut.result()
-                    atomic_write_text(out / "results" / f"{rows[k]['id']}.json", json.dumps(result) + "\n")
-                    rows[k] |= result
-                    if on_progress is not None:
-                        on_progress(n, len(todo))
-            except KeyboardInterrupt:
-                client.cancel(list(futures))
-                raise
+        for cid, result in _compute(spec, todo, scheduler, workers, on_progress, on_client):
+            atomic_write_text(out / "results" / f"{cid}.json", json.dumps(result) + "\n")
+            for k in todo[cid][1]:
+                rows[k] |= result
     for row in rows:
         for name in METRICS:
             row.setdefault(name, float("nan"))
@@ -222,6 +196,37 @@ def run_sweep(
         row["pareto"] = bool(on_front)
     table = write_table(out / "sweep.csv", rows, list(spec.parameters))
     return {"rows": rows, "computed": len(todo), "reused": reused, "table": table}
+
+
+def _compute(
+    spec: SweepSpec,
+    todo: dict[str, tuple[str, list[int]]],
+    scheduler: str | None,
+    workers: int | None,
+    on_progress: Callable[[int, int], None] | None,
+    on_client: Callable[[Any], None] | None,
+) -> Iterator[tuple[str, dict[str, Any]]]:
+    """``(id, result)`` of every candidate of ``todo`` as its Dask task finishes."""
+    from distributed import as_completed
+
+    from .cluster import dask_client
+
+    with dask_client(scheduler, workers) as client:
+        if on_client is not None:
+            on_client(client)
+        args = (spec.settings, spec.leg_stiffness, spec.leg_clearance)
+        futures = {
+            client.submit(evaluate_candidate, text, *args, key=f"candidate-{cid}", pure=False): cid
+            for cid, (text, _) in todo.items()
+        }
+        try:
+            for n, fut in enumerate(as_completed(futures), start=1):
+                yield futures[fut], fut.result()
+                if on_progress is not None:
+                    on_progress(n, len(todo))
+        except (KeyboardInterrupt, GeneratorExit):
+            client.cancel(list(futures))
+            raise
 
 
 def write_table(path: Path, rows: list[dict[str, Any]], parameters: list[str]) -> Path:

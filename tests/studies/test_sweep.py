@@ -198,3 +198,15 @@ def test_layout_parameters_rebuild_the_base_and_a_base_file_is_relative_to_the_s
     spec.write_text('base = "mine.toml"\n[parameters]\nhome_height = [0.4]\n')
     loaded = load_spec(spec)
     assert loaded.base == base and loaded.base_source == str((tmp_path / "g" / "mine.toml").resolve())
+
+
+def test_a_value_listed_twice_is_one_task_and_two_rows(scheduler, tmp_path, capsys):
+    spec = tmp_path / "twice.toml"
+    spec.write_text(
+        'base = "reference"\n[evaluate]\ngrid = 3\ncone_deg = 10.0\ncone_samples = 3\n'
+        "[parameters]\nhome_height = [0.4, 0.4]\n"
+    )
+    assert main(["sweep", str(spec), "--scheduler", scheduler, "--out", str(tmp_path / "o")]) == 0
+    assert "1 computed" in capsys.readouterr().out
+    a, b = _rows(tmp_path / "o" / "sweep.csv")
+    assert a == b and a["status"] == "ok"
