@@ -78,6 +78,16 @@ def scheduler():
                 p.wait()
 
 
+def _sweep(tmp_path: Path, scheduler: str, parameters: str, grid: int = 4) -> list[dict[str, str]]:
+    """Run a sweep of the reference preset over ``parameters`` (TOML lines) on ``scheduler``; its rows."""
+    spec = tmp_path / "spec.toml"
+    spec.write_text(
+        f'base = "reference"\n[evaluate]\ngrid = {grid}\ncone_deg = 10.0\ncone_samples = 3\n[parameters]\n{parameters}'
+    )
+    assert main(["sweep", str(spec), "--scheduler", scheduler, "--out", str(tmp_path / "out")]) == 0
+    return _rows(tmp_path / "out" / "sweep.csv")
+
+
 def _rows(path: Path) -> list[dict[str, str]]:
     with open(path, newline="") as f:
         return list(csv.DictReader(f))
@@ -115,13 +125,8 @@ def test_example_sweep_on_two_workers_matches_evaluate_and_resumes(scheduler, tm
 
 
 def test_invalid_candidates_get_their_reason(scheduler, tmp_path, capsys):
-    spec = tmp_path / "spec.toml"
-    spec.write_text(
-        'base = "reference"\n[evaluate]\ngrid = 4\ncone_deg = 10.0\ncone_samples = 3\n'
-        "[parameters]\nplatform_spread_deg = [24.0, 150.0]\nstroke_min = [-0.16, 0.0]\n"
-    )
-    assert main(["sweep", str(spec), "--scheduler", scheduler, "--out", str(tmp_path / "out")]) == 0
-    rows = {(float(r["platform_spread_deg"]), float(r["stroke_min"])): r for r in _rows(tmp_path / "out" / "sweep.csv")}
+    found = _sweep(tmp_path, scheduler, "platform_spread_deg = [24.0, 150.0]\nstroke_min = [-0.16, 0.0]\n")
+    rows = {(float(r["platform_spread_deg"]), float(r["stroke_min"])): r for r in found}
     assert rows[(24.0, -0.16)]["status"] == "ok"
     assert rows[(150.0, -0.16)]["status"] == "invalid" and "cross at home" in rows[(150.0, -0.16)]["reason"]
     for key in ((24.0, 0.0), (150.0, 0.0)):
@@ -201,12 +206,6 @@ def test_layout_parameters_rebuild_the_base_and_a_base_file_is_relative_to_the_s
 
 
 def test_a_value_listed_twice_is_one_task_and_two_rows(scheduler, tmp_path, capsys):
-    spec = tmp_path / "twice.toml"
-    spec.write_text(
-        'base = "reference"\n[evaluate]\ngrid = 3\ncone_deg = 10.0\ncone_samples = 3\n'
-        "[parameters]\nhome_height = [0.4, 0.4]\n"
-    )
-    assert main(["sweep", str(spec), "--scheduler", scheduler, "--out", str(tmp_path / "o")]) == 0
+    a, b = _sweep(tmp_path, scheduler, "home_height = [0.4, 0.4]\n", grid=3)
     assert "1 computed" in capsys.readouterr().out
-    a, b = _rows(tmp_path / "o" / "sweep.csv")
     assert a == b and a["status"] == "ok"
