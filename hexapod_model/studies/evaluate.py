@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import io
 import json
+import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -76,22 +77,39 @@ def make_grid(hexa: Hexapod, grid: int) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 
 #: Hexapods loaded by this process's tasks, by spec (a Dask worker keeps them between tasks)
-_LOADED: dict[str, Hexapod] = {}
+_LOADED: dict[tuple[str, str | None], Hexapod] = {}
 #: version of the checkpoint's slice files (meta.json): a change starts afresh
 CHECKPOINT_VERSION = 2
 
 
-def loaded(spec: str) -> Hexapod:
-    """``Hexapod.load(spec)``, once per process."""
-    hexa = _LOADED.get(spec)
+def hexapod_payload(spec: str) -> tuple[str, str | None]:
+    """What a task needs to load ``spec`` anywhere: ``(file name, its text)`` for a file, ``(preset, None)``."""
+    path = Path(spec)
+    return (path.name, path.read_text()) if path.is_file() else (str(spec), None)
+
+
+def loaded(name: str, text: str | None) -> Hexapod:
+    """The hexapod of a :func:`hexapod_payload`, loaded once per process.
+
+    A file's text is written under its own name into a temporary folder and loaded from there: the same
+    reading as ``Hexapod.load`` of the original, on a worker that cannot see the original.
+    """
+    key = (name, text)
+    hexa = _LOADED.get(key)
     if hexa is None:
-        hexa = _LOADED[spec] = Hexapod.load(spec)
+        if text is None:
+            hexa = Hexapod.load(name)
+        else:
+            with tempfile.TemporaryDirectory() as tmp:
+                (Path(tmp) / name).write_text(text)
+                hexa = Hexapod.load(str(Path(tmp) / name))
+        _LOADED[key] = hexa
     return hexa
 
 
-def slice_task(spec: str, index: int, z: float, xs, ys, rotations, unit) -> SliceResult:
-    """One z-slice of ``spec`` (a Dask task: the spec's file must be readable where it runs)."""
-    return compute_slice(loaded(spec), index, z, xs, ys, rotations, unit)
+def slice_task(payload: tuple[str, str | None], index: int, z: float, xs, ys, rotations, unit) -> SliceResult:
+    """One z-slice of the hexapod of ``payload`` (:func:`hexapod_payload`): a Dask task."""
+    return compute_slice(loaded(*payload), index, z, xs, ys, rotations, unit)
 
 
 @dataclass(frozen=True)
@@ -147,8 +165,8 @@ def run_evaluation(
     in this process.
 
     Args:
-        spec: preset name, URDF file or geometry file (each worker loads it: on a remote cluster the
-            file must be readable at the same path there).
+        spec: preset name, URDF, MJCF or geometry file (its text travels with the tasks: workers need not
+            see the file).
         settings: grid and orientation cone.
         out: folder of the resumable checkpoint (``None``: no checkpoint).
         workers: LocalCluster processes (default: all cores).
@@ -208,14 +226,14 @@ def run_evaluation(
     elif todo:
         from .cluster import dask_client
 
-        where = str(Path(spec).resolve()) if Path(spec).exists() else str(spec)
+        payload = hexapod_payload(spec)
         with dask_client(scheduler, workers) as client:
             if on_client is not None:
                 on_client(client)
             from distributed import as_completed
 
             futures = [
-                client.submit(slice_task, where, k, zs[k], xs, ys, plan.rotations, unit, pure=False) for k in todo
+                client.submit(slice_task, payload, k, zs[k], xs, ys, plan.rotations, unit, pure=False) for k in todo
             ]
             try:
                 for fut in as_completed(futures):
