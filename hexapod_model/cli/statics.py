@@ -45,7 +45,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frame", choices=FRAMES, default="platform", help="coordinates of --wrench and --point")
     p.add_argument("--point", nargs=3, type=float, metavar=("PX", "PY", "PZ"), help="where the force acts (m)")
     p.add_argument("--brake-capacity", type=float, help="axial force a brake holds (N); default: the geometry's")
-    p.add_argument("--leg-stiffness", type=float, help="axial stiffness of each locked leg (N/m)")
+    p.add_argument(
+        "--leg-stiffness",
+        type=float,
+        nargs="+",
+        metavar="K",
+        help="axial stiffness of the locked legs (N/m): one or six",
+    )
     p.add_argument("--json", help="also write the figures as JSON")
     p.set_defaults(func=run)
 
@@ -79,8 +85,9 @@ def run(args: argparse.Namespace) -> int:
     capacity = args.brake_capacity
     if capacity is not None and not (np.isfinite(capacity) and capacity > 0):
         raise InputError("--brake-capacity", capacity, "expected a positive force in N")
-    if args.leg_stiffness is not None and not (np.isfinite(args.leg_stiffness) and args.leg_stiffness > 0):
-        raise InputError("--leg-stiffness", args.leg_stiffness, "expected a positive stiffness in N/m")
+    k = args.leg_stiffness
+    if k is not None and (len(k) not in (1, 6) or not all(np.isfinite(v) and v > 0 for v in k)):
+        raise InputError("--leg-stiffness", k, "expected one or six positive stiffnesses in N/m")
     hexa = hexapod_of(args, compiled=False)  # one solve: no numba start-up
     if capacity is None and hexa.geometry is not None:
         capacity = hexa.geometry.brake_capacity
@@ -98,20 +105,22 @@ def run(args: argparse.Namespace) -> int:
         "wrench_at_origin_base": loads.wrench.tolist(),
         "axial_force_N": loads.axial_force.tolist(),
         "leg_force_N": loads.leg_force.tolist(),
+        "transverse_force_N": loads.transverse_force.tolist(),
         "platform_moment_Nm": loads.platform_moment.tolist(),
         "base_moment_Nm": loads.base_moment.tolist(),
         "largest_axial_force_N": loads.largest_axial_force,
         "brake_capacity_N": capacity,
         "margin_N": loads.margin(capacity) if capacity is not None else None,
     }
-    if args.leg_stiffness is not None:
-        k = stiffness_of(loads.jacobian, args.leg_stiffness)
+    if k is not None:
+        stiff = stiffness_of(loads.jacobian, k[0] if len(k) == 1 else k)
+        legs = f"{k[0]:.6g} N/m" if len(k) == 1 else "the given stiffnesses"
         print(
-            f"locked stiffness with legs of {args.leg_stiffness:.6g} N/m: "
-            f"translational >= {k.translational:.6g} N/m, rotational >= {k.rotational:.6g} N m/rad"
+            f"locked stiffness with legs of {legs}: "
+            f"translational >= {stiff.translational:.6g} N/m, rotational >= {stiff.rotational:.6g} N m/rad"
         )
-        report |= {"stiffness": k.matrix.tolist(), "translational_N_per_m": k.translational}
-        report |= {"rotational_Nm_per_rad": k.rotational}
+        report |= {"stiffness": stiff.matrix.tolist(), "translational_N_per_m": stiff.translational}
+        report |= {"rotational_Nm_per_rad": stiff.rotational}
     if args.json:
         atomic_write_text(args.json, json.dumps(report, indent=2) + "\n")
     return 0
