@@ -44,7 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--frame", choices=FRAMES, default="platform", help="coordinates of --wrench and --point")
     p.add_argument("--point", nargs=3, type=float, metavar=("PX", "PY", "PZ"), help="where the force acts (m)")
-    p.add_argument("--brake-capacity", type=float, help="axial force a brake holds (N); default: the geometry's")
+    p.add_argument(
+        "--brake-capacity", type=float, metavar="N", help="axial force a brake holds (N); default: the geometry's"
+    )
     p.add_argument(
         "--leg-stiffness",
         type=float,

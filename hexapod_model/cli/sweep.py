@@ -17,8 +17,8 @@ grid or a seeded random sample; docs/sweep.md) under OUT and evaluate it as `hex
 does (workspace volume for the tool cone, singular values and condition number over it), with
 the largest leg force per unit wrench, the locked fixture's stiffness and the home conditioning.
 Candidates run as Dask tasks: on a LocalCluster of this machine's cores, or on the cluster at
---scheduler. OUT/sweep.csv has one row per candidate (invalid ones with the reason),
-OUT/pareto.png the trade-off; a rerun computes only the candidates not yet done."""
+--scheduler. DIR/sweep.csv has one row per candidate (invalid ones with the reason),
+DIR/pareto.png the trade-off; a rerun computes only the candidates not yet done."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -27,7 +27,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("spec", metavar="SPEC.toml", help="the sweep's specification (docs/sweep.md)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created; a rerun resumes)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, tcp://HOST:PORT")
-    p.add_argument("--workers", type=int, help="local worker processes without --scheduler (default: all cores)")
+    p.add_argument(
+        "--workers", type=int, metavar="N", help="local worker processes without --scheduler (default: all cores)"
+    )
     p.set_defaults(func=run)
 
 
