@@ -13,7 +13,7 @@ from ._common import note, stream_bar
 
 DESCRIPTION = """\
 Write every candidate geometry of SPEC.toml (a base geometry and the parameters to vary, as a
-grid or a seeded random sample; docs/sweep.md) under OUT and evaluate it as `hexapod evaluate`
+grid or a seeded random sample; docs/sweep.md) under DIR and evaluate it as `hexapod evaluate`
 does (workspace volume for the tool cone, singular values and condition number over it), with
 the largest leg force per unit wrench, the locked fixture's stiffness and the home conditioning.
 Candidates run as Dask tasks: on a LocalCluster of this machine's cores, or on the cluster at
