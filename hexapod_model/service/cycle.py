@@ -32,11 +32,10 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from ..analysis.statics import loads_at
-from ..exceptions import SingularityError
 from ..kinematics.hexapod import Hexapod
 from .alarms import UNACKNOWLEDGED, Acknowledgement, LatchedFault
 from .config import FixtureConfig
+from .load import lock_load
 from .pose import pose_record, quaternion
 from .solve import PoseSolver, SolveOutcome
 from .state import MOTION_LEGS, LockDetector, StepDetector, StuckDetector
@@ -331,7 +330,7 @@ class FixtureCycle:
             )
         else:
             self.lock.lock(t, rec.readings)
-            self._load = self._load_at(rec.q)
+            self._load = lock_load(self.cfg, self.hexa, rec.q)
             self._episode += 1
             self._stored_episode = self._episode
 
@@ -345,30 +344,10 @@ class FixtureCycle:
         status = "ok" if self.fault is None else self.fault.stored_status()  # the lock carries a waiting fault
         event = LockEvent(self.cfg.name, t, sol.pose[:3, 3].copy(), quat, mean, status, self.geometry_hash, sol.q)
         self.lock.lock(t, mean)
-        self._load = self._load_at(sol.q)
+        self._load = lock_load(self.cfg, self.hexa, sol.q)
         self._episode += 1
         self.pending_lock = (self._episode, event)
         log.info("fixture %s: locked", self.cfg.name)
-
-    def _load_at(self, q: np.ndarray) -> dict | None:
-        """The record's ``load`` at the lock configuration ``q``: leg forces and brake margin (once per lock)."""
-        wrench = self.cfg.process_wrench
-        if wrench is None:
-            return None
-        capacity = self.cfg.brake_capacity
-        if capacity is None and self.hexa.geometry is not None:
-            capacity = self.hexa.geometry.brake_capacity
-        try:
-            loads = loads_at(self.hexa, q, wrench, "platform", self.cfg.wrench_point)
-        except SingularityError:  # unbounded leg forces: no number to give
-            log.warning("fixture %s: locked at a singular pose: no leg forces for the process wrench", self.cfg.name)
-            return {"leg_forces_N": None, "largest_leg_force_N": None, "brake_capacity_N": capacity, "margin_N": None}
-        return {
-            "leg_forces_N": loads.axial_force.tolist(),
-            "largest_leg_force_N": loads.largest_axial_force,
-            "brake_capacity_N": capacity,
-            "margin_N": None if capacity is None else loads.margin(capacity),
-        }
 
     # ----- records -----
     def _failure(self, t: float, status: str, flags: list[str]) -> dict:
