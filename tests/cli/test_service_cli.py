@@ -250,8 +250,11 @@ def test_serve_simulated_over_http_and_json_lines_then_ctrl_c_and_fixture_status
         pose = served.get("/fixtures/left/pose")
         health = served.get("/health")
     finally:
+        t0 = time.monotonic()
         code = served.finish(signal.SIGINT)
+        stopped = time.monotonic() - t0
     assert code == 0, "".join(served.err)
+    assert stopped < 2.0  # Ctrl-C of a running service: stopped and exited within 2 s
     assert tuple(pose) == RECORD_KEYS and pose["status"] == "ok" and pose["state"] == "locked" and pose["stored"]
     assert health["status"] == "ok" and health["fixtures"]["left"]["stored"]
     ok = [r for r in served.records if r["status"] == "ok"]
