@@ -164,6 +164,10 @@ def _values(name: str, raw: Any, mode: str) -> tuple[tuple[float, ...], bool]:
     raise InputError(where, raw, "expected a list of values or a table {min, max, steps}")
 
 
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
 def _table(data: dict, key: str) -> dict:
     value = data.get(key, {})
     if not isinstance(value, dict):
@@ -217,8 +221,18 @@ def load_spec(path: str | Path) -> SweepSpec:
     if bad:
         raise InputError(f"evaluate.{bad[0]}", ev[bad[0]], "unknown setting")
     settings = replace(Settings(), **ev)
-    if not isinstance(settings.grid, int) or settings.grid < 2:
-        raise InputError("evaluate.grid", settings.grid, "expected an integer >= 2")
+    if not isinstance(settings.grid, int) or isinstance(settings.grid, bool) or not 2 <= settings.grid <= 401:
+        raise InputError("evaluate.grid", settings.grid, "expected an integer in [2, 401]")
+    if (
+        not isinstance(settings.cone_samples, int)
+        or isinstance(settings.cone_samples, bool)
+        or settings.cone_samples < 1
+    ):
+        raise InputError("evaluate.cone_samples", settings.cone_samples, "expected an integer >= 1")
+    if not _is_number(settings.cone_deg) or not 0 <= settings.cone_deg < 90:
+        raise InputError("evaluate.cone_deg", settings.cone_deg, "expected a half-angle in [0, 90) deg")
+    if settings.length_unit is not None and not (_is_number(settings.length_unit) and settings.length_unit > 0):
+        raise InputError("evaluate.length_unit", settings.length_unit, "expected a positive length in m")
     statics = _table(data, "statics")
     k = statics.get("leg_stiffness")
     if k is not None and not (isinstance(k, (int, float)) and math.isfinite(k) and k > 0):

@@ -151,12 +151,22 @@ def test_wrong_scheduler_address_is_one_clear_error(tmp_path, capsys):
     assert not (tmp_path / "o" / "results").exists() or not any((tmp_path / "o" / "results").iterdir())
 
 
-def test_spec_errors_name_the_value(tmp_path, capsys):
+@pytest.mark.parametrize(
+    "text, named",
+    [
+        ("[parameters]\nbase_radius = [0.2]\nwheel_count = [3]\n", "wheel_count"),
+        ("[evaluate]\ncone_samples = 0\n[parameters]\nbase_radius = [0.2]\n", "evaluate.cone_samples"),
+        ("[evaluate]\ncone_deg = 95\n[parameters]\nbase_radius = [0.2]\n", "evaluate.cone_deg"),
+        ("[parameters]\nbase_radius = { min = 0.3, max = 0.2 }\n", "parameters.base_radius"),
+        ('[sample]\nmode = "sobol"\n[parameters]\nbase_radius = [0.2]\n', "sample.mode"),
+    ],
+)
+def test_spec_errors_name_the_value(tmp_path, capsys, text, named):
     spec = tmp_path / "bad.toml"
-    spec.write_text('base = "reference"\n[parameters]\nbase_radius = [0.2]\nwheel_count = [3]\n')
+    spec.write_text('base = "reference"\n' + text)
     assert main(["sweep", str(spec), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "wheel_count" in err[0]
+    assert len(err) == 1 and named in err[0]
 
 
 def test_random_sample_is_seeded_and_within_ranges(tmp_path):
