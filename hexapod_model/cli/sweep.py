@@ -40,6 +40,10 @@ def run(args: argparse.Namespace) -> int:
     if Path(args.out).exists() and not Path(args.out).is_dir():
         raise InputError("--out", args.out, "is a file; name a folder")
     spec = load_spec(args.spec)
+    try:
+        Path(args.out).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError("--out", args.out, f"cannot create the folder: {exc.strerror or exc}") from None
     bar = stream_bar("sweep (candidates)", unit="candidate")
 
     def on_client(client) -> None:
