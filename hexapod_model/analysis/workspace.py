@@ -25,6 +25,18 @@ import numpy as np
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
 from .jacobian import evaluate_jacobian, leg_jacobian
+from .statics import force_per_unit_wrench, stiffness_of
+
+#: the per-point worst cases over the orientations that :class:`SliceResult` keeps, in ``worst`` order
+WORST = (
+    "kappa_max",
+    "sigma_min_min",
+    "sigma_max_max",
+    "force_per_force_max",
+    "force_per_moment_max",
+    "stiffness_translational_min",
+    "stiffness_rotational_min",
+)
 
 
 def cone_rotations(cone_deg: float, samples: int) -> np.ndarray:
@@ -68,6 +80,12 @@ class SliceResult:
     """One z-slice of the grid.
 
     Arrays of shape (ny, nx); figures are orientation averages (NaN outside the workspace).
+    ``worst`` (7, ny, nx) holds the worst case over the orientations of each point, in :data:`WORST`
+    order: largest condition number, smallest and largest singular value (lengths in the evaluation's
+    unit), largest leg force per unit force (N/N) and per unit moment (N per N m, SI) at the platform
+    origin (:func:`~hexapod_model.analysis.statics.force_per_unit_wrench`), smallest translational
+    (N/m) and rotational (N m/rad) stiffness of the locked fixture per N/m of leg stiffness
+    (:func:`~hexapod_model.analysis.statics.stiffness_of`; it scales with a common leg stiffness).
     """
 
     index: int
@@ -75,6 +93,7 @@ class SliceResult:
     kappa: np.ndarray
     sigma_min: np.ndarray
     abs_det: np.ndarray
+    worst: np.ndarray
 
 
 def compute_slice(
@@ -84,6 +103,7 @@ def compute_slice(
     ny, nx = len(ys), len(xs)
     inside = np.zeros((ny, nx), dtype=bool)
     figs = np.full((3, ny, nx), np.nan)
+    worst = np.full((len(WORST), ny, nx), np.nan)
     guesses: list[Solution | None] = [None] * len(rotations)
     T = np.eye(4)
     for iy, y in enumerate(ys):
@@ -103,9 +123,21 @@ def compute_slice(
             if len(sols) != len(rotations):
                 continue
             inside[iy, ix] = True
-            ev = [evaluate_jacobian(leg_jacobian(hexa, s.q), length_unit) for s in sols]
+            Js = [leg_jacobian(hexa, s.q) for s in sols]
+            ev = [evaluate_jacobian(J, length_unit) for J in Js]
             figs[:, iy, ix] = np.mean([[e.condition_number, e.sigma_min, e.abs_det] for e in ev], axis=0)
-    return SliceResult(index, inside, figs[0], figs[1], figs[2])
+            forces = np.array([force_per_unit_wrench(J) for J in Js])
+            stiff = [stiffness_of(J, 1.0) for J in Js]
+            worst[:, iy, ix] = (
+                max(e.condition_number for e in ev),
+                min(e.sigma_min for e in ev),
+                max(float(e.singular_values[0]) for e in ev),
+                forces[:, 0].max(),
+                forces[:, 1].max(),
+                min(k.translational for k in stiff),
+                min(k.rotational for k in stiff),
+            )
+    return SliceResult(index, inside, figs[0], figs[1], figs[2], worst)
 
 
 def probe_extent(hexa: Hexapod, step: float, max_steps: int = 400) -> np.ndarray:

@@ -6,8 +6,10 @@ import argparse
 import json
 from pathlib import Path
 
+from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
 from ..kinematics.hexapod import load_hexapod
+from ..studies.cluster import dashboard_link
 from ..studies.evaluate import Settings, run_evaluation
 from ._common import add_hexapod_argument, note, stream_bar
 
@@ -15,7 +17,8 @@ DESCRIPTION = """\
 Map the workspace reachable for a whole cone of tool orientations (within stroke and Cardan
 limits) and the kinematic figures of Jakobović and Jelenković (2002), "Kinematic evaluation and
 forward kinematic problem for Stewart platform based manipulators" (condition number, sigma_min,
-|det J|) over it, in parallel over all cores; resumable with --out."""
+|det J|) over it, the z-slices as Dask tasks over all cores or on a cluster (--scheduler);
+resumable with --out."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -35,7 +38,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=None,
         help="m per length unit of the Jacobian figures (default: platform anchor radius)",
     )
-    p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    p.add_argument(
+        "--workers", type=int, default=None, help="local Dask worker processes (default: all cores; 1: this process)"
+    )
+    p.add_argument("--scheduler", metavar="ADDRESS", help="run the slices on the Dask cluster at tcp://HOST:PORT")
     p.add_argument("--out", default=None, help="directory for the PNG and the resumable checkpoint (created)")
     p.add_argument("--json", help="write the report as JSON")
     p.set_defaults(func=run)
@@ -72,8 +78,15 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         check_output_path(args.json, args.hexapod)
     settings = Settings(args.grid, args.cone_deg, args.cone_samples, args.length_unit)
+    if args.workers is not None and args.workers < 1:
+        raise InputError("--workers", args.workers, "need at least 1")
     hexa = load_hexapod(args.hexapod)  # fails here, with one line, before any worker starts
     bar = stream_bar("evaluate (z slices)", unit="slice")  # shows itself on a terminal only
+
+    def show_dashboard(client) -> None:
+        link = dashboard_link(client)
+        if link:
+            note("evaluate", f"Dask dashboard: {link}")
 
     def on_slice(done: int, total: int) -> None:
         bar.total = total
@@ -81,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
         bar.refresh()
 
     try:
-        r = run_evaluation(args.hexapod, settings, args.out, args.workers, on_slice)
+        r = run_evaluation(args.hexapod, settings, args.out, args.workers, on_slice, args.scheduler, show_dashboard)
     except KeyboardInterrupt:
         where = f"; rerun with --out {args.out} to resume" if args.out else ""
         note("evaluate", f"interrupted; finished slices saved{where}")

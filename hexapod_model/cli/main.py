@@ -17,12 +17,24 @@ EXIT_CODES = {
     130: "interrupted (Ctrl-C)",
     141: "standard output closed early (e.g. piped into head)",
 }
-MODULES = ("core", "mjcf", "reproduce", "calibrate", "evaluate", "track", "view", "serve", "fixture")
+MODULES = (
+    "core",
+    "mjcf",
+    "reproduce",
+    "calibrate",
+    "evaluate",
+    "track",
+    "view",
+    "serve",
+    "fixture",
+    "statics",
+    "sweep",
+)
 #: the module registering each sub-command: ``hexapod fk`` imports ``core`` only, not the studies'
 #: scipy, matplotlib or meshcat (tests/cli check this table against the modules)
 OWNER = {"urdf": "core", "fk": "core", "ik": "core", "bench": "core", "mjcf": "mjcf", "reproduce": "reproduce"}
 OWNER |= {"calibrate": "calibrate", "evaluate": "evaluate", "track": "track", "view": "view", "snapshot": "view"}
-OWNER |= {"serve": "serve", "simulate-encoders": "serve", "fixture": "fixture"}
+OWNER |= {"serve": "serve", "simulate-encoders": "serve", "fixture": "fixture", "statics": "statics", "sweep": "sweep"}
 
 DESCRIPTION = """\
 Leg readings <-> platform pose for Stewart-Gough hexapods with offset-axis Cardan joints.

@@ -141,6 +141,8 @@ class HexapodGeometry:
         platform_offset: same at the platform Cardan joint (m, cardan legs only).
         cardan_limit: bound on ``|angle|`` of every Cardan revolute (rad), < pi/2.
         roll_limit: bound on ``|angle|`` of the roll joint about the leg axis (rad).
+        brake_capacity: axial force each leg's brake holds (N, tension or compression); ``None``: not given.
+            ``hexapod statics`` states the load margin against it (docs/statics.md).
         description: one line for ``hexapod urdf --list-presets``.
     """
 
@@ -153,6 +155,7 @@ class HexapodGeometry:
     cardan_limit: float = math.radians(45.0)
     roll_limit: float = math.pi
     description: str = ""
+    brake_capacity: float | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name.replace("-", "_").replace("_", "a").isalnum():
@@ -168,6 +171,10 @@ class HexapodGeometry:
         _number("platform_offset", self.platform_offset, 0.0, 10.0)
         _number("cardan_limit", self.cardan_limit, 0.0, math.pi / 2 - 1e-3, open_lo=True)
         _number("roll_limit", self.roll_limit, 0.0, math.pi, open_lo=True)
+        if self.brake_capacity is not None:
+            object.__setattr__(
+                self, "brake_capacity", _number("brake_capacity", self.brake_capacity, 0.0, 1e9, open_lo=True)
+            )
         if self.joint_type != "cardan" and self.platform_offset != 0.0:
             raise GeometryError(
                 "platform_offset", self.platform_offset, "only cardan legs have a platform Cardan joint"
@@ -258,7 +265,8 @@ class HexapodGeometry:
                     }
                     for leg in v
                 ]
-            out[f.name] = v
+            if v is not None:
+                out[f.name] = v
         return out
 
 

@@ -15,6 +15,7 @@ Public API::
     svc.stop()
 """
 
+from .bus import open_bus
 from .codec import Decoded, FrameLayout, LegCodec, decode, encode
 from .config import (
     BusConfig,
@@ -28,7 +29,7 @@ from .config import (
 )
 from .cycle import RECORD_KEYS, FixtureCycle
 from .errors import ConfigError, FrameError, ServiceError
-from .service import FixtureService, open_bus
+from .service import FixtureService
 from .simconfig import Fault, SimConfig, SimFixture, load_simulation, simulation_from_dict
 from .simulate import SentSet, Simulator
 from .solve import PoseSolver, SolveOutcome, Uncertainty

@@ -105,6 +105,11 @@ class FixtureConfig:
             set can go unseen: use a slower rate or fewer fixtures per bus.
         predictor: the tracker's predictor (``none``, ``eq22``, ``eq23``, ``eq24``).
         confirm_samples: consistent samples after a tracker jump before the branch is re-confirmed.
+        process_wrench: force (N) and moment (N m) the process applies to the platform, platform frame,
+            at ``wrench_point``; a locked fixture's records then carry the leg forces and the brakes' load
+            margin at the lock pose (docs/statics.md). None: no ``load``.
+        wrench_point: where the process force acts (m, platform frame).
+        brake_capacity: axial force a brake holds (N); None: the geometry file's ``brake_capacity``.
         index: position in the file's ``[[fixtures]]`` list (for messages).
     """
 
@@ -121,6 +126,9 @@ class FixtureConfig:
     max_skew: float = 0.0
     predictor: str = "eq22"
     confirm_samples: int = 5
+    process_wrench: tuple[float, ...] | None = None
+    wrench_point: tuple[float, ...] = (0.0, 0.0, 0.0)
+    brake_capacity: float | None = None
     index: int = 0
     source: str = field(default="<dict>", compare=False)
 
@@ -276,6 +284,17 @@ def _hexapod_spec(t: Table, folder: Path) -> str:
     return str(p)
 
 
+def _numbers(t: Table, key: str, n: int, default: tuple[float, ...] | None) -> tuple[float, ...] | None:
+    """``n`` finite numbers under ``key`` (a TOML array), or ``default`` when absent."""
+    raw = t.take(key, None)
+    if raw is None:
+        return default
+    if not isinstance(raw, list) or len(raw) != n:
+        raise t.error(key, raw, f"expected {n} numbers")
+    sub = Table({f"{key}[{k}]": v for k, v in enumerate(raw)}, t.where, t.source)
+    return tuple(sub.number(f"{key}[{k}]") for k in range(n))
+
+
 def _fixture(t: Table, index: int, folder: Path) -> FixtureConfig:
     name = t.text("name")
     if not NAME_PATTERN.match(name) or set(name) == {"."}:
@@ -316,6 +335,9 @@ def _fixture(t: Table, index: int, folder: Path) -> FixtureConfig:
         max_skew=t.number("max_skew", 0.0, 0.0, 60.0),
         predictor=t.text("predictor", "eq22", PREDICTORS),
         confirm_samples=t.integer("confirm_samples", 5, 1, 10_000),
+        process_wrench=_numbers(t, "process_wrench", 6, None),
+        wrench_point=_numbers(t, "wrench_point", 3, (0.0, 0.0, 0.0)),  # type: ignore[arg-type]
+        brake_capacity=t.number("brake_capacity", None, 1e-9, 1e9) if "brake_capacity" in t.data else None,
         index=index,
         source=t.source,
     )

@@ -1,8 +1,9 @@
 """``hexapod evaluate``: workspace volume and Jakobović and Jelenković's Table II figures over it, in parallel.
 
 The grid (cubic cells of ``cell`` m, centred on the home pose, sized by
-:func:`~hexapod_model.workspace.probe_extent`) is split into z-slices solved by a
-``ProcessPoolExecutor`` over all cores. Each finished slice is saved in ``OUT/checkpoint/``
+:func:`~hexapod_model.workspace.probe_extent`) is split into z-slices solved as Dask tasks
+(:mod:`~hexapod_model.studies.cluster`: a LocalCluster over all cores, or a running cluster).
+Each finished slice is saved in ``OUT/checkpoint/``
 (``slice_NNN.npz`` next to a ``meta.json`` of the settings), so an interrupted run resumes
 where it stopped; changing a setting starts afresh.
 """
@@ -11,16 +12,16 @@ from __future__ import annotations
 
 import io
 import json
-import os
+import tempfile
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..analysis.jacobian import kinematic_evaluation
-from ..analysis.workspace import SliceResult, compute_slice, cone_rotations, probe_extent
+from ..analysis.workspace import WORST, SliceResult, compute_slice, cone_rotations, probe_extent
 from ..files import atomic_write_bytes, atomic_write_text
 from ..kinematics.hexapod import Hexapod
 
@@ -75,18 +76,77 @@ def make_grid(hexa: Hexapod, grid: int) -> tuple[np.ndarray, np.ndarray, np.ndar
     return axes[0], axes[1], zs[zs > 0], cell
 
 
-_WORKER: dict = {}
+#: Hexapods loaded by this process's tasks, by spec (a Dask worker keeps them between tasks)
+_LOADED: dict[tuple[str, str | None], Hexapod] = {}
+#: version of the checkpoint's slice files (meta.json): a change starts afresh
+CHECKPOINT_VERSION = 2
 
 
-def _init(spec: str) -> None:
-    import signal
+def hexapod_payload(spec: str) -> tuple[str, str | None]:
+    """What a task needs to load ``spec`` anywhere: ``(file name, its text)`` for a file, ``(preset, None)``."""
+    path = Path(spec)
+    return (path.name, path.read_text()) if path.is_file() else (str(spec), None)
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's: it saves and stops
-    _WORKER["hexa"] = Hexapod.load(spec)
+
+def loaded(name: str, text: str | None) -> Hexapod:
+    """The hexapod of a :func:`hexapod_payload`, loaded once per process.
+
+    A file's text is written under its own name into a temporary folder and loaded from there: the same
+    reading as ``Hexapod.load`` of the original, on a worker that cannot see the original.
+    """
+    key = (name, text)
+    hexa = _LOADED.get(key)
+    if hexa is None:
+        if text is None:
+            hexa = Hexapod.load(name)
+        else:
+            with tempfile.TemporaryDirectory() as tmp:
+                (Path(tmp) / name).write_text(text)
+                hexa = Hexapod.load(str(Path(tmp) / name))
+        _LOADED[key] = hexa
+    return hexa
 
 
-def _task(index: int, z: float, xs, ys, rotations, unit) -> SliceResult:
-    return compute_slice(_WORKER["hexa"], index, z, xs, ys, rotations, unit)
+def slice_task(payload: tuple[str, str | None], index: int, z: float, xs, ys, rotations, unit) -> SliceResult:
+    """One z-slice of the hexapod of ``payload`` (:func:`hexapod_payload`): a Dask task."""
+    return compute_slice(loaded(*payload), index, z, xs, ys, rotations, unit)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The grid, the orientations and the length unit of one evaluation."""
+
+    xs: np.ndarray
+    ys: np.ndarray
+    zs: np.ndarray
+    cell: float
+    rotations: np.ndarray
+    unit: float
+
+
+def plan_for(hexa: Hexapod, settings: Settings) -> Plan:
+    """The :class:`Plan` of ``hexa`` under ``settings`` (the grid is probed from home)."""
+    unit = settings.length_unit or platform_radius(hexa)
+    xs, ys, zs, cell = make_grid(hexa, settings.grid)
+    return Plan(xs, ys, zs, cell, cone_rotations(settings.cone_deg, settings.cone_samples), unit)
+
+
+def evaluate_hexapod(hexa: Hexapod, settings: Settings = Settings(), spec: str = "") -> dict:
+    """The report of :func:`run_evaluation`, every slice computed in this process, one after the other.
+
+    The same slices, grid and arithmetic as :func:`run_evaluation`: the same figures (a sweep's task).
+    """
+    plan = plan_for(hexa, settings)
+    done = {k: compute_slice(hexa, k, z, plan.xs, plan.ys, plan.rotations, plan.unit) for k, z in enumerate(plan.zs)}
+    return summarise(hexa, spec or (hexa.geometry.name if hexa.geometry else "<hexapod>"), settings, plan, done, 0)
+
+
+def _save_slice(ckpt: Path, r: SliceResult) -> None:
+    buf = io.BytesIO()  # atomic: an interrupted write must not leave a broken slice
+    np.savez_compressed(
+        buf, index=r.index, inside=r.inside, kappa=r.kappa, sigma_min=r.sigma_min, abs_det=r.abs_det, worst=r.worst
+    )
+    atomic_write_bytes(ckpt / f"slice_{r.index:03d}.npz", buf.getvalue())
 
 
 def run_evaluation(
@@ -95,25 +155,35 @@ def run_evaluation(
     out: str | Path | None = None,
     workers: int | None = None,
     on_slice: Callable[[int, int], None] | None = None,
+    scheduler: str | None = None,
+    on_client: Callable[[Any], None] | None = None,
 ) -> dict:
     """Compute the workspace and its figures; returns the report dict (SI and chosen units).
 
+    The z-slices are Dask tasks (:mod:`~hexapod_model.studies.cluster`): on the cluster at ``scheduler``,
+    else on a LocalCluster of ``workers`` processes; ``workers=1`` without ``scheduler`` computes them
+    in this process.
+
     Args:
-        spec: preset name, URDF file or geometry file (each worker process loads it).
+        spec: preset name, URDF, MJCF or geometry file (its text travels with the tasks: workers need not
+            see the file).
         settings: grid and orientation cone.
         out: folder of the resumable checkpoint (``None``: no checkpoint).
-        workers: processes (default: all cores).
+        workers: LocalCluster processes (default: all cores).
         on_slice: called as ``on_slice(done, total)`` after each finished z-slice (progress).
+        scheduler: ``tcp://HOST:PORT`` of a running Dask scheduler.
+        on_client: called with the ``distributed.Client`` once connected (e.g. to show the dashboard).
 
     Raises:
+        InputError: no scheduler answering at ``scheduler``; dask.distributed not installed.
         KeyboardInterrupt: re-raised after the finished slices were saved; a rerun with the
             same ``out`` resumes.
     """
     hexa = Hexapod.load(spec)
-    unit = settings.length_unit or platform_radius(hexa)
-    xs, ys, zs, cell = make_grid(hexa, settings.grid)
-    rotations = cone_rotations(settings.cone_deg, settings.cone_samples)
+    plan = plan_for(hexa, settings)
+    xs, ys, zs, cell, unit = plan.xs, plan.ys, plan.zs, plan.cell, plan.unit
     meta = {
+        "version": CHECKPOINT_VERSION,
         "spec": str(spec),
         "grid": settings.grid,
         "cone_deg": settings.cone_deg,
@@ -134,7 +204,7 @@ def run_evaluation(
             for f in ckpt.glob("slice_*.npz"):
                 d = np.load(f)
                 done[int(d["index"])] = SliceResult(
-                    int(d["index"]), d["inside"], d["kappa"], d["sigma_min"], d["abs_det"]
+                    int(d["index"]), d["inside"], d["kappa"], d["sigma_min"], d["abs_det"], d["worst"]
                 )
         else:
             for f in ckpt.glob("slice_*.npz"):
@@ -142,37 +212,47 @@ def run_evaluation(
             atomic_write_text(meta_path, json.dumps(meta, indent=1))
     todo = [k for k in range(len(zs)) if k not in done]
     resumed = len(done)
-    workers = workers or os.cpu_count() or 1
-    if todo:
-        with ProcessPoolExecutor(
-            max_workers=min(workers, len(todo)),
-            initializer=_init,
-            initargs=(str(Path(spec).resolve()) if Path(spec).exists() else spec,),
-        ) as pool:
-            futures = [pool.submit(_task, k, zs[k], xs, ys, rotations, unit) for k in todo]
+
+    def finished(r: SliceResult) -> None:
+        done[r.index] = r
+        if ckpt is not None:
+            _save_slice(ckpt, r)
+        if on_slice is not None:
+            on_slice(len(done), len(zs))
+
+    if todo and scheduler is None and workers == 1:
+        for k in todo:
+            finished(compute_slice(hexa, k, zs[k], xs, ys, plan.rotations, unit))
+    elif todo:
+        from .cluster import dask_client
+
+        payload = hexapod_payload(spec)
+        with dask_client(scheduler, workers) as client:
+            if on_client is not None:
+                on_client(client)
+            from distributed import as_completed
+
+            futures = [
+                client.submit(slice_task, payload, k, zs[k], xs, ys, plan.rotations, unit, pure=False) for k in todo
+            ]
             try:
                 for fut in as_completed(futures):
-                    r = fut.result()
-                    done[r.index] = r
-                    if ckpt is not None:
-                        buf = io.BytesIO()  # atomic: an interrupted write must not leave a broken slice
-                        np.savez_compressed(
-                            buf,
-                            index=r.index,
-                            inside=r.inside,
-                            kappa=r.kappa,
-                            sigma_min=r.sigma_min,
-                            abs_det=r.abs_det,
-                        )
-                        atomic_write_bytes(ckpt / f"slice_{r.index:03d}.npz", buf.getvalue())
-                    if on_slice is not None:
-                        on_slice(len(done), len(zs))
+                    finished(fut.result())
             except KeyboardInterrupt:
-                pool.shutdown(wait=False, cancel_futures=True)
+                client.cancel(futures)
                 raise
+    return summarise(hexa, str(spec), settings, plan, done, resumed)
+
+
+def summarise(
+    hexa: Hexapod, spec: str, settings: Settings, plan: Plan, done: dict[int, SliceResult], resumed: int
+) -> dict:
+    """The report of the finished slices ``done`` (all of ``plan``'s z-slices)."""
+    xs, ys, zs, cell, unit, rotations = plan.xs, plan.ys, plan.zs, plan.cell, plan.unit, plan.rotations
     stack = [done[k] for k in range(len(zs))]
     inside = np.array([s.inside for s in stack])
     figs = {name: np.array([getattr(s, name) for s in stack]) for name in ("kappa", "sigma_min", "abs_det")}
+    worst = np.array([s.worst for s in stack])  # (nz, 5, ny, nx)
     n_in = int(inside.sum())
     home = kinematic_evaluation(hexa, hexa.q_home, unit)
     g = hexa.geometry
@@ -196,6 +276,12 @@ def run_evaluation(
         "volume_m3": n_in * cell**3,
         "volume_paper_units3": n_in * (cell / PAPER_UNIT) ** 3,
         "average": {k: (float(np.nanmean(v[inside])) if n_in else float("nan")) for k, v in figs.items()},
+        "worst": {
+            name: (float(np.min(worst[:, i][inside]) if "_min" in name else np.max(worst[:, i][inside])))
+            if n_in
+            else float("nan")
+            for i, name in enumerate(WORST)
+        },
         "home": {
             "kappa": home.condition_number,
             "sigma_min": home.sigma_min,

@@ -193,3 +193,17 @@ def test_urdf_without_geometry_gets_its_sizes_from_the_model(tmp_path):
     assert bare.geometry is None
     assert platform_radius(bare) == pytest.approx(platform_radius(preset), rel=0.02)
     assert characteristic_length(bare) == pytest.approx(characteristic_length(preset), rel=0.02)
+
+
+def test_slices_on_dask_workers_equal_the_slices_in_this_process():
+    """The same slices computed by two LocalCluster workers and in this process: the same workspace."""
+    pytest.importorskip("distributed", reason="pip install -e '.[sweep]'")
+    settings = Settings(grid=5, cone_deg=10, cone_samples=3)
+    here = run_evaluation("3-6", settings, workers=1)
+    there = run_evaluation("3-6", settings, workers=2)
+    assert here["points_inside"] == there["points_inside"] > 0
+    np.testing.assert_array_equal(here["_arrays"]["inside"], there["_arrays"]["inside"])
+    for key in ("kappa", "sigma_min", "abs_det"):
+        assert here["average"][key] == pytest.approx(there["average"][key], rel=1e-12)
+    for key, value in here["worst"].items():
+        assert value == pytest.approx(there["worst"][key], rel=1e-12)
