@@ -26,7 +26,7 @@ from numba import njit
 
 from .follow import follow, rescale
 from .iteration import iterate_blocks, iterate_schur
-from .kernels import first_outside, first_outside_at, pose_to_xyzquat, rigid_error, xyzquat_to_pose
+from .kernels import copy_into, first_outside, first_outside_at, pose_to_xyzquat, rigid_error, xyzquat_to_pose
 from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
 from .packing import unpack_work
 
@@ -42,7 +42,7 @@ def _finish_row(k, q, code, it, norm, ratio, kappa, sign, limits, platform_q, ho
         if b >= 0:
             code, bad[k] = OUT_OF_LIMITS, limited[b]
     codes[k], iterations[k], residuals[k], ratios[k], kappas[k], signs[k] = code, it, norm, ratio, kappa, sign
-    Q[k] = q
+    copy_into(Q[k], q)
     if code == CONVERGED:
         xyzquat_to_pose(q[platform_q : platform_q + 7], home, poses[k])
     else:
@@ -110,7 +110,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q
         if first_outside(readings[k], stroke[0], stroke[1], limits[3]) >= 0:  # NaN, inf or out of stroke
             _invalid_row(k, out)
             continue
-        q0[:] = start
+        copy_into(q0, start)
         for i in range(prismatic_q.shape[0]):
             q0[prismatic_q[i]] = joints[k, i]
         code, it, norm, ratio, theta, sign, certified = iterate_schur(
@@ -127,7 +127,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q
         kappa, sign = (state[1], state[0]) if code == CONVERGED else (np.inf, 0.0)
         code = _finish_row(k, q, code, it, norm, ratio, kappa, sign, limits, platform_q, home, out)
         if warm and code == CONVERGED:
-            start[:] = q
+            copy_into(start, q)
             carry[0], carry[1] = sign, 1.0
     return readings.shape[0]
 
@@ -150,11 +150,11 @@ def inverse_rows(targets, start, warm, settings, limits, home, packed, out):
         if not rigid_error(T) <= pose_tolerance or far:
             _invalid_row(k, out)
             continue
-        q0[:] = start
+        copy_into(q0, start)
         pose_to_xyzquat(T, home, q0[platform_q : platform_q + 7])
         code, it, norm, ratio, _, _, _ = iterate_blocks(
             q0, q, tol, max_iter, 0.0, no_offset, 0.0, False, ints, floats, work, iwork
         )
         code = _finish_row(k, q, code, it, norm, ratio, np.inf, 0.0, limits, platform_q, home, out)
         if warm and code == CONVERGED:
-            start[:] = q
+            copy_into(start, q)
