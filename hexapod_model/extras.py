@@ -55,7 +55,7 @@ def require(module: str, extra: str, what: str | None = None) -> ModuleType:
         return importlib.import_module(module)
     except ImportError as exc:
         needs = what or EXTRAS[extra]
-        raise MissingExtraError(f"{needs} needs {exc.name or module}: {install_hint(extra)}") from None
+        raise MissingExtraError(f"{exc.name or module} is not installed ({needs}): {install_hint(extra)}") from None
 
 
 def require_distribution(name: str, extra: str, what: str | None = None) -> importlib.metadata.Distribution:
@@ -63,7 +63,7 @@ def require_distribution(name: str, extra: str, what: str | None = None) -> impo
     try:
         return importlib.metadata.distribution(name)
     except importlib.metadata.PackageNotFoundError:
-        raise MissingExtraError(f"{what or EXTRAS[extra]} needs {name}: {install_hint(extra)}") from None
+        raise MissingExtraError(f"{name} is not installed ({what or EXTRAS[extra]}): {install_hint(extra)}") from None
 
 
 def require_extra(extra: str) -> None:

@@ -15,7 +15,7 @@ def test_require_names_the_extra_to_install():
         require("hexapod_model_no_such_module", "plots")
     message = str(info.value)
     assert "\n" not in message and message.endswith("pip install 'hexapod_model[plots]'")
-    assert message.startswith("the figures needs hexapod_model_no_such_module")
+    assert message.startswith("hexapod_model_no_such_module is not installed (the figures)")
     assert set(MODULES) == set(EXTRAS)
 
 
