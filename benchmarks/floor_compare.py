@@ -63,20 +63,27 @@ def main(argv=None) -> int:
     J, G = np.zeros((6, 42)), np.zeros((1, 1))
     first = hexa.forward(warm[0], tol=BENCH_TOL)
 
+    warm_steps = {"package": 0, "floor": 0}  # Newton steps of the last round's solves
+
     def package_warm() -> np.ndarray:
-        previous = first
+        previous, warm_steps["package"] = first, 0
 
         def solve(x):
             nonlocal previous
             previous = hexa.forward(x, previous, tol=BENCH_TOL)
+            warm_steps["package"] += previous.iterations
 
         return per_solve(solve, warm[1:])
 
     def floor_warm() -> np.ndarray:
         theta, R, p = np.zeros((6, 6)), Rh.copy(), ph.copy()
         floor.fk_newton(theta, R, p, hexa.joints_of(warm[0]), *tables, BENCH_TOL, MAX_ITER, MAX_STEP, J, G)
-        settings = (BENCH_TOL, MAX_ITER, MAX_STEP, J, G)
-        return per_solve(lambda x: floor.fk_newton(theta, R, p, x, *tables, *settings), hexa.joints_of(warm[1:]))
+        settings, warm_steps["floor"] = (BENCH_TOL, MAX_ITER, MAX_STEP, J, G), 0
+
+        def solve(x):
+            warm_steps["floor"] += floor.fk_newton(theta, R, p, x, *tables, *settings)[0]
+
+        return per_solve(solve, hexa.joints_of(warm[1:]))
 
     def floor_batch(rows: np.ndarray, warm_start: bool) -> np.ndarray:
         n, joints = len(rows), hexa.joints_of(rows)
@@ -117,6 +124,8 @@ def main(argv=None) -> int:
         print(f"  {k:36s}" + "".join(f"{np.percentile(best[k], q):9.1f}" for q in (50, 95)))
     ratio = np.median(best["package"]) / np.median(best["floor"])
     print(f"  ratio package / floor {ratio:.2f}x (target <= 1.5x)")
+    a, b = (warm_steps[k] / (len(warm) - 1) for k in ("package", "floor"))
+    print(f"  Newton steps per solve: package {a:.2f} (the certificate's), floor {b:.2f}")
     for name, r in rates.items():
         pkg, ref = max(r["package"]), max(r["floor"])
         label = f"{name} (solves/s)"
