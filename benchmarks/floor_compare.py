@@ -68,13 +68,14 @@ def main(argv=None) -> int:
 
         return per_solve(solve, hexa.joints_of(warm[1:]))
 
-    def floor_batch(rows: np.ndarray, warm_start: bool) -> None:
+    def floor_batch(rows: np.ndarray, warm_start: bool) -> np.ndarray:
         n, joints = len(rows), hexa.joints_of(rows)
         out = (np.empty((n, 3, 3)), np.empty((n, 3)), np.empty(n, dtype=np.int64))
         if warm_start:
             floor.fk_batch_warm(joints, np.zeros((6, 6)), Rh, ph, *tables, BENCH_TOL, MAX_ITER, MAX_STEP, *out)
         else:
             floor.fk_batch_cold(joints, *tables, Rh, ph, BENCH_TOL, MAX_ITER, MAX_STEP, *out)
+        return out[2]  # Newton steps per row
 
     cases = {
         "forward_batch, box poses from home": (
@@ -88,8 +89,9 @@ def main(argv=None) -> int:
             len(warm),
         ),
     }
-    for package, reference, _ in cases.values():  # compile (or load) everything before timing
-        package(), reference()
+    steps = {}  # mean Newton steps per row: the package's certificate follows some rows' readings path
+    for name, (package, reference, _) in cases.items():  # compile (or load) everything before timing
+        steps[name] = (float(np.mean(package().iterations)), float(np.mean(reference())))
     fk: dict[str, list[np.ndarray]] = {"package": [], "floor": []}
     rates: dict[str, dict[str, list[float]]] = {name: {"package": [], "floor": []} for name in cases}
     for _ in range(args.rounds):
@@ -111,6 +113,9 @@ def main(argv=None) -> int:
         pkg, ref = max(r["package"]), max(r["floor"])
         label = f"{name} (solves/s)"
         print(f"{label:38s} package {pkg:8.0f}  floor {ref:8.0f}  ratio {pkg / ref:.2f}x (target >= 0.85x)")
+        a, b = steps[name]
+        per_step = (pkg * a) / (ref * b)
+        print(f"{'':38s} Newton steps per row: package {a:.2f}, floor {b:.2f}; steps/s ratio {per_step:.2f}x")
     return 0
 
 

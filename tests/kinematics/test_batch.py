@@ -171,3 +171,19 @@ def test_batches_in_threads_match_one_thread():
 def test_bad_batch_input_raises_one_clear_error(call, pattern):
     with pytest.raises(hm.InputError, match=pattern):
         call(hexapod("reference"))
+
+
+def test_the_compiled_loops_compile_the_iteration_once():
+    # forward_batch's certified attempts, its plain solves from a guess and the readings path (in
+    # the loop and from forward) pass certify as a runtime boolean: one signature of iterate_schur
+    # (a constant True / False typed as a literal compiled the iteration once per value)
+    from hexapod_model.kinematics.newton.iteration import iterate_schur
+
+    hexa = hexapod("reference")
+    rows = mixed_readings(hexa, seed=46)
+    inside = np.all(np.isfinite(rows) & (rows >= hexa.stroke[:, 0]) & (rows <= hexa.stroke[:, 1]), axis=1)
+    followed = [hexa.forward(x, check=False) for x in rows[inside][:40]]  # the readings path from Python
+    warm = hexa.forward_batch(rows, warm=True)  # each row from the last converged: the plain solve from a guess
+    hexa.forward_batch(rows, hexa.forward(rows[inside][0]))
+    assert len(iterate_schur.signatures) == 1
+    assert any(s.converged and s.iterations > 10 for s in followed) and "converged" in list(warm.status)

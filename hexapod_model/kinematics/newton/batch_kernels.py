@@ -81,8 +81,9 @@ def _follow_row(q0, q, start, target, attempt, tol, max_iter, sign, guessed, nea
     it, theta = attempt
     first = q.copy()  # the first Newton iterate when the attempt took one step
     if guessed:  # near a singularity no path certifies: forward() returns the plain result, flagged
+        no = np.zeros(1, dtype=np.bool_)[0]  # a runtime False: one compiled signature of iterate_schur
         code, n, _, _, theta, _, _ = iterate_schur(
-            q0, q, tol, max_iter, 0.0, np.zeros(6 * ints[0]), 0.0, False, ints, floats, work, iwork
+            q0, q, tol, max_iter, 0.0, np.zeros(6 * ints[0]), 0.0, no, ints, floats, work, iwork
         )
         it += n
         if code == CONVERGED and not state[1] <= near_kappa:
@@ -106,6 +107,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q
     ints, floats, work, iwork = packed
     platform_q, state = ints[3], unpack_work(ints, work)[0][18]  # the last Schur step's sign and condition bound
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
+    yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
     for k in range(k0, readings.shape[0]):
         if first_outside(readings[k], stroke[0], stroke[1], limits[3]) >= 0:  # NaN, inf or out of stroke
             _invalid_row(k, out)
@@ -114,7 +116,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q
         for i in range(prismatic_q.shape[0]):
             q0[prismatic_q[i]] = joints[k, i]
         code, it, norm, ratio, theta, sign, certified = iterate_schur(
-            q0, q, tol, max_iter, carry[0], no_offset, 0.0, True, ints, floats, work, iwork
+            q0, q, tol, max_iter, carry[0], no_offset, 0.0, yes, ints, floats, work, iwork
         )
         if not certified or (code != CONVERGED and code != NO_CONVERGENCE):  # follow the readings path
             attempt, guessed = (it, theta), carry[1] == 1.0 or carry[2] == 1.0

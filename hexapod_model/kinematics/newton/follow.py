@@ -98,6 +98,7 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prism
     q0, before, dv = np.empty(nq), np.empty(nq), np.empty(ints[1])
     scratch = (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3))
     offset = np.zeros(r.shape[0])
+    yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
     # the start's own closure residual: a start off the manifold follows r - (1 - t) r_start
     res = _residual(start, ints, floats, work)
     shifted = res > INTERMEDIATE_TOL
@@ -119,7 +120,7 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prism
         scale = 1.0 - tn if shifted else 0.0
         tol_n = tol if tn == 1.0 else INTERMEDIATE_TOL
         code, it, res, _, theta, kept, certified = iterate_schur(
-            q0, q, tol_n, max_iter, sign, offset, scale, True, ints, floats, work, iwork
+            q0, q, tol_n, max_iter, sign, offset, scale, yes, ints, floats, work, iwork
         )
         total += it
         substeps += 1

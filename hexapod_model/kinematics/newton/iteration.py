@@ -132,7 +132,9 @@ def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, fl
     return code, it, norm, ratio, theta, sign, certified
 
 
-# For the compiled loops of .follow and .batch_kernels, ``schur`` a constant in each.
+# For the compiled loops of .follow and .batch_kernels, ``schur`` a constant in each. The loops pass
+# ``certify`` read from an array, never as a constant: a constant types as a literal,
+# and numba would compile the whole iteration once more per literal value.
 @njit(cache=True)
 def iterate_schur(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
     """:func:`_iterate` with the Schur step (one joint held per leg, the platform free)."""
