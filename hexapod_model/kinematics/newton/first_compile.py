@@ -18,8 +18,8 @@ LOGGER = "hexapod_model.compile"
 #: each entry: what it compiles, and the CPU seconds it took from an empty cache on a 2-core machine
 #: (benchmarks/startup.py --cold)
 ENTRIES = {
-    "solve_schur": ("direct kinematics", 17),
-    "solve_blocks": ("inverse kinematics", 10),
+    "solve_schur": ("direct kinematics", 14),
+    "solve_blocks": ("inverse kinematics", 8),
     "forward_rows": ("the direct-kinematics batch loop", 15),
     "inverse_rows": ("the inverse-kinematics batch loop", 8),
     "follow": ("the readings path", 12),
