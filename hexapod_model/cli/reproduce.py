@@ -11,6 +11,7 @@ import numpy as np
 
 from ..analysis.conditioning import condition_numbers
 from ..exceptions import InputError
+from ..extras import require_extra
 from ..files import atomic_write_text, check_output_path, output_folder
 from ..kinematics.hexapod import Hexapod, load_hexapod
 from ..studies.paper_table import READINGS, format_table
@@ -147,6 +148,7 @@ def _study(args: argparse.Namespace, name: str, hexa: Hexapod, data: StudyInput)
     if args.json:
         atomic_write_text(args.json, json.dumps(result.report, indent=2) + "\n")
     if args.out:
+        require_extra("plots")
         from ..plots.reproduce import write_figures
 
         for path in write_figures(

@@ -16,17 +16,13 @@ from contextlib import contextmanager
 from typing import Any
 
 from ..exceptions import InputError
+from ..extras import require
 
-INSTALL_HINT = "pip install 'hexapod_model[sweep]'"
 CONNECT_TIMEOUT_S = 5.0
 
 
 def _distributed() -> Any:
-    try:
-        import distributed
-    except ImportError:
-        raise InputError("dask.distributed", None, f"is not installed: {INSTALL_HINT}") from None
-    return distributed
+    return require("distributed", "sweep")
 
 
 @contextmanager

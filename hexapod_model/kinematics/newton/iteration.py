@@ -34,7 +34,15 @@ import numpy as np
 from numba import njit
 
 from .chains import evaluate_chains
-from .kernels import closure_residual, first_outside_at, jacobian, scatter_step, shift_residual, xyzquat_to_pose
+from .kernels import (
+    closure_residual,
+    copy_into,
+    first_outside_at,
+    jacobian,
+    scatter_step,
+    shift_residual,
+    xyzquat_to_pose,
+)
 from .lie import integrate_free_flyer
 from .outcomes import CONVERGED, FLIPPED, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED
 from .packing import unpack_floats, unpack_ints, unpack_iwork, unpack_work
@@ -124,7 +132,9 @@ def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, fl
     return code, it, norm, ratio, theta, sign, certified
 
 
-# For the compiled loops of .follow and .batch_kernels, ``schur`` a constant in each.
+# For the compiled loops of .follow and .batch_kernels, ``schur`` a constant in each. The loops pass
+# ``certify`` read from an array, never as a constant: a constant types as a literal,
+# and numba would compile the whole iteration once more per literal value.
 @njit(cache=True)
 def iterate_schur(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
     """:func:`_iterate` with the Schur step (one joint held per leg, the platform free)."""
@@ -164,7 +174,7 @@ def _solve(
     if finish and (not certify or (code == CONVERGED and certified)):
         (_, leg_v, platform_v, _, colmap, _, _), _ = unpack_ints(ints)
         views = unpack_work(ints, work)[0]
-        q[:] = q_solver
+        copy_into(q, q_solver)
         jacobian(views[2], leg_v, platform_v, colmap, ints[0], views[4], views[5], G)
         xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
         if code == CONVERGED:
