@@ -45,7 +45,12 @@ DEFAULT_MAX_ITER = 20
 #: (metres and radians; the presets have 9-67, a 20x smaller hexapod about 700, a singular
 #: layout with parallel, coplanar or coincident legs 1e13 and more)
 HOME_CONDITION_LIMIT = 1e6
-_ERRORS = {"singular": SingularityError, "out_of_limits": WorkspaceError, "ambiguous_assembly": AssemblyError}
+_ERRORS = {
+    "singular": SingularityError,
+    "out_of_limits": WorkspaceError,
+    "ambiguous_assembly": AssemblyError,
+    "uncertified": AssemblyError,
+}
 
 __all__ = ["Hexapod", "POSE_TOLERANCE", "check_pose", "check_vector", "load_hexapod"]
 

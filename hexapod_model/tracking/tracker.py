@@ -41,6 +41,7 @@ from .passage import PassageMixin
 from .types import (
     FAILED_STATUSES,
     FLAGS,
+    POSED_STATUSES,
     PREDICTORS,
     TrackResult,
     characteristic_length,
@@ -213,7 +214,7 @@ class Tracker(PassageMixin):
         if self._gap > s.max_gap and "stuck" not in flags:
             return self._reanchor(l, flags, legs, t0)
         sol = self._solve(l, self._guess())
-        if sol.status not in ("converged", "out_of_limits"):
+        if sol.status not in POSED_STATUSES:
             if not suspect and sol.status != "invalid_input" and self._cond_last > self.cond_limit / 4:
                 self._open(latch=False)  # no assembly near the prediction: readings past a fold?
             return self._failure(l, sol.status, sol.message, tuple(flags), legs, t0, sol)
@@ -225,7 +226,8 @@ class Tracker(PassageMixin):
                 self._lost = not s.recover
                 self._doubt = suspect = s.recover
         sol, sens, open_ = self._passage(sol, sens, l, bool(legs) or self._lost)
-        if (self._lost or self._uncertified or open_) and "branch_uncertain" not in flags:
+        uncertified = sol.status == "uncertified"  # the solver could not certify the assembly
+        if (self._lost or self._uncertified or open_ or uncertified) and "branch_uncertain" not in flags:
             flags.append("branch_uncertain")
         if not checked and m <= s.max_gap + 1:
             flags.append("settling")
@@ -267,7 +269,7 @@ class Tracker(PassageMixin):
         if self.settings.recover and sens.condition_number > self.cond_limit:
             # near a singularity assemblies meet: keep the one the motion continues to
             alt = self._solve(l, self._model_q(w))
-            if alt.status in ("converged", "out_of_limits") and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
+            if alt.status in POSED_STATUSES and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
                 sol, sens = alt, self._sens.evaluate(alt.q)
         bound = self.settings.branch_sigmas * self.settings.noise * self._scale * spread
 
@@ -286,7 +288,7 @@ class Tracker(PassageMixin):
         if not self.settings.recover:
             return sol, sens, False
         retry = self._solve(l, self._model_q(w))
-        if retry.status in ("converged", "out_of_limits"):
+        if retry.status in POSED_STATUSES:
             rsens = self._sens.evaluate(retry.q)
             if consistent(retry, rsens):
                 return retry, rsens, True
@@ -312,7 +314,7 @@ class Tracker(PassageMixin):
             (self._last_q, s.continuation_step),
         ):
             sol = self._continue(q0, l, step)
-            if sol.status in ("converged", "out_of_limits"):
+            if sol.status in POSED_STATUSES:
                 break
         else:
             assert sol is not None
@@ -339,7 +341,7 @@ class Tracker(PassageMixin):
         q, sol = q0, None
         for k in range(1, n + 1):
             sol = self._solve(l0 + (l - l0) * (k / n), q)
-            if sol.status not in ("converged", "out_of_limits"):
+            if sol.status not in POSED_STATUSES:
                 return sol
             q = sol.q
         assert sol is not None

@@ -24,6 +24,9 @@ _COEFFS = {"none": (0.0, 0.0), "eq22": (-1.0, 0.0), "eq23": (0.0, -0.5), "eq24":
 FLAGS = ("jump", "stuck", "branch_uncertain", "settling", "near_singular", "out_of_limits", "imprecise")
 #: statuses of a sample without a pose (``status`` is ``ok`` otherwise)
 FAILED_STATUSES = ("invalid_input", "max_iterations", "singular")
+#: solve statuses that give the tracker a closed configuration (``uncertified``: flagged
+#: ``branch_uncertain``, its assembly is the tracker's passage logic's to judge)
+POSED_STATUSES = ("converged", "out_of_limits", "uncertified")
 
 
 def characteristic_length(hexa: Hexapod) -> float:
