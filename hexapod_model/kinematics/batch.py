@@ -19,7 +19,7 @@ import numpy as np
 
 from ..exceptions import HexapodError, InputError
 from .assembly import NEAR_SINGULAR_FACTOR
-from .checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance
+from .checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance, failure_status
 from .newton.outcomes import INVALID_INPUT, OUT_OF_LIMITS, outcome
 from .newton.solver import Solution
 
@@ -42,7 +42,7 @@ class BatchResult:
         iterations: (N,) Newton steps taken.
         residual: (N,) final closure residual norm (NaN for ``invalid_input``).
         messages: (N,) each row's ``Solution.message`` (or the error a per-row call raises).
-        flags: (N,) each row's ``Solution.flags`` (``("near_singular",)`` or ``()``).
+        flags: (N,) each row's ``Solution.flags`` (``("near_singular",)``, ``("not_closed",)`` or ``()``).
         det_sign: (N,) each row's ``Solution.det_sign``.
     """
 
@@ -120,8 +120,14 @@ def _message(hexa: Hexapod, code: int, k: int, out: tuple, tol: float, retry) ->
     return outcome(code, tol, int(iterations[k]), float(residuals[k]), float(ratios[k]))[1]
 
 
-def _result(hexa: Hexapod, out: tuple, tol: float, retry, fallback: dict[int, Solution], forward: bool) -> BatchResult:
-    """The :class:`BatchResult` of the compiled loops' outputs and the rows solved one by one."""
+def _result(
+    hexa: Hexapod, out: tuple, tol: float, retry, fallback: dict[int, Solution], forward: bool, max_iter: int = 0
+) -> BatchResult:
+    """The :class:`BatchResult` of the compiled loops' outputs and the rows solved one by one.
+
+    A row that used its ``max_iter`` steps is named as :meth:`.hexapod.Hexapod.forward` names it
+    (:func:`.checks.failure_status`).
+    """
     Q, poses, codes, iterations, residuals, _, kappas, signs, _ = out
     home_kappa = hexa._solver(hexa._held_forward).home_kappa
     near = ~(kappas <= NEAR_SINGULAR_FACTOR * home_kappa) & ((codes == 0) | (codes == OUT_OF_LIMITS)) & forward
@@ -132,6 +138,10 @@ def _result(hexa: Hexapod, out: tuple, tol: float, retry, fallback: dict[int, So
     messages = [""] * len(Q)
     for k in np.flatnonzero((codes != 0) | near):
         messages[k] = "" if codes[k] == _FALLBACK else _message(hexa, int(codes[k]), int(k), out, tol, retry)
+        if status[k] == "max_iterations":
+            outside = hexa._outside(Q[k])
+            status[k], messages[k] = failure_status("max_iterations", messages[k], residuals[k], max_iter, outside)
+            flags[k] = ("not_closed",) if status[k] == "out_of_limits" else flags[k]
     for j, sol in fallback.items():
         Q[j], poses[j], status[j], iterations[j], residuals[j] = (
             sol.q,
@@ -228,7 +238,7 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, sla
             if warm and sol.converged:
                 start[:], carry[:2] = sol.q, (sol.det_sign, 1.0)
             k += 1
-    return _result(hexa, out, tol, retry, fallback, True)
+    return _result(hexa, out, tol, retry, fallback, True, max_iter)
 
 
 def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter, slack: float) -> BatchResult:
@@ -258,4 +268,4 @@ def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter, slack:
     settings = (tol, max_iter, POSE_TOLERANCE, MAX_POSITION)
     limits = (hexa._limited, hexa._limited_lo, hexa._limited_hi, slack)
     inverse_rows(rows, hexa._start(guess), warm, settings, limits, hexa._home_h, solver.arrays, out)
-    return _result(hexa, out, tol, retry, {}, False)
+    return _result(hexa, out, tol, retry, {}, False, max_iter)

@@ -35,6 +35,7 @@ from .checks import (
     check_pose,
     check_tolerance,
     check_vector,
+    failure_status,
 )
 from .newton.kernel_sets import kernel_set
 from .newton.solver import NewtonSolver, Solution
@@ -333,26 +334,47 @@ class Hexapod:
         if type(max_iter) is not int or max_iter < 0:
             max_iter = check_max_iter(max_iter)
         if forward:
-            return self._solution(assembly.solve_forward(solver, q0, forward[0], tol, max_iter, *forward[1:]), check)
+            out = assembly.solve_forward(solver, q0, forward[0], tol, max_iter, *forward[1:])
+            return self._solution(out, check, max_iter=max_iter)
         if solver.compiled_loop:  # inverse kinematics: the solve, pose and limit check in one compiled call
             done = solver.run_checked(q0, tol, max_iter, self._limits, self._home_h)  # type: ignore[attr-defined]
             if done is not None:
-                return self._solution(Outcome(*done[0]), check, done[1], done[2])
-        return self._solution(Outcome(*solver.run(q0, tol, max_iter)), check)
+                return self._solution(Outcome(*done[0]), check, done[1], done[2], max_iter)
+        return self._solution(Outcome(*solver.run(q0, tol, max_iter)), check, max_iter=max_iter)
 
-    def _solution(self, out: Outcome, check: bool, pose: np.ndarray | None = None, bad: int | None = None) -> Solution:
+    def _outside(self, q: np.ndarray) -> str | None:
+        """The limit error of configuration ``q`` (one line), ``None`` when within the limits (or not finite)."""
+        bad = self._kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, LIMIT_SLACK)
+        if bad < 0 or not np.all(np.isfinite(q)):
+            return None
+        k = int(self._limited[bad])
+        return str(self._limit_error(k, q[k]))
+
+    def _solution(
+        self,
+        out: Outcome,
+        check: bool,
+        pose: np.ndarray | None = None,
+        bad: int | None = None,
+        max_iter: int = DEFAULT_MAX_ITER,
+    ) -> Solution:
         """The :class:`Solution` of a solve's outcome: the joint-limit check, the pose, the readings.
 
         ``pose`` and ``bad`` (the first joint outside its limits, -1 if none) when the caller
-        has them already (the compiled first attempt of :meth:`forward`).
+        has them already (the compiled first attempt of :meth:`forward`); ``max_iter`` the
+        caller's step limit (:func:`.checks.failure_status` names a stalled solve).
         """
         q, status, it, res, jac, msg = out[:6]
+        flags = out.flags
         if status == "converged":
             if bad is None:
                 bad = self._kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, LIMIT_SLACK)
             if bad >= 0:
                 k = int(self._limited[bad])
                 status, msg = "out_of_limits", str(self._limit_error(k, q[k]))
+        elif status == "max_iterations":
+            status, msg = failure_status(status, msg, res, max_iter, self._outside(q))
+            flags = ("not_closed",) if status == "out_of_limits" else flags
         poses = tuple(self.pose_of(c) for c in out.candidates) if out.candidates else ()
         sol = Solution(
             self.pose_of(q) if pose is None else pose,
@@ -363,7 +385,7 @@ class Hexapod:
             res,
             jac,
             msg,
-            out.flags,
+            flags,
             poses,
             out.det_sign,
         )

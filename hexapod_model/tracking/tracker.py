@@ -41,10 +41,10 @@ from .passage import PassageMixin
 from .types import (
     FAILED_STATUSES,
     FLAGS,
-    POSED_STATUSES,
     PREDICTORS,
     TrackResult,
     characteristic_length,
+    posed,
     predict,
 )
 
@@ -214,7 +214,7 @@ class Tracker(PassageMixin):
         if self._gap > s.max_gap and "stuck" not in flags:
             return self._reanchor(l, flags, legs, t0)
         sol = self._solve(l, self._guess())
-        if sol.status not in POSED_STATUSES:
+        if not posed(sol):
             if not suspect and sol.status != "invalid_input" and self._cond_last > self.cond_limit / 4:
                 self._open(latch=False)  # no assembly near the prediction: readings past a fold?
             return self._failure(l, sol.status, sol.message, tuple(flags), legs, t0, sol)
@@ -269,7 +269,7 @@ class Tracker(PassageMixin):
         if self.settings.recover and sens.condition_number > self.cond_limit:
             # near a singularity assemblies meet: keep the one the motion continues to
             alt = self._solve(l, self._model_q(w))
-            if alt.status in POSED_STATUSES and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
+            if posed(alt) and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
                 sol, sens = alt, self._sens.evaluate(alt.q)
         bound = self.settings.branch_sigmas * self.settings.noise * self._scale * spread
 
@@ -288,7 +288,7 @@ class Tracker(PassageMixin):
         if not self.settings.recover:
             return sol, sens, False
         retry = self._solve(l, self._model_q(w))
-        if retry.status in POSED_STATUSES:
+        if posed(retry):
             rsens = self._sens.evaluate(retry.q)
             if consistent(retry, rsens):
                 return retry, rsens, True
@@ -314,7 +314,7 @@ class Tracker(PassageMixin):
             (self._last_q, s.continuation_step),
         ):
             sol = self._continue(q0, l, step)
-            if sol.status in POSED_STATUSES:
+            if posed(sol):
                 break
         else:
             assert sol is not None
@@ -341,7 +341,7 @@ class Tracker(PassageMixin):
         q, sol = q0, None
         for k in range(1, n + 1):
             sol = self._solve(l0 + (l - l0) * (k / n), q)
-            if sol.status not in POSED_STATUSES:
+            if not posed(sol):
                 return sol
             q = sol.q
         assert sol is not None

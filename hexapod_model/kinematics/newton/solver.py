@@ -27,6 +27,7 @@ STATUSES = (
     "uncertified",
     "ambiguous_assembly",
     "max_iterations",
+    "not_found",
     "singular",
     "out_of_limits",
     "invalid_input",
@@ -53,7 +54,8 @@ class Solution:
         message: human-readable detail when ``status != "converged"`` or a flag is set.
         flags: ``("near_singular",)`` for a direct-kinematics result close to a singularity
             (another assembly may be close; the CLI writes the flag instead of ``ok``); always
-            with status ``uncertified``.
+            with status ``uncertified``. ``("not_closed",)`` for an ``out_of_limits`` result whose
+            iteration stopped outside the limits before closing the loops (``q`` closes nothing).
         candidates: with status ``ambiguous_assembly``, the (4, 4) poses of the assemblies
             found (``pose`` is the first).
         det_sign: sign of the direct-kinematics Jacobian's determinant at the result (0: none).
@@ -78,6 +80,16 @@ class Solution:
         Never for ``uncertified``, ``ambiguous_assembly`` or any other status.
         """
         return self.status == "converged"
+
+    @property
+    def closed(self) -> bool:
+        """True when :attr:`q` closes every loop to the solve's tolerance (whatever its limits or assembly).
+
+        ``converged``, ``uncertified``, ``ambiguous_assembly`` and ``out_of_limits`` without the
+        flag ``not_closed``.
+        """
+        closing = ("converged", "uncertified", "ambiguous_assembly", "out_of_limits")
+        return self.status in closing and "not_closed" not in self.flags
 
     @property
     def condition_number(self) -> float:
