@@ -104,4 +104,8 @@ def test_study_and_evaluation_commands_run(tmp_path, monkeypatch):
             args += ["--folds", "2", "--hold", "*_axis.*", "--candidates", "150"]
         if "--scenario" in args:
             args += ["--calibration-poses", "40"]
+        if args[0] == "calibrate" and "examples/measured.csv" in line and "--force" not in args:
+            # the bundled example is the nominal model plus noise: no better than nominal, not written
+            assert main(args) == 1 and not Path(args[args.index("-o") + 1]).exists(), line
+            continue
         assert main(args) == 0, line
