@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import functools
+import re
 import shutil
 
+import numpy as np
 import pytest
 
 import hexapod_model as hm
@@ -18,6 +20,47 @@ HAVE_CHROMIUM = any(shutil.which(name) for name in CHROMIUM_NAMES)
 def hexapod(name: str) -> hm.Hexapod:
     """Cached Hexapod of preset ``name`` (solver buffers are reused across tests)."""
     return hm.Hexapod.from_preset(name)
+
+
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?|\b(?:nan|inf)\b")
+PATH_TOL = 1e-12  # m and rad: two code paths of one solve (compiled, NumPy, one call, batch) agree to this
+
+
+def assert_same_message(a: str, b: str, numbers: bool = True) -> None:
+    """The same words; the numbers (printed to 2-3 digits) to 1e-2 relative when ``numbers``."""
+    assert _NUMBER.sub("#", a) == _NUMBER.sub("#", b)
+    if numbers:
+        x, y = ([float(v) for v in _NUMBER.findall(m)] for m in (a, b))
+        np.testing.assert_allclose(x, y, rtol=1e-2, atol=0)
+
+
+def assert_same_solution(a: hm.Solution, b: hm.Solution, tol: float = PATH_TOL) -> None:
+    """``a`` and ``b``, one problem solved by two code paths: the same answer to rounding.
+
+    Status, iterations, flags, determinant sign, candidate count and the message's words exactly;
+    poses, configurations, readings and candidates to ``tol`` (m, rad), the residual to ``tol``,
+    the Jacobian to ``1e3 tol`` (its entries are lever arms, up to ~1 m), the message's numbers to
+    1e-2 relative (printed to 2-3 digits). The last iterate of a diverging Newton
+    (``max_iterations`` after several steps) magnifies the paths' rounding: its numbers are not
+    compared.
+    """
+    assert (a.status, a.iterations, a.flags, a.det_sign, len(a.candidates)) == (
+        b.status,
+        b.iterations,
+        b.flags,
+        b.det_sign,
+        len(b.candidates),
+    )
+    diverged = a.status == "max_iterations" and a.iterations > 1
+    assert_same_message(a.message, b.message, numbers=not diverged)
+    if diverged:
+        return
+    for x, y in zip((a.pose, a.q, a.lengths, *a.candidates), (b.pose, b.q, b.lengths, *b.candidates)):
+        np.testing.assert_allclose(x, y, rtol=0, atol=tol)
+    np.testing.assert_allclose(a.residual, b.residual, rtol=0, atol=tol)
+    assert (a.jacobian is None) == (b.jacobian is None)
+    if a.jacobian is not None:
+        np.testing.assert_allclose(a.jacobian, b.jacobian, rtol=0, atol=1e3 * tol)
 
 
 @pytest.fixture(params=PRESET_NAMES)

@@ -80,7 +80,7 @@ def cmd_urdf(args: argparse.Namespace) -> int:
     geom = load_geometry(args.geometry) if args.geometry else get_preset(args.preset)
     text = geometry_to_urdf(geom)
     validate_urdf(text, geom.name)  # an independent parser (yourdfpy) accepts it
-    Hexapod.from_geometry(geom)  # and it loads and assembles in Pinocchio
+    Hexapod.from_geometry(geom, compiled=False)  # and it loads and assembles in Pinocchio (no numba needed)
     if args.output:
         atomic_write_text(args.output, text)
         note("urdf", f"wrote {args.output} ({geom.name}, {geom.joint_type} legs)")

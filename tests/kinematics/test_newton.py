@@ -16,7 +16,7 @@ from hexapod_model.kinematics.checks import LIMIT_SLACK
 from hexapod_model.kinematics.newton.compiled import CompiledSolver, solver_for
 from hexapod_model.kinematics.newton.solver import NewtonSolver
 
-from ..conftest import PRESET_NAMES, hexapod
+from ..conftest import PATH_TOL, PRESET_NAMES, assert_same_message, assert_same_solution, hexapod
 
 _ROLL = """  <joint name="leg1_roll" type="revolute">
     <origin xyz="0 0 0" rpy="0 0 0" />
@@ -53,7 +53,8 @@ def solvers(hexa: hm.Hexapod, held: tuple[int, ...]) -> tuple[NewtonSolver, Newt
 def assert_same_run(fast: tuple, general: tuple) -> None:
     """Same status, message and iterations; configurations and Jacobians to rounding."""
     q, status, iterations, residual, jacobian, message = fast
-    assert (status, iterations, message) == (general[1], general[2], general[5])
+    assert (status, iterations) == (general[1], general[2])
+    assert_same_message(message, general[5], numbers=status != "max_iterations")
     np.testing.assert_allclose(q, general[0], rtol=0, atol=1e-12)
     np.testing.assert_allclose(jacobian, general[4], rtol=0, atol=1e-11)
     if status == "converged":
@@ -151,7 +152,8 @@ def test_legs_of_different_joint_counts_solve_through_the_general_path():
 def assert_same_iterate(fast: NewtonSolver, general: NewtonSolver, args: tuple, nq: int) -> str:
     """Same outcome and certificate from :meth:`iterate` on both solvers; returns the status."""
     a, b = fast.iterate(*args), general.iterate(*args)
-    assert (a[0], a[1], a[3]) == (b[0], b[1], b[3])
+    assert (a[0], a[1]) == (b[0], b[1])
+    assert_same_message(a[3], b[3], numbers=a[0] != "max_iterations")
     assert (fast.certified, fast.det_sign, fast.sign) == (general.certified, general.det_sign, general.sign)
     np.testing.assert_allclose(fast.q_aug[:nq], general.q_aug[:nq], rtol=0, atol=1e-12)
     np.testing.assert_allclose([fast.theta, fast.kappa], [general.theta, general.kappa], rtol=1e-6, atol=1e-12)
@@ -186,13 +188,8 @@ def test_forward_solutions_equal_the_general_path():
     for T in poses:
         readings = np.clip(fast.inverse(T, check=False).lengths, *fast.stroke.T)
         a, b = fast.forward(readings, check=False), general.forward(readings, check=False)
-        assert (a.status, a.iterations, a.message, a.flags, a.det_sign) == (
-            b.status,
-            b.iterations,
-            b.message,
-            b.flags,
-            b.det_sign,
-        )
+        assert (a.status, a.iterations, a.flags, a.det_sign) == (b.status, b.iterations, b.flags, b.det_sign)
+        assert_same_message(a.message, b.message, numbers=a.status != "max_iterations")
         np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-12)
         assert len(a.candidates) == len(b.candidates)
         statuses.add(a.status)
@@ -200,7 +197,7 @@ def test_forward_solutions_equal_the_general_path():
 
 
 def _fields(sol: hm.Solution) -> tuple:
-    """Everything a Solution holds, arrays as bytes (bitwise comparison)."""
+    """Everything a Solution holds, arrays as bytes (bitwise: two runs of one code path)."""
     arrays = (sol.pose, sol.q, sol.lengths, sol.jacobian, *sol.candidates)
     return (sol.status, sol.iterations, sol.residual, sol.message, sol.flags, sol.det_sign) + tuple(
         a.tobytes() for a in arrays
@@ -210,7 +207,7 @@ def _fields(sol: hm.Solution) -> tuple:
 @pytest.mark.parametrize("name", PRESET_NAMES)
 def test_one_call_forward_equals_the_python_path(name):
     # Hexapod.forward tries CompiledSolver.certified_forward (one compiled call) first; the
-    # Python path (assembly.solve_forward, then _solution) must give the same Solution, bit for bit
+    # Python path (assembly.solve_forward, then _solution) must give the same Solution, to rounding
     hexa = hexapod(name)
     solver = hexa._solver(hexa._held_forward)
     assert solver.compiled_loop
@@ -224,10 +221,14 @@ def test_one_call_forward_equals_the_python_path(name):
         attempt = solver.certified_forward(hexa._start(guess), joints, 1e-10, 50, sign, limits, hexa._home_h)
         one_call = len(attempt) == 6  # converged certified: (q, pose, jacobian, iterations, residual, bad)
         slow = hexa._finish(solver, hexa._start(guess), 1e-10, 50, False, (joints, sign, guess is not None))
-        state = (solver.q_aug.tobytes(), solver.sign, solver.kappa, solver.det_sign, solver.certified)
+        q_aug, state = solver.q_aug.copy(), (solver.sign, solver.det_sign, solver.certified)
+        kappa = solver.kappa
         fast = hexa.forward(readings, guess, tol=1e-10, max_iter=50, check=False)
-        assert _fields(fast) == _fields(slow)
-        assert (solver.q_aug.tobytes(), solver.sign, solver.kappa, solver.det_sign, solver.certified) == state
+        assert_same_solution(fast, slow)
+        assert (solver.sign, solver.det_sign, solver.certified) == state
+        if slow.status != "max_iterations":
+            np.testing.assert_allclose(solver.q_aug, q_aug, rtol=0, atol=PATH_TOL)
+            np.testing.assert_allclose(solver.kappa, kappa, rtol=1e-9)
         seen.add((fast.status, one_call))
         flags.update((f, one_call) for f in fast.flags)
         return fast
@@ -249,7 +250,7 @@ def test_one_call_forward_equals_the_python_path(name):
 @pytest.mark.parametrize("name", PRESET_NAMES)
 def test_one_call_inverse_equals_the_python_path(name):
     # Hexapod.inverse solves, checks limits and builds the pose in one call (CompiledSolver.run_checked);
-    # NewtonSolver.run then _solution must give the same Solution and solver state, bit for bit
+    # NewtonSolver.run then _solution must give the same Solution and solver state, to rounding
     hexa = hexapod(name)
     solver = hexa._solver(hexa._held_inverse)
     assert solver.compiled_loop
@@ -259,10 +260,13 @@ def test_one_call_inverse_equals_the_python_path(name):
             q0 = hexa._start(None)
             hexa._set_pose(q0, T)
             slow = hexa._solution(Outcome(*solver.run(q0, 1e-10, max_iter)), False)
-            state = (solver.q_aug.tobytes(), solver.theta, solver.det_sign, solver.certified)
+            q_aug, theta, state = solver.q_aug.copy(), solver.theta, (solver.det_sign, solver.certified)
             fast = hexa.inverse(T, tol=1e-10, max_iter=max_iter, check=False)
-            assert _fields(fast) == _fields(slow)
-            assert (solver.q_aug.tobytes(), solver.theta, solver.det_sign, solver.certified) == state
+            assert_same_solution(fast, slow)
+            assert (solver.det_sign, solver.certified) == state
+            if slow.status != "max_iterations" or max_iter == 1:
+                np.testing.assert_allclose(solver.q_aug, q_aug, rtol=0, atol=PATH_TOL)
+                np.testing.assert_allclose(solver.theta, theta, rtol=1e-9, atol=1e-15)
             statuses.add(fast.status)
     assert {"converged", "max_iterations", "out_of_limits"} <= statuses
 

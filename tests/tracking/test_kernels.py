@@ -59,8 +59,13 @@ def test_branch_residual_is_zero_on_a_constant_twist_motion():
     assert np.abs(e).max() < 1e-15
 
 
-def test_reading_checks_match_the_numpy_statistics_bitwise():
-    """Frozen runs, ``z = |l - lhat| / sd``, its maximum and ``z . z`` as the tracker computed them with NumPy."""
+def test_reading_checks_match_the_numpy_statistics():
+    """Frozen runs, ``z = |l - lhat| / sd``, its maximum and ``z . z`` as the tracker computed them with NumPy.
+
+    Frozen counts and the stuck flag exactly (comparisons of exact differences); ``z`` (in
+    standard deviations) to 1e-12 relative: a compiled kernel and NumPy may round the last bit
+    differently, by CPU and by library version.
+    """
     rng = np.random.default_rng(4)
     frozen = np.zeros(6, dtype=np.int64)
     last = rng.normal(0.0, 1e-3, 6)
@@ -78,7 +83,9 @@ def test_reading_checks_match_the_numpy_statistics_bitwise():
         assert fmax == int(expected_frozen.max()) and any_stuck == bool(stuck.any())
         if lhat.size:
             expected = np.abs(l - lhat) / sd
-            assert np.array_equal(z, expected) and zmax == float(expected.max()) and zz == float(expected @ expected)
+            np.testing.assert_allclose(z, expected, rtol=1e-12, atol=0)
+            assert zmax == pytest.approx(float(expected.max()), rel=1e-12, abs=0)
+            assert zz == pytest.approx(float(expected @ expected), rel=1e-12, abs=0)
         else:
             assert np.isnan(zmax) and zz == 0.0
         last = l
