@@ -12,12 +12,13 @@ are solved row by row.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from ..exceptions import HexapodError, InputError
+from .assemblies import review
 from .assembly import NEAR_SINGULAR_FACTOR
 from .checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance, failure_status
 from .newton.outcomes import INVALID_INPUT, OUT_OF_LIMITS, outcome
@@ -238,7 +239,52 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, sla
             if warm and sol.converged:
                 start[:], carry[:2] = sol.q, (sol.det_sign, 1.0)
             k += 1
-    return _result(hexa, out, tol, retry, fallback, True, max_iter)
+    res = _result(hexa, out, tol, retry, fallback, True, max_iter)
+    return _reviewed(hexa, res, rows, guess, warm, solve, set(fallback))
+
+
+def _reviewed(
+    hexa: Hexapod, res: BatchResult, rows: np.ndarray, guess, warm: bool, solve, done: set[int]
+) -> BatchResult:
+    """A 3-6 hexapod's rows checked against every assembly, as :meth:`.hexapod.Hexapod.forward` checks them.
+
+    Each row from its own start (``guess``, or with ``warm`` the last converged row); the rows
+    in ``done`` were solved by ``forward`` already. Once a warm row's status changes, the rows
+    after it are solved by ``solve`` (``forward``) one by one.
+    """
+    if hexa._finder.exact is None:
+        return res
+    status, messages, flags = res.status.astype(object), list(res.messages), list(res.flags)
+    poses, lengths, q, signs = res.poses.copy(), res.lengths.copy(), res.q.copy(), res.det_sign.copy()
+    start, redo = guess, False
+    for k in range(len(rows)):
+        if status[k] == "invalid_input":
+            continue
+        if redo:  # forward() checks it itself
+            new, changed = solve(rows[k], start), True
+        elif k in done:
+            new, changed = res.solution(k), False
+        else:
+            sol = res.solution(k)
+            new = review(hexa._finder, sol, rows[k], start)
+            changed, redo = new is not sol, warm and new.status != sol.status
+        if changed:
+            status[k], messages[k], flags[k], signs[k], q[k] = new.status, new.message, new.flags, new.det_sign, new.q
+            res.iterations[k], res.residual[k] = new.iterations, new.residual
+            poses[k] = new.pose if new.converged else np.nan
+            lengths[k] = new.lengths if new.converged else np.nan
+        if warm and new.converged:
+            start = new
+    return replace(
+        res,
+        poses=poses,
+        lengths=lengths,
+        q=q,
+        status=status.astype(str),
+        messages=tuple(messages),
+        flags=tuple(flags),
+        det_sign=signs,
+    )
 
 
 def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter, slack: float) -> BatchResult:

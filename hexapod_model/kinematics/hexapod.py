@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import functools
 import threading
 from collections.abc import Mapping
 from pathlib import Path
@@ -21,8 +22,9 @@ from ..description.mjcf_loader import MJCF_SUFFIXES, load_mjcf
 from ..description.model import ClosedLoopModel
 from ..description.presets import PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
-from ..exceptions import AssemblyError, ConvergenceError, LimitError, SingularityError, WorkspaceError
+from ..exceptions import AssemblyError, ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
 from . import assembly, batch, hybrid
+from .assemblies import DEFAULT_STARTS, Assemblies, AssemblyFinder, review
 from .assembly import Outcome
 from .batch import BatchResult
 from .checks import (
@@ -51,6 +53,7 @@ _ERRORS = {
     "out_of_limits": WorkspaceError,
     "ambiguous_assembly": AssemblyError,
     "uncertified": AssemblyError,
+    "no_assembly": WorkspaceError,
 }
 
 __all__ = ["Hexapod", "POSE_TOLERANCE", "check_pose", "check_vector", "load_hexapod"]
@@ -262,14 +265,65 @@ class Hexapod:
         start = self._start(guess, copy=False)  # solve_forward writes its own copy
         fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
         attempt = None
+        review = self._finder.exact is not None  # a 3-6 hexapod: every assembly is accounted for
         if fast and solver.compiled_loop:
             # the certified first attempt in one compiled call; solve_forward goes on from it
             done = solver.certified_forward(start, joints, tol, max_iter, sign, self._limits, self._home_h)  # type: ignore[attr-defined]
             if len(done) == 6:
                 q, pose, jac, it, res, bad = done
-                return self._solution(assembly.certified_outcome(solver, q, jac, it, res), check, pose, bad)
+                sol = self._solution(
+                    assembly.certified_outcome(solver, q, jac, it, res), check and not review, pose, bad
+                )
+                return self._reviewed(sol, lengths, guess, check) if review else sol
             attempt = done
-        return self._finish(solver, start.copy(), tol, max_iter, check, (joints, sign, guess is not None, attempt))
+        sol = self._finish(
+            solver, start.copy(), tol, max_iter, check and not review, (joints, sign, guess is not None, attempt)
+        )
+        return self._reviewed(sol, lengths, guess, check) if review else sol
+
+    @functools.cached_property
+    def _finder(self) -> AssemblyFinder:
+        """The global direct kinematics (:mod:`.assemblies`)."""
+        return AssemblyFinder(self)
+
+    def _reviewed(self, sol: Solution, lengths: np.ndarray, guess, check: bool) -> Solution:
+        """A 3-6 hexapod's result checked against every assembly (:func:`.assemblies.review`); raised if ``check``."""
+        sol = review(self._finder, sol, lengths, guess)
+        if check and sol.status != "converged":
+            raise _ERRORS.get(sol.status, ConvergenceError)(sol, f"{sol.status}: {sol.message}")
+        return sol
+
+    def assemblies(
+        self, lengths: ArrayLike, *, reference: np.ndarray | None = None, starts: int = DEFAULT_STARTS, seed: int = 0
+    ) -> Assemblies:
+        """Every assembly for these readings that can be found: the global answer of direct kinematics.
+
+        For a 3-6 hexapod (e.g. preset ``3-6``) all of them, from the resultant polynomial
+        (``complete`` is True); for the others, what plain Newton reaches from home and ``starts``
+        random poses (``complete`` is False: assemblies it does not reach may exist).
+        See :mod:`~hexapod_model.kinematics.assemblies`.
+
+        Args:
+            lengths: six readings, leg order, metres (zero at home).
+            reference: order the assemblies by distance to this pose (4x4, default home).
+            starts: random starts of the multi-start search (ignored for a 3-6 hexapod).
+            seed: random seed of those starts.
+
+        Returns:
+            :class:`~.assemblies.Assemblies`: the assemblies within the stroke and joint limits
+            (converged inverse-kinematics :class:`Solution` each), the count of those outside.
+
+        Raises:
+            InputError, LimitError: as :meth:`forward` for the readings.
+        """
+        lengths = check_vector("lengths", lengths, 6)
+        k = self._kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, LIMIT_SLACK)
+        if k >= 0:
+            raise LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
+        ref = None if reference is None else check_pose(reference, self._kernels.rigid_error)
+        if type(starts) is not int or starts < 0:
+            raise InputError("starts", starts, "an int >= 0")
+        return self._finder.find(lengths, ref, starts, seed)
 
     def inverse(
         self,

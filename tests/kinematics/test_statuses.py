@@ -32,8 +32,10 @@ def test_poses_whose_iterate_leaves_the_limits_are_out_of_limits_not_max_iterati
 
 def test_readings_without_an_assembly_are_named_with_the_residual():
     """Random readings within the stroke on the 3-6 preset for which the resultant polynomial has
-    no real root: these were max_iterations (a step budget), now not_found or out_of_limits."""
-    hexa = hexapod("3-6")
+    no real root: these were max_iterations (a step budget), now not_found or out_of_limits from
+    Newton alone, no_assembly with the resultant (forward's answer on a 3-6 hexapod)."""
+    hexa = hm.Hexapod.from_preset("3-6")
+    hexa._finder.exact = None  # Newton alone
     exact = ThreeSixFK(hexa.geometry)
     rng = np.random.default_rng(0)
     seen = set()
@@ -46,6 +48,7 @@ def test_readings_without_an_assembly_are_named_with_the_residual():
         except WorkspaceError:  # two legs that cannot meet: no assembly either
             pass
         rows.append(readings)
+        assert hexapod("3-6").forward(readings, check=False).status == "no_assembly"
         sol = hexa.forward(readings, check=False)
         seen.add(sol.status)
         assert sol.status in ("not_found", "out_of_limits") and not sol.closed

@@ -28,6 +28,7 @@ STATUSES = (
     "ambiguous_assembly",
     "max_iterations",
     "not_found",
+    "no_assembly",
     "singular",
     "out_of_limits",
     "invalid_input",
