@@ -1,4 +1,4 @@
-"""Which assembly direct kinematics returns, and the certificate that it is that one.
+"""Which assembly direct kinematics returns, and the check (a heuristic, not a proof) that it is that one.
 
 Six readings usually admit several platform poses (assemblies). :func:`solve_forward` returns
 as ``converged`` only **the assembly connected to the start**: the end of the path of
@@ -9,11 +9,22 @@ Newton corrector
 
 * takes no shortened step (``MAX_STEP``),
 * contracts: every ``|dx_k+1| / |dx_k| <= THETA_MAX`` = 1/4 (Deuflhard's estimate of the
-  affine-covariant Kantorovich quantity ``h0 <= 1/2``, under which the solution is unique in a
-  ball around the substep's start, so the corrector cannot jump to another assembly), and
+  affine-covariant Kantorovich quantity ``h0``; were ``h0 <= 1/2`` *bounded*, the solution
+  would be unique in a ball around the substep's start), and
 * keeps the sign of the constraint Jacobian's determinant (the 36x36 or 18x18 direct-kinematics
   system, ``prod_i det L_i * det M`` from the Schur step) equal to the start's at every iterate
   (home's for a cold solve, the guess :class:`Solution`'s ``det_sign`` for a warm one).
+
+**What this is not.** The contraction ratio is measured at the iterates only: it estimates the
+Kantorovich quantity from below, where a proof needs a bound from above (a Lipschitz bound of
+the closure Jacobian over a ball); a solve that closes in one step measures no contraction (a
+first step above ``_ONE_STEP`` is followed by a second); the determinant's sign is sampled at
+the iterates, not between them. So "certified" here names these checks passing, not a proof
+that the result is the connected assembly: what they achieve is measured by
+``benchmarks/robustness.py`` (converged results that are not the generating pose, per preset)
+and their cost and refusals by ``benchmarks/certificate.py``; docs/solver.md states what
+``converged`` guarantees. On a 3-6 hexapod every assembly is known
+(:mod:`.assemblies`), which is what makes its ``converged`` exact up to its stated rule.
 
 The first attempt is the whole path in one substep, i.e. the plain Newton solve: warm starts
 and most cold starts pass at no extra cost. Otherwise the path is followed in substeps (a

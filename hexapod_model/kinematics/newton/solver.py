@@ -35,7 +35,7 @@ STATUSES = (
 )
 SINGULAR_PIVOT_RATIO = 1e-13
 MAX_STEP = 0.5  # rad or m: largest entry of one Newton step (cold starts far from the solution)
-THETA_MAX = 0.25  # largest Newton contraction |dx_k+1| / |dx_k| of a certified solve (Kantorovich)
+THETA_MAX = 0.25  # largest Newton contraction |dx_k+1| / |dx_k| of a checked solve (an estimate, not a bound)
 _THETA_FLOOR, _ONE_STEP = 1e-9, 1e-6  # rounding-level step (no contraction); largest step a solve may end on
 
 
