@@ -3,7 +3,11 @@
 Runs the two commands alternately in fresh processes and prints, per command, the median wall
 time, CPU time (user + sys, from ``os.wait4``) and the largest peak RSS; ``--cold`` also runs
 the command once with an empty numba cache (a temporary ``NUMBA_CACHE_DIR``: the first run after
-installation, compiling every kernel it calls).
+installation, compiling every kernel it calls) and, each in a fresh process with an empty cache,
+the CPU time of the first compiled solve (``Hexapod.from_preset("reference")``, then one
+``forward``, then one ``inverse``, then a 3-row ``forward_batch``; numba and the package already
+imported) beside the compilation of the reference floor (``floor_newton.py``: the same iteration
+as one njit function, its first solve), and their ratio.
 
     python benchmarks/startup.py [--runs 7] [--cold] [-- hexapod fk reference docs/examples/lengths.csv]
 """
@@ -22,6 +26,39 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 BASELINE = [sys.executable, "-c", "import pinocchio, numpy"]
 COMMAND = [sys.executable, "-m", "hexapod_model", "fk", "reference", str(ROOT / "docs/examples/lengths.csv")]
+FIRST_SOLVES = """
+import sys, time
+import numpy as np, numba
+import hexapod_model as hm
+from hexapod_model.kinematics.newton import iteration
+t0 = time.process_time()
+h = hm.Hexapod.from_preset("reference")
+s = h.forward(np.full(6, 0.01))
+t1 = time.process_time()
+b = h.inverse(s.pose)
+t2 = time.process_time()
+h.forward_batch(np.full((3, 6), 0.01))
+t3 = time.process_time()
+assert s.converged and b.converged
+print(t1 - t0, t2 - t1, t3 - t2)
+"""
+FLOOR_SOLVE = """
+import sys, time
+import numpy as np, numba
+import hexapod_model as hm
+sys.path.insert(0, sys.argv[1])
+import floor_newton as f
+from hexapod_model.kinematics.newton.solver import MAX_STEP
+h = hm.Hexapod.from_preset("reference")
+tables = f.extract(h)
+lengths, work = h.joints_of(np.full(6, 0.01)), (np.zeros((6, 42)), np.zeros((1, 1)))
+R, p = h.home_pose[:3, :3].copy(), h.home_pose[:3, 3].copy()
+t0 = time.process_time()
+it, norm = f.fk_newton(np.zeros((6, 6)), R, p, lengths, *tables, 1e-12, 50, MAX_STEP, *work)
+t1 = time.process_time()
+assert norm <= 1e-12
+print(t1 - t0)
+"""
 
 
 def run(cmd: list[str], env: dict | None = None) -> tuple[float, float, float]:
@@ -33,6 +70,20 @@ def run(cmd: list[str], env: dict | None = None) -> tuple[float, float, float]:
     if os.waitstatus_to_exitcode(status) != 0:
         raise SystemExit(f"{' '.join(cmd)} failed: {proc.stderr.read().decode()[-500:] if proc.stderr else ''}")
     return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024
+
+
+def cold_cpu(code: str, env: dict, *args: str) -> list[float]:
+    """The figures ``code`` prints, run in a fresh process with an empty numba cache."""
+    cache = tempfile.mkdtemp(prefix="numba-cold-")
+    try:
+        out = subprocess.run(
+            [sys.executable, "-c", code, *args], env=dict(env, NUMBA_CACHE_DIR=cache), capture_output=True, text=True
+        )
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+    if out.returncode != 0:
+        raise SystemExit(out.stderr[-800:])
+    return [float(v) for v in out.stdout.split()]
 
 
 def median(values: list[float]) -> float:
@@ -66,6 +117,13 @@ def main(argv=None) -> int:
         finally:
             shutil.rmtree(cache, ignore_errors=True)
         print(f"{'first run, empty numba cache':34s}{wall:9.3f}{cpu:9.3f}{rss:9.0f}")
+        forward, inverse, batch = cold_cpu(FIRST_SOLVES, env)
+        (floor,) = cold_cpu(FLOOR_SOLVE, env, str(Path(__file__).resolve().parent))
+        print("\nfirst compiled solves, empty numba cache (CPU s, numba and the package imported):")
+        print(f"  Hexapod.from_preset + first forward {forward:8.2f}   x{forward / floor:.2f} the floor's compile")
+        print(f"  then first inverse                  {inverse:8.2f}")
+        print(f"  then first forward_batch (3 rows)   {batch:8.2f}")
+        print(f"  floor_newton.fk_newton first solve  {floor:8.2f}   (its compilation; target: first forward <= x1.5)")
     return 0
 
 

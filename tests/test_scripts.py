@@ -230,6 +230,17 @@ def test_compiled_newton_benchmark_runs():
     assert "Pinocchio Newton" in out.stdout and "forward_batch" in out.stdout
 
 
+def test_floor_compare_benchmark_runs():
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "floor_compare.py"), "--rounds", "1", "--samples", "20"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert out.returncode == 0, out.stderr
+    assert "ratio package / floor" in out.stdout and "target >= 0.85x" in out.stdout
+
+
 def test_startup_benchmark_runs():
     out = subprocess.run(
         [sys.executable, str(ROOT / "benchmarks" / "startup.py"), "--runs", "1"],

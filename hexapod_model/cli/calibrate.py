@@ -14,6 +14,7 @@ from ..calibration.planning import plan_poses
 from ..calibration.validation import verdict
 from ..description.geometry_toml import save_geometry
 from ..exceptions import InputError
+from ..extras import require_extra
 from ..files import atomic_write_text, check_output_path
 from ..io.tables import LENGTH_COLUMNS, POSE_COLUMNS, pose_row, write_table
 from ..studies.calibrate import load_poses, nominal_geometry, run_calibration, save_simulation, simulate
@@ -128,6 +129,7 @@ def run(args: argparse.Namespace) -> int:
         written = (not refused) if args.output else None
         atomic_write_text(args.json, json.dumps(report_json(result, written), indent=2) + "\n")
     if args.report:
+        require_extra("plots")
         from ..plots.calibrate import write_figures
 
         out = Path(args.report)

@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from ..extras import require_extra
 from ..files import atomic_write_text, check_output_path
 from ..kinematics.hexapod import load_hexapod
 from ..studies.evaluate import Settings, run_evaluation
@@ -91,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
     r["home_z"] = float(hexa.home_pose[2, 3])
     print(format_report(r))
     if args.out:
+        require_extra("plots")
         from ..plots.evaluate import plot_sections
 
         png = Path(args.out) / "evaluate_sections.png"

@@ -10,6 +10,7 @@ import sys
 import numpy as np
 
 from ..exceptions import InputError
+from ..extras import require_extra
 from ..files import atomic_write_text, check_output_path
 from ..io.tables import LENGTH_COLUMNS, POSE_COLUMNS
 
@@ -52,6 +53,7 @@ def iso(t: float) -> str:
 
 
 def _open(args: argparse.Namespace):
+    require_extra("service")
     from ..service import Store, load_config
 
     config = load_config(args.config)

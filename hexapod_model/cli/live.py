@@ -14,6 +14,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..exceptions import HexapodError
+from ..extras import require_extra
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.rotations import quaternion_to_matrix
 from ._common import note
@@ -71,6 +72,8 @@ def live_view(
 
 def run_live(args: argparse.Namespace) -> int:
     """``hexapod view FIXTURE.toml --live``: poll a running service over HTTP and show its poses."""
+    require_extra("view")
+    require_extra("service")
     from ..service import load_config
 
     config = load_config(args.hexapod)

@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import logging
 import os
 import sys
+from collections.abc import Iterator
 
 from .. import __version__
 from ..exceptions import HexapodError, SolverError
+from ..kinematics.newton.first_compile import LOGGER as COMPILE_LOGGER
 
 EXIT_CODES = {
     0: "all good",
@@ -61,6 +65,33 @@ def main(argv: list[str] | None = None) -> int:
     """Run ``hexapod`` with ``argv`` (default: ``sys.argv[1:]``); returns the exit code."""
     argv = sys.argv[1:] if argv is None else argv
     args = build_parser(argv[0] if argv else None).parse_args(argv)
+    with _compile_notes(args.command):
+        return _run(args)
+
+
+@contextlib.contextmanager
+def _compile_notes(command: str) -> Iterator[None]:
+    """On a terminal, the solver's one line before a first compilation, as ``hexapod COMMAND: ...`` on stderr."""
+    if not sys.stderr.isatty():
+        yield
+        return
+    log = logging.getLogger(COMPILE_LOGGER)
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter(f"hexapod {command}: %(message)s"))
+    level, propagate = log.level, log.propagate
+    log.addHandler(handler)
+    log.setLevel(logging.INFO)
+    log.propagate = False
+    try:
+        yield
+    finally:
+        log.removeHandler(handler)
+        log.setLevel(level)
+        log.propagate = propagate
+
+
+def _run(args: argparse.Namespace) -> int:
+    """``args.func(args)``: the exit code, one line on stderr for an error."""
     try:
         return int(args.func(args) or 0)
     except SolverError as exc:

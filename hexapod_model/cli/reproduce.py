@@ -10,6 +10,7 @@ import numpy as np
 
 from ..analysis.conditioning import condition_numbers
 from ..exceptions import InputError
+from ..extras import require_extra
 from ..files import atomic_write_text, check_output_path
 from ..kinematics.hexapod import load_hexapod
 from ..studies.paper_table import READINGS, format_table
@@ -145,6 +146,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         atomic_write_text(args.json, json.dumps(result.report, indent=2) + "\n")
     if args.out:
+        require_extra("plots")
         from ..plots.reproduce import write_figures
 
         for path in write_figures(

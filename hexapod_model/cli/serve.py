@@ -11,6 +11,7 @@ import sys
 import threading
 import time
 
+from ..extras import require_extra
 from ._common import note
 
 # python-can and the service are imported when a command runs: `hexapod --help` stays fast.
@@ -78,6 +79,7 @@ def run_serve(args: argparse.Namespace) -> int:
 
 
 def _serve(args: argparse.Namespace) -> int:
+    require_extra("service")
     import can
 
     from ..service import FixtureService, ServiceError, Simulator, load_config, load_simulation
@@ -141,6 +143,7 @@ def run_simulate(args: argparse.Namespace) -> int:
 
 
 def _simulate(args: argparse.Namespace) -> int:
+    require_extra("service")
     from ..service import Simulator, load_config, load_simulation, open_bus
 
     config = load_config(args.config)

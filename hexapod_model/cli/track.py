@@ -8,6 +8,7 @@ import json
 import sys
 from pathlib import Path
 
+from ..extras import require_extra
 from ..files import atomic_write_text, check_output_path
 from ..io.tables import LENGTH_COLUMNS, column, read_table, write_table
 from ..studies.track import SPEEDS, TRACK_LOG_COLUMNS, run_table, simulate, track_log
@@ -105,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
         print(format_table(rows))
         result = rows
     else:
+        require_extra("plots")
         from ..plots.track import plot_run
 
         out = Path(args.out)

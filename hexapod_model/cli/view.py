@@ -9,6 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ..exceptions import HexapodError, InputError, ViewError
+from ..extras import require_extra
 from ..files import check_output_path
 from ..io.tables import LENGTH_COLUMNS, open_table, pose_input_columns, poses_from_table
 from ..kinematics.hexapod import Hexapod
@@ -58,6 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def build(args: argparse.Namespace, vis):
     """Scene of ``args`` (hexapod, pose, optional cell) in the visualizer ``vis``."""
+    require_extra("view")
     from ..viz.meshcat_scene import HexapodScene, solve_view_configuration
 
     hexa = hexapod_of(args)
@@ -106,6 +108,7 @@ def run_view(args: argparse.Namespace) -> int:
         from .live import run_live
 
         return run_live(args)
+    require_extra("view")
     from ..viz.meshcat_scene import start_visualizer, stop_visualizer
 
     vis = start_visualizer()
@@ -145,6 +148,7 @@ def parse_size(text: str) -> tuple[int, int]:
 
 def run_snapshot(args: argparse.Namespace) -> int:
     """``hexapod snapshot``."""
+    require_extra("view")
     from ..viz.meshcat_scene import start_visualizer, stop_visualizer
     from ..viz.render import render_pngs, write_html
 

@@ -52,6 +52,7 @@ from typing import TYPE_CHECKING, NamedTuple, cast
 import numpy as np
 import pinocchio as pin
 
+from .newton.first_compile import announce
 from .newton.path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP, rescale
 from .newton.solver import NewtonSolver
 
@@ -197,6 +198,8 @@ def _follow_compiled(
 ) -> Outcome:
     """:func:`_follow` on the compiled path (:func:`.follow.follow`); the candidates, if any, here."""
     from .newton.follow import follow  # numba: a compiled solver's
+
+    announce(follow)
 
     first = tried[1] if tried[1] is not None else start
     x = np.empty_like(start)

@@ -21,6 +21,7 @@ from ..exceptions import HexapodError, InputError
 from .assemblies import review
 from .assembly import NEAR_SINGULAR_FACTOR
 from .checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance, failure_status
+from .newton.first_compile import announce
 from .newton.outcomes import INVALID_INPUT, OUT_OF_LIMITS, outcome
 from .newton.solver import Solution
 
@@ -203,6 +204,8 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, sla
         return _per_row(hexa, solve, rows, guess, warm, retry, True)
     from .newton.batch_kernels import forward_rows  # numba: only for a compiled solver
 
+    announce(forward_rows)
+
     start = hexa._start(guess)  # a bad guess raises, as forward would on every row
     sign = solver.home_sign if guess is None else float(getattr(guess, "det_sign", 0))
     carry = np.array([sign, 0.0, float(guess is not None)])
@@ -309,6 +312,8 @@ def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter, slack:
     if not solver.compiled_loop:
         return _per_row(hexa, solve, rows, guess, warm, retry, False)
     from .newton.batch_kernels import inverse_rows  # numba: only for a compiled solver
+
+    announce(inverse_rows)
 
     out = _outputs(len(rows), hexa.nq)
     settings = (tol, max_iter, POSE_TOLERANCE, MAX_POSITION)

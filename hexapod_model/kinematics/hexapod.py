@@ -39,7 +39,7 @@ from .checks import (
     check_vector,
     failure_status,
 )
-from .newton.kernel_sets import kernel_set
+from .newton.kernel_sets import KernelSet, kernel_set
 from .newton.solver import NewtonSolver, Solution
 
 DEFAULT_TOL = 1e-12  # closure residual (m, rad): pose errors stay below 1e-9 on every preset
@@ -76,7 +76,6 @@ class Hexapod:
         self.closed_loop = model
         #: whether the solves run the numba-compiled kernels
         self.compiled = bool(compiled)
-        self._kernels = kernel_set(self.compiled)
         self.geometry = geometry
         m = model.model
         #: the Pinocchio model of the URDF tree (``RobotWrapper.model``)
@@ -110,6 +109,11 @@ class Hexapod:
         self._free_directions: dict[tuple[int, ...], tuple[int, int]] = {}  # held set -> (free, rank)
         #: 2-norm condition number of the direct-kinematics constraint Jacobian at home
         self.home_condition_number = self._check_home_conditioning()
+
+    @property
+    def _kernels(self) -> KernelSet:
+        """The kernels of :attr:`compiled`: numba is imported at the first solve, not on loading."""
+        return kernel_set(self.compiled)
 
     # ----- construction -----
     @classmethod
@@ -210,8 +214,12 @@ class Hexapod:
         return solver
 
     def _check_home_conditioning(self) -> float:
-        """Condition number of the direct-kinematics Jacobian at home; GeometryError above the limit."""
-        _, G = self._solver(self._held_forward).evaluate(self.closed_loop.q_home)
+        """Condition number of the direct-kinematics Jacobian at home; GeometryError above the limit.
+
+        Evaluated with the NumPy kernels: loading a hexapod compiles nothing (the first solve
+        compiles what it runs).
+        """
+        _, G = NewtonSolver(self.closed_loop, self._held_forward, kernel_set(False)).evaluate(self.closed_loop.q_home)
         return check_home_conditioning(G, self.closed_loop.source, HOME_CONDITION_LIMIT)
 
     def _start(self, guess, copy: bool = True) -> np.ndarray:

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import ViewError
+from ..extras import require
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
 
@@ -32,11 +33,11 @@ DEFAULT_CAMERA = (0.46, 0.34, 0.46)  # m, camera position relative to the centre
 
 
 def _require_meshcat():
+    require("meshcat", "view")
     try:
-        import meshcat  # noqa: F401
         from pinocchio.visualize import MeshcatVisualizer  # noqa: F401
-    except ImportError as exc:  # pragma: no cover - meshcat is a declared dependency
-        raise ViewError(f"the 3-D view needs meshcat: pip install meshcat ({exc})") from None
+    except ImportError as exc:  # pragma: no cover - Pinocchio without its visualizers
+        raise ViewError(f"the 3-D view needs pinocchio.visualize ({exc})") from None
 
 
 @dataclass

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import RenderError
+from ..extras import require
 from ..files import atomic_write_bytes, atomic_write_text
 
 CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")
@@ -57,7 +58,7 @@ def render_pngs(
 
     ``size`` (width, height) in pixels, at least 1024x768.
     """
-    from PIL import Image
+    Image = require("PIL.Image", "view", "reading the rendered snapshots")
 
     if len(html_files) != len(png_files) or not html_files:
         raise RenderError(f"need as many PNG paths as HTML files, got {len(png_files)} and {len(html_files)}")
@@ -111,6 +112,6 @@ def render_pngs(
 
 def pixels(png: str | Path) -> np.ndarray:
     """(H, W, 3) uint8 pixels of a PNG (for checks and tests)."""
-    from PIL import Image
+    Image = require("PIL.Image", "view", "reading the rendered snapshots")
 
     return np.asarray(Image.open(png).convert("RGB"))

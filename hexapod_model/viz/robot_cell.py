@@ -9,7 +9,6 @@ the plate, by a damped least-squares IK on the UR10's Pinocchio model.
 
 from __future__ import annotations
 
-import importlib.metadata
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -17,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import HexapodError, UnreachableError
+from ..extras import require_distribution
 from ..kinematics.newton.solver import Solution
 from .meshcat_scene import HexapodScene
 
@@ -50,10 +50,7 @@ def tool_changer_pose(platform_pose: np.ndarray) -> np.ndarray:
 
 def ur10_files() -> tuple[Path, Path]:
     """The UR10 URDF and the directory that resolves its ``package://`` mesh paths."""
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        raise HexapodError("the robot cell needs example-robot-data: pip install example-robot-data") from None
+    dist = require_distribution("example-robot-data", "cell")
     for f in dist.files or ():
         if str(f).endswith("robots/ur_description/urdf/ur10_robot.urdf"):
             urdf = Path(str(dist.locate_file(f)))

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...description.model import ClosedLoopModel
+from .first_compile import announce
 from .iteration import solve_blocks, solve_schur
 from .kernels import jacobian
 from .legs import ChainTables
@@ -57,6 +58,7 @@ class CompiledSolver(NewtonSolver):
             self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb])
         self.packed = packed
         self._kernel = solve_schur if schur else solve_blocks
+        announce(self._kernel)  # the first solve after installation compiles it
         self._home = tables.home
         nq = clm.nq
         # the entries' other arguments when a plain iterate() does not use them

@@ -2,7 +2,7 @@
 
 :func:`follow` is :func:`.assembly._follow` on the compiled path (:mod:`.newton`): the path of
 solutions for the readings ``l(t) = l0 + t (l - l0)`` from the start, in substeps, each accepted
-only when its certified Newton corrector (:func:`.newton.iterate_schur` with ``certify``)
+only when its certified Newton corrector (:func:`.iteration.iterate_schur` with ``certify``)
 converges: no shortened step (``MAX_STEP``), every contraction at most ``THETA_MAX``, the
 determinant sign kept. Same rules as the Python follower:
 
@@ -26,8 +26,8 @@ from numba import njit
 
 from . import path_rules
 from .chains import evaluate_chains
-from .iteration import CONVERGED, _integrate, iterate_schur
-from .kernels import closure_residual
+from .iteration import CONVERGED, _integrate, iterate_schur, loop_spare
+from .kernels import closure_residual, copy_into
 from .lie import difference_free_flyer
 from .packing import unpack_floats, unpack_ints, unpack_work
 from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP
@@ -55,7 +55,7 @@ def _predict(x, a, b, u, q0, dv, ints, work, scratch):
     _difference(a, b, dv, ints, scratch)
     for i in range(dv.shape[0]):
         dv[i] *= u
-    q0[:] = x
+    copy_into(q0, x)
     _integrate(q0, dv, leg_q, leg_v, ints[3], platform_v, Rs, ps, quat)
 
 
@@ -98,12 +98,13 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prism
     q0, before, dv = np.empty(nq), np.empty(nq), np.empty(ints[1])
     scratch = (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3))
     offset = np.zeros(r.shape[0])
+    spare = loop_spare(nq)
     # the start's own closure residual: a start off the manifold follows r - (1 - t) r_start
     res = _residual(start, ints, floats, work)
     shifted = res > INTERMEDIATE_TOL
     if shifted:
-        offset[:] = r
-    x[:] = start
+        copy_into(offset, r)
+    copy_into(x, start)
     t, t_before, substeps, has_before = 0.0, 0.0, 0, False
     while t < 1.0 and substeps < MAX_SUBSTEPS and h >= MIN_STEP:
         tn = 1.0 if t + 1.2 * h >= 1.0 else t + h  # no sliver of a last substep
@@ -112,21 +113,21 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prism
         elif predicted:  # along the plain attempt's first Newton step (the tangent, to first order)
             _predict(x, x, first, tn, q0, dv, ints, work, scratch)  # pin.interpolate(x, first, tn)
         else:
-            q0[:] = x
+            copy_into(q0, x)
         for i in range(n):
             l0 = start[prismatic_q[i]]
             q0[prismatic_q[i]] = l0 + tn * (target[i] - l0)
         scale = 1.0 - tn if shifted else 0.0
         tol_n = tol if tn == 1.0 else INTERMEDIATE_TOL
         code, it, res, _, theta, kept, certified = iterate_schur(
-            q0, q, tol_n, max_iter, sign, offset, scale, True, ints, floats, work, iwork
+            q0, q, tol_n, max_iter, sign, offset, scale, spare[0][1], packed, spare
         )
         total += it
         substeps += 1
         accepted = code == CONVERGED and certified
         h = (tn - t) * rescale(theta, accepted, 2 if predicted else 1)  # from the substep tried
         if accepted:
-            before[:] = x
-            x[:] = q
+            copy_into(before, x)
+            copy_into(x, q)
             t_before, t, sign, predicted, has_before = t, tn, kept, True, True
     return t, total, res

@@ -114,6 +114,17 @@ def copied(a):
     return a.copy()
 
 
+@njit(cache=True, inline="always")
+def copy_into(dst, src):
+    """``dst[:] = src`` for 1-D arrays of one length, element by element.
+
+    The slice assignment's shape check brings numba's error formatting into the compiled unit:
+    about 2 s more to compile on a first run.
+    """
+    for k in range(dst.shape[0]):
+        dst[k] = src[k]
+
+
 @njit(cache=True)
 def scatter_step(x, free_v, dv, max_step):
     """Scatter a Newton step into the full velocity space, limited in size.

@@ -1,0 +1,140 @@
+"""The package's compiled direct kinematics against the reference floor (``floor_newton.py``), in one process.
+
+Alternating rounds (the machine is shared: the load affects both alike), CPU time
+(``time.thread_time_ns``):
+
+* warm FK: ``Hexapod.forward`` along trajectory A at 1 kHz, each solve from the previous one,
+  against ``floor_newton.fk_newton`` called from Python on the same readings (its state carried);
+  microseconds per solve (median, p95) and the ratio (target: at most 1.5x the floor);
+* ``forward_batch`` of box poses from home (cold) and of trajectory A (``warm=True``) against
+  ``fk_batch_cold`` / ``fk_batch_warm``: solves per CPU second and the ratio (target: at least
+  0.85x the floor).
+
+Both solve to ``BENCH_TOL``. The figures of the first solves (compilation) are in
+``startup.py --cold``.
+
+    python benchmarks/floor_compare.py [--rounds 5] [--samples 1000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import floor_newton as floor
+import numpy as np
+
+from hexapod_model import Hexapod
+from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.kinematics.newton.solver import MAX_STEP
+from hexapod_model.studies.bench import BENCH_TOL, trajectory_readings
+
+MAX_ITER = 50
+
+
+def per_solve(solve, inputs) -> np.ndarray:
+    """CPU microseconds of each ``solve(x)``."""
+    out = np.empty(len(inputs))
+    for k, x in enumerate(inputs):
+        t0 = time.thread_time_ns()
+        solve(x)
+        out[k] = (time.thread_time_ns() - t0) / 1e3
+    return out
+
+
+def rate(call, n: int) -> float:
+    """Solves per CPU second of one ``call()`` solving ``n`` rows."""
+    t0 = time.thread_time_ns()
+    call()
+    return n / ((time.thread_time_ns() - t0) / 1e9)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--samples", type=int, default=1000)
+    args = ap.parse_args(argv)
+    hexa = Hexapod.from_preset("reference")
+    tables = floor.extract(hexa)
+    _, warm = trajectory_readings(hexa)
+    box = hexa.inverse_batch(box_poses(hexa.home_pose, args.samples, seed=0))
+    cold = box.lengths[box.converged]
+    Rh, ph = hexa.home_pose[:3, :3].copy(), hexa.home_pose[:3, 3].copy()
+    J, G = np.zeros((6, 42)), np.zeros((1, 1))
+    first = hexa.forward(warm[0], tol=BENCH_TOL)
+
+    warm_steps = {"package": 0, "floor": 0}  # Newton steps of the last round's solves
+
+    def package_warm() -> np.ndarray:
+        previous, warm_steps["package"] = first, 0
+
+        def solve(x):
+            nonlocal previous
+            previous = hexa.forward(x, previous, tol=BENCH_TOL)
+            warm_steps["package"] += previous.iterations
+
+        return per_solve(solve, warm[1:])
+
+    def floor_warm() -> np.ndarray:
+        theta, R, p = np.zeros((6, 6)), Rh.copy(), ph.copy()
+        floor.fk_newton(theta, R, p, hexa.joints_of(warm[0]), *tables, BENCH_TOL, MAX_ITER, MAX_STEP, J, G)
+        settings, warm_steps["floor"] = (BENCH_TOL, MAX_ITER, MAX_STEP, J, G), 0
+
+        def solve(x):
+            warm_steps["floor"] += floor.fk_newton(theta, R, p, x, *tables, *settings)[0]
+
+        return per_solve(solve, hexa.joints_of(warm[1:]))
+
+    def floor_batch(rows: np.ndarray, warm_start: bool) -> np.ndarray:
+        n, joints = len(rows), hexa.joints_of(rows)
+        out = (np.empty((n, 3, 3)), np.empty((n, 3)), np.empty(n, dtype=np.int64))
+        if warm_start:
+            floor.fk_batch_warm(joints, np.zeros((6, 6)), Rh, ph, *tables, BENCH_TOL, MAX_ITER, MAX_STEP, *out)
+        else:
+            floor.fk_batch_cold(joints, *tables, Rh, ph, BENCH_TOL, MAX_ITER, MAX_STEP, *out)
+        return out[2]  # Newton steps per row
+
+    cases = {
+        "forward_batch, box poses from home": (
+            lambda: hexa.forward_batch(cold, tol=BENCH_TOL),
+            lambda: floor_batch(cold, False),
+            len(cold),
+        ),
+        "forward_batch, trajectory A warm": (
+            lambda: hexa.forward_batch(warm, warm=True, tol=BENCH_TOL),
+            lambda: floor_batch(warm, True),
+            len(warm),
+        ),
+    }
+    steps = {}  # mean Newton steps per row: the package's certificate follows some rows' readings path
+    for name, (package, reference, _) in cases.items():  # compile (or load) everything before timing
+        steps[name] = (float(np.mean(package().iterations)), float(np.mean(reference())))
+    fk: dict[str, list[np.ndarray]] = {"package": [], "floor": []}
+    rates: dict[str, dict[str, list[float]]] = {name: {"package": [], "floor": []} for name in cases}
+    for _ in range(args.rounds):
+        fk["package"].append(package_warm())
+        fk["floor"].append(floor_warm())
+        for name, (package, reference, n) in cases.items():
+            rates[name]["package"].append(rate(package, n))
+            rates[name]["floor"].append(rate(reference, n))
+    print(f"reference preset, tol {BENCH_TOL:g}: {args.rounds} alternating rounds, CPU time")
+    best = {k: min(runs, key=np.median) for k, runs in fk.items()}
+    print(f"{'warm FK, trajectory A (us/solve)':38s}{'median':>9s}{'p95':>9s}")
+    for k in ("package", "floor"):
+        print(f"  {k:36s}" + "".join(f"{np.percentile(best[k], q):9.1f}" for q in (50, 95)))
+    ratio = np.median(best["package"]) / np.median(best["floor"])
+    print(f"  ratio package / floor {ratio:.2f}x (target <= 1.5x)")
+    a, b = (warm_steps[k] / (len(warm) - 1) for k in ("package", "floor"))
+    print(f"  Newton steps per solve: package {a:.2f} (the certificate's), floor {b:.2f}")
+    for name, r in rates.items():
+        pkg, ref = max(r["package"]), max(r["floor"])
+        label = f"{name} (solves/s)"
+        print(f"{label:38s} package {pkg:8.0f}  floor {ref:8.0f}  ratio {pkg / ref:.2f}x (target >= 0.85x)")
+        a, b = steps[name]
+        per_step = (pkg * a) / (ref * b)
+        print(f"{'':38s} Newton steps per row: package {a:.2f}, floor {b:.2f}; steps/s ratio {per_step:.2f}x")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

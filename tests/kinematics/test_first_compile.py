@@ -1,0 +1,45 @@
+"""The one line logged before a compiled entry's first compilation."""
+
+from __future__ import annotations
+
+import logging
+import subprocess
+import sys
+import types
+
+from hexapod_model.kinematics.newton import first_compile
+
+
+class _Entry:
+    """A stand-in for a numba dispatcher: its Python function, its compiled signatures, no cache."""
+
+    def __init__(self, name: str, signatures: list):
+        self.py_func = types.SimpleNamespace(__name__=name)
+        self.signatures = signatures
+
+
+def test_announces_a_compilation_once_per_entry(caplog, monkeypatch):
+    monkeypatch.setattr(first_compile, "_announced", set())
+    with caplog.at_level(logging.INFO, logger=first_compile.LOGGER):
+        first_compile.announce(_Entry("solve_schur", []))
+        first_compile.announce(_Entry("solve_schur", []))  # the same entry: once
+        first_compile.announce(_Entry("forward_rows", ["(float64[:],)"]))  # compiled in this process: silent
+    assert caplog.messages == ["compiling the solver kernels, once after installation: ~18 s"]
+
+
+def test_a_cached_entry_is_not_announced(caplog, monkeypatch):
+    monkeypatch.setattr(first_compile, "_announced", set())
+    monkeypatch.setattr(first_compile, "_cached", lambda d: True)
+    with caplog.at_level(logging.INFO, logger=first_compile.LOGGER):
+        first_compile.announce(_Entry("solve_blocks", []))
+    assert caplog.messages == []
+
+
+def test_loading_a_hexapod_imports_no_numba():
+    """Numba is imported, and the kernels compiled, by the first solve: not by loading a hexapod."""
+    code = (
+        "import sys\nimport hexapod_model as hm\nh = hm.Hexapod.from_preset('reference')\n"
+        "assert h.compiled and h.home_condition_number > 1\nprint('numba' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
