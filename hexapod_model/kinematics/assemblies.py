@@ -7,15 +7,16 @@ answers it globally:
 * **3-6 hexapods** (legs meeting in pairs at three platform points, e.g. preset ``3-6``): the
   resultant polynomial of :mod:`.three_six` gives *every* real assembly (at most 16, 1-2 ms);
   the set is complete (``complete``). :meth:`.hexapod.Hexapod.forward` uses it by itself
-  (:func:`review`): a result (cold, or warm with a reading more than ``WARM_CHECK`` from the
+  (:func:`review`): a result (cold, or warm with a reading more than ``WARM_CHECK`` base radii from the
   guess's) stays ``converged`` only when no other assembly within the stroke and joint limits
   lies within ``MARGIN`` times its distance from the start (home or the guess; poses compared
   by :func:`.rotations.pose_distance`, rotations times the base radius); otherwise it is
   ``ambiguous_assembly`` with all of them as candidates, the connected one first. Readings the
   polynomial has no real root for are ``no_assembly``; when Newton found nothing or could not
   follow the path from home, the one assembly within the limits is returned as ``converged``
-  (several: ``ambiguous_assembly``). Warm starts closer than ``WARM_CHECK`` (a tracker's
-  samples) keep the connected assembly unchecked. (At home's readings the ``3-6`` preset has
+  (several: ``ambiguous_assembly``). Warm starts closer than ``WARM_CHECK`` base radii (a
+  tracker's samples) keep the connected assembly unchecked. Every distance here is relative to
+  the base radius, so a hexapod scaled by any factor gets the same answers. (At home's readings the ``3-6`` preset has
   four assemblies within its limits: home and three tilted by about 85 deg, 60 mm lower.)
 * **other hexapods**: a multi-start search: plain Newton from home and from ``starts``
   configurations of random poses (translation within the largest stroke, roll, pitch and yaw
@@ -41,11 +42,11 @@ from .three_six import ThreeSixFK
 
 Hexapod = Any  # a hexapod.Hexapod (this module is below it)
 
-SAME = 1e-7  # m (rotations times the characteristic length): two poses closer than this are one assembly
+SAME = 5e-7  # times the base radius (1e-7 m on the presets): two poses closer than this are one assembly
 SAMPLE_ANGLE = np.radians(40.0)  # rad: roll, pitch, yaw range of the multi-start search's poses
 DEFAULT_STARTS = 64  # starts of the multi-start search besides home
 MARGIN = 3.0  # a result competes with the assemblies within this many times its distance from the start
-WARM_CHECK = 1e-3  # m: a warm start is checked when a reading differs from the guess's by more than this
+WARM_CHECK = 5e-3  # times the base radius (1 mm on the presets): a warm start farther in a reading is checked
 
 
 @dataclass(frozen=True)
@@ -83,9 +84,7 @@ class AssemblyFinder:
                 self.exact = ThreeSixFK(hexa.geometry)
             except GeometryError:  # not a 3-6 layout
                 self.exact = None
-        base = hexa.closed_loop.model.jointPlacements
-        anchors = np.array([base[leg.joints[0]].translation for leg in hexa.closed_loop.legs])
-        self.length = float(np.max(np.linalg.norm(anchors[:, :2], axis=1))) or 0.25
+        self.length = hexa.base_radius  # m: rotations count times this in pose distances
 
     def find(
         self, readings: np.ndarray, reference: np.ndarray | None = None, starts: int = DEFAULT_STARTS, seed: int = 0
@@ -103,7 +102,7 @@ class AssemblyFinder:
         inside: list[Solution] = []
         for T in poses:
             sol = self.hexa.inverse(T, check=False)
-            if sol.converged and np.max(np.abs(sol.lengths - readings)) <= 1e-9:
+            if sol.converged and np.max(np.abs(sol.lengths - readings)) <= 5e-9 * self.length:
                 inside.append(sol)
         ref = self.hexa.home_pose if reference is None else reference
         inside.sort(key=lambda s: pose_distance(ref, s.pose, self.length))
@@ -133,7 +132,7 @@ class AssemblyFinder:
             if status != "converged":
                 continue
             T = hexa.pose_of(q1)
-            if all(pose_distance(T, P, self.length) > SAME for P in found):
+            if all(pose_distance(T, P, self.length) > SAME * self.length for P in found):
                 found.append(T)
         return found
 
@@ -146,11 +145,12 @@ def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: A
     if not cold and sol.status != "converged":
         return sol  # warm failures keep their own status (the tracker judges its passages)
     q_guess = None if cold else np.asarray(getattr(guess, "q", guess), dtype=float)
-    if q_guess is not None and np.max(np.abs(hexa.lengths_of(q_guess) - readings)) <= WARM_CHECK:
+    if q_guess is not None and np.max(np.abs(hexa.lengths_of(q_guess) - readings)) <= WARM_CHECK * finder.length:
         return sol
     reference = hexa.home_pose if q_guess is None else hexa.pose_of(q_guess)
     found = finder.find(readings, reference)
     within, length = found.solutions, finder.length
+    same = SAME * length
     if not within:
         if found.outside == 0:
             why = "the resultant polynomial of the 3-6 platform has no real root for these readings"
@@ -159,7 +159,7 @@ def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: A
         return _replace(sol, "out_of_limits", msg, sol.flags if sol.status == "out_of_limits" else ("not_closed",))
     if sol.status == "converged":
         d = pose_distance(reference, sol.pose, length)
-        rivals = [s for s in within if pose_distance(s.pose, sol.pose, length) > SAME]
+        rivals = [s for s in within if pose_distance(s.pose, sol.pose, length) > same]
         if not any(pose_distance(reference, s.pose, length) <= MARGIN * d for s in rivals):
             return sol  # clearly the assembly nearest the start
         first = [sol]
@@ -169,7 +169,7 @@ def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: A
             only = within[0]
             msg = "the only assembly within the stroke and joint limits (resultant polynomial of the 3-6 platform)"
             return Solution(only.pose, only.q, only.lengths, "converged", sol.iterations, 0.0, only.jacobian, msg)
-    ordered = first + [s for s in within if all(pose_distance(s.pose, f.pose, length) > SAME for f in first)]
+    ordered = first + [s for s in within if all(pose_distance(s.pose, f.pose, length) > same for f in first)]
     start = "home" if cold else "the guess"
     msg = (
         f"{len(ordered)} assemblies within the stroke and joint limits fit these readings (resultant polynomial "

@@ -142,7 +142,8 @@ def _result(
         messages[k] = "" if codes[k] == _FALLBACK else _message(hexa, int(codes[k]), int(k), out, tol, retry)
         if status[k] == "max_iterations":
             outside = hexa._outside(Q[k])
-            status[k], messages[k] = failure_status("max_iterations", messages[k], residuals[k], max_iter, outside)
+            stalled = failure_status("max_iterations", messages[k], residuals[k], max_iter, outside, hexa.scale)
+            status[k], messages[k] = stalled
             flags[k] = ("not_closed",) if status[k] == "out_of_limits" else flags[k]
     for j, sol in fallback.items():
         Q[j], poses[j], status[j], iterations[j], residuals[j] = (

@@ -187,7 +187,9 @@ STALL_RESIDUAL = 1e-6
 STALL_STEPS = 20  # a caller's max_iter below this keeps ``max_iterations`` (it asked for few steps)
 
 
-def failure_status(status: str, message: str, residual: float, max_iter: int, outside: str | None) -> tuple[str, str]:
+def failure_status(
+    status: str, message: str, residual: float, max_iter: int, outside: str | None, scale: float = 1.0
+) -> tuple[str, str]:
     """The status of a solve that did not converge: what happened, and what the caller can do.
 
     Args:
@@ -196,6 +198,7 @@ def failure_status(status: str, message: str, residual: float, max_iter: int, ou
         residual: the last closure residual (m, rad mixed).
         max_iter: the caller's step limit.
         outside: the limit error of the last iterate (one line), ``None`` when within the limits.
+        scale: the hexapod's size ratio (:attr:`.hexapod.Hexapod.scale`) ``STALL_RESIDUAL`` scales by.
 
     Returns:
         ``out_of_limits`` when the last iterate left the stroke or joint limits (no closed
@@ -209,7 +212,7 @@ def failure_status(status: str, message: str, residual: float, max_iter: int, ou
     if outside is not None:
         msg = f"no closed configuration found within the limits ({message}); the iterate left them: {outside}"
         return "out_of_limits", msg
-    if residual > STALL_RESIDUAL and max_iter >= STALL_STEPS:
+    if residual > STALL_RESIDUAL * scale and max_iter >= STALL_STEPS:
         why = "the readings or pose may admit no real assembly, or none reachable from the start"
         return "not_found", f"no closed configuration found, the iteration stalled ({message}): {why}"
     return status, message

@@ -9,6 +9,7 @@
 from __future__ import annotations
 
 import functools
+import math
 import threading
 from collections.abc import Mapping
 from pathlib import Path
@@ -42,7 +43,8 @@ from .checks import (
 from .newton.kernel_sets import KernelSet, kernel_set
 from .newton.solver import NewtonSolver, Solution
 
-DEFAULT_TOL = 1e-12  # closure residual (m, rad): pose errors stay below 1e-9 on every preset
+DEFAULT_TOL = 1e-12  # closure residual (m, rad) at a 0.25 m base radius: pose errors below 1e-9 on every preset
+REFERENCE_RADIUS = 0.25  # m: the base radius DEFAULT_TOL is stated for
 DEFAULT_MAX_ITER = 20
 #: largest 2-norm condition number of the direct-kinematics constraint Jacobian at home
 #: (metres and radians; the presets have 9-67, a 20x smaller hexapod about 700, a singular
@@ -109,6 +111,13 @@ class Hexapod:
         self._free_directions: dict[tuple[int, ...], tuple[int, int]] = {}  # held set -> (free, rank)
         #: 2-norm condition number of the direct-kinematics constraint Jacobian at home
         self.home_condition_number = self._check_home_conditioning()
+        anchors = np.array([m.jointPlacements[leg.joints[0]].translation for leg in model.legs])
+        #: largest horizontal distance of a leg's first joint from the base origin (m)
+        self.base_radius = float(np.max(np.linalg.norm(anchors[:, :2], axis=1))) or REFERENCE_RADIUS
+        #: the size ratio, to the nearest power of two (1 for the presets), the constants scale by
+        self.scale = 2.0 ** round(math.log2(self.base_radius / REFERENCE_RADIUS))
+        #: the closure residual a solve stops at by default (m, rad): ``DEFAULT_TOL * scale``
+        self.default_tol = min(DEFAULT_TOL * self.scale, MAX_TOL)
 
     @property
     def _kernels(self) -> KernelSet:
@@ -241,7 +250,7 @@ class Hexapod:
         lengths: ArrayLike,
         guess=None,
         *,
-        tol: float = DEFAULT_TOL,
+        tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
         check: bool = True,
     ) -> Solution:
@@ -250,7 +259,9 @@ class Hexapod:
         Args:
             lengths: six readings, leg order, metres (zero at home).
             guess: previous :class:`Solution` or configuration to start from (default: home).
-            tol: closure residual to reach, in (0, 1e-6] (metres and radians).
+            tol: closure residual to reach, in (0, 1e-6] (metres and radians); default
+                :attr:`default_tol` (``DEFAULT_TOL`` = 1e-12 scaled with the base radius to the
+                nearest power of two: the presets' 1e-12, 3.1e-14 for a 1 cm base radius).
             max_iter: Newton step limit (an int >= 0).
             check: raise on a result that is not ``converged`` (default). With
                 ``check=False`` the :class:`Solution` is returned and its ``status`` says why.
@@ -261,6 +272,7 @@ class Hexapod:
             LimitError: a reading outside its stroke.
             ConvergenceError, SingularityError, WorkspaceError: when ``check`` and the solve failed.
         """
+        tol = self.default_tol if tol is None else tol
         if not (isinstance(lengths, np.ndarray) and lengths.shape == (6,) and lengths.dtype == np.float64):
             lengths = check_vector("lengths", lengths, 6)
         k = self._kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, LIMIT_SLACK)
@@ -338,7 +350,7 @@ class Hexapod:
         pose: np.ndarray,
         guess=None,
         *,
-        tol: float = DEFAULT_TOL,
+        tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
         check: bool = True,
     ) -> Solution:
@@ -349,6 +361,7 @@ class Hexapod:
         """
         q = self._start(guess)
         self._set_pose(q, pose)
+        tol = self.default_tol if tol is None else tol
         return self._finish(self._solver(self._held_inverse), q, tol, max_iter, check)
 
     def solve(
@@ -356,7 +369,7 @@ class Hexapod:
         held: Mapping[str, object],
         guess=None,
         *,
-        tol: float = DEFAULT_TOL,
+        tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
         check: bool = True,
     ) -> Solution:
@@ -376,6 +389,7 @@ class Hexapod:
         """
         q = self._start(guess)
         held_ids = hybrid.hold(self, held, q)
+        tol = self.default_tol if tol is None else tol
         return self._finish(self._solver(held_ids), q, tol, max_iter, check)
 
     def _limit_error(self, iq: int, value: float) -> LimitError:
@@ -435,7 +449,7 @@ class Hexapod:
                 k = int(self._limited[bad])
                 status, msg = "out_of_limits", str(self._limit_error(k, q[k]))
         elif status == "max_iterations":
-            status, msg = failure_status(status, msg, res, max_iter, self._outside(q))
+            status, msg = failure_status(status, msg, res, max_iter, self._outside(q), self.scale)
             flags = ("not_closed",) if status == "out_of_limits" else flags
         poses = tuple(self.pose_of(c) for c in out.candidates) if out.candidates else ()
         sol = Solution(
@@ -462,7 +476,7 @@ class Hexapod:
         guess=None,
         *,
         warm: bool = False,
-        tol: float = DEFAULT_TOL,
+        tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
     ) -> BatchResult:
         """Direct kinematics of N rows of readings in one call (a compiled loop; row by row if not ``compiled``).
@@ -479,6 +493,7 @@ class Hexapod:
             A :class:`~.batch.BatchResult`: per row what :meth:`forward` with ``check=False``
             gives (``invalid_input`` where it raises: NaN, out of stroke); never raises on a row.
         """
+        tol = self.default_tol if tol is None else tol
         return batch.forward_batch(self, lengths, guess, warm, tol, max_iter, LIMIT_SLACK)
 
     def inverse_batch(
@@ -487,7 +502,7 @@ class Hexapod:
         guess=None,
         *,
         warm: bool = False,
-        tol: float = DEFAULT_TOL,
+        tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
     ) -> BatchResult:
         """Inverse kinematics of N poses in one call (a compiled loop; row by row if not ``compiled``).
@@ -503,6 +518,7 @@ class Hexapod:
         Returns:
             A :class:`~.batch.BatchResult`: per row what :meth:`inverse` with ``check=False`` gives.
         """
+        tol = self.default_tol if tol is None else tol
         return batch.inverse_batch(self, poses, guess, warm, tol, max_iter, LIMIT_SLACK)
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:

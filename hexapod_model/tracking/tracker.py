@@ -76,7 +76,8 @@ class Tracker(PassageMixin):
         hexa: the hexapod.
         predictor: one of :data:`PREDICTORS` (the Newton guess; the checks do not depend on it).
         initial: known starting configuration (``Solution`` or ``q``); default home.
-        tol, max_iter: Newton settings per sample (closure residual, m and rad).
+        tol, max_iter: Newton settings per sample (closure residual, m and rad; default ``tol``:
+            100 times the hexapod's :attr:`~.hexapod.Hexapod.default_tol`, 1e-10 on the presets).
         length: m per rad in pose distances and condition numbers (default
             :func:`characteristic_length`).
         settings: a :class:`TrackerSettings`; keyword ``options`` replace its fields
@@ -92,7 +93,7 @@ class Tracker(PassageMixin):
         predictor: str = "eq22",
         initial=None,
         *,
-        tol: float = 1e-10,
+        tol: float | None = None,
         max_iter: int = 20,
         length: float | None = None,
         settings: TrackerSettings | None = None,
@@ -100,6 +101,7 @@ class Tracker(PassageMixin):
     ):
         if predictor not in PREDICTORS:
             raise InputError("predictor", predictor, f"choose one of {PREDICTORS}")
+        tol = 100.0 * hexa.default_tol if tol is None else tol
         self.hexa, self.predictor, self.tol, self.max_iter = hexa, predictor, tol, max_iter
         self.settings = s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
         self.length = characteristic_length(hexa) if length is None else float(length)
@@ -189,8 +191,9 @@ class Tracker(PassageMixin):
             lhat = w @ self._L[:n]
         # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
         last = self._raw[-1] if self._raw else _NONE
+        sigma_nu = s.innovation_sigma(spread)
         finite, zmax, zz, frozen, any_stuck = (False, math.nan, 0.0, 0, False) if l.shape != (6,) else (
-            reading_checks(l, last, s.stuck_tolerance, self._frozen, self._stuck, lhat, s.noise * spread, self._z)
+            reading_checks(l, last, s.stuck_tolerance, self._frozen, self._stuck, lhat, sigma_nu, self._z)
         )  # fmt: skip
         if not finite:
             msg = f"expected 6 finite readings, got {lengths!r}"
@@ -204,7 +207,7 @@ class Tracker(PassageMixin):
         legs: tuple[int, ...] = ()
         suspect = False
         if zmax > s.jump_sigmas or frozen > 0 or any_stuck:
-            moving = motion_sigmas(np.array(self._raw), s.noise) if frozen >= s.stuck_samples else None
+            moving = motion_sigmas(np.array(self._raw), s.reading_sigma) if frozen >= s.stuck_samples else None
             stuck = stuck_legs(self._frozen, z, self._moved(), s, moving) | (self._stuck & (self._frozen > 0))
             self._stuck = stuck  # latched while the reading stays unchanged
             jump = z > s.jump_sigmas
