@@ -133,6 +133,14 @@ def hour(hexa: Hexapod, rate: float, hours: float, noise: float, resolution: flo
             "speed_mm_s": speed * 1e3, "measured_per_hour": per_hour, "expected_per_hour": expected}  # fmt: skip
 
 
+def _save(report: list, path: str | None) -> int:
+    """Write ``report`` as JSON to ``path`` (if given); the exit status 0."""
+    if path:
+        with open(path, "w") as fh:
+            json.dump(report, fh, indent=2)
+    return 0
+
+
 def main_hour(args: argparse.Namespace) -> int:
     """``--hour``: measured and expected false alarms per hour, per preset, noise and speed."""
     report = []
@@ -151,10 +159,7 @@ def main_hour(args: argparse.Namespace) -> int:
                     f"failed {m['failed']:.0f}/h",
                     flush=True,
                 )
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(report, fh, indent=2)
-    return 0
+    return _save(report, args.json)
 
 
 def main(argv=None) -> int:
@@ -201,10 +206,7 @@ def main(argv=None) -> int:
             f"{t['compiled_sensitivity_median_us']:.0f} us",
             flush=True,
         )
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(report, fh, indent=2)
-    return 0
+    return _save(report, args.json)
 
 
 if __name__ == "__main__":
