@@ -19,10 +19,10 @@ Both solve to ``BENCH_TOL``. The figures of the first solves (compilation) are i
 from __future__ import annotations
 
 import argparse
-import time
 
 import floor_newton as floor
 import numpy as np
+from compiled_newton import per_solve, rate
 
 from hexapod_model import Hexapod
 from hexapod_model.analysis.trajectories import box_poses
@@ -30,23 +30,6 @@ from hexapod_model.kinematics.newton.solver import MAX_STEP
 from hexapod_model.studies.bench import BENCH_TOL, trajectory_readings
 
 MAX_ITER = 50
-
-
-def per_solve(solve, inputs) -> np.ndarray:
-    """CPU microseconds of each ``solve(x)``."""
-    out = np.empty(len(inputs))
-    for k, x in enumerate(inputs):
-        t0 = time.thread_time_ns()
-        solve(x)
-        out[k] = (time.thread_time_ns() - t0) / 1e3
-    return out
-
-
-def rate(call, n: int) -> float:
-    """Solves per CPU second of one ``call()`` solving ``n`` rows."""
-    t0 = time.thread_time_ns()
-    call()
-    return n / ((time.thread_time_ns() - t0) / 1e9)
 
 
 def main(argv=None) -> int:
@@ -66,12 +49,12 @@ def main(argv=None) -> int:
     warm_steps = {"package": 0, "floor": 0}  # Newton steps of the last round's solves
 
     def package_warm() -> np.ndarray:
-        previous, warm_steps["package"] = first, 0
+        warm_steps["package"] = 0
 
-        def solve(x):
-            nonlocal previous
-            previous = hexa.forward(x, previous, tol=BENCH_TOL)
-            warm_steps["package"] += previous.iterations
+        def solve(x, previous):
+            sol = hexa.forward(x, previous or first, tol=BENCH_TOL)
+            warm_steps["package"] += sol.iterations
+            return sol
 
         return per_solve(solve, warm[1:])
 
@@ -80,7 +63,7 @@ def main(argv=None) -> int:
         floor.fk_newton(theta, R, p, hexa.joints_of(warm[0]), *tables, BENCH_TOL, MAX_ITER, MAX_STEP, J, G)
         settings, warm_steps["floor"] = (BENCH_TOL, MAX_ITER, MAX_STEP, J, G), 0
 
-        def solve(x):
+        def solve(x, _):
             warm_steps["floor"] += floor.fk_newton(theta, R, p, x, *tables, *settings)[0]
 
         return per_solve(solve, hexa.joints_of(warm[1:]))
