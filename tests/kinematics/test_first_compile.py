@@ -24,7 +24,7 @@ def test_announces_a_compilation_once_per_entry(caplog, monkeypatch):
         first_compile.announce(_Entry("solve_schur", []))
         first_compile.announce(_Entry("solve_schur", []))  # the same entry: once
         first_compile.announce(_Entry("forward_rows", ["(float64[:],)"]))  # compiled in this process: silent
-    assert caplog.messages == ["compiling the solver kernels, once after installation: ~18 s"]
+    assert caplog.messages == ["compiling the solver kernels (direct kinematics), once after installation: ~17 s"]
 
 
 def test_a_cached_entry_is_not_announced(caplog, monkeypatch):
@@ -43,3 +43,32 @@ def test_loading_a_hexapod_imports_no_numba():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+_ANNOUNCE = """
+import types
+from hexapod_model.cli.main import _compile_notes
+from hexapod_model.kinematics.newton import first_compile
+first_compile._cached = lambda d: False
+entry = types.SimpleNamespace(py_func=types.SimpleNamespace(__name__="forward_rows"), signatures=[])
+with _compile_notes("fk"):
+    first_compile.announce(entry)
+"""
+
+
+def test_the_command_line_shows_the_line_on_a_terminal_only():
+    import os
+    import pty
+
+    main_fd, terminal = pty.openpty()
+    try:
+        subprocess.run([sys.executable, "-c", _ANNOUNCE], stderr=terminal, check=True, timeout=120)
+        shown = os.read(main_fd, 4096).decode()
+    finally:
+        os.close(main_fd)
+        os.close(terminal)
+    assert shown.strip() == (
+        "hexapod fk: compiling the solver kernels (the direct-kinematics batch loop), once after installation: ~15 s"
+    )
+    piped = subprocess.run([sys.executable, "-c", _ANNOUNCE], capture_output=True, text=True, check=True)
+    assert piped.stderr == ""

@@ -25,7 +25,7 @@ import numpy as np
 from numba import njit
 
 from .follow import follow, rescale
-from .iteration import iterate_blocks, iterate_schur, loop_spare
+from .iteration import iterate_blocks, iterate_schur
 from .kernels import copy_into, first_outside, first_outside_at, pose_to_xyzquat, rigid_error, xyzquat_to_pose
 from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
 from .packing import unpack_work
@@ -81,9 +81,9 @@ def _follow_row(q0, q, start, target, attempt, tol, max_iter, sign, guessed, nea
     it, theta = attempt
     first = q.copy()  # the first Newton iterate when the attempt took one step
     if guessed:  # near a singularity no path certifies: forward() returns the plain result, flagged
-        spare = loop_spare(q.shape[0])
+        no = np.zeros(1, dtype=np.bool_)[0]  # a runtime False: one compiled signature of iterate_schur
         code, n, _, _, theta, _, _ = iterate_schur(
-            q0, q, tol, max_iter, 0.0, np.zeros(6 * ints[0]), 0.0, spare[0][0], packed, spare
+            q0, q, tol, max_iter, 0.0, np.zeros(6 * ints[0]), 0.0, no, ints, floats, work, iwork
         )
         it += n
         if code == CONVERGED and not state[1] <= near_kappa:
@@ -107,7 +107,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q
     ints, floats, work, iwork = packed
     platform_q, state = ints[3], unpack_work(ints, work)[0][18]  # the last Schur step's sign and condition bound
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
-    spare = loop_spare(q.shape[0])
+    yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
     for k in range(k0, readings.shape[0]):
         if first_outside(readings[k], stroke[0], stroke[1], limits[3]) >= 0:  # NaN, inf or out of stroke
             _invalid_row(k, out)
@@ -116,7 +116,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q
         for i in range(prismatic_q.shape[0]):
             q0[prismatic_q[i]] = joints[k, i]
         code, it, norm, ratio, theta, sign, certified = iterate_schur(
-            q0, q, tol, max_iter, carry[0], no_offset, 0.0, spare[0][1], packed, spare
+            q0, q, tol, max_iter, carry[0], no_offset, 0.0, yes, ints, floats, work, iwork
         )
         if not certified or (code != CONVERGED and code != NO_CONVERGENCE):  # follow the readings path
             attempt, guessed = (it, theta), carry[1] == 1.0 or carry[2] == 1.0
@@ -146,7 +146,6 @@ def inverse_rows(targets, start, warm, settings, limits, home, packed, out):
     ints, floats, work, iwork = packed
     platform_q = ints[3]
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
-    spare = loop_spare(q.shape[0])
     for k in range(targets.shape[0]):
         T = targets[k]
         far = abs(T[0, 3]) > max_position or abs(T[1, 3]) > max_position or abs(T[2, 3]) > max_position
@@ -156,7 +155,7 @@ def inverse_rows(targets, start, warm, settings, limits, home, packed, out):
         copy_into(q0, start)
         pose_to_xyzquat(T, home, q0[platform_q : platform_q + 7])
         code, it, norm, ratio, _, _, _ = iterate_blocks(
-            q0, q, tol, max_iter, 0.0, no_offset, 0.0, spare[0][0], packed, spare
+            q0, q, tol, max_iter, 0.0, no_offset, 0.0, False, ints, floats, work, iwork
         )
         code = _finish_row(k, q, code, it, norm, ratio, np.inf, 0.0, limits, platform_q, home, out)
         if warm and code == CONVERGED:

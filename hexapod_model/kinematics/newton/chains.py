@@ -192,30 +192,29 @@ def _shift(a, b):
     )  # fmt: skip
 
 
-@njit(cache=True, inline="always")
-def _leg(q, i, placements, kinds, motions, leg_q, leg_v, closure, oR, op, J, R, p):
-    """Leg ``i``: joint placements ``oR[i, k]``, ``op[i, k]``, Jacobian columns, tip frame ``R[i]``, ``p[i]``.
+@njit(cache=True)
+def evaluate_chains(
+    q, placements, kinds, motions, leg_q, leg_v, closure, home, platform_q, platform_v, oR, op, J, R, p
+):
+    """Everything the Newton step needs at configuration ``q`` (see the module docstring).
 
-    A placement of kind ``SHIFT`` or ``IDENTITY`` (:func:`.legs.placement_kinds`) skips the
-    products by its exact ones and zeros: the same numbers, a third less time per evaluation.
+    Writes the leg joints' world placements ``oR`` (6, n, 3, 3) / ``op`` (6, n, 3), the leg and
+    platform columns of ``J`` (6 x nv, WORLD) and the 12 closure frames ``R`` (12, 3, 3) /
+    ``p`` (12, 3).
     """
-    T = _load_joint(placements, i, 0)  # the first joint hangs from the root: oM_parent = identity
-    for k in range(placements.shape[1]):
-        if k > 0:
-            kind = kinds[i, k]
-            if kind == GENERAL:
-                T = _mul(T, _load_joint(placements, i, k))
-            elif kind == SHIFT:
-                T = _shift(T, _load_joint(placements, i, k))
-        T = _move(T, motions, i, k, q[leg_q[i, k]])
-        _store_joint(T, oR, op, i, k)
-        _act_column(T, motions, i, k, J, leg_v[i, k])
-    _store(_mul(T, _load(closure, i)), R, p, i)
-
-
-@njit(cache=True, inline="always")
-def _platform(q, platform_q, platform_v, home, closure, J, R, p):
-    """Platform ``oMp = home * X(q_p)``, its six Jacobian columns and the anchor frames ``R[6:]``, ``p[6:]``."""
+    for i in range(leg_q.shape[0]):  # 6 as a variable: unrolled, every unit that holds it compiled longer
+        T = _load_joint(placements, i, 0)  # the first joint hangs from the root: oM_parent = identity
+        for k in range(placements.shape[1]):
+            if k > 0:
+                kind = kinds[i, k]
+                if kind == GENERAL:
+                    T = _mul(T, _load_joint(placements, i, k))
+                elif kind == SHIFT:
+                    T = _shift(T, _load_joint(placements, i, k))
+            T = _move(T, motions, i, k, q[leg_q[i, k]])
+            _store_joint(T, oR, op, i, k)
+            _act_column(T, motions, i, k, J, leg_v[i, k])
+        _store(_mul(T, _load(closure, i)), R, p, i)
     x = q[platform_q : platform_q + 7]
     qx, qy, qz, qw = x[3], x[4], x[5], x[6]
     tx, ty, tz = 2.0 * qx, 2.0 * qy, 2.0 * qz  # X's rotation as quat_to_matrix (Eigen) writes it
@@ -244,18 +243,3 @@ def _platform(q, platform_q, platform_v, home, closure, J, R, p):
     _column(J, v[5], 0.0, 0.0, 0.0, T[2], T[5], T[8], T[9], T[10], T[11])
     for i in range(6):
         _store(_mul(T, _load(closure, 6 + i)), R, p, 6 + i)
-
-
-@njit(cache=True)
-def evaluate_chains(
-    q, placements, kinds, motions, leg_q, leg_v, closure, home, platform_q, platform_v, oR, op, J, R, p
-):
-    """Everything the Newton step needs at configuration ``q`` (see the module docstring).
-
-    Writes the leg joints' world placements ``oR`` (6, n, 3, 3) / ``op`` (6, n, 3), the leg and
-    platform columns of ``J`` (6 x nv, WORLD) and the 12 closure frames ``R`` (12, 3, 3) /
-    ``p`` (12, 3).
-    """
-    for i in range(leg_q.shape[0]):  # 6 as a variable: unrolled, every unit that holds it compiled longer
-        _leg(q, i, placements, kinds, motions, leg_q, leg_v, closure, oR, op, J, R, p)
-    _platform(q, platform_q, platform_v, home, closure, J, R, p)

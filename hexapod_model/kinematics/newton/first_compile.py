@@ -3,7 +3,7 @@
 numba compiles an entry of the compiled path (:mod:`.iteration`, :mod:`.batch_kernels`,
 :mod:`.follow`) on its first call and keeps the machine code in its cache (``__pycache__`` or
 ``NUMBA_CACHE_DIR``); later processes load it in well under a second. :func:`announce` logs, at
-INFO on the ``hexapod_model.compile`` logger, ``compiling the solver kernels, once after
+INFO on the ``hexapod_model.compile`` logger, ``compiling the solver kernels (WHAT), once after
 installation: ~N s`` before a call that will compile (no signature in this process, no cache
 index on disk); the command line shows it on a terminal.
 """
@@ -15,8 +15,15 @@ import os
 from typing import Any
 
 LOGGER = "hexapod_model.compile"
-#: CPU seconds each entry took to compile from an empty cache on a 2-core machine (benchmarks/startup.py --cold)
-ESTIMATE_S = {"solve_schur": 18, "solve_blocks": 10, "forward_rows": 20, "inverse_rows": 10, "follow": 15}
+#: each entry: what it compiles, and the CPU seconds it took from an empty cache on a 2-core machine
+#: (benchmarks/startup.py --cold)
+ENTRIES = {
+    "solve_schur": ("direct kinematics", 17),
+    "solve_blocks": ("inverse kinematics", 10),
+    "forward_rows": ("the direct-kinematics batch loop", 15),
+    "inverse_rows": ("the inverse-kinematics batch loop", 8),
+    "follow": ("the readings path", 12),
+}
 
 log = logging.getLogger(LOGGER)
 _announced: set[str] = set()
@@ -28,7 +35,8 @@ def announce(dispatcher: Any) -> None:
     if name in _announced or dispatcher.signatures or _cached(dispatcher):
         return
     _announced.add(name)
-    log.info("compiling the solver kernels, once after installation: ~%d s", ESTIMATE_S.get(name, 10))
+    what, seconds = ENTRIES.get(name, ("the solver", 10))
+    log.info("compiling the solver kernels (%s), once after installation: ~%d s", what, seconds)
 
 
 def _cached(dispatcher: Any) -> bool:

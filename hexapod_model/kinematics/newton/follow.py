@@ -2,7 +2,7 @@
 
 :func:`follow` is :func:`.assembly._follow` on the compiled path (:mod:`.newton`): the path of
 solutions for the readings ``l(t) = l0 + t (l - l0)`` from the start, in substeps, each accepted
-only when its certified Newton corrector (:func:`.iteration.iterate_schur` with ``certify``)
+only when its certified Newton corrector (:func:`.newton.iterate_schur` with ``certify``)
 converges: no shortened step (``MAX_STEP``), every contraction at most ``THETA_MAX``, the
 determinant sign kept. Same rules as the Python follower:
 
@@ -26,7 +26,7 @@ from numba import njit
 
 from . import path_rules
 from .chains import evaluate_chains
-from .iteration import CONVERGED, _integrate, iterate_schur, loop_spare
+from .iteration import CONVERGED, _integrate, iterate_schur
 from .kernels import closure_residual, copy_into
 from .lie import difference_free_flyer
 from .packing import unpack_floats, unpack_ints, unpack_work
@@ -98,7 +98,7 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prism
     q0, before, dv = np.empty(nq), np.empty(nq), np.empty(ints[1])
     scratch = (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3))
     offset = np.zeros(r.shape[0])
-    spare = loop_spare(nq)
+    yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
     # the start's own closure residual: a start off the manifold follows r - (1 - t) r_start
     res = _residual(start, ints, floats, work)
     shifted = res > INTERMEDIATE_TOL
@@ -120,7 +120,7 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prism
         scale = 1.0 - tn if shifted else 0.0
         tol_n = tol if tn == 1.0 else INTERMEDIATE_TOL
         code, it, res, _, theta, kept, certified = iterate_schur(
-            q0, q, tol_n, max_iter, sign, offset, scale, spare[0][1], packed, spare
+            q0, q, tol_n, max_iter, sign, offset, scale, yes, ints, floats, work, iwork
         )
         total += it
         substeps += 1

@@ -24,9 +24,8 @@ for ball joints) and the two structured problems: one joint held per leg, the pl
 
 The entries called from Python are :func:`solve_schur` and :func:`solve_blocks` (the iteration,
 and with ``finish`` the Jacobian, pose and limit check a ``Solution`` needs); the compiled
-loops of :mod:`.follow` and :mod:`.batch_kernels` call them too, through :func:`iterate_schur` /
-:func:`iterate_blocks`, so that the iteration is compiled once, in the entry.
-:class:`.compiled.CompiledSolver` is the solver object on top.
+loops of :mod:`.follow` and :mod:`.batch_kernels` call :func:`iterate_schur` /
+:func:`iterate_blocks`. :class:`.compiled_solver.CompiledSolver` is the solver object on top.
 """
 
 from __future__ import annotations
@@ -133,54 +132,19 @@ def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, fl
     return code, it, norm, ratio, theta, sign, certified
 
 
-# The compiled loops of .follow and .batch_kernels run the iteration through the entries Python
-# calls, solve_schur and solve_blocks, with the signature Python compiled (or loaded): numba reuses
-# that machine code instead of compiling the iteration again in each loop's unit. A constant
-# argument would type as a literal (another signature, another compilation): the loops pass
-# booleans from an array (``spare[0]``).
-@njit(cache=True, inline="always")
-def loop_spare(nq):
-    """What a compiled loop passes to :func:`iterate_schur` / :func:`iterate_blocks` besides the iteration's.
-
-    ``(flags, no joints, no prismatic indices, no limits, home, q, pose, G)``: ``flags = [False,
-    True]`` (runtime booleans for ``certify``), then the entry's arguments a plain iteration does
-    not read, typed as Python passes them.
-    """
-    no_limits = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0), 0.0)
-    flags = np.array([False, True])
-    buffers = (np.eye(4), np.empty(nq), np.empty((4, 4)), np.empty((1, 1)))  # home, q, pose, G
-    return (flags, np.zeros(0), np.zeros(0, np.int64), no_limits, *buffers)
+# For the compiled loops of .follow and .batch_kernels, ``schur`` a constant in each. The loops pass
+# ``certify`` read from an array, never as a constant: a constant types as a literal,
+# and numba would compile the whole iteration once more per literal value.
+@njit(cache=True)
+def iterate_schur(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
+    """:func:`_iterate` with the Schur step (one joint held per leg, the platform free)."""
+    return _iterate(True, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork)
 
 
-@njit(cache=True, inline="always")
-def iterate_schur(q0, q, tol, max_iter, sign, offset, scale, certify, packed, spare):
-    """:func:`_iterate` with the Schur step (one joint held per leg, the platform free), through :func:`solve_schur`.
-
-    ``packed = (ints, floats, work, iwork)``, ``spare`` from :func:`loop_spare`; ``certify`` a
-    runtime boolean (``spare[0][1]``, not ``True``). Returns :func:`_iterate`'s tuple.
-    """
-    flags, no_joints, no_q, no_limits, home, q_spare, pose, G = spare
-    ints, floats, work, iwork = packed
-    arrays = (ints, floats, work, iwork, q, q_spare, pose, G)
-    code, it, norm, ratio, theta, kept, certified, _ = solve_schur(
-        q0, no_joints, no_q, tol, max_iter, sign, offset, scale, certify, flags[0], no_limits, home, arrays
-    )
-    return code, it, norm, ratio, theta, kept, certified
-
-
-@njit(cache=True, inline="always")
-def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, packed, spare):
-    """:func:`_iterate` with the block step (the platform held), through :func:`solve_blocks`.
-
-    Arguments and result as :func:`iterate_schur`.
-    """
-    flags, no_joints, no_q, no_limits, home, q_spare, pose, G = spare
-    ints, floats, work, iwork = packed
-    arrays = (ints, floats, work, iwork, q, q_spare, pose, G)
-    code, it, norm, ratio, theta, kept, certified, _ = solve_blocks(
-        q0, no_joints, no_q, tol, max_iter, sign, offset, scale, certify, flags[0], no_limits, home, arrays
-    )
-    return code, it, norm, ratio, theta, kept, certified
+@njit(cache=True)
+def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
+    """:func:`_iterate` with the block step (the platform held)."""
+    return _iterate(False, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork)
 
 
 @njit(cache=True, inline="always")

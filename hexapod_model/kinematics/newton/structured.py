@@ -77,9 +77,24 @@ def _tip_weights(E, i):
     )  # fmt: skip
 
 
-@njit(cache=True, inline="always")
-def _schur(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w, rhs):
-    """:func:`schur_solve`'s body (``rhs``: scratch for the eliminated right-hand side)."""
+@njit(cache=True)
+def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w):
+    """Newton step when the platform is free and each leg has ``rows`` joints, one held.
+
+    Per leg the square block ``L_i`` (all its joints) is factored once; ``n_i`` with
+    ``L_i^T n_i = e_held`` eliminates the leg's free joints, leaving a 6x6 system
+    ``(n_i^T A_i) v = -n_i^T r_i`` for the platform step ``v``; the leg steps follow from
+    ``L_i dq_i = -(r_i + A_i v)`` (whose held entry is then zero). Writes ``x`` (``G x = r``,
+    the step is ``-x``) and returns ``(ratio, kappa)``: the smallest pivot ratio (0 = singular)
+    times the sign of ``prod_i det L_i * det M``, which is the sign of ``det G`` up to a
+    constant of the layout, and ``2 (|M|_F / sqrt 6)^6 / |det M|``, an upper bound of the 2-norm
+    condition number of ``M`` (Guggenheimer, Edelman and Johnson, 1995) at no extra solve.
+
+    The loops run over ``rows`` and the legs as variables: with them constants (unrolled) a
+    Schur step took 15 % less time, but every compiled unit that holds the Newton iteration
+    took 10 s longer to compile (``benchmarks/compiled_newton.py``; first run after installation).
+    """
+    rhs = np.empty(6)  # the eliminated right-hand side
     worst = 1.0
     sign = 1.0
     for i in range(leg_cols.shape[0]):
@@ -138,29 +153,13 @@ def _schur(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, 
 
 
 @njit(cache=True)
-def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w):
-    """Newton step when the platform is free and each leg has ``rows`` joints, one held.
+def blocks_solve(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w):
+    """:func:`block_solve` with the blocks built from ``J`` directly (inverse kinematics).
 
-    Per leg the square block ``L_i`` (all its joints) is factored once; ``n_i`` with
-    ``L_i^T n_i = e_held`` eliminates the leg's free joints, leaving a 6x6 system
-    ``(n_i^T A_i) v = -n_i^T r_i`` for the platform step ``v``; the leg steps follow from
-    ``L_i dq_i = -(r_i + A_i v)`` (whose held entry is then zero). Writes ``x`` (``G x = r``,
-    the step is ``-x``) and returns ``(ratio, kappa)``: the smallest pivot ratio (0 = singular)
-    times the sign of ``prod_i det L_i * det M``, which is the sign of ``det G`` up to a
-    constant of the layout, and ``2 (|M|_F / sqrt 6)^6 / |det M|``, an upper bound of the 2-norm
-    condition number of ``M`` (Guggenheimer, Edelman and Johnson, 1995) at no extra solve.
-
-    The loops run over ``rows`` and the legs as variables: with them constants (unrolled) a
-    Schur step took 15 % less time, but every compiled unit that holds the Newton iteration
-    took 10 s longer to compile (``benchmarks/compiled_newton.py``; first run after installation).
+    The platform is held, so closure ``i``'s block is ``L_i`` over its leg's joints in leg order
+    (the columns ``block_cols[i]`` of the solver's ``G``, the same numbers): ``L_i x_i = r_i``.
+    Writes ``x`` (``G x = r``) and returns the smallest pivot ratio (0 = singular).
     """
-    rhs = np.empty(6)
-    return _schur(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w, rhs)
-
-
-@njit(cache=True, inline="always")
-def _blocks(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w):
-    """:func:`blocks_solve`'s body."""
     worst = 1.0
     for i in range(leg_cols.shape[0]):
         o = i * rows
@@ -176,14 +175,3 @@ def _blocks(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w):
         for k in range(rows):
             x[colmap[leg_cols[i, k]]] = w[k]
     return worst
-
-
-@njit(cache=True)
-def blocks_solve(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w):
-    """:func:`block_solve` with the blocks built from ``J`` directly (inverse kinematics).
-
-    The platform is held, so closure ``i``'s block is ``L_i`` over its leg's joints in leg order
-    (the columns ``block_cols[i]`` of the solver's ``G``, the same numbers): ``L_i x_i = r_i``.
-    Writes ``x`` (``G x = r``) and returns the smallest pivot ratio (0 = singular).
-    """
-    return _blocks(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w)
