@@ -49,3 +49,14 @@ def test_batches_and_the_tracker_do_not_call_it_converged():
     res = hexa.forward_batch(readings[None], guess=start)
     assert res.status[0] == "uncertified" and not res.converged[0] and np.isnan(res.poses[0]).all()
     assert "uncertified" in hm.STATUSES and "uncertified" in POSED_STATUSES
+
+
+def test_the_tracker_flags_an_uncertified_sample_and_never_calls_it_ok():
+    from hexapod_model.tracking.tracker import Tracker
+
+    hexa = hexapod("3-6")
+    case = _cases()[0]
+    start, readings = np.array(case["start_q"]), np.array(case["readings_m"])
+    tracker = Tracker(hexa, initial=start)
+    r = tracker.step(readings)
+    assert r.solution.status == "uncertified" and "branch_uncertain" in r.flags
