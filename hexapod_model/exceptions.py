@@ -131,7 +131,9 @@ class WorkspaceError(SolverError):
 class AssemblyError(SolverError):
     """Direct kinematics cannot certify which assembly the readings belong to.
 
-    Status ``ambiguous_assembly``; ``result.candidates`` holds the poses of the assemblies found.
+    Status ``ambiguous_assembly`` (``result.candidates`` holds the poses of the assemblies
+    found) or ``uncertified`` (``result.pose`` closes the loops near a singularity, but may be
+    another assembly than the one connected to the start).
     """
 
 

@@ -191,13 +191,30 @@ def test_robustness_benchmark_classifies_every_solve(tmp_path):
         timeout=600,
     )
     assert out.returncode == 0, out.stdout + out.stderr
-    assert "returned as good but another assembly, unexplained: 0" in out.stdout
+    assert "returned as good but another assembly, unexplained (and any on 3-6): 0" in out.stdout
+    assert "converged but not the generating pose: cold 0, warm 0" in out.stdout  # 3-6: every assembly known
     classes = ("ok", "flagged", "flagged_other", "ambiguous", "ambiguous_truth", "failed", "other_explained")
     for report in json.loads((tmp_path / "r.json").read_text()):
         for mode in ("cold", "warm"):
             counts = report[mode]
             assert counts["other_unexplained"] == 0
+            assert report["preset"] != "3-6" or counts["converged_not_generating"] == 0
             assert sum(counts[k] for k in classes) + counts["no_guess"] == report["within_limits"] > 100
+
+
+def test_certificate_and_tracker_false_alarm_benchmarks_run():
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "certificate.py"), "spherical", "--poses", "30"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "first attempt refused" in out.stdout and "warm:" in out.stdout
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "tracker_faults.py"), "reference", "--hour", "--hours", "0.0005"]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert out.stdout.count("expected <=") == 4  # two noise levels, at rest and moving
 
 
 def test_three_six_benchmark_runs():

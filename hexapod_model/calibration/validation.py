@@ -92,3 +92,54 @@ def cross_validate(
         err = pose_errors(M, data.measured[test])
         after[0][test], after[1][test] = err
     return Validation(folds, fold, before, after)
+
+
+IMPROVEMENT_SIGMAS = 2.0  # standard errors by which the held-out error must drop to call a calibration better
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Whether the calibrated geometry predicts held-out poses better than the nominal one.
+
+    The figure is the mean held-out translation error (mm); its uncertainty the standard error
+    of the mean paired difference ``before - after`` over the poses. Better means the mean
+    dropped by more than ``IMPROVEMENT_SIGMAS`` standard errors, and the mean rotation error
+    (deg) did not rise by more than as many of its own.
+
+    Attributes:
+        better: the calibrated geometry is better beyond the uncertainty.
+        before_mm, after_mm: mean held-out translation error, nominal and calibrated (mm).
+        uncertainty_mm: ``IMPROVEMENT_SIGMAS`` standard errors of their difference (mm).
+        before_deg, after_deg: mean held-out rotation error, nominal and calibrated (deg).
+        uncertainty_deg: ``IMPROVEMENT_SIGMAS`` standard errors of their difference (deg).
+    """
+
+    better: bool
+    before_mm: float
+    after_mm: float
+    uncertainty_mm: float
+    before_deg: float
+    after_deg: float
+    uncertainty_deg: float
+
+    def describe(self) -> str:
+        """One line with both figures and the decision."""
+        word = "better" if self.better else "not better"
+        return (
+            f"held-out error {self.before_mm:.4f} mm (nominal) -> {self.after_mm:.4f} mm (calibrated), "
+            f"{self.before_deg:.4f} -> {self.after_deg:.4f} deg: {word} beyond the uncertainty "
+            f"(+-{self.uncertainty_mm:.4f} mm, +-{self.uncertainty_deg:.4f} deg, "
+            f"{IMPROVEMENT_SIGMAS:g} standard errors)"
+        )
+
+
+def verdict(validation: Validation) -> Verdict:
+    """The :class:`Verdict` of a k-fold validation."""
+    figures = []
+    for before, after in zip(validation.before, validation.after):
+        d = before - after
+        se = float(np.std(d, ddof=1) / np.sqrt(d.size)) if d.size > 1 else float("inf")
+        figures.append((float(np.mean(before)), float(np.mean(after)), IMPROVEMENT_SIGMAS * se))
+    (b_mm, a_mm, u_mm), (b_deg, a_deg, u_deg) = figures
+    better = b_mm - a_mm > u_mm and a_deg - b_deg <= u_deg
+    return Verdict(bool(better), b_mm, a_mm, u_mm, b_deg, a_deg, u_deg)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..calibration.frames import Noise
 from ..calibration.planning import plan_poses
+from ..calibration.validation import verdict
 from ..description.geometry_toml import save_geometry
 from ..exceptions import InputError
 from ..extras import require_extra
@@ -29,12 +30,16 @@ held at nominal; k-fold validation before / after. The offset-Cardan hexapod of 
 Nemec (2026), "Experimental Validation of the Direct Kinematics of a Passive Stewart-Gough
 Platform with Modified Cardan Joints ...", is the reference design.
 
-  hexapod calibrate NOMINAL measured.csv -o calibrated.toml [--report DIR] [--json FILE]
+  hexapod calibrate NOMINAL measured.csv -o calibrated.toml [--report DIR] [--json FILE] [--force]
   hexapod calibrate NOMINAL --plan 60 -o poses_to_visit.csv
   hexapod calibrate NOMINAL --simulate [--poses 100] [--seed S]
 
 measured.csv: the `hexapod reproduce --data` format: l1..l6 (m, zero at home) and the
-measured pose x,y,z (m), qx,qy,qz,qw of a marker or tool frame in the measuring device's frame."""
+measured pose x,y,z (m), qx,qy,qz,qw of a marker or tool frame in the measuring device's frame.
+
+The calibrated geometry is written only when it predicts the held-out poses better than the
+nominal one beyond the uncertainty (mean translation error down by more than 2 standard
+errors); otherwise one line gives both figures and the exit status is 1 (--force writes it)."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -59,6 +64,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rotation-noise", type=float, default=0.05, metavar="DEG", help="stated sigma per axis (deg)")
     p.add_argument("--folds", type=int, default=5, help="k of the k-fold validation (default 5)")
     p.add_argument("--encoder-scale", action="store_true", help="also identify each reading's scale error")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="write the calibrated geometry even when it predicts held-out poses no better than nominal",
+    )
     p.add_argument("--hold", action="append", default=[], metavar="PATTERN", help="keep parameters at nominal")
     p.add_argument(
         "--max-sigma",
@@ -109,12 +119,15 @@ def run(args: argparse.Namespace) -> int:
     result = run_calibration(nominal, data, noise, args.folds, args.seed, sim, progress, **options)
     print(format_report(result, noise))
     geometry = result.identification.geometry
-    if args.output:
+    decision = verdict(result.validation)
+    refused = bool(args.output) and not decision.better and not args.force
+    if args.output and not refused:
         comment = f"Calibrated by hexapod calibrate from {data.source} ({len(data.readings)} poses)."
         save_geometry(geometry, args.output, comment)
-        note("calibrate", f"wrote {args.output}")
+        note("calibrate", f"wrote {args.output}" + ("" if decision.better else f" (--force; {decision.describe()})"))
     if args.json:
-        atomic_write_text(args.json, json.dumps(report_json(result), indent=2) + "\n")
+        written = (not refused) if args.output else None
+        atomic_write_text(args.json, json.dumps(report_json(result, written), indent=2) + "\n")
     if args.report:
         require_extra("plots")
         from ..plots.calibrate import write_figures
@@ -126,6 +139,9 @@ def run(args: argparse.Namespace) -> int:
         if sim is not None:
             paths += save_simulation(sim, out)
         note("calibrate", f"wrote {', '.join(str(p) for p in paths)}")
+    if refused:
+        note("calibrate", f"{args.output} not written: {decision.describe()}; --force writes it anyway")
+        return 1
     return 0
 
 

@@ -15,6 +15,7 @@ Line rules (:class:`TableReader`):
 from __future__ import annotations
 
 import csv
+import io
 import math
 import sys
 from collections.abc import Iterator, Mapping, Sequence
@@ -75,7 +76,7 @@ class TableReader:
         if isinstance(source, (str, Path)):
             self.name = name or str(source)
             try:
-                self._fh: IO[Any] = open(source, "rb")  # noqa: SIM115 - closed by close()
+                self._fh: IO[Any] = _old_mac_lines(open(source, "rb"))  # noqa: SIM115 - closed by close()
             except OSError as exc:
                 raise InputError("CSV file", str(source), exc.strerror or "cannot read") from None
         else:
@@ -83,7 +84,10 @@ class TableReader:
             self._fh = source
         self._reader = csv.reader(self._lines())
         try:
-            first = next(self._reader, None)
+            try:
+                first = next(self._reader, None)
+            except csv.Error as exc:
+                raise InputError("CSV file", self.name, f"line 1: {_csv_error(exc)}") from None
             if first is None or not "".join(first).strip():
                 raise InputError("CSV file", self.name, "line 1: expected a header line of column names")
             self.header = [c.strip() for c in first]
@@ -136,7 +140,7 @@ class TableReader:
             try:
                 cells = next(self._reader, None)
             except csv.Error as exc:
-                raise InputError("CSV file", self.name, f"line {self._reader.line_num}: {exc}") from None
+                raise InputError("CSV file", self.name, f"line {self._reader.line_num}: {_csv_error(exc)}") from None
             start, end = end + 1, self._reader.line_num
             if cells is None:
                 break
@@ -217,3 +221,18 @@ def _parse(cells: list[str], cols: list[int], names: Sequence[str], limits: list
             error = error or problem
         row.append(v)
     return row, error
+
+
+def _old_mac_lines(fh: io.BufferedReader) -> IO[Any]:
+    """``fh`` itself, or a text stream of it that reads CR as a line end when its first block has CR and no LF."""
+    head = fh.peek(1 << 16)
+    if b"\r" in head and b"\n" not in head:  # lines ended by CR only (classic Mac OS, some loggers)
+        return io.TextIOWrapper(fh, encoding="utf-8", newline=None)
+    return fh
+
+
+def _csv_error(exc: csv.Error) -> str:
+    """The csv module's complaint in the user's words."""
+    if "new-line character" in str(exc):
+        return "a line ends in CR (carriage return) alone inside the text; save the file with LF or CRLF line ends"
+    return str(exc)

@@ -1,4 +1,4 @@
-"""Which assembly direct kinematics returns, and the certificate that it is that one.
+"""Which assembly direct kinematics returns, and the check (a heuristic, not a proof) that it is that one.
 
 Six readings usually admit several platform poses (assemblies). :func:`solve_forward` returns
 as ``converged`` only **the assembly connected to the start**: the end of the path of
@@ -9,16 +9,31 @@ Newton corrector
 
 * takes no shortened step (``MAX_STEP``),
 * contracts: every ``|dx_k+1| / |dx_k| <= THETA_MAX`` = 1/4 (Deuflhard's estimate of the
-  affine-covariant Kantorovich quantity ``h0 <= 1/2``, under which the solution is unique in a
-  ball around the substep's start, so the corrector cannot jump to another assembly), and
+  affine-covariant Kantorovich quantity ``h0``; were ``h0 <= 1/2`` *bounded*, the solution
+  would be unique in a ball around the substep's start), and
 * keeps the sign of the constraint Jacobian's determinant (the 36x36 or 18x18 direct-kinematics
   system, ``prod_i det L_i * det M`` from the Schur step) equal to the start's at every iterate
   (home's for a cold solve, the guess :class:`Solution`'s ``det_sign`` for a warm one).
 
+**What this is not.** The contraction ratio is measured at the iterates only: it estimates the
+Kantorovich quantity from below, where a proof needs a bound from above (a Lipschitz bound of
+the closure Jacobian over a ball); a solve that closes in one step measures no contraction (a
+first step above ``_ONE_STEP`` is followed by a second); the determinant's sign is sampled at
+the iterates, not between them. So "certified" here names these checks passing, not a proof
+that the result is the connected assembly: what they achieve is measured by
+``benchmarks/robustness.py`` (converged results that are not the generating pose, per preset)
+and their cost and refusals by ``benchmarks/certificate.py``; docs/solver.md states what
+``converged`` guarantees. On a 3-6 hexapod every assembly is known
+(:mod:`.assemblies`), which is what makes its ``converged`` exact up to its stated rule.
+
 The first attempt is the whole path in one substep, i.e. the plain Newton solve: warm starts
 and most cold starts pass at no extra cost. Otherwise the path is followed in substeps (a
 predictor along the first Newton step, then along the secant of the last two path points),
-down to ``MIN_STEP`` and at most ``MAX_SUBSTEPS`` of them. When the path cannot be followed (it
+down to ``MIN_STEP`` and at most ``MAX_SUBSTEPS`` of them. A warm start whose certified
+attempt fails but whose plain Newton result lies near a singularity (condition bound above
+``NEAR_SINGULAR_FACTOR`` times home's) is returned as ``uncertified`` with the flag
+``near_singular``: a closed configuration, but perhaps across a fold from the start (another
+assembly), so never ``converged``. When the path cannot be followed (it
 meets a singularity or a fold of the readings map), the result is ``ambiguous_assembly`` with
 the assemblies found (the plain solve's, and Newton's from the last certified point) as
 candidates, never ``converged``. On the compiled path the path is followed in compiled code
@@ -88,15 +103,16 @@ def solve_forward(
         max_iter: Newton steps per substep (the outcome counts them all).
         sign: determinant sign of the start's assembly (0 when unknown).
         warm: the start is a guess, not home: an uncertified result of plain Newton that is
-            near a singularity is returned flagged ``near_singular`` before the path is tried.
+            near a singularity is returned as ``uncertified``, flagged ``near_singular``, before
+            the path is tried.
         attempt: the certified first attempt's ``(status, iterations, residual, message)``
             when the caller made it already (the solver's state is that attempt's):
             :meth:`.compiled_solver.CompiledSolver.certified_forward`, which returns it when the attempt
             did not converge certified.
 
     Returns:
-        ``converged`` (certified, maybe flagged ``near_singular``), ``ambiguous_assembly`` with
-        candidates, or the plain solve's failure.
+        ``converged`` (certified, maybe flagged ``near_singular``), ``uncertified`` (warm, near
+        a singularity), ``ambiguous_assembly`` with candidates, or the plain solve's failure.
     """
     pq = solver.clm.prismatic_q
     l0 = start[pq]
@@ -109,11 +125,11 @@ def solve_forward(
         return Outcome(solver.q_aug[: solver.clm.nq].copy(), status, it, res, solver.G.copy(), msg)
     plain = start.copy()  # for the candidates, should the path be blocked
     first = solver.q_aug[: solver.clm.nq].copy() if it == 1 else None  # after the first Newton step
-    if warm:  # near a singularity no path certifies (its balls shrink): say so, with the plain result
+    if warm:  # near a singularity no path certifies (its balls shrink): the plain result, not converged
         status, n, res, msg = solver.iterate(plain, tol, max_iter)
         it += n
         if status == "converged" and not solver.kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
-            return _certified(solver, it, res, "not certified: ")
+            return _uncertified(solver, it, res)
     start[pq] = l0
     h = rescale(solver.theta, False, 1)
     if solver.compiled_loop:  # a compiled_solver.CompiledSolver
@@ -221,6 +237,20 @@ def _certified(solver: NewtonSolver, total: int, res: float, note: str = "") -> 
     solver.kernels.jacobian(*solver._jac_args)
     q = solver.q_aug[: solver.clm.nq].copy()  # the last Schur step (iterate() takes one even at once)
     return certified_outcome(solver, q, solver.kernels.copied(solver.G), total, res, note)
+
+
+def _uncertified(solver: NewtonSolver, total: int, res: float) -> Outcome:
+    """The plain Newton result in the solver's buffers, near a singularity: status ``uncertified``.
+
+    It closes the loops, but nothing shows that it is the assembly connected to the start: the
+    readings may have moved it across a fold (another assembly), so it is never ``converged``.
+    """
+    out = _certified(solver, total, res)
+    msg = (
+        "the assembly connected to the start could not be certified (the plain Newton result is near a "
+        f"singularity, another assembly may be the one connected to the start): {out.message}"
+    )
+    return out._replace(status="uncertified", message=msg)
 
 
 def _ambiguous(

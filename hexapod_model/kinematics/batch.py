@@ -12,14 +12,15 @@ are solved row by row.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from ..exceptions import HexapodError, InputError
+from .assemblies import review
 from .assembly import NEAR_SINGULAR_FACTOR
-from .checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance
+from .checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance, failure_status
 from .newton.first_compile import announce
 from .newton.outcomes import INVALID_INPUT, OUT_OF_LIMITS, outcome
 from .newton.solver import Solution
@@ -43,7 +44,7 @@ class BatchResult:
         iterations: (N,) Newton steps taken.
         residual: (N,) final closure residual norm (NaN for ``invalid_input``).
         messages: (N,) each row's ``Solution.message`` (or the error a per-row call raises).
-        flags: (N,) each row's ``Solution.flags`` (``("near_singular",)`` or ``()``).
+        flags: (N,) each row's ``Solution.flags`` (``("near_singular",)``, ``("not_closed",)`` or ``()``).
         det_sign: (N,) each row's ``Solution.det_sign``.
     """
 
@@ -121,8 +122,14 @@ def _message(hexa: Hexapod, code: int, k: int, out: tuple, tol: float, retry) ->
     return outcome(code, tol, int(iterations[k]), float(residuals[k]), float(ratios[k]))[1]
 
 
-def _result(hexa: Hexapod, out: tuple, tol: float, retry, fallback: dict[int, Solution], forward: bool) -> BatchResult:
-    """The :class:`BatchResult` of the compiled loops' outputs and the rows solved one by one."""
+def _result(
+    hexa: Hexapod, out: tuple, tol: float, retry, fallback: dict[int, Solution], forward: bool, max_iter: int = 0
+) -> BatchResult:
+    """The :class:`BatchResult` of the compiled loops' outputs and the rows solved one by one.
+
+    A row that used its ``max_iter`` steps is named as :meth:`.hexapod.Hexapod.forward` names it
+    (:func:`.checks.failure_status`).
+    """
     Q, poses, codes, iterations, residuals, _, kappas, signs, _ = out
     home_kappa = hexa._solver(hexa._held_forward).home_kappa
     near = ~(kappas <= NEAR_SINGULAR_FACTOR * home_kappa) & ((codes == 0) | (codes == OUT_OF_LIMITS)) & forward
@@ -133,6 +140,11 @@ def _result(hexa: Hexapod, out: tuple, tol: float, retry, fallback: dict[int, So
     messages = [""] * len(Q)
     for k in np.flatnonzero((codes != 0) | near):
         messages[k] = "" if codes[k] == _FALLBACK else _message(hexa, int(codes[k]), int(k), out, tol, retry)
+        if status[k] == "max_iterations":
+            outside = hexa._outside(Q[k])
+            stalled = failure_status("max_iterations", messages[k], residuals[k], max_iter, outside, hexa.scale)
+            status[k], messages[k] = stalled
+            flags[k] = ("not_closed",) if status[k] == "out_of_limits" else flags[k]
     for j, sol in fallback.items():
         Q[j], poses[j], status[j], iterations[j], residuals[j] = (
             sol.q,
@@ -231,7 +243,52 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, sla
             if warm and sol.converged:
                 start[:], carry[:2] = sol.q, (sol.det_sign, 1.0)
             k += 1
-    return _result(hexa, out, tol, retry, fallback, True)
+    res = _result(hexa, out, tol, retry, fallback, True, max_iter)
+    return _reviewed(hexa, res, rows, guess, warm, solve, set(fallback))
+
+
+def _reviewed(
+    hexa: Hexapod, res: BatchResult, rows: np.ndarray, guess, warm: bool, solve, done: set[int]
+) -> BatchResult:
+    """A 3-6 hexapod's rows checked against every assembly, as :meth:`.hexapod.Hexapod.forward` checks them.
+
+    Each row from its own start (``guess``, or with ``warm`` the last converged row); the rows
+    in ``done`` were solved by ``forward`` already. Once a warm row's status changes, the rows
+    after it are solved by ``solve`` (``forward``) one by one.
+    """
+    if hexa._finder.exact is None:
+        return res
+    status, messages, flags = res.status.astype(object), list(res.messages), list(res.flags)
+    poses, lengths, q, signs = res.poses.copy(), res.lengths.copy(), res.q.copy(), res.det_sign.copy()
+    start, redo = guess, False
+    for k in range(len(rows)):
+        if status[k] == "invalid_input":
+            continue
+        if redo:  # forward() checks it itself
+            new, changed = solve(rows[k], start), True
+        elif k in done:
+            new, changed = res.solution(k), False
+        else:
+            sol = res.solution(k)
+            new = review(hexa._finder, sol, rows[k], start)
+            changed, redo = new is not sol, warm and new.status != sol.status
+        if changed:
+            status[k], messages[k], flags[k], signs[k], q[k] = new.status, new.message, new.flags, new.det_sign, new.q
+            res.iterations[k], res.residual[k] = new.iterations, new.residual
+            poses[k] = new.pose if new.converged else np.nan
+            lengths[k] = new.lengths if new.converged else np.nan
+        if warm and new.converged:
+            start = new
+    return replace(
+        res,
+        poses=poses,
+        lengths=lengths,
+        q=q,
+        status=status.astype(str),
+        messages=tuple(messages),
+        flags=tuple(flags),
+        det_sign=signs,
+    )
 
 
 def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter, slack: float) -> BatchResult:
@@ -263,4 +320,4 @@ def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter, slack:
     settings = (tol, max_iter, POSE_TOLERANCE, MAX_POSITION)
     limits = (hexa._limited, hexa._limited_lo, hexa._limited_hi, slack)
     inverse_rows(rows, hexa._start(guess), warm, settings, limits, hexa._home_h, solver.arrays, out)
-    return _result(hexa, out, tol, retry, {}, False)
+    return _result(hexa, out, tol, retry, {}, False, max_iter)

@@ -178,3 +178,41 @@ def check_max_iter(max_iter: Any) -> int:
     if isinstance(max_iter, bool) or not isinstance(max_iter, numbers.Integral) or max_iter < 0:
         raise InputError("max_iter", max_iter, "expected a whole number of Newton steps >= 0")
     return int(max_iter)
+
+
+#: closure residual (m, rad mixed) above which a solve that used its whole step budget stalled:
+#: Newton near a closed configuration converges quadratically, so after ``STALL_STEPS`` steps it is
+#: far from every one (no real assembly, or none reachable from the start)
+STALL_RESIDUAL = 1e-6
+STALL_STEPS = 20  # a caller's max_iter below this keeps ``max_iterations`` (it asked for few steps)
+
+
+def failure_status(
+    status: str, message: str, residual: float, max_iter: int, outside: str | None, scale: float = 1.0
+) -> tuple[str, str]:
+    """The status of a solve that did not converge: what happened, and what the caller can do.
+
+    Args:
+        status: the iteration's status (``max_iterations`` is the only one reclassified).
+        message: its message.
+        residual: the last closure residual (m, rad mixed).
+        max_iter: the caller's step limit.
+        outside: the limit error of the last iterate (one line), ``None`` when within the limits.
+        scale: the hexapod's size ratio (:attr:`.hexapod.Hexapod.scale`) ``STALL_RESIDUAL`` scales by.
+
+    Returns:
+        ``out_of_limits`` when the last iterate left the stroke or joint limits (no closed
+        configuration was found within them: the :class:`Solution` carries the flag
+        ``not_closed``), ``not_found`` when the iteration stalled far from
+        any closure (residual above ``STALL_RESIDUAL`` after at least ``STALL_STEPS`` steps),
+        else ``status`` unchanged; with the message saying why.
+    """
+    if status != "max_iterations":
+        return status, message
+    if outside is not None:
+        msg = f"no closed configuration found within the limits ({message}); the iterate left them: {outside}"
+        return "out_of_limits", msg
+    if residual > STALL_RESIDUAL * scale and max_iter >= STALL_STEPS:
+        why = "the readings or pose may admit no real assembly, or none reachable from the start"
+        return "not_found", f"no closed configuration found, the iteration stalled ({message}): {why}"
+    return status, message

@@ -8,6 +8,8 @@
 
 from __future__ import annotations
 
+import functools
+import math
 import threading
 from collections.abc import Mapping
 from pathlib import Path
@@ -21,8 +23,9 @@ from ..description.mjcf_loader import MJCF_SUFFIXES, load_mjcf
 from ..description.model import ClosedLoopModel
 from ..description.presets import PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
-from ..exceptions import AssemblyError, ConvergenceError, LimitError, SingularityError, WorkspaceError
+from ..exceptions import AssemblyError, ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
 from . import assembly, batch, hybrid
+from .assemblies import DEFAULT_STARTS, Assemblies, AssemblyFinder, review
 from .assembly import Outcome
 from .batch import BatchResult
 from .checks import (
@@ -35,17 +38,25 @@ from .checks import (
     check_pose,
     check_tolerance,
     check_vector,
+    failure_status,
 )
 from .newton.kernel_sets import KernelSet, kernel_set
 from .newton.solver import NewtonSolver, Solution
 
-DEFAULT_TOL = 1e-12  # closure residual (m, rad): pose errors stay below 1e-9 on every preset
+DEFAULT_TOL = 1e-12  # closure residual (m, rad) at a 0.25 m base radius: pose errors below 1e-9 on every preset
+REFERENCE_RADIUS = 0.25  # m: the base radius DEFAULT_TOL is stated for
 DEFAULT_MAX_ITER = 20
 #: largest 2-norm condition number of the direct-kinematics constraint Jacobian at home
 #: (metres and radians; the presets have 9-67, a 20x smaller hexapod about 700, a singular
 #: layout with parallel, coplanar or coincident legs 1e13 and more)
 HOME_CONDITION_LIMIT = 1e6
-_ERRORS = {"singular": SingularityError, "out_of_limits": WorkspaceError, "ambiguous_assembly": AssemblyError}
+_ERRORS = {
+    "singular": SingularityError,
+    "out_of_limits": WorkspaceError,
+    "ambiguous_assembly": AssemblyError,
+    "uncertified": AssemblyError,
+    "no_assembly": WorkspaceError,
+}
 
 __all__ = ["Hexapod", "POSE_TOLERANCE", "check_pose", "check_vector", "load_hexapod"]
 
@@ -100,6 +111,13 @@ class Hexapod:
         self._free_directions: dict[tuple[int, ...], tuple[int, int]] = {}  # held set -> (free, rank)
         #: 2-norm condition number of the direct-kinematics constraint Jacobian at home
         self.home_condition_number = self._check_home_conditioning()
+        anchors = np.array([m.jointPlacements[leg.joints[0]].translation for leg in model.legs])
+        #: largest horizontal distance of a leg's first joint from the base origin (m)
+        self.base_radius = float(np.max(np.linalg.norm(anchors[:, :2], axis=1))) or REFERENCE_RADIUS
+        #: the size ratio, to the nearest power of two (1 for the presets), the constants scale by
+        self.scale = 2.0 ** round(math.log2(self.base_radius / REFERENCE_RADIUS))
+        #: the closure residual a solve stops at by default (m, rad): ``DEFAULT_TOL * scale``
+        self.default_tol = min(DEFAULT_TOL * self.scale, MAX_TOL)
 
     @property
     def _kernels(self) -> KernelSet:
@@ -232,7 +250,7 @@ class Hexapod:
         lengths: ArrayLike,
         guess=None,
         *,
-        tol: float = DEFAULT_TOL,
+        tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
         check: bool = True,
     ) -> Solution:
@@ -241,7 +259,9 @@ class Hexapod:
         Args:
             lengths: six readings, leg order, metres (zero at home).
             guess: previous :class:`Solution` or configuration to start from (default: home).
-            tol: closure residual to reach, in (0, 1e-6] (metres and radians).
+            tol: closure residual to reach, in (0, 1e-6] (metres and radians); default
+                :attr:`default_tol` (``DEFAULT_TOL`` = 1e-12 scaled with the base radius to the
+                nearest power of two: the presets' 1e-12, 3.1e-14 for a 1 cm base radius).
             max_iter: Newton step limit (an int >= 0).
             check: raise on a result that is not ``converged`` (default). With
                 ``check=False`` the :class:`Solution` is returned and its ``status`` says why.
@@ -252,6 +272,7 @@ class Hexapod:
             LimitError: a reading outside its stroke.
             ConvergenceError, SingularityError, WorkspaceError: when ``check`` and the solve failed.
         """
+        tol = self.default_tol if tol is None else tol
         if not (isinstance(lengths, np.ndarray) and lengths.shape == (6,) and lengths.dtype == np.float64):
             lengths = check_vector("lengths", lengths, 6)
         k = self._kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, LIMIT_SLACK)
@@ -264,21 +285,72 @@ class Hexapod:
         start = self._start(guess, copy=False)  # solve_forward writes its own copy
         fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
         attempt = None
+        review = self._finder.exact is not None  # a 3-6 hexapod: every assembly is accounted for
         if fast and solver.compiled_loop:
             # the certified first attempt in one compiled call; solve_forward goes on from it
             done = solver.certified_forward(start, joints, tol, max_iter, sign, self._limits, self._home_h)  # type: ignore[attr-defined]
             if len(done) == 6:
                 q, pose, jac, it, res, bad = done
-                return self._solution(assembly.certified_outcome(solver, q, jac, it, res), check, pose, bad)
+                sol = self._solution(
+                    assembly.certified_outcome(solver, q, jac, it, res), check and not review, pose, bad
+                )
+                return self._reviewed(sol, lengths, guess, check) if review else sol
             attempt = done
-        return self._finish(solver, start.copy(), tol, max_iter, check, (joints, sign, guess is not None, attempt))
+        sol = self._finish(
+            solver, start.copy(), tol, max_iter, check and not review, (joints, sign, guess is not None, attempt)
+        )
+        return self._reviewed(sol, lengths, guess, check) if review else sol
+
+    @functools.cached_property
+    def _finder(self) -> AssemblyFinder:
+        """The global direct kinematics (:mod:`.assemblies`)."""
+        return AssemblyFinder(self)
+
+    def _reviewed(self, sol: Solution, lengths: np.ndarray, guess, check: bool) -> Solution:
+        """A 3-6 hexapod's result checked against every assembly (:func:`.assemblies.review`); raised if ``check``."""
+        sol = review(self._finder, sol, lengths, guess)
+        if check and sol.status != "converged":
+            raise _ERRORS.get(sol.status, ConvergenceError)(sol, f"{sol.status}: {sol.message}")
+        return sol
+
+    def assemblies(
+        self, lengths: ArrayLike, *, reference: np.ndarray | None = None, starts: int = DEFAULT_STARTS, seed: int = 0
+    ) -> Assemblies:
+        """Every assembly for these readings that can be found: the global answer of direct kinematics.
+
+        For a 3-6 hexapod (e.g. preset ``3-6``) all of them, from the resultant polynomial
+        (``complete`` is True); for the others, what plain Newton reaches from home and ``starts``
+        random poses (``complete`` is False: assemblies it does not reach may exist).
+        See :mod:`~hexapod_model.kinematics.assemblies`.
+
+        Args:
+            lengths: six readings, leg order, metres (zero at home).
+            reference: order the assemblies by distance to this pose (4x4, default home).
+            starts: random starts of the multi-start search (ignored for a 3-6 hexapod).
+            seed: random seed of those starts.
+
+        Returns:
+            :class:`~.assemblies.Assemblies`: the assemblies within the stroke and joint limits
+            (converged inverse-kinematics :class:`Solution` each), the count of those outside.
+
+        Raises:
+            InputError, LimitError: as :meth:`forward` for the readings.
+        """
+        lengths = check_vector("lengths", lengths, 6)
+        k = self._kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, LIMIT_SLACK)
+        if k >= 0:
+            raise LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
+        ref = None if reference is None else check_pose(reference, self._kernels.rigid_error)
+        if type(starts) is not int or starts < 0:
+            raise InputError("starts", starts, "an int >= 0")
+        return self._finder.find(lengths, ref, starts, seed)
 
     def inverse(
         self,
         pose: np.ndarray,
         guess=None,
         *,
-        tol: float = DEFAULT_TOL,
+        tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
         check: bool = True,
     ) -> Solution:
@@ -289,6 +361,7 @@ class Hexapod:
         """
         q = self._start(guess)
         self._set_pose(q, pose)
+        tol = self.default_tol if tol is None else tol
         return self._finish(self._solver(self._held_inverse), q, tol, max_iter, check)
 
     def solve(
@@ -296,7 +369,7 @@ class Hexapod:
         held: Mapping[str, object],
         guess=None,
         *,
-        tol: float = DEFAULT_TOL,
+        tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
         check: bool = True,
     ) -> Solution:
@@ -316,6 +389,7 @@ class Hexapod:
         """
         q = self._start(guess)
         held_ids = hybrid.hold(self, held, q)
+        tol = self.default_tol if tol is None else tol
         return self._finish(self._solver(held_ids), q, tol, max_iter, check)
 
     def _limit_error(self, iq: int, value: float) -> LimitError:
@@ -336,26 +410,47 @@ class Hexapod:
         if type(max_iter) is not int or max_iter < 0:
             max_iter = check_max_iter(max_iter)
         if forward:
-            return self._solution(assembly.solve_forward(solver, q0, forward[0], tol, max_iter, *forward[1:]), check)
+            out = assembly.solve_forward(solver, q0, forward[0], tol, max_iter, *forward[1:])
+            return self._solution(out, check, max_iter=max_iter)
         if solver.compiled_loop:  # inverse kinematics: the solve, pose and limit check in one compiled call
             done = solver.run_checked(q0, tol, max_iter, self._limits, self._home_h)  # type: ignore[attr-defined]
             if done is not None:
-                return self._solution(Outcome(*done[0]), check, done[1], done[2])
-        return self._solution(Outcome(*solver.run(q0, tol, max_iter)), check)
+                return self._solution(Outcome(*done[0]), check, done[1], done[2], max_iter)
+        return self._solution(Outcome(*solver.run(q0, tol, max_iter)), check, max_iter=max_iter)
 
-    def _solution(self, out: Outcome, check: bool, pose: np.ndarray | None = None, bad: int | None = None) -> Solution:
+    def _outside(self, q: np.ndarray) -> str | None:
+        """The limit error of configuration ``q`` (one line), ``None`` when within the limits (or not finite)."""
+        bad = self._kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, LIMIT_SLACK)
+        if bad < 0 or not np.all(np.isfinite(q)):
+            return None
+        k = int(self._limited[bad])
+        return str(self._limit_error(k, q[k]))
+
+    def _solution(
+        self,
+        out: Outcome,
+        check: bool,
+        pose: np.ndarray | None = None,
+        bad: int | None = None,
+        max_iter: int = DEFAULT_MAX_ITER,
+    ) -> Solution:
         """The :class:`Solution` of a solve's outcome: the joint-limit check, the pose, the readings.
 
         ``pose`` and ``bad`` (the first joint outside its limits, -1 if none) when the caller
-        has them already (the compiled first attempt of :meth:`forward`).
+        has them already (the compiled first attempt of :meth:`forward`); ``max_iter`` the
+        caller's step limit (:func:`.checks.failure_status` names a stalled solve).
         """
         q, status, it, res, jac, msg = out[:6]
+        flags = out.flags
         if status == "converged":
             if bad is None:
                 bad = self._kernels.first_outside_at(q, self._limited, self._limited_lo, self._limited_hi, LIMIT_SLACK)
             if bad >= 0:
                 k = int(self._limited[bad])
                 status, msg = "out_of_limits", str(self._limit_error(k, q[k]))
+        elif status == "max_iterations":
+            status, msg = failure_status(status, msg, res, max_iter, self._outside(q), self.scale)
+            flags = ("not_closed",) if status == "out_of_limits" else flags
         poses = tuple(self.pose_of(c) for c in out.candidates) if out.candidates else ()
         sol = Solution(
             self.pose_of(q) if pose is None else pose,
@@ -366,7 +461,7 @@ class Hexapod:
             res,
             jac,
             msg,
-            out.flags,
+            flags,
             poses,
             out.det_sign,
         )
@@ -381,7 +476,7 @@ class Hexapod:
         guess=None,
         *,
         warm: bool = False,
-        tol: float = DEFAULT_TOL,
+        tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
     ) -> BatchResult:
         """Direct kinematics of N rows of readings in one call (a compiled loop; row by row if not ``compiled``).
@@ -398,6 +493,7 @@ class Hexapod:
             A :class:`~.batch.BatchResult`: per row what :meth:`forward` with ``check=False``
             gives (``invalid_input`` where it raises: NaN, out of stroke); never raises on a row.
         """
+        tol = self.default_tol if tol is None else tol
         return batch.forward_batch(self, lengths, guess, warm, tol, max_iter, LIMIT_SLACK)
 
     def inverse_batch(
@@ -406,7 +502,7 @@ class Hexapod:
         guess=None,
         *,
         warm: bool = False,
-        tol: float = DEFAULT_TOL,
+        tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
     ) -> BatchResult:
         """Inverse kinematics of N poses in one call (a compiled loop; row by row if not ``compiled``).
@@ -422,6 +518,7 @@ class Hexapod:
         Returns:
             A :class:`~.batch.BatchResult`: per row what :meth:`inverse` with ``check=False`` gives.
         """
+        tol = self.default_tol if tol is None else tol
         return batch.inverse_batch(self, poses, guess, warm, tol, max_iter, LIMIT_SLACK)
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:

@@ -6,7 +6,9 @@ JSON keys (scripts rely on them): ``before``, ``after`` and, for a simulation,
 (4x4: the measured frame in the platform frame), ``parameters`` (a list of ``{"name",
 "nominal", "identified", "sigma", "identifiable"}``, SI units as the names say; ``sigma`` is
 ``null`` for a parameter held at nominal). Also: ``poses``, ``validation``,
-``identifiability`` and, for a simulation, ``truth``.
+``identifiability``, ``decision`` (whether the calibrated geometry predicts held-out poses
+better than nominal beyond the uncertainty, both figures, and whether the file was written)
+and, for a simulation, ``truth``.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import math
 import numpy as np
 
 from ..calibration.frames import ERROR_KEYS, Noise, error_stats
+from ..calibration.validation import IMPROVEMENT_SIGMAS, verdict
 from .calibrate import CalibrationResult
 
 SIGMA_LIMIT = 3.0  # the simulated study's check: identified parameters within this many sigma of the truth
@@ -36,8 +39,8 @@ def truth_check(result: CalibrationResult) -> dict | None:
     }
 
 
-def report_json(result: CalibrationResult) -> dict:
-    """The ``--json`` document (see the module doc)."""
+def report_json(result: CalibrationResult, written: bool | None = None) -> dict:
+    """The ``--json`` document (see the module doc); ``written``: whether the geometry file was written."""
     ident, val = result.identification, result.validation
     ps = ident.parameters
     nominal, values = ps.nominal_values(), ps.values(ident.delta)
@@ -65,6 +68,17 @@ def report_json(result: CalibrationResult) -> dict:
         "singular_values": ident.spectrum.tolist(),
         "held": [c.describe() for c in ident.combinations],
         "noise_factor": ident.noise_factor,
+    }
+    v = verdict(val)
+    out["decision"] = {
+        "better_than_nominal": v.better,
+        "held_out_translation_mean_mm": {"nominal": v.before_mm, "calibrated": v.after_mm},
+        "held_out_rotation_mean_deg": {"nominal": v.before_deg, "calibrated": v.after_deg},
+        "uncertainty_mm": v.uncertainty_mm,
+        "uncertainty_deg": v.uncertainty_deg,
+        "rule": f"better: the mean drops by more than {IMPROVEMENT_SIGMAS:g} standard errors of the paired "
+        "difference (translation) and the rotation mean does not rise by more than as many",
+        "written": written,
     }
     check = truth_check(result)
     if check is not None:

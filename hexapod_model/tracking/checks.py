@@ -20,18 +20,23 @@ Per leg, ``z = |nu| / (noise * spread)``:
   rate (least-squares slope over the readings kept, ``stuck_samples + 8``) of more than
   ``stuck_motion_sigmas`` (default 5) of its standard deviation: at 50 um noise and 1x a slow
   leg needs 5-6 samples to move by ``3 sqrt(2)`` noise, its slope is significant at once. A working
-  encoder with noise repeats its value with probability ~ resolution / noise per sample; at
-  rest (no motion) nothing is flagged. The flag stays while the reading stays unchanged.
+  encoder with counts (``resolution``) repeats its value with probability ``p_repeat`` per
+  sample (about resolution / (2 sqrt(pi) noise)): with counts every rule needs a frozen run
+  of ``frozen_run`` samples, one a working encoder shows with probability below 1e-9
+  (:mod:`.false_alarms`, which also states each flag's false-alarm rate per hour). The flag
+  stays while the reading stays unchanged.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, fields
 
 import numpy as np
 
 from ..exceptions import InputError
+from .false_alarms import reading_sigma, stuck_run
 
 DEFAULT_READING_NOISE = 10e-6  # m, the order of the LinACE encoder accuracy (Bem et al. (2026) §2)
 
@@ -71,6 +76,11 @@ class TrackerSettings:
         recover: re-solve from the motion model when a pose fails the branch check;
             ``False`` keeps the Jakobović and Jelenković (2002) experiment's raw behaviour (a failed branch check
             latches ``branch_uncertain`` until ``reset``).
+        resolution: the encoder's count (m; 0: continuous readings). Counts add
+            ``resolution / sqrt(12)`` to the reading spread and make a working leg repeat its
+            value: ``stuck`` then needs a longer frozen run (:mod:`.false_alarms`).
+        motion_error: the motion model's own prediction error (m, speed-dependent), added in
+            quadrature to the innovation spread of ``jump``.
     """
 
     noise: float = DEFAULT_READING_NOISE
@@ -90,6 +100,8 @@ class TrackerSettings:
     resolve_samples: int = 200
     continuation_step: float = 2e-3
     recover: bool = True
+    resolution: float = 0.0
+    motion_error: float = 0.0
 
     def __post_init__(self) -> None:
         positive = (
@@ -109,9 +121,10 @@ class TrackerSettings:
             v = getattr(self, name)
             if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0):
                 raise InputError(name, v, "expected a number > 0 or None")
-        v = self.stuck_tolerance
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v >= 0):
-            raise InputError("stuck_tolerance", v, "expected a finite number >= 0")
+        for name in ("stuck_tolerance", "resolution", "motion_error"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v >= 0):
+                raise InputError(name, v, "expected a finite number >= 0")
         v = self.branch_alpha
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1:
             raise InputError("branch_alpha", v, "expected a number in (0, 1)")
@@ -124,6 +137,23 @@ class TrackerSettings:
             raise InputError("settle_samples", self.settle_samples, f"cannot exceed window ({self.window})")
         if not isinstance(self.recover, bool):
             raise InputError("recover", self.recover, "expected True or False")
+
+    @functools.cached_property
+    def reading_sigma(self) -> float:
+        """Standard deviation of a reading (m): ``noise`` and the count's rounding (:mod:`.false_alarms`)."""
+        return reading_sigma(self.noise, self.resolution)
+
+    def innovation_sigma(self, spread: float) -> float:
+        """Standard deviation (m) of a reading's innovation for the motion model's ``spread``."""
+        sigma = self.reading_sigma * spread
+        return sigma if self.motion_error == 0.0 else math.hypot(sigma, self.motion_error)
+
+    @functools.cached_property
+    def frozen_run(self) -> int:
+        """Unchanged samples before ``stuck`` (:func:`.false_alarms.stuck_run`; ``stuck_samples`` without counts)."""
+        if self.resolution == 0.0:
+            return self.stuck_samples
+        return stuck_run(self.noise, self.resolution, self.stuck_samples)
 
     @classmethod
     def with_options(cls, base: TrackerSettings | None, options: dict) -> TrackerSettings:
@@ -192,9 +222,11 @@ def stuck_legs(
         settings: the tracker's settings.
         moving: :func:`motion_sigmas` of the readings kept (``None``: not used).
     """
-    predicted = (frozen > 0) & (np.nan_to_num(z, nan=0.0) > settings.stuck_sigmas)
-    evidence = moved > settings.stuck_sigmas * math.sqrt(2.0) * settings.noise
+    counts = settings.resolution > 0.0  # a working encoder repeats counts: only an improbable run counts
+    run = settings.frozen_run
+    predicted = (frozen >= (run if counts else 1)) & (np.nan_to_num(z, nan=0.0) > settings.stuck_sigmas)
+    evidence = moved > settings.stuck_sigmas * math.sqrt(2.0) * settings.reading_sigma
     if moving is not None:
         evidence |= moving > settings.stuck_motion_sigmas
-    others = (frozen >= settings.stuck_samples) & evidence
+    others = (frozen >= run) & evidence
     return predicted | others

@@ -27,6 +27,7 @@ from ..kinematics.newton.solver import Solution
 from ..kinematics.rotations import pose_distance
 from .branches import BranchResolver, mirror_guess
 from .checks import TrackerSettings
+from .types import posed
 
 _MIN_BEFORE = 12  # certified samples before a passage: fewer cannot anchor the smooth motion
 
@@ -80,7 +81,7 @@ class PassageMixin:
 
         def solve(guess):
             alt = self._solve(l, guess)
-            return alt.q if alt.status in ("converged", "out_of_limits") else None
+            return alt.q if posed(alt) else None
 
         def measure(q):
             J = self._sens_b_eval(q)

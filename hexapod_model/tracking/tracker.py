@@ -44,6 +44,7 @@ from .types import (
     PREDICTORS,
     TrackResult,
     characteristic_length,
+    posed,
     predict,
 )
 
@@ -75,7 +76,8 @@ class Tracker(PassageMixin):
         hexa: the hexapod.
         predictor: one of :data:`PREDICTORS` (the Newton guess; the checks do not depend on it).
         initial: known starting configuration (``Solution`` or ``q``); default home.
-        tol: Newton tolerance per sample (closure residual, m and rad).
+        tol: Newton tolerance per sample (closure residual, m and rad; default 100 times the
+            hexapod's :attr:`~.hexapod.Hexapod.default_tol`, 1e-10 on the presets).
         max_iter: Newton iterations per sample at most.
         length: m per rad in pose distances and condition numbers (default
             :func:`characteristic_length`).
@@ -92,7 +94,7 @@ class Tracker(PassageMixin):
         predictor: str = "eq22",
         initial=None,
         *,
-        tol: float = 1e-10,
+        tol: float | None = None,
         max_iter: int = 20,
         length: float | None = None,
         settings: TrackerSettings | None = None,
@@ -100,6 +102,7 @@ class Tracker(PassageMixin):
     ):
         if predictor not in PREDICTORS:
             raise InputError("predictor", predictor, f"choose one of {PREDICTORS}")
+        tol = 100.0 * hexa.default_tol if tol is None else tol
         self.hexa, self.predictor, self.tol, self.max_iter = hexa, predictor, tol, max_iter
         self.settings = s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
         self.length = characteristic_length(hexa) if length is None else float(length)
@@ -189,8 +192,9 @@ class Tracker(PassageMixin):
             lhat = w @ self._L[:n]
         # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
         last = self._raw[-1] if self._raw else _NONE
+        sigma_nu = s.innovation_sigma(spread)
         finite, zmax, zz, frozen, any_stuck = (False, math.nan, 0.0, 0, False) if l.shape != (6,) else (
-            reading_checks(l, last, s.stuck_tolerance, self._frozen, self._stuck, lhat, s.noise * spread, self._z)
+            reading_checks(l, last, s.stuck_tolerance, self._frozen, self._stuck, lhat, sigma_nu, self._z)
         )  # fmt: skip
         if not finite:
             msg = f"expected 6 finite readings, got {lengths!r}"
@@ -204,7 +208,7 @@ class Tracker(PassageMixin):
         legs: tuple[int, ...] = ()
         suspect = False
         if zmax > s.jump_sigmas or frozen > 0 or any_stuck:
-            moving = motion_sigmas(np.array(self._raw), s.noise) if frozen >= s.stuck_samples else None
+            moving = motion_sigmas(np.array(self._raw), s.reading_sigma) if frozen >= s.stuck_samples else None
             stuck = stuck_legs(self._frozen, z, self._moved(), s, moving) | (self._stuck & (self._frozen > 0))
             self._stuck = stuck  # latched while the reading stays unchanged
             jump = z > s.jump_sigmas
@@ -214,7 +218,7 @@ class Tracker(PassageMixin):
         if self._gap > s.max_gap and "stuck" not in flags:
             return self._reanchor(l, flags, legs, t0)
         sol = self._solve(l, self._guess())
-        if sol.status not in ("converged", "out_of_limits"):
+        if not posed(sol):
             if not suspect and sol.status != "invalid_input" and self._cond_last > self.cond_limit / 4:
                 self._open(latch=False)  # no assembly near the prediction: readings past a fold?
             return self._failure(l, sol.status, sol.message, tuple(flags), legs, t0, sol)
@@ -226,7 +230,8 @@ class Tracker(PassageMixin):
                 self._lost = not s.recover
                 self._doubt = suspect = s.recover
         sol, sens, open_ = self._passage(sol, sens, l, bool(legs) or self._lost)
-        if (self._lost or self._uncertified or open_) and "branch_uncertain" not in flags:
+        uncertified = sol.status == "uncertified"  # the solver could not certify the assembly
+        if (self._lost or self._uncertified or open_ or uncertified) and "branch_uncertain" not in flags:
             flags.append("branch_uncertain")
         if not checked and m <= s.max_gap + 1:
             flags.append("settling")
@@ -268,7 +273,7 @@ class Tracker(PassageMixin):
         if self.settings.recover and sens.condition_number > self.cond_limit:
             # near a singularity assemblies meet: keep the one the motion continues to
             alt = self._solve(l, self._model_q(w))
-            if alt.status in ("converged", "out_of_limits") and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
+            if posed(alt) and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
                 sol, sens = alt, self._sens.evaluate(alt.q)
         bound = self.settings.branch_sigmas * self.settings.noise * self._scale * spread
 
@@ -287,7 +292,7 @@ class Tracker(PassageMixin):
         if not self.settings.recover:
             return sol, sens, False
         retry = self._solve(l, self._model_q(w))
-        if retry.status in ("converged", "out_of_limits"):
+        if posed(retry):
             rsens = self._sens.evaluate(retry.q)
             if consistent(retry, rsens):
                 return retry, rsens, True
@@ -313,7 +318,7 @@ class Tracker(PassageMixin):
             (self._last_q, s.continuation_step),
         ):
             sol = self._continue(q0, l, step)
-            if sol.status in ("converged", "out_of_limits"):
+            if posed(sol):
                 break
         else:
             assert sol is not None
@@ -340,7 +345,7 @@ class Tracker(PassageMixin):
         q, sol = q0, None
         for k in range(1, n + 1):
             sol = self._solve(l0 + (l - l0) * (k / n), q)
-            if sol.status not in ("converged", "out_of_limits"):
+            if not posed(sol):
                 return sol
             q = sol.q
         assert sol is not None

@@ -23,7 +23,15 @@ _COEFFS = {"none": (0.0, 0.0), "eq22": (-1.0, 0.0), "eq23": (0.0, -0.5), "eq24":
 #: every flag a sample can carry, in the order they are checked
 FLAGS = ("jump", "stuck", "branch_uncertain", "settling", "near_singular", "out_of_limits", "imprecise")
 #: statuses of a sample without a pose (``status`` is ``ok`` otherwise)
-FAILED_STATUSES = ("invalid_input", "max_iterations", "singular")
+FAILED_STATUSES = ("invalid_input", "max_iterations", "not_found", "singular", "out_of_limits")
+#: solve statuses that give the tracker a closed configuration (``uncertified``: flagged
+#: ``branch_uncertain``, its assembly is the tracker's passage logic's to judge)
+POSED_STATUSES = ("converged", "out_of_limits", "uncertified")
+
+
+def posed(sol: Solution) -> bool:
+    """Whether a solve gives the tracker a pose: a closed configuration of :data:`POSED_STATUSES`."""
+    return sol.status in POSED_STATUSES and sol.closed
 
 
 def characteristic_length(hexa: Hexapod) -> float:

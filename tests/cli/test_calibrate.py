@@ -52,6 +52,30 @@ def test_calibrate_from_a_measured_csv(simulated, tmp_path, capsys):
     assert "true_geometry" not in second
 
 
+def test_a_calibration_no_better_than_nominal_is_not_written_unless_forced(tmp_path, capsys):
+    """docs/examples/measured.csv: the held-out error rises 0.4731 -> 0.5029 mm; the file was
+    written with exit 0."""
+    data = Path(__file__).resolve().parents[2] / "docs" / "examples" / "measured.csv"
+    out, js = tmp_path / "c.toml", tmp_path / "c.json"
+    assert main(["calibrate", "reference", str(data), "-o", str(out), "--json", str(js)]) == 1
+    assert not out.exists()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not written" in err[0] and "0.4731 mm (nominal) -> 0.5029 mm (calibrated)" in err[0]
+    decision = json.loads(js.read_text())["decision"]
+    assert decision["better_than_nominal"] is False and decision["written"] is False
+    assert decision["held_out_translation_mean_mm"]["calibrated"] > decision["held_out_translation_mean_mm"]["nominal"]
+    assert main(["calibrate", "reference", str(data), "-o", str(out), "--json", str(js), "--force"]) == 0
+    assert hm.load_geometry(out).name == "reference_calibrated"
+    assert json.loads(js.read_text())["decision"]["written"] is True
+
+
+def test_a_calibration_better_than_nominal_says_so(simulated):
+    decision = json.loads((simulated / "cal.json").read_text())["decision"]
+    assert decision["better_than_nominal"] is True and decision["written"] is True
+    figures = decision["held_out_translation_mean_mm"]
+    assert figures["nominal"] - figures["calibrated"] > decision["uncertainty_mm"] > 0
+
+
 def test_plan_writes_reachable_poses(tmp_path, capsys):
     out = tmp_path / "poses.csv"
     assert main(["calibrate", "reference", "--plan", "27", "--candidates", "120", "-o", str(out)]) == 0

@@ -24,13 +24,16 @@ def test_mjcf_of_every_preset_is_read_back_by_fk(name, tmp_path, capsys):
     assert out.read_text() == geometry_to_mjcf(hm.get_preset(name))
     assert f"wrote {out}" in capsys.readouterr().err
     lengths = ROOT / "docs/examples/lengths.csv"
-    assert main(["fk", name, str(lengths), "-o", str(tmp_path / "urdf.csv")]) == 0
+    # the 3-6 preset checks every assembly (the resultant needs its geometry; an MJCF file has none):
+    # these readings (another preset's) are ambiguous_assembly there, converged from the MJCF
+    assert main(["fk", name, str(lengths), "-o", str(tmp_path / "urdf.csv")]) == (1 if name == "3-6" else 0)
     assert main(["fk", str(out), str(lengths), "-o", str(tmp_path / "mjcf.csv")]) == 0
     a = np.genfromtxt(tmp_path / "urdf.csv", delimiter=",", names=True, dtype=None, encoding=None)
     b = np.genfromtxt(tmp_path / "mjcf.csv", delimiter=",", names=True, dtype=None, encoding=None)
-    assert list(a["status"]) == list(b["status"])
+    same = a["status"] == b["status"]
+    assert same.all() or (name == "3-6" and set(a["status"][~same]) == {"ambiguous_assembly"})
     for col in ("x", "y", "z", "qx", "qy", "qz", "qw"):
-        np.testing.assert_allclose(a[col], b[col], atol=1e-11, equal_nan=True)
+        np.testing.assert_allclose(a[col][same], b[col][same], atol=1e-11, equal_nan=True)
 
 
 def test_actuated_stdout_and_geometry_file(tmp_path, capsys):

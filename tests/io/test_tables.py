@@ -49,6 +49,25 @@ def test_line_numbers_are_the_files_own_lines(tmp_path):
     assert rows.lines.tolist() == [3, 6, 7] and rows.errors == ["", "", "2 cells, the header has 6"]
 
 
+def test_lines_ended_by_cr_alone_are_read_or_refused_in_one_line(tmp_path, capsys):
+    """A CSV whose lines end in CR only gave a 20-line traceback (_csv.Error)."""
+    from hexapod_model.cli.main import main
+
+    rows = rows_of(tmp_path, "l1,l2,l3,l4,l5,l6\r0,0,0,0,0,0\r1,2,3,4,5,6\r")
+    assert rows.values.tolist() == [[0] * 6, [1, 2, 3, 4, 5, 6]] and rows.lines.tolist() == [2, 3]
+    mixed = tmp_path / "m.csv"  # CR alone inside a file of LF lines: refused, named
+    mixed.write_bytes(b"l1,l2,l3,l4,l5,l6\r0,0,0,0,0,0\n0,0,0,0,0,0\n")
+    with pytest.raises(hm.InputError, match="line 1: a line ends in CR .* save the file with LF or CRLF"):
+        with open_table(mixed) as table:
+            table.read(LENGTH_COLUMNS)
+    assert main(["fk", "reference", str(mixed), "-o", str(tmp_path / "o.csv")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "a line ends in CR" in err[0] and "Traceback" not in err[0]
+    cr = tmp_path / "cr.csv"
+    cr.write_bytes(b"l1,l2,l3,l4,l5,l6\r0,0,0,0,0,0\r")
+    assert main(["fk", "reference", str(cr), "-o", str(tmp_path / "o.csv")]) == 0
+
+
 def test_quoted_cell_over_two_lines_counts_from_its_first(tmp_path):
     text = 'a,l1\n"x\ny",1\n2\n'
     rows = rows_of(tmp_path, text, columns=["l1"])

@@ -73,7 +73,8 @@ def test_forward_batch_rows_match_forward(name):
         expected = per_row(lambda x, g, check, m=max_iter: hexa.forward(x, g, max_iter=m, check=check), rows)
         assert_rows_match(result, expected)
         statuses |= set(result.status)
-    assert {"converged", "invalid_input", "max_iterations"} <= statuses
+    assert {"converged", "invalid_input"} <= statuses
+    assert "max_iterations" in statuses or name == "3-6"  # 3-6: every assembly from the resultant instead
 
 
 @pytest.mark.parametrize("name", PRESET_NAMES)

@@ -57,7 +57,7 @@ def test_compiled_follower_matches_python_follower(name, monkeypatch):
     statuses = set()
     for a, b in zip(python, compiled):
         assert (a.status, a.flags, a.det_sign, a.iterations) == (b.status, b.flags, b.det_sign, b.iterations)
-        if a.status == "max_iterations":  # the 20th iterate of a diverging Newton: rounding grows
+        if not a.closed and a.status != "no_assembly":  # the 20th iterate of a diverging Newton: rounding grows
             assert_same_message(a.message, b.message, numbers=False)
             continue
         assert_same_message(a.message, b.message)

@@ -221,6 +221,7 @@ def test_one_call_forward_equals_the_python_path(name):
         attempt = solver.certified_forward(hexa._start(guess), joints, 1e-10, 50, sign, limits, hexa._home_h)
         one_call = len(attempt) == 6  # converged certified: (q, pose, jacobian, iterations, residual, bad)
         slow = hexa._finish(solver, hexa._start(guess), 1e-10, 50, False, (joints, sign, guess is not None))
+        slow = hexa._reviewed(slow, readings, guess, False)  # a 3-6 hexapod's every assembly (forward does it)
         q_aug, state = solver.q_aug.copy(), (solver.sign, solver.det_sign, solver.certified)
         kappa = solver.kappa
         fast = hexa.forward(readings, guess, tol=1e-10, max_iter=50, check=False)
@@ -259,7 +260,7 @@ def test_one_call_inverse_equals_the_python_path(name):
         for max_iter in (50, 1):
             q0 = hexa._start(None)
             hexa._set_pose(q0, T)
-            slow = hexa._solution(Outcome(*solver.run(q0, 1e-10, max_iter)), False)
+            slow = hexa._solution(Outcome(*solver.run(q0, 1e-10, max_iter)), False, max_iter=max_iter)
             q_aug, theta, state = solver.q_aug.copy(), solver.theta, (solver.det_sign, solver.certified)
             fast = hexa.inverse(T, tol=1e-10, max_iter=max_iter, check=False)
             assert_same_solution(fast, slow)

@@ -12,7 +12,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
 from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.kinematics.newton.solver import NewtonSolver
-from hexapod_model.kinematics.rotations import rotation_angle
+from hexapod_model.kinematics.rotations import pose_distance, rotation_angle
 
 from ..conftest import PRESET_NAMES, hexapod
 
@@ -57,7 +57,11 @@ def test_round_trip_pose_lengths_pose_on_1000_box_poses(name):
     steps = []
     for T in poses:
         back = hexa.inverse(T)  # whole box is inside the limits of every preset
-        sol = hexa.forward(back.lengths)  # cold start from home, certified
+        sol = hexa.forward(back.lengths, check=False)  # cold start from home, certified
+        if sol.status == "ambiguous_assembly":  # 3-6: another assembly within the limits about as near home
+            assert name == "3-6" and any(pose_distance(P, T, 0.2) < 1e-9 for P in sol.candidates)
+            continue
+        assert sol.converged
         worst_p = max(worst_p, np.linalg.norm(sol.pose[:3, 3] - T[:3, 3]))
         worst_r = max(worst_r, rotation_angle(sol.pose[:3, :3], T[:3, :3]))
         worst_l = max(worst_l, np.abs(hexa.inverse(sol.pose, guess=sol).lengths - back.lengths).max())

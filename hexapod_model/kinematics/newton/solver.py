@@ -22,10 +22,20 @@ import pinocchio as pin
 from ...description.model import ClosedLoopModel
 from .kernel_sets import KernelSet, kernel_set
 
-STATUSES = ("converged", "ambiguous_assembly", "max_iterations", "singular", "out_of_limits", "invalid_input")
+STATUSES = (
+    "converged",
+    "uncertified",
+    "ambiguous_assembly",
+    "max_iterations",
+    "not_found",
+    "no_assembly",
+    "singular",
+    "out_of_limits",
+    "invalid_input",
+)
 SINGULAR_PIVOT_RATIO = 1e-13
 MAX_STEP = 0.5  # rad or m: largest entry of one Newton step (cold starts far from the solution)
-THETA_MAX = 0.25  # largest Newton contraction |dx_k+1| / |dx_k| of a certified solve (Kantorovich)
+THETA_MAX = 0.25  # largest Newton contraction |dx_k+1| / |dx_k| of a checked solve (an estimate, not a bound)
 _THETA_FLOOR, _ONE_STEP = 1e-9, 1e-6  # rounding-level step (no contraction); largest step a solve may end on
 
 
@@ -37,14 +47,16 @@ class Solution:
         pose: (4, 4) homogeneous transform base -> platform (metres).
         q: Pinocchio configuration of the URDF model (``nq``), free-flyer part relative to home.
         lengths: (6,) measured-joint readings, leg order (metres, zero at home).
-        status: one of ``STATUSES``.
+        status: one of ``STATUSES`` (docs/solver.md says what each means and what to do).
         iterations: Newton steps taken.
         residual: final closure residual norm (metres and radians mixed).
         jacobian: reduced constraint Jacobian at the final configuration (rows: closures,
             columns: free velocities), or ``None`` if the input was rejected.
         message: human-readable detail when ``status != "converged"`` or a flag is set.
         flags: ``("near_singular",)`` for a direct-kinematics result close to a singularity
-            (another assembly may be close; the CLI writes the flag instead of ``ok``).
+            (another assembly may be close; the CLI writes the flag instead of ``ok``); always
+            with status ``uncertified``. ``("not_closed",)`` for an ``out_of_limits`` result whose
+            iteration stopped outside the limits before closing the loops (``q`` closes nothing).
         candidates: with status ``ambiguous_assembly``, the (4, 4) poses of the assemblies
             found (``pose`` is the first).
         det_sign: sign of the direct-kinematics Jacobian's determinant at the result (0: none).
@@ -64,8 +76,21 @@ class Solution:
 
     @property
     def converged(self) -> bool:
-        """True for a closed configuration within all joint limits (FK: the certified assembly)."""
+        """True for a closed configuration within all joint limits (FK: the certified assembly).
+
+        Never for ``uncertified``, ``ambiguous_assembly`` or any other status.
+        """
         return self.status == "converged"
+
+    @property
+    def closed(self) -> bool:
+        """True when :attr:`q` closes every loop to the solve's tolerance (whatever its limits or assembly).
+
+        ``converged``, ``uncertified``, ``ambiguous_assembly`` and ``out_of_limits`` without the
+        flag ``not_closed``.
+        """
+        closing = ("converged", "uncertified", "ambiguous_assembly", "out_of_limits")
+        return self.status in closing and "not_closed" not in self.flags
 
     @property
     def condition_number(self) -> float:

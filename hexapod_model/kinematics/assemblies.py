@@ -1,0 +1,201 @@
+"""Every assembly for a set of readings, where it can be had: the global answer of direct kinematics.
+
+:meth:`.hexapod.Hexapod.forward` returns the assembly connected to its start. Where the question
+is which assembly the platform is in (a cold start after power-on), :meth:`.hexapod.Hexapod.assemblies`
+answers it globally:
+
+* **3-6 hexapods** (legs meeting in pairs at three platform points, e.g. preset ``3-6``): the
+  resultant polynomial of :mod:`.three_six` gives *every* real assembly (at most 16, 1-2 ms);
+  the set is complete (``complete``). :meth:`.hexapod.Hexapod.forward` uses it by itself
+  (:func:`review`): a result (cold, or warm with a reading more than ``WARM_CHECK`` base radii from the
+  guess's) stays ``converged`` only when no other assembly within the stroke and joint limits
+  lies within ``MARGIN`` times its distance from the start (home or the guess; poses compared
+  by :func:`.rotations.pose_distance`, rotations times the base radius); otherwise it is
+  ``ambiguous_assembly`` with all of them as candidates, the connected one first. Readings the
+  polynomial has no real root for are ``no_assembly``; when Newton found nothing or could not
+  follow the path from home, the one assembly within the limits is returned as ``converged``
+  (several: ``ambiguous_assembly``). Warm starts closer than ``WARM_CHECK`` base radii (a
+  tracker's samples) keep the connected assembly unchecked. Every distance here is relative to
+  the base radius, so a hexapod scaled by any factor gets the same answers. (At home's readings the ``3-6`` preset has
+  four assemblies within its limits: home and three tilted by about 85 deg, 60 mm lower.)
+* **other hexapods**: a multi-start search: plain Newton from home and from ``starts``
+  configurations of random poses (translation within the largest stroke, roll, pitch and yaw
+  within ``SAMPLE_ANGLE``); every distinct closed configuration it reaches. It finds what its
+  starts lead to and **proves nothing** about the assemblies it did not reach (``complete`` is
+  False): more starts find more of them, at ~30 us a start.
+
+Each assembly is checked against the stroke and joint limits by inverse kinematics of its
+pose (the leg joints of an offset-Cardan leg follow from the pose); those outside are counted.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import GeometryError, WorkspaceError
+from .newton.solver import Solution
+from .rotations import pose_distance, rpy_to_matrix
+from .three_six import ThreeSixFK
+
+Hexapod = Any  # a hexapod.Hexapod (this module is below it)
+
+SAME = 5e-7  # times the base radius (1e-7 m on the presets): two poses closer than this are one assembly
+SAMPLE_ANGLE = np.radians(40.0)  # rad: roll, pitch, yaw range of the multi-start search's poses
+DEFAULT_STARTS = 64  # starts of the multi-start search besides home
+MARGIN = 3.0  # a result competes with the assemblies within this many times its distance from the start
+WARM_CHECK = 5e-3  # times the base radius (1 mm on the presets): a warm start farther in a reading is checked
+
+
+@dataclass(frozen=True)
+class Assemblies:
+    """The assemblies found for one set of readings.
+
+    Attributes:
+        solutions: the assemblies within the stroke and joint limits, each a converged
+            :class:`Solution` of inverse kinematics of its pose, nearest the reference first.
+        outside: how many real assemblies found lie outside the stroke or joint limits.
+        complete: True when ``solutions`` are provably all of them (the 3-6 resultant), False
+            for the multi-start search.
+        method: ``"resultant"`` or ``"multi-start (N starts)"``.
+    """
+
+    solutions: tuple[Solution, ...]
+    outside: int
+    complete: bool
+    method: str
+
+    @property
+    def poses(self) -> tuple[np.ndarray, ...]:
+        """The (4, 4) base -> platform poses (m) of :attr:`solutions`."""
+        return tuple(s.pose for s in self.solutions)
+
+
+class AssemblyFinder:
+    """The global direct kinematics of one hexapod (see the module doc)."""
+
+    def __init__(self, hexa: Hexapod):
+        self.hexa = hexa
+        self.exact: ThreeSixFK | None = None
+        if hexa.geometry is not None:
+            try:
+                self.exact = ThreeSixFK(hexa.geometry)
+            except GeometryError:  # not a 3-6 layout
+                self.exact = None
+        self.length = hexa.base_radius  # m: rotations count times this in pose distances
+
+    def find(
+        self, readings: np.ndarray, reference: np.ndarray | None = None, starts: int = DEFAULT_STARTS, seed: int = 0
+    ) -> Assemblies:
+        """Every assembly found for ``readings`` (m, checked), nearest ``reference`` (4x4, default home) first."""
+        if self.exact is not None:
+            try:
+                poses = [s.pose for s in self.exact.solve_all(self.hexa.joints_of(readings))]
+            except WorkspaceError:  # two legs of a pair cannot meet: no assembly
+                poses = []
+            method, complete = "resultant", True
+        else:
+            poses = self._search(readings, starts, seed)
+            method, complete = f"multi-start ({starts} starts)", False
+        inside: list[Solution] = []
+        for T in poses:
+            sol = self.hexa.inverse(T, check=False)
+            if sol.converged and np.max(np.abs(sol.lengths - readings)) <= 5e-9 * self.length:
+                inside.append(sol)
+        ref = self.hexa.home_pose if reference is None else reference
+        inside.sort(key=lambda s: pose_distance(ref, s.pose, self.length))
+        return Assemblies(tuple(inside), len(poses) - len(inside), complete, method)
+
+    def _search(self, readings: np.ndarray, starts: int, seed: int) -> list[np.ndarray]:
+        """Poses of the distinct closed configurations plain Newton reaches from home and ``starts`` random poses."""
+        hexa = self.hexa
+        solver = hexa._solver(hexa._held_forward)
+        pq = hexa.closed_loop.prismatic_q
+        joints = hexa.joints_of(readings)
+        rng = np.random.default_rng(seed)
+        span = float(np.max(np.abs(hexa.stroke)))
+        configurations = [hexa.q_home]
+        for _ in range(starts):
+            T = hexa.home_pose.copy()
+            T[:3, 3] += rng.uniform(-span, span, 3)
+            T[:3, :3] = T[:3, :3] @ rpy_to_matrix(*rng.uniform(-SAMPLE_ANGLE, SAMPLE_ANGLE, 3))
+            start = hexa.inverse(T, check=False)
+            if np.all(np.isfinite(start.q)) and start.closed:
+                configurations.append(start.q)
+        found: list[np.ndarray] = []
+        for q in configurations:
+            q0 = q.copy()
+            q0[pq] = joints
+            q1, status = solver.run(q0, 1e-12, 30)[:2]
+            if status != "converged":
+                continue
+            T = hexa.pose_of(q1)
+            if all(pose_distance(T, P, self.length) > SAME * self.length for P in found):
+                found.append(T)
+        return found
+
+
+def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: Any) -> Solution:
+    """A 3-6 hexapod's direct-kinematics result checked against every assembly (see the module doc)."""
+    if finder.exact is None or sol.status == "invalid_input":
+        return sol
+    hexa, cold = finder.hexa, guess is None
+    if not cold and sol.status != "converged":
+        return sol  # warm failures keep their own status (the tracker judges its passages)
+    q_guess = None if cold else np.asarray(getattr(guess, "q", guess), dtype=float)
+    if q_guess is not None and np.max(np.abs(hexa.lengths_of(q_guess) - readings)) <= WARM_CHECK * finder.length:
+        return sol
+    reference = hexa.home_pose if q_guess is None else hexa.pose_of(q_guess)
+    found = finder.find(readings, reference)
+    within, length = found.solutions, finder.length
+    same = SAME * length
+    if not within:
+        if found.outside == 0:
+            why = "the resultant polynomial of the 3-6 platform has no real root for these readings"
+            return _replace(sol, "no_assembly", f"no real assembly: {why}", ("not_closed",) if not sol.closed else ())
+        msg = f"all {found.outside} real assemblies for these readings lie outside the stroke or joint limits"
+        return _replace(sol, "out_of_limits", msg, sol.flags if sol.status == "out_of_limits" else ("not_closed",))
+    if sol.status == "converged":
+        d = pose_distance(reference, sol.pose, length)
+        rivals = [s for s in within if pose_distance(s.pose, sol.pose, length) > same]
+        if not any(pose_distance(reference, s.pose, length) <= MARGIN * d for s in rivals):
+            return sol  # clearly the assembly nearest the start
+        first = [sol]
+    else:
+        first = []
+        if len(within) == 1:  # Newton missed it or could not certify it; it is the only one within the limits
+            only = within[0]
+            msg = "the only assembly within the stroke and joint limits (resultant polynomial of the 3-6 platform)"
+            return Solution(only.pose, only.q, only.lengths, "converged", sol.iterations, 0.0, only.jacobian, msg)
+    ordered = first + [s for s in within if all(pose_distance(s.pose, f.pose, length) > same for f in first)]
+    start = "home" if cold else "the guess"
+    msg = (
+        f"{len(ordered)} assemblies within the stroke and joint limits fit these readings (resultant polynomial "
+        f"of the 3-6 platform), another as near {start} as {MARGIN:g} times the nearest; "
+        + (f"the one connected to {start} is first" if first else f"none is certified as connected to {start}")
+    )
+    if sol.status == "ambiguous_assembly":
+        msg = f"{sol.message}; {msg}"
+    head = ordered[0]
+    return Solution(
+        head.pose,
+        head.q,
+        head.lengths,
+        "ambiguous_assembly",
+        sol.iterations,
+        head.residual,
+        head.jacobian,
+        msg,
+        (),
+        tuple(s.pose for s in ordered),
+        sol.det_sign if first else 0,
+    )
+
+
+def _replace(sol: Solution, status: str, message: str, flags: tuple[str, ...]) -> Solution:
+    """``sol`` with another status, message and flags."""
+    return Solution(
+        sol.pose, sol.q, sol.lengths, status, sol.iterations, sol.residual, sol.jacobian, message, flags, (), 0
+    )

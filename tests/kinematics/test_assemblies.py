@@ -1,0 +1,112 @@
+"""Every assembly accounted for where it can be: the 3-6 resultant in forward(), Hexapod.assemblies."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import hexapod_model as hm
+from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.kinematics.rotations import pose_distance
+
+from ..conftest import hexapod
+
+SAME = 1e-6  # m, rotations times 0.2 m
+
+
+def _has(poses, T) -> bool:
+    return any(pose_distance(P, T, 0.2) < SAME for P in poses)
+
+
+def test_cold_results_another_assembly_also_fits_are_ambiguous_with_every_assembly():
+    """Readings 0.1 % short of a fold (+-100 mm / +-40 deg): the assembly connected to home and the
+    one that produced the readings are 3 to 4 mm apart; the first was returned converged."""
+    hexa = hexapod("3-6")
+    poses = box_poses(hexa.home_pose, 600, seed=0, translation=0.1, angle_deg=40)
+    for i in (13, 544):
+        readings = hexa.inverse(poses[i]).lengths
+        sol = hexa.forward(readings, check=False)
+        assert sol.status == "ambiguous_assembly" and not sol.converged
+        every = hexa.assemblies(readings)
+        assert every.complete and len(every.solutions) >= 2
+        assert len(sol.candidates) == len(every.solutions) and all(_has(sol.candidates, P) for P in every.poses)
+        assert _has(sol.candidates, poses[i])  # the generating pose is a candidate
+        assert pose_distance(sol.candidates[0], poses[i], 0.2) > 1e-3  # the connected one first, 1-5 mm away
+        with pytest.raises(hm.AssemblyError, match="^ambiguous_assembly: .*resultant polynomial"):
+            hexa.forward(readings)
+
+
+def test_blocked_paths_list_every_assembly_within_the_limits():
+    """+-150 mm / +-60 deg: the readings path from home meets a fold; two of Newton's candidate lists
+    missed the assembly a tracker reaches."""
+    hexa = hexapod("3-6")
+    poses = box_poses(hexa.home_pose, 400, seed=1, translation=0.15, angle_deg=60)
+    for i in (83, 244, 250, 335):
+        readings = hexa.inverse(poses[i]).lengths
+        sol = hexa.forward(readings, check=False)
+        every = hexa.assemblies(readings)
+        if len(every.solutions) == 1:  # the only one within the limits: the global answer
+            assert sol.converged and "the only assembly" in sol.message
+            assert pose_distance(sol.pose, poses[i], 0.2) < SAME
+            continue
+        assert sol.status == "ambiguous_assembly" and all(_has(sol.candidates, P) for P in every.poses)
+        assert _has(sol.candidates, poses[i])
+
+
+def test_a_cold_result_clearly_nearest_home_stays_converged():
+    hexa = hexapod("3-6")
+    every = hexa.assemblies(np.zeros(6))
+    assert every.complete and len(every.solutions) == 4  # home and three tilted by ~85 deg
+    sol = hexa.forward(np.zeros(6))
+    assert sol.converged and pose_distance(sol.pose, hexa.home_pose, 0.2) < 1e-12
+    T = box_poses(hexa.home_pose, 1, seed=5, translation=0.01, angle_deg=3)[0]
+    assert pose_distance(hexa.forward(hexa.inverse(T).lengths).pose, T, 0.2) < 1e-9
+
+
+def test_readings_without_any_real_assembly_are_no_assembly():
+    hexa = hexapod("3-6")
+    rng = np.random.default_rng(0)
+    for _ in range(10):
+        readings = rng.uniform(hexa.stroke[:, 0], hexa.stroke[:, 1])
+        every = hexa.assemblies(readings)
+        if every.solutions or every.outside:
+            continue
+        sol = hexa.forward(readings, check=False)
+        assert sol.status == "no_assembly" and "no real assembly" in sol.message and not sol.closed
+        with pytest.raises(hm.WorkspaceError, match="^no_assembly: "):
+            hexa.forward(readings)
+        return
+    pytest.fail("no readings without an assembly drawn")
+
+
+def test_warm_starts_20_mm_away_with_the_truth_as_near_are_ambiguous():
+    """Warm starts 20 mm from the generating pose whose connected assembly is another one, about as
+    far from the guess (a fold between them): returned converged before."""
+    hexa = hexapod("3-6")
+    rng = np.random.default_rng(1)
+    checked = 0
+    for i, T in enumerate(box_poses(hexa.home_pose, 1500, 0, 0.1, 40.0)):
+        truth = hexa.inverse(T, check=False)
+        if not truth.converged:
+            continue
+        d = rng.normal(size=3)
+        if i not in (75, 406, 568, 632, 847):
+            continue
+        moved = T.copy()
+        moved[:3, 3] += 0.02 * d / np.linalg.norm(d)
+        sol = hexa.forward(truth.lengths, guess=hexa.inverse(moved), check=False)
+        assert sol.status == "ambiguous_assembly" and _has(sol.candidates, T)
+        checked += 1
+    assert checked == 5
+
+
+def test_the_multi_start_search_finds_the_generating_pose_and_says_it_is_not_complete():
+    hexa = hexapod("reference")
+    for T in box_poses(hexa.home_pose, 3, seed=7):
+        every = hexa.assemblies(hexa.inverse(T).lengths, starts=16)
+        assert not every.complete and every.method == "multi-start (16 starts)"
+        assert _has(every.poses, T)
+        for s in every.solutions:
+            np.testing.assert_allclose(s.lengths, hexa.inverse(T).lengths, atol=1e-9)
+    with pytest.raises(hm.InputError, match="starts"):
+        hexa.assemblies(np.zeros(6), starts=-1)
