@@ -34,7 +34,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
+from ..description.geometry import HexapodGeometry, LegGeometry
 from ..exceptions import GeometryError, WorkspaceError
 from .newton.solver import Solution
 from .rotations import pose_distance, rpy_to_matrix
@@ -73,15 +75,55 @@ class Assemblies:
         return tuple(s.pose for s in self.solutions)
 
 
+def three_six_geometry(hexa: Hexapod) -> HexapodGeometry | None:
+    """The 3-6 layout of a hexapod loaded without its geometry (a URDF or MJCF file), or None.
+
+    A 3-6 hexapod here has point (``3d``) closures whose platform anchors coincide for legs
+    ``2k``, ``2k+1``, and a home pose that is a pure translation along z. Each leg's base point is
+    its first joint's origin at home (the universal joint's centre), its platform point the
+    anchor frame's position in the platform frame. The derived layout is accepted only when the
+    resultant's assemblies at home's readings include the model's home pose (1e-9 base radii),
+    so a layout the model does not follow is never used.
+    """
+    clm = hexa.closed_loop
+    if any(c.kind != "3d" for c in clm.closures):
+        return None
+    m = hexa.model
+    R, t = clm.home.rotation, clm.home.translation
+    if not np.allclose(R, np.eye(3), atol=1e-12) or np.hypot(t[0], t[1]) > 1e-12 * hexa.base_radius:
+        return None
+    data = m.createData()
+    pin.forwardKinematics(m, data, hexa.q0)
+    legs = []
+    for i, leg in enumerate(clm.legs):
+        base = data.oMi[leg.joints[0]].translation
+        anchor = m.frames[leg.anchor_frame].placement.translation
+        lo, hi = (float(v) for v in hexa.stroke[i])
+        b = (float(base[0]), float(base[1]), float(base[2]))
+        a = (float(anchor[0]), float(anchor[1]), float(anchor[2]))
+        legs.append(LegGeometry(base_anchor=b, platform_anchor=a, stroke=(lo, hi)))
+    try:
+        geometry = HexapodGeometry(
+            name=m.name or "urdf", joint_type="spherical", legs=tuple(legs), home_height=float(t[2])
+        )
+        exact = ThreeSixFK(geometry)
+        homes = [s.pose for s in exact.solve_all(np.zeros(6))]
+    except (GeometryError, WorkspaceError):
+        return None
+    near = [pose_distance(hexa.home_pose, T, hexa.base_radius) for T in homes]
+    return geometry if near and min(near) <= 1e-9 * hexa.base_radius else None
+
+
 class AssemblyFinder:
     """The global direct kinematics of one hexapod (see the module doc)."""
 
     def __init__(self, hexa: Hexapod):
         self.hexa = hexa
         self.exact: ThreeSixFK | None = None
-        if hexa.geometry is not None:
+        geometry = hexa.geometry if hexa.geometry is not None else three_six_geometry(hexa)
+        if geometry is not None:
             try:
-                self.exact = ThreeSixFK(hexa.geometry)
+                self.exact = ThreeSixFK(geometry)
             except GeometryError:  # not a 3-6 layout
                 self.exact = None
         self.length = hexa.base_radius  # m: rotations count times this in pose distances

@@ -71,21 +71,23 @@ def assert_same_model(a: hm.Hexapod, b: hm.Hexapod) -> None:
 def worst_disagreement(name: str, n: int, seed: int) -> tuple[int, dict[str, float]]:
     """IK and FK of ``n`` random box poses through the URDF and the MJCF path: solves, worst gaps."""
     urdf, mjcf = hexapod(name), mjcf_hexapod(name)
-    worst = dict.fromkeys(("ik lengths", "ik q", "fk pose", "fk q"), 0.0)
+    worst = dict.fromkeys(("ik lengths", "ik q", "fk pose", "fk q", "candidates"), 0.0)
     solved = 0
     for T in box_poses(urdf.home_pose, n, seed=seed):
         a, b = urdf.inverse(T, check=False), mjcf.inverse(T, check=False)
         assert a.status == b.status
         if not a.converged:
             continue
-        fa, fb = urdf.forward(a.lengths), mjcf.forward(a.lengths)
+        fa, fb = urdf.forward(a.lengths, check=False), mjcf.forward(a.lengths, check=False)
+        assert fa.status == fb.status  # (3-6: ambiguous_assembly alike, the layout read off the MJCF)
+        assert len(fa.candidates) == len(fb.candidates)
         solved += 1
-        for key, x, y in (
-            ("ik lengths", a.lengths, b.lengths),
-            ("ik q", a.q, b.q),
-            ("fk pose", fa.pose, fb.pose),
-            ("fk q", fa.q, fb.q),
-        ):
+        pairs = [("ik lengths", a.lengths, b.lengths), ("ik q", a.q, b.q)]
+        if fa.converged:
+            pairs += [("fk pose", fa.pose, fb.pose), ("fk q", fa.q, fb.q)]
+        # candidates come from the 3-6 resultant of each model's own layout (read to 1e-13 m off the file)
+        pairs += [("candidates", np.asarray(x), np.asarray(y)) for x, y in zip(fa.candidates, fb.candidates)]
+        for key, x, y in pairs:
             worst[key] = max(worst[key], float(np.abs(x - y).max()))
     return solved, worst
 
@@ -94,6 +96,7 @@ def worst_disagreement(name: str, n: int, seed: int) -> tuple[int, dict[str, flo
 def test_pinocchio_mjcf_loader_gives_the_urdf_kinematics(name):
     solved, worst = worst_disagreement(name, 200, seed=11)
     assert solved >= 190, solved  # the box is inside every preset's workspace but for a few corners
+    assert worst.pop("candidates") < 1e-10, worst  # m and rotation-matrix entries
     assert max(worst.values()) < 1e-12, worst
 
 
@@ -102,6 +105,7 @@ def test_pinocchio_mjcf_loader_gives_the_urdf_kinematics(name):
 def test_pinocchio_mjcf_loader_on_1000_poses(name):
     solved, worst = worst_disagreement(name, 1000, seed=12)
     assert solved >= 950, solved
+    assert worst.pop("candidates") < 1e-10, worst  # m and rotation-matrix entries
     assert max(worst.values()) < 1e-12, worst
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -11,6 +13,7 @@ from hexapod_model.kinematics.rotations import pose_distance
 
 from ..conftest import hexapod
 
+ROOT = Path(__file__).resolve().parents[2]
 SAME = 1e-6  # m, rotations times 0.2 m
 
 
@@ -110,3 +113,28 @@ def test_the_multi_start_search_finds_the_generating_pose_and_says_it_is_not_com
             np.testing.assert_allclose(s.lengths, hexa.inverse(T).lengths, atol=1e-9)
     with pytest.raises(hm.InputError, match="starts"):
         hexa.assemblies(np.zeros(6), starts=-1)
+
+
+@pytest.mark.parametrize("kind", ["urdf", "mjcf"])
+def test_a_3_6_hexapod_loaded_from_a_file_checks_every_assembly_as_the_preset_does(kind, tmp_path):
+    """A URDF or MJCF file carries no geometry: the 3-6 layout is read off the model, so the same
+    readings are ambiguous_assembly whatever the hexapod was loaded from (they came back converged)."""
+    from hexapod_model.description.mjcf import geometry_to_mjcf
+    from hexapod_model.description.urdf import geometry_to_urdf
+
+    geometry = hm.get_preset("3-6")
+    path = tmp_path / f"sensor.{'urdf' if kind == 'urdf' else 'xml'}"
+    path.write_text(geometry_to_urdf(geometry) if kind == "urdf" else geometry_to_mjcf(geometry))
+    loaded, preset = hm.Hexapod.load(path, compiled=False), hexapod("3-6")
+    assert loaded.geometry is None
+    poses = box_poses(preset.home_pose, 600, seed=0, translation=0.1, angle_deg=40)
+    readings = preset.inverse(poses[13]).lengths
+    a, b = loaded.forward(readings, check=False), preset.forward(readings, check=False)
+    assert a.status == b.status == "ambiguous_assembly"
+    assert len(a.candidates) == len(b.candidates) and all(_has(a.candidates, P) for P in b.candidates)
+    assert loaded.assemblies(readings).complete
+
+
+def test_a_spherical_hexapod_from_a_file_is_not_taken_for_a_3_6():
+    hexa = hm.Hexapod.from_urdf(ROOT / "urdf" / "spherical.urdf", compiled=False)
+    assert not hexa.assemblies(np.zeros(6), starts=4).complete
