@@ -21,16 +21,19 @@ from __future__ import annotations
 
 import logging
 import math
+from dataclasses import replace
 
 import numpy as np
 import pinocchio as pin
 
 from ..kinematics.hexapod import Hexapod
 from .config import FixtureConfig
+from .guidance import deviation, within
 from .pose import pose_record, quaternion
 from .solve import PoseSolver, SolveOutcome
 from .state import LockDetector, StuckDetector
 from .store import LockEvent
+from .targets import Target
 
 log = logging.getLogger(__name__)
 RECORD_KEYS = (
@@ -92,6 +95,9 @@ class FixtureCycle:
         self._check_moved = self.recovered is not None
         initial = None if self.recovered is None else self.recovered.q
         self.solver = PoseSolver(hexa, cfg.noise, cfg.predictor, initial, cfg.confirm_samples)
+        #: the changeover target (set by :class:`~hexapod_model.service.changeover.Changeover`): a lock
+        #: pose within its tolerance is stored naming it
+        self.target: Target | None = None
         #: the lock to commit: the service takes it, stores it and calls :meth:`lock_stored`
         self.pending_lock: tuple[int, LockEvent] | None = None
         self.last: dict = self._record(t0, "no_data", [], None)
@@ -220,6 +226,11 @@ class FixtureCycle:
             return
         quat = _quaternion(sol.pose[:3, :3])
         event = LockEvent(self.cfg.name, t, sol.pose[:3, 3].copy(), quat, mean, "ok", self.geometry_hash, sol.q)
+        target, u = self.target, outcome.uncertainty
+        if target is not None and u is not None:
+            sigma = {"translation_mm": u.translation * 1e3, "rotation_deg": math.degrees(u.rotation)}
+            if within(deviation(sol.pose, target.pose), sigma, target.tolerance):
+                event = replace(event, target_id=target.id, recipe=target.recipe)
         self.lock.lock(t, mean)
         self._episode += 1
         self.pending_lock = (self._episode, event)

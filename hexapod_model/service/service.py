@@ -23,6 +23,7 @@ from typing import Any
 
 import can
 
+from .changeover import Changeover
 from .config import ServiceConfig, geometry_hash
 from .cycle import FixtureCycle
 from .errors import ServiceError
@@ -81,6 +82,8 @@ class FixtureService:
         self.cycles: dict[str, FixtureCycle] = {}
         self.endpoint: HttpEndpoint | None = None
         self.store: Store | None = None
+        #: targets, recipes and guidance (:class:`~hexapod_model.service.changeover.Changeover`), once started
+        self.changeover: Changeover | None = None
         self.writer: StoreWriter | None = None
         self.frames = self.unknown_frames = 0
         self._started = 0.0
@@ -102,6 +105,7 @@ class FixtureService:
                 cycle = FixtureCycle(f, hexa, geometry_hash(hexa), self.store.last_lock(f.name), self._started)
                 self.cycles[f.name] = cycle
                 log.info("fixture %s: %s", f.name, cycle.recovery)
+            self.changeover = Changeover(self.store, self.hexapods, self.cycles)
         except BaseException:
             self._close()
             raise
