@@ -6,6 +6,7 @@ import argparse
 import contextlib
 import dataclasses
 import logging
+import os
 import signal
 import sys
 import threading
@@ -43,20 +44,36 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run_simulate)
 
 
+class _OneLine(logging.Formatter):
+    """Log lines without tracebacks: an exception is its type and message on the same line."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        if record.exc_info and record.exc_info[1] is not None:
+            exc = record.exc_info[1]
+            record = logging.makeLogRecord({**record.__dict__, "exc_info": None, "exc_text": None})
+            record.msg, record.args = f"{record.getMessage()}: {type(exc).__name__}: {exc}", None
+        return super().format(record)
+
+
 @contextlib.contextmanager
 def _logging(command: str, level: str):
-    """The package's log records as ``hexapod COMMAND: LEVEL message`` lines on stderr, for the command's run."""
+    """The package's (and the HTTP server's) log records as ``hexapod COMMAND: LEVEL message`` lines on stderr."""
     handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter(f"hexapod {command}: %(levelname)s %(message)s"))
-    root = logging.getLogger("hexapod_model")
-    saved_handlers, saved_level = root.handlers[:], root.level
-    root.handlers[:] = [handler]
-    root.setLevel(level)
+    handler.setFormatter(_OneLine(f"hexapod {command}: %(levelname)s %(message)s"))
+    saved = []
+    for name, lvl in (("hexapod_model", level), ("uvicorn", "WARNING" if level != "DEBUG" else level)):
+        logger = logging.getLogger(name)
+        saved.append((logger, logger.handlers[:], logger.level, logger.propagate))
+        logger.handlers[:] = [handler]
+        logger.setLevel(lvl)
+        logger.propagate = False
     try:
         yield
     finally:
-        root.handlers[:] = saved_handlers
-        root.setLevel(saved_level)
+        for logger, handlers, old_level, propagate in saved:
+            logger.handlers[:] = handlers
+            logger.setLevel(old_level)
+            logger.propagate = propagate
 
 
 def _stop_on_sigterm(stop: threading.Event) -> None:
@@ -78,14 +95,11 @@ def run_serve(args: argparse.Namespace) -> int:
 
 
 def _serve(args: argparse.Namespace) -> int:
-    import can
-
-    from ..service import FixtureService, ServiceError, Simulator, load_config, load_simulation
+    from ..service import FixtureService, load_config
 
     config = load_config(args.config)
     if args.simulate:
         config = simulated(config)
-        sim_config = load_simulation(args.simulate, config)
     stop = threading.Event()
     _stop_on_sigterm(stop)
     service = FixtureService(config)
@@ -93,20 +107,19 @@ def _serve(args: argparse.Namespace) -> int:
         service.subscribe(_jsonl_writer(stop, service.json_of))
     sim_bus = sim = None
     try:
-        service.start()
-        note("serve", f"fixtures {', '.join(service.names())}; Ctrl-C stops")
-        if args.simulate:
-            sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
-            sim = Simulator(config, sim_config, sim_bus, truth=1, hexapods=service.hexapods)
-            sim.start()
+        service.start(wait=False)  # HTTP answers 503 "starting" while the kernels compile
+        sim_config = None if not args.simulate else _load_simulation(args.simulate, config)
         deadline = None if args.duration is None else time.monotonic() + args.duration
+        while not service.ready:
+            if service.failure is not None:
+                raise service.failure
+            if stop.wait(0.05) or (deadline is not None and time.monotonic() >= deadline):
+                return 0
+        note("serve", f"fixtures {', '.join(service.names())}; Ctrl-C stops")
+        if sim_config is not None:
+            sim, sim_bus = _start_simulator(config, sim_config, service)
         if args.view:
-            from .live import live_view
-
-            name = args.fixture or service.names()[0]
-            if service.record(name) is None:
-                raise ServiceError(f"--fixture {name!r}: not a fixture of {args.config}")
-            live_view(service.hexapods[name], lambda: service.record(name), stop, deadline)
+            _view(args, service, stop, deadline)
         else:
             while not stop.wait(0.2):
                 if deadline is not None and time.monotonic() >= deadline:
@@ -119,8 +132,39 @@ def _serve(args: argparse.Namespace) -> int:
         if sim_bus is not None:
             sim_bus.shutdown()
         service.stop()
+        if service.preparing:  # stopped while the kernels compile: a compile cannot be interrupted
+            note("serve", "stopped while starting")
+            sys.stderr.flush()
+            os._exit(0)
     note("serve", f"stopped; store {config.store.path}")
     return 0
+
+
+def _load_simulation(path: str, config):
+    from ..service import load_simulation
+
+    return load_simulation(path, config)
+
+
+def _start_simulator(config, sim_config, service):
+    import can
+
+    from ..service import Simulator
+
+    sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    sim = Simulator(config, sim_config, sim_bus, truth=1, hexapods=service.hexapods)
+    sim.start()
+    return sim, sim_bus
+
+
+def _view(args: argparse.Namespace, service, stop: threading.Event, deadline: float | None) -> None:
+    from ..service import ServiceError
+    from .live import live_view
+
+    name = args.fixture or service.names()[0]
+    if service.record(name) is None:
+        raise ServiceError(f"--fixture {name!r}: not a fixture of {args.config}")
+    live_view(service.hexapods[name], lambda: service.record(name), stop, deadline)
 
 
 def _jsonl_writer(stop: threading.Event, json_of):

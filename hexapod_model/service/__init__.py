@@ -5,7 +5,7 @@ Stewart-Gough Platform with Modified Cardan Joints Using Integrated Absolute Lin
 §2 and §5.5): absolute encoders on the six legs report on a CAN bus, an edge computer collects
 the readings, the pose is computed, published to the robot cell and kept in non-volatile memory
 for recovery after shutdown. Here: python-can for the bus, the stream tracker for the poses,
-SQLite for the store, the standard library's HTTP server for clients. ``docs/service.md``.
+SQLite for the store, uvicorn + Starlette for HTTP clients. ``docs/service.md``.
 
 Public API::
 

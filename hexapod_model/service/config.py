@@ -10,6 +10,7 @@ The format, with every field and default: ``docs/service.md``; an example:
 from __future__ import annotations
 
 import hashlib
+import ipaddress
 import math
 import re
 import tomllib
@@ -25,6 +26,7 @@ from ..tracking.tracker import PREDICTORS
 from .cell import Cell, placement
 from .codec import FrameLayout, LegCodec
 from .errors import ConfigError, Table
+from .token import read_token
 
 INTERFACES = tuple(sorted(can.interfaces.VALID_INTERFACES))
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9_.-]+$")  # fixture names appear in URLs
@@ -50,10 +52,34 @@ class StoreConfig:
 
 @dataclass(frozen=True)
 class HttpConfig:
-    """Address of the HTTP endpoint; port 0 takes any free port (the service logs which)."""
+    """The HTTP endpoint: address, access and limits.
+
+    Attributes:
+        host: address to bind (``127.0.0.1``: this machine only).
+        port: port; 0 takes any free port (the service logs which).
+        token_file: file holding the bearer token (mode 600), or None.
+        token: the token read from ``token_file`` (never shown in a repr).
+        allow_unauthenticated_reads: GET endpoints answer without the token (writes still need it).
+        certfile: PEM certificate chain for HTTPS, with ``keyfile``; None: plain HTTP.
+        keyfile: PEM private key of ``certfile``.
+        max_connections: open connections served at once; more are answered ``503``.
+        idle_timeout: s an idle connection (or one that sends no request) is kept open.
+    """
 
     host: str = "127.0.0.1"
     port: int = 8765
+    token_file: Path | None = None
+    token: str | None = field(default=None, repr=False, compare=False)
+    allow_unauthenticated_reads: bool = False
+    certfile: Path | None = None
+    keyfile: Path | None = None
+    max_connections: int = 64
+    idle_timeout: float = 5.0
+
+    @property
+    def reads_need_token(self) -> bool:
+        """GET endpoints need the token: one is configured and reads are not opened."""
+        return self.token is not None and not self.allow_unauthenticated_reads
 
 
 @dataclass(frozen=True)
@@ -173,9 +199,7 @@ def config_from_dict(data: dict, source: str = "<dict>", folder: Path | None = N
         sample_interval=s.number("sample_interval", 0.0, 0.0, 3600.0),
     )
     s.finish()
-    h = top.table("http", {})
-    http = HttpConfig(host=h.text("host", "127.0.0.1"), port=h.integer("port", 8765, 0, 65535))
-    h.finish()
+    http = _http(top.table("http", {}), folder)
     items = top.take("fixtures")
     if not isinstance(items, list) or not items:
         raise top.error("fixtures", items, "expected one or more [[fixtures]] tables")
@@ -183,6 +207,58 @@ def config_from_dict(data: dict, source: str = "<dict>", folder: Path | None = N
     top.finish()
     _check_unique(fixtures, source)
     return ServiceConfig(bus, store, http, fixtures, source)
+
+
+def _http(h: Table, folder: Path) -> HttpConfig:
+    host = h.text("host", "127.0.0.1")
+    token_file = _path(h, "token_file", folder)
+    token = None if token_file is None else read_token(token_file, h.name("token_file"), h.source)
+    certfile, keyfile = _path(h, "certfile", folder), _path(h, "keyfile", folder)
+    if (certfile is None) != (keyfile is None):
+        key = "keyfile" if keyfile is None else "certfile"
+        raise h.error(key, None, "HTTPS needs both certfile and keyfile")
+    for key, p in (("certfile", certfile), ("keyfile", keyfile)):
+        if p is not None and not p.is_file():
+            raise h.error(key, str(p), "not a readable file")
+    http = HttpConfig(
+        host=host,
+        port=h.integer("port", 8765, 0, 65535),
+        token_file=token_file,
+        token=token,
+        allow_unauthenticated_reads=h.boolean("allow_unauthenticated_reads", False),
+        certfile=certfile,
+        keyfile=keyfile,
+        max_connections=h.integer("max_connections", 64, 1, 10_000),
+        idle_timeout=h.number("idle_timeout", 5.0, 0.1, 3600.0),
+    )
+    if token is None and not http.allow_unauthenticated_reads and not is_loopback(host):
+        raise h.error(
+            "host",
+            host,
+            "serving beyond this machine needs [http] token_file (or allow_unauthenticated_reads = true)",
+        )
+    h.finish()
+    return http
+
+
+def is_loopback(host: str) -> bool:
+    """Whether ``host`` names this machine only (``localhost`` or a loopback address)."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def _path(t: Table, key: str, folder: Path) -> Path | None:
+    value = t.take(key, None)
+    if value is None:
+        return None
+    if not isinstance(value, str) or not value:
+        raise t.error(key, value, "expected a file path")
+    p = Path(value)
+    return p if p.is_absolute() else folder / p
 
 
 def _hexapod_spec(t: Table, folder: Path) -> str:

@@ -1,130 +1,204 @@
-"""The HTTP endpoint: the standard library's threaded server, JSON out, GET only.
+"""The HTTP application (Starlette): JSON in and out, the bearer token, ``503`` while starting.
+
+Endpoints of the service itself:
 
 * ``GET /fixtures`` -> ``{"fixtures": [names]}``
 * ``GET /fixtures/NAME/pose`` -> the fixture's latest record (404 for an unknown name)
-* ``GET /health`` -> ``{"status": "ok" | "degraded", ...}`` (see :meth:`FixtureService.health`)
+* ``GET /health`` -> ``{"status": "ok" | "degraded", ...}`` (see ``FixtureService.health``)
 
-Anything else is 404 (405 for other methods). Requests are logged at DEBUG level through
-:mod:`logging`; nothing is printed.
+Every answer is JSON, errors too (``{"error": ...}``): 404 for an unknown path, 405 (with
+``Allow``) for a method a path does not serve, ``401`` without the right bearer token, ``503
+{"status": "starting"}`` until the solver's kernels are compiled. Add endpoints by passing
+Starlette routes to :func:`build_app` (or ``FixtureService(..., routes=[...])``)::
+
+    from starlette.routing import Route
+    from hexapod_model.service.http import json_response, read_json, requires_token, service_of
+
+    @requires_token                              # a write: the bearer token, always
+    async def set_target(request):
+        body = await read_json(request)          # 400/413 as JSON when it is not a small JSON object
+        service = service_of(request)            # the FixtureService
+        return json_response({"accepted": body, "by": request.state.client})
+
+    FixtureService(config, routes=[Route("/fixtures/{name}/target", set_target, methods=["POST"])])
+
+Reads need the token too when one is configured, unless ``[http] allow_unauthenticated_reads``;
+that check covers every route, added ones included (HTTP and WebSocket).
 """
 
 from __future__ import annotations
 
-import errno
+import functools
 import json
 import logging
-import threading
-from collections.abc import Callable
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
-from urllib.parse import unquote, urlsplit
+from collections.abc import Awaitable, Callable, Mapping, Sequence
+from typing import Any
 
-from .errors import ServiceError
+from starlette.applications import Starlette
+from starlette.exceptions import HTTPException
+from starlette.middleware import Middleware
+from starlette.requests import Request
+from starlette.responses import Response
+from starlette.routing import BaseRoute, Route
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from .token import bearer_matches
 
 log = logging.getLogger(__name__)
+Endpoint = Callable[[Request], Awaitable[Response]]
+MAX_BODY = 65_536  # bytes of a request body read by read_json
+RESOURCES = ["/fixtures", "/fixtures/NAME/pose", "/health"]
 
 
-class Routes:
-    """What the server answers: callables returning JSON-ready objects (``None``: not found)."""
-
-    def __init__(
-        self,
-        names: Callable[[], list[str]],
-        record: Callable[[str], dict | None],
-        health: Callable[[], dict],
-        record_json: Callable[[str], str | None] | None = None,
-    ):
-        self.names, self.record, self.health = names, record, health
-        self.record_json = record_json  # the latest record as JSON text, serialised once per record
-
-    def get(self, path: str) -> tuple[int, object]:
-        """Status code and body of ``GET path`` (a ``str`` body is JSON text already)."""
-        parts = [unquote(p) for p in urlsplit(path).path.split("/") if p]
-        if parts == ["fixtures"]:
-            return 200, {"fixtures": self.names()}
-        if parts == ["health"]:
-            return 200, self.health()
-        if len(parts) == 3 and parts[0] == "fixtures" and parts[2] == "pose":
-            rec = self.record(parts[1]) if self.record_json is None else self.record_json(parts[1])
-            if rec is not None:
-                return 200, rec
-            return 404, {"error": f"no fixture {parts[1]!r}", "fixtures": self.names()}
-        return 404, {
-            "error": f"no such resource {path!r}",
-            "resources": ["/fixtures", "/fixtures/NAME/pose", "/health"],
-        }
+def json_response(body: object, status: int = 200, headers: Mapping[str, str] | None = None) -> Response:
+    """A JSON response (``body`` a JSON-ready object, or a ``str`` that is JSON text already); never cached."""
+    text = body if isinstance(body, str) else json.dumps(body, allow_nan=False)
+    all_headers = {"Cache-Control": "no-store", **(headers or {})}
+    return Response(text, status, all_headers, media_type="application/json")
 
 
-class _Handler(BaseHTTPRequestHandler):
-    server: _Server
-    protocol_version = "HTTP/1.1"
-
-    def _send(self, code: int, body: object) -> None:
-        text = body if isinstance(body, str) else json.dumps(body, allow_nan=False)
-        data = text.encode("utf-8")
-        self.send_response(code)
-        self.send_header("Content-Type", "application/json")
-        self.send_header("Content-Length", str(len(data)))
-        self.send_header("Cache-Control", "no-store")
-        self.end_headers()
-        self.wfile.write(data)
-
-    def do_GET(self) -> None:  # noqa: N802 - the stdlib's name
-        """Answer from the routes."""
-        try:
-            code, body = self.server.routes.get(self.path)
-        except Exception as exc:  # noqa: BLE001 - a request must not kill the server
-            log.exception("GET %s failed", self.path)
-            code, body = 500, {"error": f"{type(exc).__name__}: {exc}"}
-        self._send(code, body)
-
-    def _refuse(self) -> None:
-        self._send(405, {"error": "only GET is served"})
-
-    do_POST = do_PUT = do_DELETE = do_PATCH = _refuse  # noqa: N815
-
-    def log_message(self, format: str, *args) -> None:  # noqa: A002 - the stdlib's signature
-        """Requests go to the ``logging`` DEBUG level, not to stderr."""
-        log.debug("%s " + format, self.address_string(), *args)
+def error_response(status: int, message: str, headers: Mapping[str, str] | None = None, **extra: Any) -> Response:
+    """``{"error": message, **extra}`` with ``status``."""
+    return json_response({"error": message, **extra}, status, headers)
 
 
-class _Server(ThreadingHTTPServer):
-    daemon_threads = True
-    routes: Routes
+def service_of(request: Request) -> Any:
+    """The :class:`~hexapod_model.service.service.FixtureService` behind the application."""
+    return request.app.state.service
 
 
-class HttpEndpoint:
-    """A :class:`ThreadingHTTPServer` on ``host:port`` in a thread of its own.
+def client_of(scope: Scope) -> str:
+    """``host:port`` of the peer (``?`` when the server does not know it)."""
+    client = scope.get("client")
+    return f"{client[0]}:{client[1]}" if client else "?"
 
-    Args:
-        host: address to bind (``127.0.0.1`` unless you mean to serve other machines).
-        port: port; 0 takes a free one (see :attr:`address`).
-        routes: what to answer.
 
-    Raises:
-        ServiceError: the address is in use or cannot be bound.
+def requires_token(endpoint: Endpoint) -> Endpoint:
+    """Decorate a write endpoint: ``401`` without ``Authorization: Bearer <token>``, ``403`` when no token is set.
+
+    A service without ``[http] token_file`` accepts no writes at all. The endpoint finds the
+    peer's ``host:port`` in ``request.state.client`` (for its log line of who did what).
     """
 
-    def __init__(self, host: str, port: int, routes: Routes):
+    @functools.wraps(endpoint)
+    async def checked(request: Request) -> Response:
+        token = service_of(request).config.http.token
+        if token is None:
+            return error_response(403, "writes need a token: set [http] token_file in the configuration")
+        if not bearer_matches(request.headers.get("authorization"), token):
+            return _unauthorized()
+        request.state.client = client_of(request.scope)
+        return await endpoint(request)
+
+    return checked
+
+
+async def read_json(request: Request, max_bytes: int = MAX_BODY) -> dict:
+    """The request body as a JSON object; ``HTTPException`` 413 (too long) or 400 (not a JSON object)."""
+    declared = request.headers.get("content-length")
+    if declared is not None and (not declared.isdigit() or int(declared) > max_bytes):
+        raise HTTPException(413, f"body longer than {max_bytes} bytes")
+    data = b""
+    async for chunk in request.stream():
+        data += chunk
+        if len(data) > max_bytes:
+            raise HTTPException(413, f"body longer than {max_bytes} bytes")
+    try:
+        body = json.loads(data) if data else None
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise HTTPException(400, f"body is not JSON: {exc}") from None
+    if not isinstance(body, dict):
+        raise HTTPException(400, "body must be a JSON object")
+    return body
+
+
+def _unauthorized() -> Response:
+    return error_response(401, "missing or wrong bearer token", {"WWW-Authenticate": "Bearer"})
+
+
+# ----- the service's own endpoints -----
+async def _fixtures(request: Request) -> Response:
+    return json_response({"fixtures": service_of(request).names()})
+
+
+async def _pose(request: Request) -> Response:
+    service, name = service_of(request), request.path_params["name"]
+    text = service.record_json(name)
+    if text is None:
+        return error_response(404, f"no fixture {name!r}", fixtures=service.names())
+    return json_response(text)
+
+
+async def _health(request: Request) -> Response:
+    return json_response(service_of(request).health())
+
+
+def core_routes() -> list[BaseRoute]:
+    """The service's read endpoints (``GET``; ``HEAD`` answers the same headers)."""
+    return [
+        Route("/fixtures", _fixtures, methods=["GET"]),
+        Route("/fixtures/{name}/pose", _pose, methods=["GET"]),
+        Route("/health", _health, methods=["GET"]),
+    ]
+
+
+# ----- the application -----
+class _Gate:
+    """ASGI middleware: ``503 starting`` before the service is ready, the read token, no traceback out."""
+
+    def __init__(self, app: ASGIApp, service: Any):
+        self.app, self.service = app, service
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] not in ("http", "websocket"):
+            await self.app(scope, receive, send)
+            return
+        refusal = None
+        if not self.service.ready:
+            refusal = json_response(self.service.starting(), 503, {"Retry-After": "1"})
+        elif self.service.config.http.reads_need_token:
+            headers = dict(scope.get("headers") or [])
+            if not bearer_matches(headers.get(b"authorization", b"").decode("latin-1"), self.service.config.http.token):
+                refusal = _unauthorized()
+        if refusal is not None:
+            if scope["type"] == "websocket":
+                await send({"type": "websocket.close", "code": 1008})
+            else:
+                await refusal(scope, receive, send)
+            return
+        started = False
+
+        async def tracked(message: Message) -> None:
+            nonlocal started
+            started = started or message["type"] == "http.response.start"
+            await send(message)
+
         try:
-            self.server = _Server((host, port), _Handler)
-        except OSError as exc:
-            why = "port in use" if exc.errno == errno.EADDRINUSE else (exc.strerror or str(exc))
-            raise ServiceError(f"HTTP address {host}:{port}: {why} (set [http] port in the configuration)") from None
-        self.server.routes = routes
-        self._thread = threading.Thread(target=self.server.serve_forever, name="hexapod-http", daemon=True)
+            await self.app(scope, receive, tracked)
+        except Exception as exc:  # noqa: BLE001 - one line in the log, a JSON 500 out, no traceback
+            log.error("%s %s failed: %s: %s", scope.get("method", "WS"), scope.get("path"), type(exc).__name__, exc)
+            if scope["type"] == "http" and not started:
+                await error_response(500, f"{type(exc).__name__}: {exc}")(scope, receive, send)
 
-    @property
-    def address(self) -> tuple[str, int]:
-        """The bound ``(host, port)``."""
-        host, port = self.server.server_address[:2]
-        return str(host), int(port)
 
-    def start(self) -> None:
-        """Serve in the background."""
-        self._thread.start()
+async def _http_error(request: Request, exc: Exception) -> Response:
+    assert isinstance(exc, HTTPException)
+    if exc.status_code == 404:
+        return error_response(404, f"no such resource {request.url.path!r}", resources=RESOURCES)
+    if exc.status_code == 405:
+        return error_response(405, f"{request.method} is not served here", exc.headers)
+    return error_response(exc.status_code, str(exc.detail), exc.headers)
 
-    def stop(self) -> None:
-        """Stop serving and close the socket."""
-        if self._thread.is_alive():
-            self.server.shutdown()
-        self.server.server_close()
+
+def build_app(service: Any, routes: Sequence[BaseRoute] = ()) -> Starlette:
+    """The Starlette application of ``service``: its endpoints, then ``routes`` (yours).
+
+    ``app.state.service`` is the service (:func:`service_of` in an endpoint).
+    """
+    app = Starlette(
+        routes=[*core_routes(), *routes],
+        middleware=[Middleware(_Gate, service=service)],
+        exception_handlers={HTTPException: _http_error},
+    )
+    app.state.service = service
+    return app

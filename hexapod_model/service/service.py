@@ -17,9 +17,9 @@ import json
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import can
 
@@ -27,9 +27,11 @@ from .changeover import Changeover
 from .config import ServiceConfig, geometry_hash
 from .cycle import FixtureCycle
 from .errors import ServiceError
-from .http import HttpEndpoint, Routes
 from .solve import warm_up
 from .store import Store, StoreWriter
+
+if TYPE_CHECKING:
+    from .server import HttpServer
 
 log = logging.getLogger(__name__)
 Record = dict
@@ -70,17 +72,32 @@ class FixtureService:
         ConfigError: a fixture's hexapod cannot be loaded.
     """
 
-    def __init__(self, config: ServiceConfig, bus: can.BusABC | None = None, http: bool = True, hexapods=None):
+    def __init__(
+        self,
+        config: ServiceConfig,
+        bus: can.BusABC | None = None,
+        http: bool = True,
+        hexapods: dict | None = None,
+        routes: Sequence[Any] = (),
+    ):
         self.config = config
-        hexapods = hexapods or {}
-        self.hexapods = {f.name: hexapods.get(f.name) or f.load_hexapod() for f in config.fixtures}
+        #: the fixtures' hexapods, by name: those given, the others loaded by :meth:`start`
+        self.hexapods = {f.name: hexapods[f.name] for f in config.fixtures if hexapods and f.name in hexapods}
         self._bus, self._own_bus, self._http = bus, bus is None, http
+        self._extra_routes = list(routes)
+        self._lock = threading.Lock()
+        self._ready = threading.Event()
+        self._preparing: threading.Thread | None = None
+        #: what the service does while starting (``/health`` says it with ``503 starting``)
+        self.phase = "starting"
+        #: the error that stopped a background start (``start(wait=False)``), else None
+        self.failure: Exception | None = None
         self._subscribers: list[Callable[[Record], None]] = []
         self._json: dict[str, tuple[Record, str]] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.cycles: dict[str, FixtureCycle] = {}
-        self.endpoint: HttpEndpoint | None = None
+        self.endpoint: HttpServer | None = None
         self.store: Store | None = None
         #: targets, recipes and guidance (:class:`~hexapod_model.service.changeover.Changeover`), once started
         self.changeover: Changeover | None = None
@@ -89,46 +106,103 @@ class FixtureService:
         self._started = 0.0
 
     # ----- life cycle -----
-    def start(self) -> FixtureService:
-        """Open the store, recover every fixture's last lock, open bus and HTTP, start the cycle thread."""
+    def start(self, wait: bool = True) -> FixtureService:
+        """Serve HTTP (``503 starting`` at first), open the bus, then prepare and start the cycle.
+
+        Preparing loads the hexapods, opens the store, recovers every fixture's last lock and
+        compiles the solver's kernels (about a minute after installation). With ``wait`` it
+        happens here (its errors are raised); without, in a thread: :attr:`ready` says when the
+        cycle runs, :attr:`failure` holds the error that stopped the preparation.
+        """
         cfg = self.config
         self._started = time.time()
+        self._stop.clear()
         try:  # what can fail fails first, before anything is logged or written
             if self._http:
-                routes = Routes(self.names, self.record, self.health, self.record_json)
-                self.endpoint = HttpEndpoint(cfg.http.host, cfg.http.port, routes)
+                from .server import HttpServer
+
+                try:
+                    from .http import build_app
+                except ImportError:
+                    from .server import INSTALL_HINT
+
+                    raise ServiceError(INSTALL_HINT) from None
+                self.endpoint = HttpServer(build_app(self, self._extra_routes), cfg.http)
             if self._bus is None:
                 self._bus = open_bus(cfg)
-            self.store = Store(cfg.store.path, cfg.store.samples)
-            for f in cfg.fixtures:
-                hexa = self.hexapods[f.name]
-                cycle = FixtureCycle(f, hexa, geometry_hash(hexa), self.store.last_lock(f.name), self._started)
-                self.cycles[f.name] = cycle
-                log.info("fixture %s: %s", f.name, cycle.recovery)
-            self.changeover = Changeover(self.store, self.hexapods, self.cycles)
+            if self.endpoint is not None:
+                self.endpoint.start()
+                log.info("serving %s", self.endpoint.url)
+            if wait:
+                self._prepare()
         except BaseException:
             self._close()
             raise
-        self._routes = {
-            (leg.can_id, leg.extended_id): (self.cycles[f.name], k)
-            for f in cfg.fixtures
-            for k, leg in enumerate(f.legs)
-        }
-        self._warm_up()
-        self.writer = StoreWriter(self.store)
-        self._last_logged = {name: -1e300 for name in self.cycles}
-        if self.endpoint is not None:
-            self.endpoint.start()
-            log.info("serving http://%s:%d", *self.endpoint.address)
-        self._stop.clear()
-        # what is alive now (numba, pinocchio, python-can, the hexapods) lives as long as the
-        # service: out of the cyclic collector's reach, whose full passes over it stalled every
-        # thread for ~100 ms (the p99 latency); the records' garbage is still collected
-        gc.collect()
-        gc.freeze()
-        self._thread = threading.Thread(target=self._loop, name="hexapod-cycle", daemon=True)
-        self._thread.start()
+        if not wait:
+            self._preparing = threading.Thread(target=self._prepare_logged, name="hexapod-start", daemon=True)
+            self._preparing.start()
         return self
+
+    def _prepare_logged(self) -> None:
+        try:
+            self._prepare()
+        except Exception as exc:  # noqa: BLE001 - kept for the caller (one line), never a traceback
+            self.failure = exc
+            log.debug("cannot start: %s", exc)
+
+    def _prepare(self) -> None:
+        """Hexapods, store, recovered locks, kernels; then the store writer and the cycle thread."""
+        cfg = self.config
+        self.phase = "loading the hexapods"
+        for f in cfg.fixtures:
+            if f.name not in self.hexapods:
+                self.hexapods[f.name] = f.load_hexapod()
+        self.phase = "opening the store"
+        store = Store(cfg.store.path, cfg.store.samples)
+        try:
+            cycles = {}
+            for f in cfg.fixtures:
+                hexa = self.hexapods[f.name]
+                cycles[f.name] = FixtureCycle(f, hexa, geometry_hash(hexa), store.last_lock(f.name), self._started)
+                log.info("fixture %s: %s", f.name, cycles[f.name].recovery)
+            self.phase = "compiling the solver's kernels"
+            self._warm_up()
+        except BaseException:
+            store.close()
+            raise
+        with self._lock:
+            if self._stop.is_set():  # stopped meanwhile
+                store.close()
+                return
+            self.store, self.cycles = store, cycles
+            self.changeover = Changeover(store, self.hexapods, cycles)
+            self._routes = {
+                (leg.can_id, leg.extended_id): (self.cycles[f.name], k)
+                for f in cfg.fixtures
+                for k, leg in enumerate(f.legs)
+            }
+            self.writer = StoreWriter(self.store)
+            self._last_logged = {name: -1e300 for name in self.cycles}
+            # what is alive now (numba, pinocchio, python-can, the hexapods) lives as long as the
+            # service: out of the cyclic collector's reach, whose full passes over it stalled every
+            # thread for ~100 ms (the p99 latency); the records' garbage is still collected
+            gc.collect()
+            gc.freeze()
+            self._thread = threading.Thread(target=self._loop, name="hexapod-cycle", daemon=True)
+            self._thread.start()
+            self.phase = "running"
+            self._ready.set()
+
+    @property
+    def ready(self) -> bool:
+        """Whether the cycle runs (before: HTTP answers ``503`` with :meth:`starting`)."""
+        return self._ready.is_set()
+
+    def starting(self) -> dict:
+        """What ``/health`` says before the service is ready: ``starting`` (and what it does) or ``failed``."""
+        if self.failure is not None:
+            return {"status": "failed", "error": str(self.failure)}
+        return {"status": "starting", "phase": self.phase, "uptime_s": time.time() - self._started}
 
     def _warm_up(self) -> None:
         """Compile the kernels a reading set runs before the cycle reads its first frame; drop what queued meanwhile.
@@ -154,23 +228,36 @@ class FixtureService:
             )
 
     def stop(self) -> None:
-        """Stop the cycle, flush the store, close HTTP and (an own) bus; unfreeze the collector's objects."""
+        """Stop the cycle, flush the store, close HTTP and (an own) bus; unfreeze the collector's objects.
+
+        Returns within about a second even while the kernels compile: the preparation then
+        ends on its own and closes the store it opened (see :attr:`preparing`).
+        """
         self._stop.set()
-        if self._thread is not None:
-            if self._thread.ident is not None:  # Ctrl-C may land between creating and starting it
-                self._thread.join()
-            self._thread = None
-        if self.writer is not None:
-            self.writer.stop()
-            self.writer = None
-        self._close()
+        if self._preparing is not None:
+            self._preparing.join(0.3)
+        with self._lock:  # the preparation either finished or will see _stop and clean up itself
+            self._ready.clear()
+            if self._thread is not None:
+                if self._thread.ident is not None:  # Ctrl-C may land between creating and starting it
+                    self._thread.join()
+                self._thread = None
+            if self.writer is not None:
+                self.writer.stop()
+                self.writer = None
+            self._close()
         gc.unfreeze()
+
+    @property
+    def preparing(self) -> bool:
+        """Whether the background preparation still runs (a compile cannot be interrupted)."""
+        return self._preparing is not None and self._preparing.is_alive()
 
     def _close(self) -> None:
         if self.endpoint is not None:
             self.endpoint.stop()
             self.endpoint = None
-        if self._own_bus and self._bus is not None:
+        if self._own_bus and self._bus is not None and not self.preparing:
             self._bus.shutdown()
             self._bus = None
         if self.store is not None:
@@ -239,7 +326,7 @@ class FixtureService:
             "uptime_s": now - self._started,
             "frames": self.frames,
             "unknown_frames": self.unknown_frames,
-            "store": {"path": str(self.config.store.path), "error": store_error},
+            "store": {"file": self.config.store.path.name, "error": store_error},
             "fixtures": fixtures,
         }
 

@@ -17,6 +17,7 @@ import subprocess
 import sys
 import threading
 import time
+import urllib.error
 import urllib.request
 import uuid
 from pathlib import Path
@@ -81,8 +82,9 @@ def test_bad_configuration_one_line_exit_2(tmp_path, capsys, case):
     text, words = bad_cases(tmp_path)[case]
     cfg = tmp_path / "bad.toml"
     cfg.write_text(text)
-    assert main(["serve", str(cfg), "--duration", "0.1"]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
+    assert main(["serve", str(cfg), "--duration", "30"]) == 2
+    # a hexapod file is loaded once HTTP answers "starting" (the load may compile): INFO lines first
+    err = [line for line in capsys.readouterr().err.strip().splitlines() if " INFO " not in line]
     assert len(err) == 1 and err[0].startswith("hexapod serve: error:") and words in err[0], err
 
 
@@ -187,9 +189,19 @@ class Served:
                 self._port_seen.set()
 
     def wait_port(self, timeout=90.0) -> int:
+        """The port, once the service is ready (``/health`` answers ``503 starting`` before)."""
         assert self._port_seen.wait(timeout), "".join(self.err)
         assert self.port is not None
+        self.wait_for(lambda: self.status("/health") != 503, timeout)
         return self.port
+
+    def status(self, path, headers=None) -> int:
+        req = urllib.request.Request(f"http://127.0.0.1:{self.port}{path}", headers=headers or {})
+        try:
+            with urllib.request.urlopen(req, timeout=5) as r:
+                return r.status
+        except urllib.error.HTTPError as e:
+            return e.code
 
     def get(self, path):
         with urllib.request.urlopen(f"http://127.0.0.1:{self.port}{path}", timeout=5) as r:
@@ -248,6 +260,25 @@ def test_serve_simulated_over_http_and_json_lines_then_ctrl_c_and_fixture_status
     assert float(rows[1].split(",")[1]) == first_locked["t"]
     assert main(["fixture", "history", str(cfg), "--samples", "--since", "0"]) == 0
     assert len(capsys.readouterr().out.splitlines()) > 20
+
+
+def test_first_start_answers_503_starting_at_once_and_sigint_stops_within_2_s(tmp_path):
+    cfg = write_config(tmp_path)
+    t0 = time.monotonic()
+    served = Served(str(cfg), "--simulate", str(write_sim(tmp_path, HOLD_SIM)))
+    try:
+        assert served._port_seen.wait(60), "".join(served.err)
+        first = served.status("/health")
+        answered = time.monotonic() - t0
+        assert first in (503, 200), first
+        served.proc.send_signal(signal.SIGINT)  # while starting (or just after)
+        t1 = time.monotonic()
+        code = served.proc.wait(10)
+        assert time.monotonic() - t1 < 2.0 and code == 0
+    finally:
+        served.finish()
+    assert answered < 10.0  # the port answers as the process starts: imports only, no compile, no hexapod
+    assert not any("Traceback" in line for line in served.err), "".join(served.err)
 
 
 def test_kill_9_while_committing_locks_then_restart_recovers_the_last_lock(tmp_path):

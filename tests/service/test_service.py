@@ -177,3 +177,37 @@ def test_simulator_stop_before_its_thread_started_is_clean(tmp_path):
     sim._thread = threading.Thread(target=lambda: None)  # created, not started (Ctrl-C in between)
     sim.stop()
     assert sim._thread is None
+
+
+def test_http_answers_503_starting_while_preparing_and_stop_is_prompt(tmp_path, monkeypatch):
+    import threading
+
+    from hexapod_model.service import service as service_module
+
+    release = threading.Event()
+    monkeypatch.setattr(service_module, "warm_up", lambda *args: release.wait(30))  # a long first compile
+    config = service_config(tmp_path)
+    bus = can.Bus(interface="virtual", channel=config.bus.channel)
+    service = FixtureService(config, bus=bus, hexapods={"left": hexapod("reference")})
+    try:
+        service.start(wait=False)
+        code, body = get(service.address, "/health")
+        assert code == 503 and body["status"] == "starting" and body["phase"] != "running"
+        assert get(service.address, "/fixtures/left/pose")[0] == 503
+        t0 = time.monotonic()
+        service.stop()
+        assert time.monotonic() - t0 < 2.0 and service.preparing
+        release.set()
+        service._preparing.join(10)
+        assert not service.preparing and service.store is None and not service.ready
+    finally:
+        release.set()
+        service.stop()
+        bus.shutdown()
+
+
+def test_health_does_not_show_the_store_path(tmp_path):
+    config = service_config(tmp_path)
+    with FixtureService(config, bus=can.Bus(interface="virtual", channel=config.bus.channel), http=False) as svc:
+        health = svc.health()
+    assert health["store"]["file"] == "store.sqlite" and str(tmp_path) not in json.dumps(health)
