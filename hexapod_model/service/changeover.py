@@ -23,6 +23,8 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
+import numpy as np
+
 from ..exceptions import HexapodError
 from ..kinematics.hexapod import Hexapod
 from .config import NAME_PATTERN
@@ -93,6 +95,11 @@ class Changeover:
         self._fixture(name)
         return self._targets.get(name)
 
+    def followed(self, name: str) -> tuple[int | None, np.ndarray | None]:
+        """``(id, 4x4 pose)`` of the fixture's target, ``(None, None)`` without: what a simulated plate follows."""
+        target = self._targets.get(name)
+        return (None, None) if target is None else (target.id, target.pose)
+
     def set_target(self, name: str, body: Any, by: str) -> Target:
         """Validate ``body`` (``{"pose", "tolerance"}``), store it as the fixture's target; returns it with its id."""
         target = target_from_json(body, name, self._fixture(name), by, self.clock())
@@ -126,10 +133,15 @@ class Changeover:
     def recipes(self) -> dict[str, Any]:
         """``{"active": {"name", "set_by", "set_at"} | None, "recipes": {name: {"targets", "set_by", "set_at"}}}``."""
         active = self.store.active()
-        stored = self.store.recipes()
+        recipes = {}
+        for name, (body, who, at) in self.store.recipes().items():
+            try:
+                recipes[name] = recipe_from_json(body, name, self.hexapods, who, at).to_json()
+            except TargetError as exc:  # a fixture gone from the configuration, or out of its workspace now
+                recipes[name] = {**body, "set_by": who, "set_at": at, "problem": str(exc)}
         return {
             "active": None if active is None else dict(zip(("name", "set_by", "set_at"), active)),
-            "recipes": {k: {**body, "set_by": who, "set_at": at} for k, (body, who, at) in stored.items()},
+            "recipes": recipes,
         }
 
     def activate(self, name: str, by: str) -> Recipe:

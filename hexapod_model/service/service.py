@@ -127,7 +127,9 @@ class FixtureService:
                     from .server import INSTALL_HINT
 
                     raise ServiceError(INSTALL_HINT) from None
-                self.endpoint = HttpServer(build_app(self, self._extra_routes), cfg.http)
+                from .changeover_http import changeover_routes
+
+                self.endpoint = HttpServer(build_app(self, [*changeover_routes(), *self._extra_routes]), cfg.http)
             if self._bus is None:
                 self._bus = open_bus(cfg)
             if self.endpoint is not None:

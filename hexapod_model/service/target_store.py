@@ -145,7 +145,7 @@ class TargetStore:
 
     def put_recipe(self, recipe: Recipe) -> None:
         """Store (or replace) a recipe."""
-        body = json.dumps({"targets": recipe.to_json()["targets"]}, allow_nan=False)
+        body = json.dumps({"targets": {k: t.to_json(brief=True) for k, t in recipe.targets.items()}}, allow_nan=False)
         sql = "INSERT INTO recipes (name, targets, set_by, set_at) VALUES (?, ?, ?, ?)"
         self._write([(sql, (recipe.name, body, recipe.set_by, float(recipe.set_at)))])
 

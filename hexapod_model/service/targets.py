@@ -85,12 +85,14 @@ class Target:
     def to_json(self, brief: bool = False) -> dict[str, Any]:
         """JSON: ``pose`` (m, deg and quaternion), ``tolerance``, ``recipe``, ``set_by``, ``set_at``, ``id``.
 
-        ``brief``: ``pose`` and ``tolerance`` only (a PUT body).
+        ``brief``: a PUT body (``pose`` as position and quaternion, ``tolerance``): how the store keeps it.
         """
         if brief:
-            return {"pose": pose_json(self.pose), "tolerance": self.tolerance.to_json()}
+            pose = {k: v for k, v in pose_json(self.pose).items() if k in QUATERNION_KEYS}
+            return {"pose": pose, "tolerance": self.tolerance.to_json()}
         return {
-            **self.to_json(brief=True),
+            "pose": pose_json(self.pose),
+            "tolerance": self.tolerance.to_json(),
             "recipe": self.recipe,
             "set_by": self.set_by,
             "set_at": self.set_at,
@@ -118,7 +120,9 @@ class Recipe:
         """``{"name", "targets": {fixture: target}, "set_by", "set_at"}``."""
         return {
             "name": self.name,
-            "targets": {k: t.to_json(brief=True) for k, t in self.targets.items()},
+            "targets": {
+                k: {"pose": pose_json(t.pose), "tolerance": t.tolerance.to_json()} for k, t in self.targets.items()
+            },
             "set_by": self.set_by,
             "set_at": self.set_at,
         }
