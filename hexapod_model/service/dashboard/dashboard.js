@@ -32,8 +32,11 @@ function el(tag, attrs, text) {
   return e;
 }
 
-function value(name, field, v, digits) {
-  return el("span", { "data-fixture": name, "data-field": field }, fmt(v, digits));
+// a shown value: formatted (its magnitude only when `magnitude`), the number itself in data-value
+function value(name, field, v, digits, magnitude) {
+  const shown = magnitude && v !== null && v !== undefined ? Math.abs(v) : v;
+  const attrs = { "data-fixture": name, "data-field": field, "data-value": v === null || v === undefined ? "" : String(v) };
+  return el("span", attrs, fmt(shown, digits));
 }
 
 function displayState(g) {
@@ -82,7 +85,7 @@ function legBars(name, legs) {
     row.appendChild(bar);
     const text = el("span");
     text.appendChild(document.createTextNode(l.change_mm === null ? "no reading " : (l.change_mm >= 0 ? "extend " : "retract ")));
-    text.appendChild(value(name, "legs." + l.leg + ".change_mm", l.change_mm, 3));
+    text.appendChild(value(name, "legs." + l.leg + ".change_mm", l.change_mm, 3, true));
     text.appendChild(document.createTextNode(" mm"));
     text.appendChild(value(name, "legs." + l.leg + ".target_mm", l.target_mm, 3));
     text.lastChild.hidden = true;
