@@ -1,4 +1,4 @@
-"""``hexapod fixture status`` and ``hexapod fixture history``: what the service's store holds."""
+"""``hexapod fixture status`` and ``history`` (what the service's store holds); ``target``, ``recipe``, ``locate``."""
 
 from __future__ import annotations
 
@@ -17,8 +17,8 @@ LOCK_COLUMNS = ["fixture", "t", "time", *POSE_COLUMNS, *LENGTH_COLUMNS, "status"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``fixture status`` and ``fixture history``."""
-    p = sub.add_parser("fixture", help="stored lock poses and sample log of the pose service")
+    """Add ``fixture status``, ``history``, ``target``, ``recipe`` and ``locate``."""
+    p = sub.add_parser("fixture", help="stored lock poses and sample log of the pose service; targets and recipes")
     actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
     s = actions.add_parser("status", help="the last stored lock pose of every fixture")
     s.add_argument("config", metavar="FIXTURE.toml")
@@ -30,6 +30,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     h.add_argument("--samples", action="store_true", help="the sample log instead of the lock events")
     h.add_argument("-o", "--output", metavar="LOG.csv", help="write the CSV here (default: stdout)")
     h.set_defaults(func=run_history)
+    from .changeover import register_actions
+
+    register_actions(actions)
 
 
 def parse_time(text: str) -> float:
