@@ -139,3 +139,44 @@ def test_fixture_target_without_a_service_is_one_line(tmp_path, capsys):
     assert main(["fixture", "target", str(cfg), "right"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "is hexapod serve running?" in err
+
+
+def test_view_live_cell_places_the_ur10_by_the_served_pose_in_robot(tmp_path, capsys):
+    import socket
+
+    import can
+
+    from hexapod_model.service import FixtureService, Simulator, load_config, load_simulation
+
+    from .test_service_cli import HOLD_SIM, write_config, write_sim
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    cell = "[fixtures.cell]\nbase_in_robot = [0.8, 0.0, 0.0, 0.0, 0.0, 180.0]\n"
+    cell += "coupling = [0.0, 0.0, 0.07, 180.0, 0.0, 0.0]\n"
+    cfg = write_config(tmp_path, port=port, fixtures=[("left", "reference", [0x181 + k for k in range(6)], cell)])
+    config = load_config(cfg)
+    sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    sim = Simulator(config, load_simulation(write_sim(tmp_path, HOLD_SIM), config), sim_bus)
+    try:
+        with FixtureService(config) as service:
+            sim.start()
+            deadline = time.monotonic() + 30
+            while (service.record("left") or {}).get("status") != "ok" and time.monotonic() < deadline:
+                time.sleep(0.05)
+            rec = service.record("left")
+            assert main(["view", str(cfg), "--live", "--cell", "--once"]) == 0
+    finally:
+        sim.stop()
+        sim_bus.shutdown()
+    captured = capsys.readouterr()
+    assert "showed 1 poses of left" in captured.err and "UR10 flange at pose_in_robot" in captured.err
+    # the same cell as `hexapod view --cell`: the robot's base at (0.8, 0, 0) facing the hexapod
+    from hexapod_model.viz.robot_cell import robot_base_pose, tool_changer_pose
+
+    expected = np.linalg.inv(robot_base_pose()) @ tool_changer_pose(record_pose(rec))
+    assert np.allclose(record_pose(rec["pose_in_robot"]), expected, atol=1e-9)
+    plain = write_config(tmp_path, port=port)
+    assert main(["view", str(plain), "--live", "--cell", "--once"]) == 2
+    assert "no [fixtures.cell]" in capsys.readouterr().err
