@@ -18,12 +18,18 @@ robot (least squares over three or more points, not all on one line), with the r
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from ..exceptions import InputError
 from ..kinematics.rotations import matrix_to_rpy, rpy_to_matrix
+from .errors import Table
+from .pose import pose_record
 
 
 def placement(values: list[float]) -> np.ndarray:
@@ -64,6 +70,46 @@ class Cell:
         return float(noise * np.sqrt(np.sum(M * M)))
 
 
+SIGMA_REUSE = (0.5e-3, math.radians(0.05))  # m, rad: the coupling's sigma is reused this close to where computed
+
+
+class InRobot:
+    """A record's ``pose_in_robot`` (``{"pose", "sigma"}``) for one fixture's cell.
+
+    Args:
+        cell: the placement.
+        noise: 1-sigma reading noise (m).
+        propagation: ``propagation(q)`` -> ``J^-1`` (6x6) at configuration ``q``.
+    """
+
+    def __init__(self, cell: Cell, noise: float, propagation: Callable[[np.ndarray], np.ndarray]):
+        self.cell, self.noise, self.propagation = cell, noise, propagation
+        self._cached: tuple[np.ndarray, float] | None = None  # (pose, coupling translation sigma m)
+
+    def record(self, outcome: Any, sigma: dict | None) -> dict:
+        """``{"pose", "sigma"}`` for a solved ``outcome`` (``pose``, ``q``) with the record's ``sigma``."""
+        cell = self.cell
+        out: dict = {"pose": pose_record(cell.pose_in_robot(outcome.pose)), "sigma": None}
+        if sigma is None or outcome.q is None:
+            return out
+        translation = sigma["translation_mm"] * 1e-3
+        if np.any(cell.offset != 0.0):  # the coupling's origin moves with the platform's rotation error too
+            cached = self._cached
+            if cached is None or not _near(cached[0], outcome.pose):
+                X = self.propagation(outcome.q)
+                self._cached = cached = (outcome.pose.copy(), cell.translation_sigma(X, self.noise))
+            translation = cached[1]
+        out["sigma"] = {"translation_mm": translation * 1e3, "rotation_deg": sigma["rotation_deg"]}
+        return out
+
+
+def _near(a: np.ndarray, b: np.ndarray) -> bool:
+    """Within :data:`SIGMA_REUSE` of each other (4x4 poses)."""
+    if np.linalg.norm(a[:3, 3] - b[:3, 3]) > SIGMA_REUSE[0]:
+        return False
+    return float(np.linalg.norm(pin.log3(a[:3, :3].T @ b[:3, :3]))) <= SIGMA_REUSE[1]
+
+
 @dataclass(frozen=True)
 class Located:
     """The base's placement estimated from touched points.
@@ -83,6 +129,22 @@ class Located:
         """``[x, y, z, roll, pitch, yaw]`` (m, deg): the ``base_in_robot`` of ``fixture.toml``."""
         T = self.base_in_robot
         return [*map(float, T[:3, 3]), *map(float, np.degrees(matrix_to_rpy(T[:3, :3])))]
+
+
+def _placement_field(t: Table, key: str, default: list[float] | None = None) -> list[float]:
+    v = t.take(key, default)
+    ok = isinstance(v, list) and len(v) == 6
+    ok = ok and all(not isinstance(x, bool) and isinstance(x, (int, float)) and math.isfinite(x) for x in v)
+    if not ok or max(abs(x) for x in v[:3]) > 100.0:
+        raise t.error(key, v, "expected [x, y, z, roll, pitch, yaw] in m (within 100) and degrees")
+    return [float(x) for x in v]
+
+
+def cell_from_table(t: Table) -> Cell:
+    """``[fixtures.cell]`` of ``fixture.toml``: ``base_in_robot`` (required) and ``coupling`` (default none)."""
+    cell = Cell(placement(_placement_field(t, "base_in_robot")), placement(_placement_field(t, "coupling", [0.0] * 6)))
+    t.finish()
+    return cell
 
 
 def locate(base_points: np.ndarray, robot_points: np.ndarray) -> Located:

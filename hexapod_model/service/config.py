@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import hashlib
 import ipaddress
-import math
 import re
 import tomllib
 from dataclasses import dataclass, field
@@ -23,7 +22,7 @@ from ..description.presets import PRESETS
 from ..exceptions import HexapodError
 from ..kinematics.hexapod import Hexapod
 from ..tracking.tracker import PREDICTORS
-from .cell import Cell, placement
+from .cell import Cell, cell_from_table
 from .codec import FrameLayout, LegCodec
 from .errors import ConfigError, Table
 from .token import read_token
@@ -318,27 +317,12 @@ def _fixture(t: Table, index: int, folder: Path) -> FixtureConfig:
         confirm_samples=t.integer("confirm_samples", 5, 1, 10_000),
         index=index,
         source=t.source,
-        cell=_cell(t.table("cell")) if "cell" in t.data else None,
+        cell=cell_from_table(t.table("cell")) if "cell" in t.data else None,
     )
     if cfg.drift_limit >= cfg.steady_band:
         raise t.error("drift_limit", cfg.drift_limit, f"must be below steady_band = {cfg.steady_band:g} m")
     t.finish()
     return cfg
-
-
-def _placement(t: Table, key: str, default: list[float] | None = None) -> list[float]:
-    v = t.take(key, default)
-    ok = isinstance(v, list) and len(v) == 6
-    ok = ok and all(not isinstance(x, bool) and isinstance(x, (int, float)) and math.isfinite(x) for x in v)
-    if not ok or max(abs(x) for x in v[:3]) > 100.0:
-        raise t.error(key, v, "expected [x, y, z, roll, pitch, yaw] in m (within 100) and degrees")
-    return [float(x) for x in v]
-
-
-def _cell(t: Table) -> Cell:
-    cell = Cell(placement(_placement(t, "base_in_robot")), placement(_placement(t, "coupling", [0.0] * 6)))
-    t.finish()
-    return cell
 
 
 def _check_unique(fixtures: tuple[FixtureConfig, ...], source: str) -> None:

@@ -27,6 +27,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..kinematics.hexapod import Hexapod
+from .cell import InRobot
 from .config import FixtureConfig
 from .guidance import deviation, within
 from .pose import pose_record, quaternion
@@ -50,7 +51,6 @@ RECORD_KEYS = (
     "singularity_margin",
     "pose_in_robot",
 )
-SIGMA_REUSE = (0.5e-3, math.radians(0.05))  # m, rad: the coupling's sigma is reused this close to where computed
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
 
 
@@ -102,7 +102,7 @@ class FixtureCycle:
         self.target: Target | None = None
         #: the lock to commit: the service takes it, stores it and calls :meth:`lock_stored`
         self.pending_lock: tuple[int, LockEvent] | None = None
-        self._robot_sigma: tuple[np.ndarray, float] | None = None  # (pose, coupling translation sigma m)
+        self._in_robot = None if cfg.cell is None else InRobot(cfg.cell, cfg.noise, self.solver.propagation)
         self.last: dict = self._record(t0, "no_data", [], None)
 
     # ----- input -----
@@ -276,34 +276,10 @@ class FixtureCycle:
             "stored": locked and self._stored_episode == self._episode,
             "sigma": sigma,
             "singularity_margin": margin,
-            "pose_in_robot": None if pose is None or self.cfg.cell is None else self._in_robot(outcome, sigma),
+            "pose_in_robot": None if pose is None or self._in_robot is None else self._in_robot.record(outcome, sigma),
         }
         self.last = record
         return record
-
-    def _in_robot(self, outcome: SolveOutcome | None, sigma: dict | None) -> dict:
-        """``{"pose", "sigma"}`` of the coupling in the robot frame (``docs/changeover.md``)."""
-        cell = self.cfg.cell
-        assert cell is not None and outcome is not None and outcome.pose is not None
-        out: dict = {"pose": pose_record(cell.pose_in_robot(outcome.pose)), "sigma": None}
-        if sigma is None or outcome.q is None:
-            return out
-        translation = sigma["translation_mm"] * 1e-3
-        if np.any(cell.offset != 0.0):  # the coupling's origin moves with the platform's rotation error too
-            cached = self._robot_sigma
-            if cached is None or not _near(cached[0], outcome.pose):
-                X = self.solver.propagation(outcome.q)
-                self._robot_sigma = cached = (outcome.pose.copy(), cell.translation_sigma(X, self.cfg.noise))
-            translation = cached[1]
-        out["sigma"] = {"translation_mm": translation * 1e3, "rotation_deg": sigma["rotation_deg"]}
-        return out
-
-
-def _near(a: np.ndarray, b: np.ndarray) -> bool:
-    """Within :data:`SIGMA_REUSE` of each other (4x4 poses)."""
-    if np.linalg.norm(a[:3, 3] - b[:3, 3]) > SIGMA_REUSE[0]:
-        return False
-    return float(np.linalg.norm(pin.log3(a[:3, :3].T @ b[:3, :3]))) <= SIGMA_REUSE[1]
 
 
 def _quaternion(R: np.ndarray) -> np.ndarray:

@@ -11,11 +11,8 @@ Schema (version 2; the tables ``docs/service.md`` documents):
 * ``samples``: published records (``fixture``, ``t``, ``status``, ``flags`` as JSON, ``state``,
   ``l1..l6``, pose columns; NULL when there is none), the newest ``samples`` rows kept.
 * ``meta``: ``schema_version``.
-* ``targets``, ``recipes``, ``activations``: the changeover's targets and recipes, with who set
-  them and when (:mod:`hexapod_model.service.target_store`).
-
-A version-1 file is migrated in place when opened (one transaction); a file of a newer version
-is refused.
+* ``targets``, ``recipes``, ``activations``: the changeover's (:mod:`~hexapod_model.service.target_store`,
+  which also migrates a version-1 file when it is opened).
 
 ``synchronous=FULL``: a commit is on disk (the WAL file fsync'ed) when :meth:`Store.add_lock`
 returns, so a lock published as stored survives a crash or a power loss. Writes happen on one
@@ -38,7 +35,6 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ServiceError
-from .target_store import SCHEMA_VERSION as SCHEMA_VERSION  # re-exported: the version this code writes
 from .target_store import TargetStore, migrate
 
 log = logging.getLogger(__name__)
@@ -136,15 +132,8 @@ class Store:
     def add_lock(self, event: LockEvent, samples: Sequence[tuple] = ()) -> LockEvent:
         """Commit ``event`` (and pending ``samples``) durably; returns it with its ``id``."""
         values = (event.t, *event.position, *event.quaternion, *event.readings)
-        row = (
-            event.fixture,
-            *map(float, values),
-            event.status,
-            event.geometry_hash,
-            json.dumps(event.q.tolist()),
-            event.target_id,
-            event.recipe,
-        )
+        q = json.dumps(event.q.tolist())
+        row = (event.fixture, *map(float, values), event.status, event.geometry_hash, q, event.target_id, event.recipe)
         with self._lock:
             self.db.execute("BEGIN IMMEDIATE")
             try:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from hexapod_model.service import Store
-from hexapod_model.service.store import SCHEMA_VERSION
+from hexapod_model.service.target_store import SCHEMA_VERSION
 from hexapod_model.service.targets import TargetError, parse_pose, recipe_from_json, target_from_json
 
 from ..conftest import hexapod
