@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import signal
+import socket
 import time
 import urllib.error
 import urllib.request
@@ -142,11 +143,7 @@ def test_fixture_target_without_a_service_is_one_line(tmp_path, capsys):
 
 
 def test_view_live_cell_places_the_ur10_by_the_served_pose_in_robot(tmp_path, capsys):
-    import socket
-
-    import can
-
-    from hexapod_model.service import FixtureService, Simulator, load_config, load_simulation
+    from hexapod_model.viz.robot_cell import robot_base_pose, tool_changer_pose
 
     from .test_service_cli import HOLD_SIM, write_config, write_sim
 
@@ -156,25 +153,17 @@ def test_view_live_cell_places_the_ur10_by_the_served_pose_in_robot(tmp_path, ca
     cell = "[fixtures.cell]\nbase_in_robot = [0.8, 0.0, 0.0, 0.0, 0.0, 180.0]\n"
     cell += "coupling = [0.0, 0.0, 0.07, 180.0, 0.0, 0.0]\n"
     cfg = write_config(tmp_path, port=port, fixtures=[("left", "reference", [0x181 + k for k in range(6)], cell)])
-    config = load_config(cfg)
-    sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
-    sim = Simulator(config, load_simulation(write_sim(tmp_path, HOLD_SIM), config), sim_bus)
+    served = Served(str(cfg), "--simulate", str(write_sim(tmp_path, HOLD_SIM)))
     try:
-        with FixtureService(config) as service:
-            sim.start()
-            deadline = time.monotonic() + 30
-            while (service.record("left") or {}).get("status") != "ok" and time.monotonic() < deadline:
-                time.sleep(0.05)
-            rec = service.record("left")
-            assert main(["view", str(cfg), "--live", "--cell", "--once"]) == 0
+        served.wait_port()
+        served.wait_for(lambda: served.get("/fixtures/left/pose")["status"] == "ok")
+        rec = served.get("/fixtures/left/pose")
+        assert main(["view", str(cfg), "--live", "--cell", "--once"]) == 0
     finally:
-        sim.stop()
-        sim_bus.shutdown()
+        assert served.finish(signal.SIGINT) == 0, "".join(served.err)
     captured = capsys.readouterr()
     assert "showed 1 poses of left" in captured.err and "UR10 flange at pose_in_robot" in captured.err
     # the same cell as `hexapod view --cell`: the robot's base at (0.8, 0, 0) facing the hexapod
-    from hexapod_model.viz.robot_cell import robot_base_pose, tool_changer_pose
-
     expected = np.linalg.inv(robot_base_pose()) @ tool_changer_pose(record_pose(rec))
     assert np.allclose(record_pose(rec["pose_in_robot"]), expected, atol=1e-9)
     plain = write_config(tmp_path, port=port)
