@@ -1,4 +1,4 @@
-"""``hexapod fixture status`` and ``history`` (what the service's store holds); ``target``, ``recipe``, ``locate``."""
+"""`hexapod fixture status`, `history` (what the store holds); `acknowledge`, `target`, `recipe`, `locate`."""
 
 from __future__ import annotations
 
@@ -12,12 +12,13 @@ import numpy as np
 from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
 from ..io.tables import LENGTH_COLUMNS, POSE_COLUMNS
+from .acknowledge import register_action
 
 LOCK_COLUMNS = ["fixture", "t", "time", *POSE_COLUMNS, *LENGTH_COLUMNS, "status", "geometry_hash"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``fixture status``, ``history``, ``target``, ``recipe`` and ``locate``."""
+    """Add ``fixture status``, ``history``, ``acknowledge``, ``target``, ``recipe`` and ``locate``."""
     p = sub.add_parser("fixture", help="stored lock poses and sample log of the pose service; targets and recipes")
     actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
     s = actions.add_parser("status", help="the last stored lock pose of every fixture")
@@ -30,6 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     h.add_argument("--samples", action="store_true", help="the sample log instead of the lock events")
     h.add_argument("-o", "--output", metavar="LOG.csv", help="write the CSV here (default: stdout)")
     h.set_defaults(func=run_history)
+    register_action(actions)
     from .changeover import register_actions
 
     register_actions(actions)

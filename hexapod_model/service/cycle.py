@@ -1,38 +1,46 @@
-"""One fixture's cycle: encoder frames in, complete reading sets solved, records out.
+"""One fixture's cycle: encoder frames in, one record per sampling instant out.
 
-A **reading set** is complete when each of the six legs has sent a frame since the last set,
-all within ``max_skew`` of each other (default: 3/4 of the measured frame period) and younger
-than ``staleness``. A leg sending twice before the set completes (a frame of another leg was
-lost) starts a new set, and frames farther than ``max_skew`` from the newest are dropped from
-it, so a set never mixes readings of two sampling instants (and re-synchronises after a lost
-frame); when the missing leg's newest frame is older than ``staleness`` the set is published
-as ``silent_leg``. A set with a bad frame, an error bit, a reading outside the stroke or a stuck
-leg is published with that status and **no pose**; a solved set is ``ok`` only when the tracker
-(through :class:`~hexapod_model.service.solve.PoseSolver`) raised no flag.
+A **reading set** holds one frame of each leg from one sampling instant: every frame within
+``max_skew`` (default: 3/4 of the measured frame period) of the set's first, whatever the
+arrival order. A frame older than the newest seen by more than that is *late* and never joins a
+set (``late_frame:legN`` in the next record); a second frame on one leg's id within the instant
+fails the set (``duplicate_frame``, ``duplicate:legN``: two senders on one id); a frame of a
+newer instant closes an unfinished set, published as ``incomplete`` (``missing:legN``) or, when a
+missing leg's newest frame is older than ``staleness``, ``silent_leg``. So every instant ends in
+a record, and a set never mixes two instants. A set with a bad frame, an error bit, a reading
+outside the stroke or a stuck leg is published with that status and **no pose**; a solved set
+is ``ok`` only when the tracker (through :class:`~hexapod_model.service.solve.PoseSolver`)
+raised no flag, no leg of a locked fixture moved and no fault waits for an acknowledgement
+(:mod:`~hexapod_model.service.alarms`).
 
-Status values: ``ok``, ``no_data`` (nothing received yet), ``silent_leg``, ``bad_frame``,
-``encoder_error``, ``out_of_stroke``, ``stuck_leg``, ``not_converged``, ``flagged``. Flags name the
-leg (``encoder_error:leg3``) or the tracker's doubt (``jump``, ``branch_uncertain``,
+Status values: ``ok``, ``no_data`` (nothing received yet), ``incomplete``, ``duplicate_frame``,
+``silent_leg``, ``bad_frame``, ``encoder_error``, ``out_of_stroke``, ``stuck_leg``,
+``leg_moved`` (one or two legs of a locked fixture left the band: no pose), ``not_converged``,
+``flagged``, ``drift`` (a locked fixture's averaged readings moved: a pose, named legs),
+``unacknowledged_fault`` (a pose, but a latched fault waits). Flags name the leg
+(``encoder_error:leg3``) or the tracker's doubt (``jump``, ``branch_uncertain``,
 ``near_singular``, ``out_of_limits``); *advisory* flags leave a good pose ``ok``:
-``encoder_warning:legN``, ``drift``, ``moved_while_off``, ``stored_geometry_changed``.
+``encoder_warning:legN``, ``late_frame:legN``, ``moved_while_off``, ``stored_geometry_changed``.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+import time
 from dataclasses import replace
 
 import numpy as np
 import pinocchio as pin
 
 from ..kinematics.hexapod import Hexapod
+from .alarms import UNACKNOWLEDGED, Acknowledgement, LatchedFault
 from .cell import InRobot
 from .config import FixtureConfig
 from .guidance import deviation, within
 from .pose import pose_record, quaternion
 from .solve import PoseSolver, SolveOutcome
-from .state import LockDetector, StuckDetector
+from .state import MOTION_LEGS, LockDetector, StepDetector, StuckDetector
 from .store import LockEvent
 from .targets import Target
 
@@ -51,6 +59,7 @@ RECORD_KEYS = (
     "singularity_margin",
     "pose_in_robot",
 )
+_POSE_STATUSES = ("ok", "flagged", "drift")
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
 
 
@@ -79,11 +88,22 @@ class FixtureCycle:
         self._n_fresh = 0
         self.lock = LockDetector(cfg.lock_time, cfg.steady_band, cfg.drift_limit, cfg.unlock_samples)
         self.stuck = StuckDetector(cfg.stuck_sigmas, cfg.noise, self.layout.metres_per_count)
+        self.steps = StepDetector(cfg.noise)
         self._period = math.nan  # s, median interval between two frames of one leg (recent frames)
         self._intervals: list[float] = []
         self._n_frames = 0
         self._instant = self._lost = 0  # sampling instants, and sets lost since the last complete one
         self._t_set = math.nan
+        self._t_newest = self._t_first = -math.inf  # newest frame seen; first frame of the set being collected
+        self._late: set[int] = set()  # legs whose late frames were dropped since the last record
+        self._duplicate: set[int] = set()  # legs with a second frame in the set being collected
+        #: frames and sets that could not be used, since the start (``/health``)
+        self.counters = {"late_frames": 0, "duplicate_frames": 0, "incomplete_sets": 0}
+        #: the fault waiting for an acknowledgement (:mod:`~hexapod_model.service.alarms`)
+        self.fault: LatchedFault | None = None
+        self.acknowledged: Acknowledgement | None = None  # the last acknowledgement
+        self._ack: Acknowledgement | None = None
+        self._drift_logged = False
         self._advisory: set[str] = set()
         self._episode = self._stored_episode = 0
         self._new_lock_stored = False
@@ -91,6 +111,7 @@ class FixtureCycle:
         self.recovery = "no stored lock pose"
         if recovered is not None and recovered.geometry_hash == geometry_hash:
             self.recovered, self.recovery = recovered, f"initial guess: the lock pose stored at t={recovered.t!r}"
+            self.fault = LatchedFault.from_stored(recovered.status)  # stored while a fault waited
         elif recovered is not None:
             self._advisory.add("stored_geometry_changed")
             self.recovery = "stored lock pose not used: solved with another geometry (hash differs)"
@@ -107,15 +128,28 @@ class FixtureCycle:
 
     # ----- input -----
     def on_frame(self, leg: int, data: bytes | bytearray, t: float) -> dict | None:
-        """A frame of leg ``leg`` (0-based) received at ``t`` (s); returns a record when one is published."""
+        """A frame of leg ``leg`` (0-based) stamped ``t`` (s); returns a record when one is published.
+
+        A set holds frames of one sampling instant: within ``max_skew`` of its first frame. A
+        frame older than the newest by more than that is *late* (an instant already closed) and
+        is dropped, named in the next record; a second frame on one leg's id within the instant
+        is a *duplicate* (two senders?) and fails the set; a frame of a newer instant closes an
+        unfinished set as ``incomplete`` (or ``silent_leg``) naming the missing legs.
+        """
+        skew = self.cfg.max_skew or 0.75 * self._period  # NaN until the period is measured
         published = None
-        if self._fresh[leg]:  # a leg repeats: some other leg's frame is missing
-            self._fresh = [False] * 6
-            self._n_fresh = 0
-            self._lost += 1
-            silent = [k for k in range(6) if k != leg and t - self._t[k] > self.cfg.staleness]
-            if silent:
-                published = self._failure(t, "silent_leg", [f"silent:leg{k + 1}" for k in silent])
+        if t < self._t_newest - skew:  # older than this instant: a late frame (False for NaN)
+            self.counters["late_frames"] += 1
+            self._late.add(leg)
+            return None
+        if self._n_fresh:
+            repeat = self._fresh[leg]
+            if t - self._t_first > skew or (repeat and not t - self._t[leg] <= skew):
+                published = self._close_incomplete()  # a newer instant begins: this set cannot complete
+            elif repeat:  # a second frame on this id within one instant
+                self.counters["duplicate_frames"] += 1
+                self._duplicate.add(leg)
+                return None
         if len(data) >= self._min_length:  # codec.decode's check, without its exception on the hot path
             count, self._err[leg], self._warn[leg] = self._unpack(data)
             self._counts[leg], self._bad[leg] = count, False
@@ -132,19 +166,42 @@ class FixtureCycle:
             if self._n_frames % 32 == 8:
                 self._period = sorted(self._intervals)[len(self._intervals) // 2]
         self._t[leg] = t
+        if t > self._t_newest:
+            self._t_newest = t
+        if not self._n_fresh:
+            self._t_first = t
         self._fresh[leg] = True
         self._n_fresh += 1
         if self._n_fresh == 6:
-            skew = self.cfg.max_skew or 0.75 * self._period
-            if t - min(self._t) > skew:  # frames of two sampling instants: keep the newest
-                self._fresh = [bool(t - tk <= skew) for tk in self._t]
-                self._n_fresh = sum(self._fresh)
-                self._lost += 1
-                return published
             self._fresh = [False] * 6
             self._n_fresh = 0
-            return self._complete(t)
+            if self._duplicate:
+                self._lost += 1
+                return self._failure(self._t_newest, "duplicate_frame", self._set_flags([]))
+            return self._complete(self._t_newest)
         return published
+
+    def _close_incomplete(self) -> dict:
+        """Publish the unfinished set: ``silent_leg`` when a missing leg is stale, else what went wrong."""
+        t = self._t_newest
+        missing = [k for k in range(6) if not self._fresh[k]]
+        self._fresh = [False] * 6
+        self._n_fresh = 0
+        self._lost += 1
+        self.counters["incomplete_sets"] += 1
+        silent = [k for k in missing if t - self._t[k] > self.cfg.staleness and k not in self._late]
+        if silent:
+            return self._failure(t, "silent_leg", self._set_flags([f"silent:leg{k + 1}" for k in silent]))
+        status = "duplicate_frame" if self._duplicate else "incomplete"
+        return self._failure(t, status, self._set_flags([f"missing:leg{k + 1}" for k in missing]))
+
+    def _set_flags(self, flags: list[str]) -> list[str]:
+        """``flags`` plus the set's duplicate and late frames (then forgotten)."""
+        flags += [f"duplicate:leg{k + 1}" for k in sorted(self._duplicate)]
+        flags += [f"late_frame:leg{k + 1}" for k in sorted(self._late)]
+        self._duplicate.clear()
+        self._late.clear()
+        return flags
 
     def check_silence(self, now: float) -> dict | None:
         """Publish ``silent_leg`` when nothing was published for ``staleness`` and a leg is silent."""
@@ -161,6 +218,49 @@ class FixtureCycle:
         self._new_lock_stored = True
         log.info("fixture %s: lock pose stored (id %s, t=%r)", self.cfg.name, event.id, event.t)
 
+    def acknowledge(self, by: str, client: str, note: str = "", now: float | None = None) -> Acknowledgement | None:
+        """Acknowledge the latched fault (None when there is none); the next set applies it.
+
+        Safe to call from another thread: the cycle's thread clears the fault at its next set
+        (and a locked fixture then takes a new lock from its readings as they are).
+        """
+        fault = self.fault
+        if fault is None:
+            return None
+        ack = Acknowledgement(self.cfg.name, by, client, time.time() if now is None else now, fault, note)
+        self._ack = ack
+        return ack
+
+    def _apply_acknowledgement(self, t: float) -> None:
+        ack, self._ack = self._ack, None
+        if ack is None or ack.fault != self.fault:
+            return
+        self.fault = None
+        self.acknowledged = ack
+        self.steps.reset()
+        if self.lock.state == "locked":
+            self.lock.release(t, self._readings)
+            self._episode += 1
+        log.warning(
+            "fixture %s: fault %s acknowledged by %s (%s) at t=%r%s",
+            self.cfg.name,
+            ",".join(ack.fault.flags()),
+            ack.by,
+            ack.client,
+            ack.t,
+            f": {ack.note}" if ack.note else "",
+        )
+
+    def _latch(self, kind: str, legs: tuple[int, ...], t: float) -> None:
+        if self.fault is None:
+            self.fault = LatchedFault(kind, legs, t)
+            log.warning(
+                "fixture %s: %s: not ok until acknowledged (POST /fixtures/%s/acknowledge)",
+                self.cfg.name,
+                ", ".join(self.fault.flags()),
+                self.cfg.name,
+            )
+
     # ----- one set -----
     def _complete(self, t: float) -> dict:
         steps, dt = 1 + self._lost, t - self._t_set  # instants since the last set: lost sets count
@@ -168,37 +268,55 @@ class FixtureCycle:
             steps = max(steps, round(dt / self._period))
         self._instant += steps
         self._lost, self._t_set = 0, t
+        if self._ack is not None:
+            self._apply_acknowledgement(t)
         r = np.array(self._readings)
         for status, bad, name in (
             ("bad_frame", self._bad, "bad_frame"),
             ("encoder_error", self._err, "encoder_error"),
         ):
             if any(bad):
-                return self._failure(t, status, [f"{name}:leg{k + 1}" for k in range(6) if bad[k]])
+                return self._failure(t, status, self._set_flags([f"{name}:leg{k + 1}" for k in range(6) if bad[k]]))
         out = [k for k in range(6) if not self._lo[k] <= self._readings[k] <= self._hi[k]]
         if out:
-            return self._failure(t, "out_of_stroke", [f"out_of_stroke:leg{k + 1}" for k in out])
+            return self._failure(t, "out_of_stroke", self._set_flags([f"out_of_stroke:leg{k + 1}" for k in out]))
         stuck = self.stuck.update(self._instant, self._counts, self._readings)
         if stuck:
-            return self._failure(t, "stuck_leg", [f"stuck:leg{k + 1}" for k in stuck])
+            return self._failure(t, "stuck_leg", self._set_flags([f"stuck:leg{k + 1}" for k in stuck]))
         was_locked = self.lock.state == "locked"
         ready = self.lock.update(t, self._readings)
         if was_locked and self.lock.state != "locked":
             self._episode += 1
             log.info("fixture %s: moving (lock released)", self.cfg.name)
         outcome = self.solver.step(r, self._instant)
+        jumped = outcome.legs if "jump" in outcome.flags else ()
+        stepped = self.steps.update(self._instant, self._readings, jumped)
+        if stepped:  # on a locked fixture a leg moved alone: brake slip or encoder, six readings cannot tell
+            self._latch("moved_while_locked" if was_locked else "discontinuity", stepped, t)
+        if self.lock.slipped:
+            self._latch("moved_while_locked", self.lock.slipped, t)
         if outcome.status == "ok":
             if self._check_moved:
                 self._compare_recovered(t, outcome)
             elif ready:
                 self._take_lock(t, outcome)
-        if self.lock.drift and "drift" not in self._advisory:
+        flags = self._set_flags(list(outcome.flags))
+        if self.lock.moved:  # one or two legs left the band of a locked fixture: not a new pose
+            return self._failure(t, "leg_moved", flags + [f"moved:leg{k + 1}" for k in self.lock.moved])
+        if self.lock.drift and not self._drift_logged:
             log.warning("fixture %s: drift: locked readings moved beyond %g m", self.cfg.name, self.cfg.drift_limit)
-        self._advisory.discard("drift")
+        self._drift_logged = self.lock.drift
         if self.lock.drift:
-            self._advisory.add("drift")
+            if len(self.lock.drift_legs) < MOTION_LEGS:
+                self._latch("moved_while_locked", self.lock.drift_legs, t)
+            flags += [f"drift:leg{k + 1}" for k in self.lock.drift_legs]
         status = {"ok": "ok", "flagged": "flagged", "failed": "not_converged"}[outcome.status]
-        return self._record(t, status, list(outcome.flags), outcome)
+        if self.steps.pending and "jump" not in flags:  # a jump that may be a step: not ok until it is known
+            flags.append("jump")
+            status = "flagged" if status == "ok" else status
+        if status == "ok" and self.lock.drift:
+            status = "drift"
+        return self._record(t, status, flags, outcome)
 
     def _compare_recovered(self, t: float, outcome: SolveOutcome) -> None:
         rec = self.recovered
@@ -228,9 +346,10 @@ class FixtureCycle:
             self.lock.restart(t, np.array(self._readings))
             return
         quat = _quaternion(sol.pose[:3, :3])
-        event = LockEvent(self.cfg.name, t, sol.pose[:3, 3].copy(), quat, mean, "ok", self.geometry_hash, sol.q)
+        status = "ok" if self.fault is None else self.fault.stored_status()  # the lock carries a waiting fault
+        event = LockEvent(self.cfg.name, t, sol.pose[:3, 3].copy(), quat, mean, status, self.geometry_hash, sol.q)
         target, u = self.target, outcome.uncertainty
-        if target is not None and u is not None:
+        if target is not None and u is not None and status == "ok":  # a lock with a fault meets no target
             sigma = {"translation_mm": u.translation * 1e3, "rotation_deg": math.degrees(u.rotation)}
             if within(deviation(sol.pose, target.pose), sigma, target.tolerance):
                 event = replace(event, target_id=target.id, recipe=target.recipe)
@@ -251,6 +370,10 @@ class FixtureCycle:
             flags.extend(f"encoder_warning:leg{k + 1}" for k in range(6) if self._warn[k] and not self._err[k])
         if self._advisory:
             flags.extend(sorted(self._advisory))
+        if self.fault is not None:  # nothing is ok until the fault is acknowledged
+            flags.extend(self.fault.flags())
+            if status in _POSE_STATUSES:
+                status = UNACKNOWLEDGED
         pose = sigma = margin = None
         if outcome is not None and outcome.pose is not None and outcome.uncertainty is not None:
             u = outcome.uncertainty

@@ -4,7 +4,8 @@ Endpoints of the service itself:
 
 * ``GET /fixtures`` -> ``{"fixtures": [names]}``
 * ``GET /fixtures/NAME/pose`` -> the fixture's latest record (404 for an unknown name)
-* ``GET /health`` -> ``{"status": "ok" | "degraded", ...}`` (see ``FixtureService.health``)
+* ``GET /health`` -> ``{"status": "ok" | "degraded", "problems": [...], ...}`` (``FixtureService.health``)
+* ``POST /fixtures/NAME/acknowledge`` ``{"by": "who", "note": "..."}`` (token) -> the fault acknowledged
 
 Every answer is JSON, errors too (``{"error": ...}``): 404 for an unknown path, 405 (with
 ``Allow``) for a method a path does not serve, ``401`` without the right bearer token, ``503
@@ -47,7 +48,7 @@ from .token import bearer_matches
 log = logging.getLogger(__name__)
 Endpoint = Callable[[Request], Awaitable[Response]]
 MAX_BODY = 65_536  # bytes of a request body read by read_json
-RESOURCES = ["/fixtures", "/fixtures/NAME/pose", "/health"]
+RESOURCES = ["/fixtures", "/fixtures/NAME/pose", "/fixtures/NAME/acknowledge", "/health"]
 
 
 def json_response(body: object, status: int = 200, headers: Mapping[str, str] | None = None) -> Response:
@@ -133,11 +134,29 @@ async def _health(request: Request) -> Response:
     return json_response(service_of(request).health())
 
 
+@requires_token
+async def _acknowledge(request: Request) -> Response:
+    service, name = service_of(request), request.path_params["name"]
+    body = await read_json(request)
+    by, note = body.get("by"), body.get("note", "")
+    if not isinstance(by, str) or not 0 < len(by.strip()) <= 100:
+        return error_response(400, 'give who acknowledges: {"by": "NAME"} (1 to 100 characters)')
+    if not isinstance(note, str) or len(note) > 1000:
+        return error_response(400, "note: text of at most 1000 characters")
+    if name not in service.names():
+        return error_response(404, f"no fixture {name!r}", fixtures=service.names())
+    ack = service.acknowledge(name, by.strip(), request.state.client, note)
+    if ack is None:
+        return error_response(409, f"fixture {name!r}: no fault waits for an acknowledgement")
+    return json_response({"acknowledged": ack.describe()})
+
+
 def core_routes() -> list[BaseRoute]:
-    """The service's read endpoints (``GET``; ``HEAD`` answers the same headers)."""
+    """The service's endpoints: reads (``GET``; ``HEAD`` answers the same headers) and the acknowledgement."""
     return [
         Route("/fixtures", _fixtures, methods=["GET"]),
         Route("/fixtures/{name}/pose", _pose, methods=["GET"]),
+        Route("/fixtures/{name}/acknowledge", _acknowledge, methods=["POST"]),
         Route("/health", _health, methods=["GET"]),
     ]
 

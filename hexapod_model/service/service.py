@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import can
 
+from .alarms import Acknowledgement
 from .changeover import Changeover
 from .config import ServiceConfig, geometry_hash
 from .cycle import FixtureCycle
@@ -306,25 +307,53 @@ class FixtureService:
         self._json[name] = (rec, text)  # one entry per fixture; a race only serialises twice
         return text
 
+    def acknowledge(self, name: str, by: str, client: str = "local", note: str = "") -> Acknowledgement | None:
+        """Acknowledge the fault latched on fixture ``name`` (None when none waits; ``KeyError``: no such fixture).
+
+        The cycle clears it at its next set (see :mod:`~hexapod_model.service.alarms`); logged
+        with who, from where and when.
+        """
+        ack = self.cycles[name].acknowledge(by, client, note)
+        if ack is not None:
+            flags = ",".join(ack.fault.flags())
+            log.warning("fixture %s: acknowledgement of %s by %s from %s", name, flags, by, client)
+        return ack
+
     def health(self) -> dict:
-        """Service state: ``ok`` or ``degraded`` (store error, cycle stopped or a fixture without a good pose)."""
+        """Service state: ``ok`` or ``degraded``, with every problem as one line in ``problems``.
+
+        Degraded: a store error, the cycle stopped, or a fixture whose latest record is not ``ok``
+        (its status and flags say why) or whose fault waits for an acknowledgement.
+        """
         now = time.time()
-        fixtures = {}
+        fixtures, problems = {}, []
         for name, c in self.cycles.items():
             rec = c.last
             fixtures[name] = {
                 "status": rec["status"],
+                "flags": rec["flags"],
                 "state": rec["state"],
                 "stored": rec["stored"],
                 "age_s": now - rec["t"],
                 "recovery": c.recovery,
                 "recovered_t": None if c.recovered is None else c.recovered.t,
+                "fault": None if c.fault is None else c.fault.describe(),
+                "acknowledged": None if c.acknowledged is None else c.acknowledged.describe(),
+                "counters": dict(c.counters),
             }
+            if rec["status"] != "ok":
+                problems.append(f"{name}: {rec['status']}" + (f" ({', '.join(rec['flags'])})" if rec["flags"] else ""))
+            if c.fault is not None and rec["status"] != "unacknowledged_fault":
+                problems.append(f"{name}: {', '.join(c.fault.flags())} waits for an acknowledgement")
         store_error = None if self.writer is None else self.writer.error
+        if store_error is not None:
+            problems.append(f"store: {store_error}")
         running = self._thread is not None and self._thread.is_alive()
-        good = running and store_error is None and all(f["status"] == "ok" for f in fixtures.values())
+        if not running:
+            problems.append("the cycle thread is not running")
         return {
-            "status": "ok" if good else "degraded",
+            "status": "ok" if not problems else "degraded",
+            "problems": problems,
             "uptime_s": now - self._started,
             "frames": self.frames,
             "unknown_frames": self.unknown_frames,

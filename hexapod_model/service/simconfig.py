@@ -21,7 +21,17 @@ from .config import ServiceConfig, read_toml
 from .errors import ConfigError, Table
 from .sim_changeover import ChangeoverScript
 
-FAULTS = ("dropped_frames", "silent_leg", "stuck_leg", "error_bit", "warning_bit", "spike")
+FAULTS = (
+    "dropped_frames",
+    "silent_leg",
+    "stuck_leg",
+    "error_bit",
+    "warning_bit",
+    "spike",
+    "step",
+    "late_frame",
+    "duplicate_id",
+)
 
 
 @dataclass(frozen=True)
@@ -34,7 +44,11 @@ class Fault:
         start: seconds after the simulation starts.
         duration: seconds (a ``spike`` affects the first set at or after ``start`` only).
         probability: chance that a frame is lost (``dropped_frames``).
-        size: reading offset of a ``spike`` (m).
+        size: reading offset (m) of a ``spike``, a ``step`` (an encoder that slipped, for
+            ``duration``) or the second sender's frame of a ``duplicate_id`` (sent on the leg's
+            CAN id just before the genuine frame).
+        sets: a ``late_frame`` leg sends its frame of this many sets earlier, with that set's
+            timestamp, last in the set, instead of the current one.
     """
 
     kind: str
@@ -43,6 +57,7 @@ class Fault:
     duration: float = 0.0
     probability: float = 1.0
     size: float = 0.0
+    sets: int = 1
 
     def active(self, t: float) -> bool:
         """True while the fault acts at simulation time ``t`` (s)."""
@@ -208,9 +223,10 @@ def _fault(t: Table) -> Fault:
         kind=kind,
         legs=legs,
         start=t.number("start", 0.0, 0.0, 1e6),
-        duration=t.number("duration", 0.0 if kind == "spike" else 1.0, 0.0, 1e6),
+        duration=t.number("duration", {"spike": 0.0, "step": 1e6}.get(kind, 1.0), 0.0, 1e6),
         probability=t.number("probability", 0.2, 0.0, 1.0) if kind == "dropped_frames" else 1.0,
-        size=t.number("size", 0.002, -0.5, 0.5) if kind == "spike" else 0.0,
+        size=t.number("size", 0.002, -0.5, 0.5) if kind in ("spike", "step", "duplicate_id") else 0.0,
+        sets=t.integer("sets", 1, 1, 1000) if kind == "late_frame" else 1,
     )
     t.finish()
     return fault

@@ -70,6 +70,9 @@ class _Encoders:
         self._sol: Solution | None = None
         self._stuck: dict[int, float] = {}
         self._spiked: set[int] = set()
+        self._past: deque[list[can.Message | None]] = deque(maxlen=1001)  # sent sets, newest last (late_frame)
+        self.late: dict[int, int] = {}
+        self.duplicate: dict[int, float] = {}
 
     def pose(self) -> np.ndarray:
         n = len(self.sim.poses)
@@ -110,6 +113,8 @@ class _Encoders:
         """The six frames (``None``: not sent) of a set at ``t_sim``."""
         r = true + self.rng.normal(0.0, self.sim.noise, 6) if self.sim.noise > 0 else true.copy()
         err, warn, drop = [False] * 6, [False] * 6, [False] * 6
+        self.late = {}  # leg -> sets: send that old frame last instead (late_frame)
+        self.duplicate = {}  # leg -> reading of a second sender (duplicate_id)
         active = []
         for i, f in enumerate(self.sim.faults):
             if f.kind == "spike":
@@ -136,6 +141,12 @@ class _Encoders:
                     err[k] = True
                 elif f.kind == "warning_bit":
                     warn[k] = True
+                elif f.kind == "step":
+                    r[k] += f.size
+                elif f.kind == "late_frame":
+                    self.late[k] = f.sets
+                elif f.kind == "duplicate_id":
+                    self.duplicate[k] = float(r[k] + f.size)
         msgs: list[can.Message | None] = []
         for k, leg in enumerate(self.cfg.legs):
             try:
@@ -182,24 +193,38 @@ class Simulator:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
-    def send_set(self, index: int, t_sim: float, stamp: float | None = None) -> SentSet:
+    def send_set(self, index: int, t_sim: float, stamp: float | None = None, stall_check: bool = True) -> SentSet:
         """Send one reading set of fixture ``index`` (of ``sim.fixtures``) at simulation time ``t_sim``.
 
         With ``stamp`` (s, Unix) the frames carry it (plus :data:`FRAME_TIME` per frame, as a bus
         delivers a burst) as their timestamps; a virtual bus keeps them when it was created with
         ``preserve_timestamps=True``, so the receiver sees the sampling times however late this
-        thread runs. Without, the bus stamps them when sent.
+        thread runs. Without, the bus stamps them when sent. ``stall_check``: a set sent more
+        than a period after its stamp is lost, as an encoder's would be.
         """
         enc = self._encoders[index]
         pose, true = enc.advance(t_sim)
         msgs, faults = enc.frames(t_sim, true)
         t_first = time.time()
-        if stamp is not None and t_first - stamp > 1.0 / enc.sim.rate:  # this thread stalled: lost
+        if stamp is not None and stall_check and t_first - stamp > 1.0 / enc.sim.rate:  # this thread stalled: lost
             msgs = [None] * 6
         for k, m in enumerate(msgs):
+            if m is not None and stamp is not None:
+                m.timestamp = stamp + k * FRAME_TIME
+        enc._past.append(list(msgs))
+        order: list[can.Message | None] = []
+        for k, m in enumerate(msgs):
+            if k in enc.duplicate and m is not None:
+                second = enc.cfg.legs[k].message(enc.duplicate[k])
+                second.timestamp = m.timestamp - FRAME_TIME / 2
+                order.append(second)
+            order.append(None if k in enc.late else m)
+        for k, sets in enc.late.items():  # the frame of `sets` sets ago, with its own stamp, last
+            old = enc._past[-1 - sets][k] if len(enc._past) > sets else None
+            order.append(old)
+            msgs[k] = old
+        for m in order:
             if m is not None:
-                if stamp is not None:
-                    m.timestamp = stamp + k * FRAME_TIME
                 self.bus.send(m)
         if stamp is not None:
             t_first, t_last = stamp, stamp + 5 * FRAME_TIME

@@ -62,6 +62,7 @@ class SolveOutcome:
         iterations: Newton steps.
         uncertainty: of the pose (``None`` when failed).
         solve_time: seconds spent (prediction, solve, checks, uncertainty).
+        legs: legs (0-based) the tracker's ``jump`` or ``stuck`` names.
     """
 
     pose: np.ndarray | None
@@ -71,6 +72,7 @@ class SolveOutcome:
     iterations: int
     uncertainty: Uncertainty | None
     solve_time: float
+    legs: tuple[int, ...] = ()
 
 
 class PoseSolver:
@@ -129,11 +131,12 @@ class PoseSolver:
         self._instant = instant
         r = self.tracker.step(readings)
         if r.failed:
-            return SolveOutcome(None, None, "failed", (*r.flags, r.status), r.iterations, None, _since(t0))
+            flags = (*r.flags, r.status)
+            return SolveOutcome(None, None, "failed", flags, r.iterations, None, _since(t0), r.legs)
         u = Uncertainty(r.sigma_translation, r.sigma_rotation, r.singularity_margin)
         status = "flagged" if r.flags else "ok"
         sol = r.solution
-        return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, _since(t0))
+        return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, _since(t0), r.legs)
 
 
 def _since(t0: float) -> float:

@@ -18,6 +18,8 @@ import math
 import numpy as np
 
 GAP_INSTANTS = 3  # sampling instants without a set after which a leg's speed estimate restarts
+STEP_SIGMAS = 5.0  # a step estimate beyond this many of its sigmas is a step (StepDetector)
+MOTION_LEGS = 3  # legs leaving the band together: the plate moves (fewer: a leg moved alone, an alarm)
 
 
 class LockDetector:
@@ -40,6 +42,10 @@ class LockDetector:
         self.state = "moving"
         self.reference: np.ndarray | None = None  # mean readings of the locking run (m)
         self.drift = False
+        self.drift_legs: tuple[int, ...] = ()  # legs whose average is beyond drift_limit
+        self.moved: tuple[int, ...] = ()  # one or two legs out of the band while the others stay
+        self.slipped: tuple[int, ...] = ()  # moved for 2 x unlock_samples sets: the caller latches it
+        self._alone = 0
         self._ref: list[float] = []  # the reference as floats
         self._run_start: tuple[float, list[float]] | None = None
         self._sum = [0.0] * 6
@@ -64,16 +70,24 @@ class LockDetector:
             if _beyond(x, ref, self.band):
                 self._outside += 1
                 if self._outside >= self.unlock_samples:
-                    self.state, self.reference, self.drift, self._outside = "moving", None, False, 0
-                    self._restart(t, x)
+                    out = _legs_beyond(x, ref, self.band)
+                    if len(out) >= MOTION_LEGS:
+                        self.state, self.reference, self.drift, self._outside = "moving", None, False, 0
+                        self.drift_legs, self.moved, self._alone = (), (), 0
+                        self._restart(t, x)
+                    else:
+                        self.moved, self._alone = out, self._alone + 1
+                        if self._alone >= 2 * self.unlock_samples:
+                            self.slipped = out
                 return False
-            self._outside = 0
+            self._outside, self.moved, self._alone = 0, (), 0
             alpha = 1.0 - math.exp(-max(t - self._t_last, 0.0) / max(self.lock_time, 1e-9))
             ema = self._ema
             for k in range(6):  # ema += alpha (readings - ema)
                 ema[k] += alpha * (x[k] - ema[k])
             self._t_last = t
             self.drift = _beyond(ema, ref, self.drift_limit)
+            self.drift_legs = _legs_beyond(ema, ref, self.drift_limit) if self.drift else ()
             return False
         if self._run_start is None or _beyond(x, self._run_start[1], self.band):
             self._restart(t, x)
@@ -92,12 +106,19 @@ class LockDetector:
     def lock(self, t: float, reference: np.ndarray) -> None:
         """Enter ``locked`` with ``reference`` readings (m) at time ``t`` (s)."""
         self.state, self.reference, self.drift, self._outside = "locked", np.array(reference, dtype=float), False, 0
+        self.drift_legs, self.moved, self.slipped, self._alone = (), (), (), 0
         self._ref = self.reference.tolist()
         self._ema = self._ref.copy()
         self._t_last = t
 
     def restart(self, t: float, readings) -> None:
         """Start a new steady run at this set (a lock could not be taken)."""
+        self._restart(t, [float(v) for v in readings])
+
+    def release(self, t: float, readings) -> None:
+        """Leave ``locked`` (an acknowledged alarm): a new lock is taken from the readings as they are now."""
+        self.state, self.reference, self.drift, self._outside = "moving", None, False, 0
+        self.drift_legs, self.moved, self.slipped, self._alone = (), (), (), 0
         self._restart(t, [float(v) for v in readings])
 
 
@@ -111,6 +132,11 @@ def _beyond(a: list[float], b: list[float], limit: float) -> bool:
         if d > worst:
             worst = d
     return worst > limit
+
+
+def _legs_beyond(a: list[float], b: list[float], limit: float) -> tuple[int, ...]:
+    """Legs (0-based) with ``|a - b| > limit``."""
+    return tuple(k for k, (u, v) in enumerate(zip(a, b)) if abs(u - v) > limit)
 
 
 class StuckDetector:
@@ -164,3 +190,78 @@ class StuckDetector:
             since[k], value[k] = instant, float(readings[k])
         self._counts = list(counts)
         return stuck
+
+
+class StepDetector:
+    """Legs whose reading jumped and stayed there: a step (slipped encoder, swapped legs), not a spike.
+
+    The tracker flags a reading far from its motion model (``jump``) but, for a small step, may
+    take the new level as motion from the next set on. So when it flags a jump at a sampling
+    instant, each named leg's readings around it, ``before`` instants before and ``after``
+    after, are fitted twice: a cubic in time plus a *step* from that instant on, and a cubic plus
+    a *spike* at it. A leg is stepped when the step model fits better, its step exceeds
+    :data:`STEP_SIGMAS` of its own uncertainty (the reading noise through the fit) and a quarter
+    of the largest step found. Until then
+    the caller keeps the records off ``ok``. A step below the tracker's jump threshold (about 5
+    noise sigma) and a creep slower than the noise are not seen.
+
+    Args:
+        noise: 1-sigma reading noise (m).
+        before: readings per leg before the jump in the fit.
+        after: readings per leg after the jump's own.
+    """
+
+    def __init__(self, noise: float, before: int = 6, after: int = 3):
+        self.noise, self.before, self.after = noise, before, after
+        self._history: list[tuple[int, list[float]]] = []  # (instant, readings), the last `before` sets
+        self._jump: tuple[int, tuple[int, ...]] | None = None  # (instant, legs) being checked
+        self._post: list[tuple[int, list[float]]] = []
+
+    @property
+    def pending(self) -> bool:
+        """Whether a jump is being checked (a step or a spike: not known yet)."""
+        return self._jump is not None
+
+    def reset(self) -> None:
+        """Forget the readings seen (after a step, or an acknowledgement)."""
+        self._history, self._jump, self._post = [], None, []
+
+    def update(self, instant: int, readings, jump_legs: tuple[int, ...]) -> tuple[int, ...]:
+        """Add a set (sampling instant, readings in m, legs the tracker flags ``jump``); returns stepped legs."""
+        x = [float(v) for v in readings]
+        if self._jump is not None:
+            self._post.append((instant, x))
+            if len(self._post) <= self.after:
+                return ()
+            stepped = self._decide()
+            after = self._post[1:]
+            self.reset()
+            self._history = after  # the readings after the jump: the new level (or the old, after a spike)
+            return stepped
+        if jump_legs and len(self._history) >= self.before:
+            self._jump, self._post = (instant, tuple(jump_legs)), [(instant, x)]
+            return ()
+        self._history.append((instant, x))
+        if len(self._history) > self.before:
+            del self._history[0]
+        return ()
+
+    def _decide(self) -> tuple[int, ...]:
+        assert self._jump is not None
+        k, legs = self._jump
+        sets = self._history + self._post
+        n = np.array([i for i, _ in sets], dtype=float) - k
+        R = np.array([r for _, r in sets])
+        base = np.column_stack([np.ones_like(n), n, n**2, n**3])
+        fits = {}
+        for name, extra in (("step", n >= 0), ("spike", n == 0)):
+            V = np.column_stack([base, extra.astype(float)])
+            coef, *_ = np.linalg.lstsq(V, R, rcond=None)
+            rss = ((R - V @ coef) ** 2).sum(axis=0)
+            sd = self.noise * math.sqrt(float(np.linalg.inv(V.T @ V)[4, 4]))
+            fits[name] = (coef[4], rss, sd)
+        step, rss_step, sd = fits["step"]
+        rss_spike = fits["spike"][1]
+        found = [j for j in legs if abs(step[j]) > STEP_SIGMAS * sd and rss_step[j] < rss_spike[j]]
+        largest = max((abs(step[j]) for j in found), default=0.0)
+        return tuple(j for j in found if abs(step[j]) >= largest / 4)  # not a leg the largest step dragged along

@@ -355,3 +355,33 @@ def test_view_live_shows_a_served_pose(tmp_path, capsys):
         sim_bus.shutdown()
     captured = capsys.readouterr()
     assert "meshcat: http://127.0.0.1" in captured.out and "showed 1 poses of left" in captured.err
+
+
+def test_a_step_needs_an_acknowledgement_from_the_command_line_then_ok_again(tmp_path, capsys):
+    token = tmp_path / "fixture.token"
+    token.write_text("cli-acknowledge-token-0123456789\n")
+    token.chmod(0o600)
+    cfg = write_config(tmp_path, extra='token_file = "fixture.token"\n')
+    body = '[[fixtures]]\nname = "left"\nrate = 100.0\ntrajectory = "A"\n'
+    body += '[[fixtures.faults]]\nkind = "step"\nleg = 2\nsize = 0.0005\nstart = 1.0\n'
+    served = Served(str(cfg), "--simulate", str(write_sim(tmp_path, body)), "--jsonl")
+    try:
+        served.wait_port()
+        assert served.status("/health") == 401  # a token is configured: reads need it too
+        served.wait_for(lambda: any(r["status"] == "unacknowledged_fault" for r in served.records))
+        time.sleep(0.3)
+        n = len(served.records)
+        url = ["--url", f"http://127.0.0.1:{served.port}"]  # port 0 in the configuration: the one it took
+        assert main(["fixture", "acknowledge", str(cfg), "left", "--by", "tester", "--note", "checked", *url]) == 0
+        served.wait_for(lambda: any(r["status"] == "ok" for r in served.records[n:]))
+        assert main(["fixture", "acknowledge", str(cfg), "left", "--by", "tester", *url]) == 2  # nothing waits now
+    finally:
+        code = served.finish(signal.SIGINT)
+    assert code == 0, "".join(served.err)
+    err = capsys.readouterr().err
+    assert "left: discontinuity (leg 2) acknowledged by tester" in err and "409" in err
+    log = "".join(served.err)
+    assert "acknowledged by tester (127.0.0.1:" in log and "Traceback" not in log
+    first = next(k for k, r in enumerate(served.records) if r["status"] == "unacknowledged_fault")
+    later_ok = next(k for k, r in enumerate(served.records) if k > first and r["status"] == "ok")
+    assert all(r["status"] != "ok" and "discontinuity:leg2" in r["flags"] for r in served.records[first:later_ok])

@@ -48,7 +48,7 @@ class CollectingBus:
 def drive(service, sim, seconds: float, recovered=None, t0: float = 1.0e9, cycle=None):
     """Feed ``seconds`` of simulated sets of the first simulated fixture into its cycle, by hand.
 
-    Frames get the simulated time (``t0 + t_sim``) as receipt time. Returns the cycle, the
+    Frames get their stamps (``t0 + t_sim`` plus the frame spacing) as receipt time. Returns the cycle, the
     records published (with the simulated set each belongs to) and the simulator's truth.
     """
     fixture = sim.fixtures[0]
@@ -64,9 +64,9 @@ def drive(service, sim, seconds: float, recovered=None, t0: float = 1.0e9, cycle
     for k in range(n):
         t_sim = k / fixture.rate
         bus.sent.clear()
-        sent = simulator.send_set(0, t_sim)
-        for msg in bus.sent:
-            rec = cycle.on_frame(leg_of[msg.arbitration_id], msg.data, t0 + t_sim)
+        sent = simulator.send_set(0, t_sim, stamp=t0 + t_sim, stall_check=False)
+        for msg in bus.sent:  # received at the sampling time of its set (a late frame keeps its own)
+            rec = cycle.on_frame(leg_of[msg.arbitration_id], msg.data, msg.timestamp)
             if rec is not None:
                 out.append((sent, rec))
         if cycle.pending_lock is not None:  # the store's part: committed at once

@@ -43,8 +43,13 @@ def check_ok_poses(out):
     return r
 
 
+def set_of(rec, t0=1.0e9):
+    """The index of the set a record is about (drive() stamps set k at t0 + k / RATE + frame spacing)."""
+    return round((rec["t"] - t0) * RATE)
+
+
 def statuses(out, t0, t1):
-    return [(round(s.t_sim * RATE), rec["status"], rec["flags"]) for s, rec in out if t0 <= s.t_sim < t1]
+    return [(set_of(rec), rec["status"], rec["flags"]) for _, rec in out if t0 <= set_of(rec) / RATE < t1]
 
 
 def test_clean_stream_every_set_ok_within_the_noise_propagated_sigma(tmp_path):
@@ -72,7 +77,8 @@ def test_clean_stream_every_set_ok_within_the_noise_propagated_sigma(tmp_path):
             119,
         ),
         ({"kind": "stuck_leg", "leg": 4, "start": 1.0, "duration": 0.3}, "stuck_leg", "stuck:leg4", 101, 129),
-        ({"kind": "silent_leg", "leg": 2, "start": 1.0, "duration": 0.3}, "silent_leg", "silent:leg2", 105, 130),
+        # incomplete sets name the missing leg at once, silent_leg once its last frame is stale (5 sets)
+        ({"kind": "silent_leg", "leg": 2, "start": 1.0, "duration": 0.3}, "incomplete", "missing:leg2", 100, 129),
         ({"kind": "spike", "leg": 5, "start": 1.0, "size": 0.002}, "flagged", "jump", 100, 100),
     ],
 )
@@ -86,14 +92,19 @@ def test_each_fault_gives_its_status_in_time_and_clean_poses_after(tmp_path, fau
     else:  # the fault's sets, then at most SETTLE sets while the tracker re-anchors after the gap
         fault_sets = [(k, s, f) for k, s, f in bad if s != "flagged"]
         assert [k for k, _, _ in fault_sets] == list(range(first, last + 1))
-        assert all(s == status and flag in f for _, s, f in fault_sets)
+        if status == "incomplete":
+            n = sum(s == "incomplete" for _, s, _ in fault_sets)  # until leg 2's last frame is 0.05 s old
+            assert 4 <= n <= 5 and [s for _, s, _ in fault_sets] == ["incomplete"] * n + ["silent_leg"] * (30 - n)
+            assert all("missing:leg2" in f if s == "incomplete" else "silent:leg2" in f for _, s, f in fault_sets)
+        else:
+            assert all(s == status and flag in f for _, s, f in fault_sets)
         settling = [k for k, s, f in bad if s == "flagged"]
         assert all(f == ["settling"] for _, s, f in bad if s == "flagged")
         assert len(settling) <= SETTLE and settling == list(range(settling[0], settling[0] + len(settling)))
         assert not settling or last <= settling[0] <= last + 1
     for k, s, _ in bad:
         if s != "flagged":
-            rec = next(r for sent, r in out if round(sent.t_sim * RATE) == k)
+            rec = next(r for _, r in out if set_of(r) == k)
             assert rec["pose"] is None and rec["sigma"] is None  # never a pose with a failure
     after = statuses(out, (bad[-1][0] + 1) / RATE, 9)
     assert after and all(s == "ok" for _, s, _ in after)
@@ -103,10 +114,13 @@ def test_each_fault_gives_its_status_in_time_and_clean_poses_after(tmp_path, fau
 def test_dropped_frames_never_mix_sampling_instants(tmp_path):
     fault = {"kind": "dropped_frames", "start": 0.5, "duration": 1.5, "probability": 0.1}
     _, out = run(tmp_path, [fault])
-    during = [rec for s, rec in out if 0.5 <= s.t_sim < 2.0]
-    assert 40 < len(during) < 120  # about 0.9^6 of 150 sets complete; the others give no record
-    assert {rec["status"] for rec in during} <= {"ok", "flagged", "silent_leg"}
-    assert sum(rec["status"] == "ok" for rec in during) > len(during) / 2  # gaps flag a few sets, not all
+    during = [rec for _, rec in out if 0.5 <= set_of(rec) / RATE < 2.0]
+    assert len(during) == 150  # every instant ends in a record: about 0.9^6 of them complete
+    assert {rec["status"] for rec in during} <= {"ok", "flagged", "silent_leg", "incomplete"}
+    missing = [rec for rec in during if rec["status"] == "incomplete"]
+    assert 30 < len(missing) < 100 and all(any(f.startswith("missing:leg") for f in r["flags"]) for r in missing)
+    complete = [rec for rec in during if rec["pose"] is not None]
+    assert sum(rec["status"] == "ok" for rec in complete) > len(complete) / 2  # gaps flag a few sets, not all
     check_ok_poses(out)  # a set mixing two instants would be off by one set's motion: ~20 sigma
 
 
@@ -165,7 +179,7 @@ def test_recovery_without_motion_is_locked_and_stored_from_the_first_pose(tmp_pa
     assert all(rec["status"] == "ok" for _, rec in out[SETTLE:])
 
 
-def test_drift_while_locked_is_flagged_in_the_record_and_logged(tmp_path, caplog):
+def test_one_leg_creeping_while_locked_is_an_alarm_naming_it_until_acknowledged(tmp_path, caplog):
     svc = service_config(tmp_path, [fixture_table(lock_time=0.2)])
     cfg = svc.fixtures[0]
     hexa = hexapod("reference")
@@ -174,13 +188,24 @@ def test_drift_while_locked_is_flagged_in_the_record_and_logged(tmp_path, caplog
     rng = np.random.default_rng(2)
     out = []
     with caplog.at_level("WARNING", logger="hexapod_model.service"):
-        for k in range(200):  # still for 0.5 s, then leg 1 creeps 1 um per set (1 mm/s, below the band)
+        for k in range(260):  # still 0.5 s, then leg 1 creeps 1 um per set (below the band) for 50 um
             r = held + rng.normal(0, 10e-6, 6)
-            r[0] += 1e-6 * max(0, k - 50)
+            r[0] += 1e-6 * min(max(0, k - 50), 50)
+            if k == 150:
+                ack = cycle.acknowledge("operator", "test")
+                assert ack is not None and ack.fault.legs == (0,)
             for leg, codec in enumerate(cfg.legs):
                 rec = cycle.on_frame(leg, codec.message(float(r[leg])).data, 1.0 + k / RATE)
             out.append(rec)
-    drifting = [k for k, rec in enumerate(out) if "drift" in rec["flags"]]
-    assert drifting and out[drifting[0]]["state"] == "locked" and out[drifting[0]]["status"] == "ok"
+    drifting = [k for k, rec in enumerate(out) if "drift:leg1" in rec["flags"]]
+    assert drifting and out[drifting[0]]["state"] == "locked" and out[drifting[0]]["status"] != "ok"
     assert 50 + 25 <= drifting[0] <= 50 + 80  # 3 sigma = 30 um of creep, plus the average's lag
+    assert all("drift:leg1" == f for rec in out[drifting[0] :] for f in rec["flags"] if f.startswith("drift"))
+    # latched: nothing ok until the acknowledgement (set 150), then a new lock from the readings as they are
+    assert all(rec["status"] != "ok" for rec in out[drifting[0] : 150])
+    assert all("moved_while_locked:leg1" in rec["flags"] for rec in out[drifting[0] : 150])
+    assert out[150]["state"] == "moving" and cycle.fault is None and cycle.acknowledged is ack
+    assert all(rec["status"] == "ok" and rec["flags"] == [] for rec in out[151:])
+    assert out[-1]["state"] == "locked"
     assert sum("drift" in m for m in caplog.messages) == 1
+    assert any("acknowledged by operator" in m for m in caplog.messages)
