@@ -1,7 +1,7 @@
 """The changeover's HTTP endpoints and the dashboard (Starlette routes joined to the service's application).
 
-Writes need the bearer token (``401`` without it) and name who made them: the optional
-``X-Operator`` header (a person's name) and the peer's address. Bad bodies are ``422`` with
+Writes need the bearer token (``401`` without it) and name who made them: the optional ``by``
+of the body (or the ``X-Operator`` header: a person's name) and the peer's address. Bad bodies are ``422`` with
 one line naming the field (``{"error": ..., "field": ...}``); unknown fixtures and recipes
 ``404``.
 
@@ -37,10 +37,17 @@ ASSETS = {"dashboard.js": "text/javascript", "dashboard.css": "text/css", "index
 _OPERATOR = re.compile(r"^[\w .@-]{1,64}$")
 
 
-def _who(request: Request) -> str:
-    """``operator@host:port`` (or just the peer) for the store's ``set_by``."""
+def _who(request: Request, body: dict | None = None) -> str:
+    """``NAME (host:port)`` for the store's ``set_by``: the body's ``by`` or the ``X-Operator`` header, and the peer.
+
+    ``by`` is taken out of ``body``; a name that is not 1-64 letters, digits, spaces, ``. @ -``
+    is a :class:`TargetError`.
+    """
     client = getattr(request.state, "client", "?")
-    operator = request.headers.get("x-operator", "").strip()
+    by = None if body is None else body.pop("by", None)
+    if by is not None and (not isinstance(by, str) or not _OPERATOR.match(by)):
+        raise TargetError("by", by, "expected a name of 1-64 letters, digits, spaces, '.', '@' or '-'")
+    operator = by or request.headers.get("x-operator", "").strip()
     return f"{operator} ({client})" if operator and _OPERATOR.match(operator) else client
 
 
@@ -62,7 +69,11 @@ def _target_json(target: Target | None) -> dict[str, Any]:
 
 @requires_token
 async def _put_target(request: Request) -> Response:
-    body, name, who = await read_json(request), request.path_params["name"], _who(request)
+    body, name = await read_json(request), request.path_params["name"]
+    try:
+        who = _who(request, body)
+    except TargetError as exc:
+        return error_response(422, str(exc), field=exc.field)
     return await _call(request, lambda c: _target_json(c.set_target(name, body, who)))
 
 
@@ -88,7 +99,11 @@ async def _guidance(request: Request) -> Response:
 
 @requires_token
 async def _put_recipe(request: Request) -> Response:
-    body, name, who = await read_json(request), request.path_params["recipe"], _who(request)
+    body, name = await read_json(request), request.path_params["recipe"]
+    try:
+        who = _who(request, body)
+    except TargetError as exc:
+        return error_response(422, str(exc), field=exc.field)
     return await _call(request, lambda c: {"recipe": c.put_recipe(name, body, who).to_json()})
 
 

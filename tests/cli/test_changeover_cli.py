@@ -112,6 +112,15 @@ def test_done_when_from_the_example_served_by_its_cli(tmp_path, capsys):
         assert again["pose"] == pytest.approx(kept["pose"], abs=1e-12)
         assert main(["fixture", "target", str(cfg), "right", "--clear", "--url", f"http://127.0.0.1:{port}"]) == 0
         assert "target cleared" in capsys.readouterr().out
+        code, body = call(port, "PUT", "/fixtures/left/target", {"pose": HOLD, "tolerance": TOL, "by": "bo"})
+        assert code == 200 and body["target"]["set_by"].startswith("bo (")
+    finally:
+        served.finish(signal.SIGKILL)  # and a kill -9 right after the answer
+    served = Served(str(cfg), "--simulate", str(sim))
+    try:
+        port = served.wait_port()
+        assert call(port, "GET", "/fixtures/right/target")[1]["target"] is None
+        assert call(port, "GET", "/fixtures/left/target")[1]["target"]["id"] == body["target"]["id"]
     finally:
         assert served.finish(signal.SIGINT) == 0, "".join(served.err)
 

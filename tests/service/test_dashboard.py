@@ -10,6 +10,7 @@ import http.client
 import json
 import shutil
 import subprocess
+import time
 from html.parser import HTMLParser
 
 import can
@@ -105,6 +106,10 @@ def test_the_dashboard_shows_what_guidance_says(tmp_path):
             "test",
         )
         service.changeover.activate("bracket", "test")
+        deadline = time.monotonic() + 30.0  # both held plates locked: the state no longer changes
+        while not all((service.record(n) or {}).get("stored") for n in ("left", "right")):
+            assert time.monotonic() < deadline, [service.record(n) for n in ("left", "right")]
+            time.sleep(0.05)
         host, port = service.address
         dom = render(f"http://{host}:{port}/#token={TOKEN}", tmp_path / "profile")
         want = {name: guidance(service.address, name) for name in ("left", "right")}

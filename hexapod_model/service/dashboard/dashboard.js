@@ -40,7 +40,7 @@ function value(name, field, v, digits, magnitude) {
 }
 
 function displayState(g) {
-  if (g.status !== "ok" && g.status !== "flagged") return "fault";
+  if (g.status !== "ok" && g.status !== "flagged" && g.status !== "drift") return "fault";
   return g.state;
 }
 
@@ -95,15 +95,25 @@ function legBars(name, legs) {
   return box;
 }
 
+// POST /fixtures/NAME/acknowledge {"by", "note"}: who checked the fixture and what they found
 async function acknowledge(name, button) {
+  const by = window.prompt("Acknowledge the fault of " + name + ": your name");
+  if (!by) return;
+  const note = window.prompt("What did you check or repair?") || "";
   button.disabled = true;
+  button.setAttribute("data-busy", "1");
   try {
-    const r = await fetch("/fixtures/" + encodeURIComponent(name) + "/acknowledge", { method: "POST", headers: headers() });
-    button.textContent = r.ok ? "acknowledged" : "acknowledge: " + r.status;
+    const r = await fetch("/fixtures/" + encodeURIComponent(name) + "/acknowledge", {
+      method: "POST",
+      headers: Object.assign({ "Content-Type": "application/json" }, headers()),
+      body: JSON.stringify({ by: by, note: note }),
+    });
+    const answer = await r.json().catch(() => ({}));
+    button.textContent = r.ok ? "acknowledged" : "not acknowledged: " + (answer.error || r.status);
   } catch (e) {
-    button.textContent = "acknowledge: " + e;
+    button.textContent = "not acknowledged: " + e;
   }
-  setTimeout(() => { button.disabled = false; button.textContent = "Acknowledge"; }, 3000);
+  setTimeout(() => { button.removeAttribute("data-busy"); button.textContent = "Acknowledge"; }, 4000);
 }
 
 function card(g) {
@@ -137,6 +147,8 @@ function card(g) {
   c.appendChild(flags);
   if (g.target_problem) c.appendChild(el("div", { class: "flags" }, g.target_problem));
   const button = el("button", { type: "button", "data-fixture": name, "data-field": "acknowledge" }, "Acknowledge");
+  button.disabled = g.status !== "unacknowledged_fault";  // a latched fault waits for a person
+  button.title = button.disabled ? "no fault waits for an acknowledgement" : "acknowledge the fault (needs the token)";
   button.addEventListener("click", () => acknowledge(name, button));
   c.appendChild(button);
   return c;
@@ -150,7 +162,7 @@ function render(overview) {
     const old = document.getElementById("fixture-" + g.fixture);
     if (old) {
       const button = old.querySelector("button");
-      if (button && button.disabled) fresh.replaceChild(button, fresh.querySelector("button"));
+      if (button && button.hasAttribute("data-busy")) fresh.replaceChild(button, fresh.querySelector("button"));
       main.replaceChild(fresh, old);
     } else {
       main.appendChild(fresh);
