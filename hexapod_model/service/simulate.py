@@ -63,7 +63,7 @@ class _Encoders:
 
     def __init__(self, sim: SimFixture, cfg: FixtureConfig, hexa: Hexapod, rng: np.random.Generator, targets=None):
         self.sim, self.cfg, self.hexa, self.rng = sim, cfg, hexa, rng
-        self.follower = None if sim.changeover is None or targets is None else Follower(sim.changeover)
+        self.follower = None if sim.changeover is None or targets is None else Follower(sim.changeover, sim.ramp)
         self._targets = targets
         self.tau = 0.0  # position in the pose sequence (samples)
         self._key: float | None = None
@@ -86,14 +86,18 @@ class _Encoders:
 
     def advance(self, t_sim: float) -> tuple[np.ndarray, np.ndarray]:
         """True pose and readings at ``t_sim``; the sequence position then moves on one set."""
+        factor = 1.0
         if self.follower is not None:
+            f = self.follower
             key, target = self._targets(self.sim.name)
+            f.request(key, target)
+            playing = len(self.sim.poses) > 1 and self.sim.speed(t_sim) > 0.0
             current = self.pose() if self._sol is None else self._sol.pose
-            self.follower.update(key, target, current, t_sim)
-            if self.follower.active:
-                self._sol = self.hexa.inverse(self.follower.pose(t_sim), guess=self._sol)
+            if f.follow(current, t_sim, playing):
+                self._sol = self.hexa.inverse(f.pose(t_sim), guess=self._sol)
                 self._key = None
                 return self._sol.pose, self._sol.lengths.copy()
+            factor = f.sequence_speed(t_sim, playing)
         if self._key != self.tau:
             pose = self.pose()
             self._sol = self.hexa.inverse(pose, guess=self._sol)
@@ -101,13 +105,18 @@ class _Encoders:
         assert self._sol is not None
         pose, true = self._sol.pose, self._sol.lengths.copy()
         if len(self.sim.poses) > 1:
-            self.tau = (self.tau + self.sim.speed(t_sim)) % len(self.sim.poses)
+            self.tau = (self.tau + factor * self.sim.speed(t_sim)) % len(self.sim.poses)
         return pose, true
 
     def skip(self, t_sim: float) -> None:
         """Let a set's time pass unsent: the plate moves on."""
+        f = self.follower
+        if f is not None and f.active:
+            return  # the move is a function of time: nothing to advance
         if len(self.sim.poses) > 1:
-            self.tau = (self.tau + self.sim.speed(t_sim)) % len(self.sim.poses)
+            playing = self.sim.speed(t_sim) > 0.0
+            factor = 1.0 if f is None else f.sequence_speed(t_sim, playing)
+            self.tau = (self.tau + factor * self.sim.speed(t_sim)) % len(self.sim.poses)
 
     def frames(self, t_sim: float, true: np.ndarray) -> tuple[list[can.Message | None], tuple[str, ...]]:
         """The six frames (``None``: not sent) of a set at ``t_sim``."""

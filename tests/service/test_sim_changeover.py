@@ -58,3 +58,33 @@ def test_a_bad_changeover_script_names_the_field(tmp_path):
         sim_config(service, [{"name": "right", "hold": HOLD, "changeover": {"overshoot": 2.0}}])
     with pytest.raises(ConfigError, match=r"fixtures\[0\].changeover.speed"):
         sim_config(service, [{"name": "right", "hold": HOLD, "changeover": {"speed": 2.0}}])
+
+
+def test_a_playing_plate_slows_to_a_stop_before_it_moves_to_its_target(tmp_path):
+    service = service_config(tmp_path, [fixture_table("left")])
+    script = {"move": 1.0, "overshoot": 0.1, "settle": 0.5}
+    fixture = {"name": "left", "rate": 100.0, "noise": 0.0, "trajectory": "A", "period": 4.0, "changeover": script}
+    sim = sim_config(service, [fixture])
+    current: dict = {"key": None, "pose": None}
+    simulator = Simulator(
+        service,
+        sim,
+        CollectingBus(),
+        hexapods={"left": hexapod("reference")},
+        targets=lambda n: tuple(current.values()),
+    )  # type: ignore[arg-type]
+    goal = placement([0.0, 0.003, 0.405, 1.0, 0.0, -2.0])
+    positions = []
+    for k in range(460):  # 1 s of trajectory, the request, the stop (ramp 0.2 s), two moves of 1.5 s
+        if k == 100:
+            current.update(key=1, pose=goal)
+        if k == 200:
+            current.update(key=2, pose=placement(HOLD))  # during the move: taken once it has settled
+        positions.append(simulator.send_set(0, k / 100.0).pose[:3, 3])
+    p = np.array(positions)
+    accel = np.linalg.norm(np.diff(p, 2, axis=0), axis=1)
+    assert accel[100:].max() <= 3.0 * accel[:98].max()  # no velocity step when it stops, turns or starts
+    # request at set 100, stopped after the ramp (0.2 s), moved and settled 1.5 s later: then the second move
+    reached = [k for k in range(250, 300) if np.allclose(p[k], goal[:3, 3], atol=1e-9)]
+    assert reached and 268 <= reached[0] <= 273, reached
+    assert np.allclose(p[-1], placement(HOLD)[:3, 3], atol=1e-9)  # then the second one
