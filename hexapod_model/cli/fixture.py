@@ -15,6 +15,7 @@ from ..io.tables import LENGTH_COLUMNS, POSE_COLUMNS
 from .acknowledge import register_action
 
 LOCK_COLUMNS = ["fixture", "t", "time", *POSE_COLUMNS, *LENGTH_COLUMNS, "status", "geometry_hash"]
+LOCK_COLUMNS += ["target_id", "recipe"]  # the changeover target the lock met (empty: none)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -131,6 +132,8 @@ def run_history(args: argparse.Namespace) -> int:
                     *e.readings,
                     e.status,
                     e.geometry_hash,
+                    e.target_id,
+                    e.recipe,
                 ]
                 for e in store.locks(args.fixture, since)
             ]

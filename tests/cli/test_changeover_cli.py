@@ -100,8 +100,11 @@ def test_done_when_from_the_example_served_by_its_cli(tmp_path, capsys):
         )
         assert main(["fixture", "recipe", str(cfg), "bracket", "--set", str(recipe), "--activate", *url]) == 0
         assert "recipe bracket active" in capsys.readouterr().out
-        g = poll(port, "left", lambda g: g["in_tolerance"] and g["state"] == "locked", 20.0)
+        g = poll(port, "left", lambda g: g["in_tolerance"] and g["stored"], 20.0)
         assert g["in_tolerance"] and g["target"]["recipe"] == "bracket", (g["status"], g["flags"], g["state"])
+        assert main(["fixture", "history", str(cfg), "--fixture", "left"]) == 0  # the lock names what it met
+        rows = capsys.readouterr().out.splitlines()
+        assert rows[0].endswith(",target_id,recipe") and rows[-1].endswith(f",{g['target']['id']},bracket")
     finally:
         assert served.finish(signal.SIGINT) == 0, "".join(served.err)
     served = Served(str(cfg), "--simulate", str(sim))  # the target survives a restart
