@@ -17,6 +17,7 @@ Public API::
     svc.stop()
 """
 
+from .bus import open_bus
 from .cell import Cell, Located, locate
 from .changeover import Changeover, UnknownError
 from .client import RequestError, ServiceClient
@@ -34,7 +35,7 @@ from .config import (
 from .cycle import RECORD_KEYS, FixtureCycle
 from .errors import ConfigError, FrameError, ServiceError
 from .guidance import guidance
-from .service import FixtureService, open_bus
+from .service import FixtureService
 from .simconfig import Fault, SimConfig, SimFixture, load_simulation, simulation_from_dict
 from .simulate import SentSet, Simulator
 from .solve import PoseSolver, SolveOutcome, Uncertainty

@@ -17,8 +17,12 @@ and a restart recovers the fault with it.
 
 from __future__ import annotations
 
+import logging
 import re
+import time
 from dataclasses import dataclass
+
+log = logging.getLogger(__name__)
 
 KINDS = ("discontinuity", "moved_while_locked")
 UNACKNOWLEDGED = "unacknowledged_fault"
@@ -91,3 +95,64 @@ class Acknowledgement:
             "fault": self.fault.describe(),
             "note": self.note,
         }
+
+
+def _who(ack: Acknowledgement) -> tuple[str, str, float]:
+    return ack.by, ack.client, ack.t
+
+
+class FaultLatch:
+    """One fixture's latched fault and its acknowledgement (the cycle's thread latches and takes).
+
+    Args:
+        fixture: the fixture's name (for the log).
+    """
+
+    def __init__(self, fixture: str):
+        self.fixture = fixture
+        self.fault: LatchedFault | None = None
+        self.acknowledged: Acknowledgement | None = None  # the last one taken
+        self._request: Acknowledgement | None = None
+
+    def latch(self, kind: str, legs: tuple[int, ...], t: float) -> None:
+        """Latch a fault (a fault already waiting stays the one to acknowledge)."""
+        if self.fault is None:
+            self.fault = LatchedFault(kind, legs, t)
+            log.warning(
+                "fixture %s: %s: not ok until acknowledged (POST /fixtures/%s/acknowledge)",
+                self.fixture,
+                ", ".join(self.fault.flags()),
+                self.fixture,
+            )
+
+    def request(self, by: str, client: str, note: str = "", now: float | None = None) -> Acknowledgement | None:
+        """Ask to clear the waiting fault (None when none waits); :meth:`take` applies it."""
+        fault = self.fault
+        if fault is None:
+            return None
+        self._request = Acknowledgement(self.fixture, by, client, time.time() if now is None else now, fault, note)
+        return self._request
+
+    @property
+    def requested(self) -> bool:
+        """Whether an acknowledgement waits to be taken."""
+        return self._request is not None
+
+    def take(self) -> Acknowledgement | None:
+        """Clear the fault the waiting acknowledgement names (None: none, or another fault now); logged."""
+        ack, self._request = self._request, None
+        if ack is None or ack.fault != self.fault:
+            return None
+        self.fault, self.acknowledged = None, ack
+        note = f": {ack.note}" if ack.note else ""
+        flags = ",".join(ack.fault.flags())
+        log.warning(
+            "fixture %s: fault %s acknowledged by %s (%s) at t=%r%s",
+            self.fixture,
+            flags,
+            ack.by,
+            ack.client,
+            ack.t,
+            note,
+        )
+        return ack

@@ -265,6 +265,8 @@ def _hexapod_spec(t: Table, folder: Path) -> str:
     if spec in PRESETS:
         return spec
     p = Path(spec) if Path(spec).is_absolute() else folder / spec
+    if p.is_dir():
+        raise t.error("hexapod", spec, f"{p} is a folder: give a URDF or geometry file in it, or a preset")
     if not p.is_file():
         raise t.error("hexapod", spec, f"neither a preset ({', '.join(PRESETS)}) nor a file ({p} does not exist)")
     try:
@@ -277,8 +279,8 @@ def _hexapod_spec(t: Table, folder: Path) -> str:
 
 def _fixture(t: Table, index: int, folder: Path) -> FixtureConfig:
     name = t.text("name")
-    if not NAME_PATTERN.match(name):
-        raise t.error("name", name, "use letters, digits, '_', '-' and '.' only (it appears in URLs)")
+    if not NAME_PATTERN.match(name) or set(name) == {"."}:
+        raise t.error("name", name, "use letters, digits, '_', '-' and '.' only, not dots alone (it appears in URLs)")
     spec = _hexapod_spec(t, folder)
     extended = t.boolean("extended_id", False)
     id_max = 0x1FFFFFFF if extended else 0x7FF

@@ -27,14 +27,13 @@ from __future__ import annotations
 
 import logging
 import math
-import time
 from dataclasses import replace
 
 import numpy as np
 import pinocchio as pin
 
 from ..kinematics.hexapod import Hexapod
-from .alarms import UNACKNOWLEDGED, Acknowledgement, LatchedFault
+from .alarms import UNACKNOWLEDGED, Acknowledgement, FaultLatch, LatchedFault
 from .cell import InRobot
 from .config import FixtureConfig
 from .guidance import deviation, within
@@ -99,10 +98,7 @@ class FixtureCycle:
         self._duplicate: set[int] = set()  # legs with a second frame in the set being collected
         #: frames and sets that could not be used, since the start (``/health``)
         self.counters = {"late_frames": 0, "duplicate_frames": 0, "incomplete_sets": 0}
-        #: the fault waiting for an acknowledgement (:mod:`~hexapod_model.service.alarms`)
-        self.fault: LatchedFault | None = None
-        self.acknowledged: Acknowledgement | None = None  # the last acknowledgement
-        self._ack: Acknowledgement | None = None
+        self.alarm = FaultLatch(cfg.name)
         self._drift_logged = False
         self._advisory: set[str] = set()
         self._episode = self._stored_episode = 0
@@ -111,7 +107,7 @@ class FixtureCycle:
         self.recovery = "no stored lock pose"
         if recovered is not None and recovered.geometry_hash == geometry_hash:
             self.recovered, self.recovery = recovered, f"initial guess: the lock pose stored at t={recovered.t!r}"
-            self.fault = LatchedFault.from_stored(recovered.status)  # stored while a fault waited
+            self.alarm.fault = LatchedFault.from_stored(recovered.status)  # stored while a fault waited
         elif recovered is not None:
             self._advisory.add("stored_geometry_changed")
             self.recovery = "stored lock pose not used: solved with another geometry (hash differs)"
@@ -218,48 +214,23 @@ class FixtureCycle:
         self._new_lock_stored = True
         log.info("fixture %s: lock pose stored (id %s, t=%r)", self.cfg.name, event.id, event.t)
 
+    @property
+    def fault(self) -> LatchedFault | None:
+        """The fault waiting for an acknowledgement (:mod:`~hexapod_model.service.alarms`)."""
+        return self.alarm.fault
+
+    @property
+    def acknowledged(self) -> Acknowledgement | None:
+        """The last acknowledgement."""
+        return self.alarm.acknowledged
+
     def acknowledge(self, by: str, client: str, note: str = "", now: float | None = None) -> Acknowledgement | None:
-        """Acknowledge the latched fault (None when there is none); the next set applies it.
+        """Acknowledge the latched fault (None when there is none); safe from another thread.
 
-        Safe to call from another thread: the cycle's thread clears the fault at its next set
-        (and a locked fixture then takes a new lock from its readings as they are).
+        The cycle's thread clears the fault at its next set; a locked fixture then takes a new
+        lock from its readings as they are.
         """
-        fault = self.fault
-        if fault is None:
-            return None
-        ack = Acknowledgement(self.cfg.name, by, client, time.time() if now is None else now, fault, note)
-        self._ack = ack
-        return ack
-
-    def _apply_acknowledgement(self, t: float) -> None:
-        ack, self._ack = self._ack, None
-        if ack is None or ack.fault != self.fault:
-            return
-        self.fault = None
-        self.acknowledged = ack
-        self.steps.reset()
-        if self.lock.state == "locked":
-            self.lock.release(t, self._readings)
-            self._episode += 1
-        log.warning(
-            "fixture %s: fault %s acknowledged by %s (%s) at t=%r%s",
-            self.cfg.name,
-            ",".join(ack.fault.flags()),
-            ack.by,
-            ack.client,
-            ack.t,
-            f": {ack.note}" if ack.note else "",
-        )
-
-    def _latch(self, kind: str, legs: tuple[int, ...], t: float) -> None:
-        if self.fault is None:
-            self.fault = LatchedFault(kind, legs, t)
-            log.warning(
-                "fixture %s: %s: not ok until acknowledged (POST /fixtures/%s/acknowledge)",
-                self.cfg.name,
-                ", ".join(self.fault.flags()),
-                self.cfg.name,
-            )
+        return self.alarm.request(by, client, note, now)
 
     # ----- one set -----
     def _complete(self, t: float) -> dict:
@@ -268,8 +239,11 @@ class FixtureCycle:
             steps = max(steps, round(dt / self._period))
         self._instant += steps
         self._lost, self._t_set = 0, t
-        if self._ack is not None:
-            self._apply_acknowledgement(t)
+        if self.alarm.requested and self.alarm.take() is not None:  # acknowledged: readings taken as they are
+            self.steps.reset()
+            if self.lock.state == "locked":
+                self.lock.release(t, self._readings)
+                self._episode += 1
         r = np.array(self._readings)
         for status, bad, name in (
             ("bad_frame", self._bad, "bad_frame"),
@@ -292,9 +266,9 @@ class FixtureCycle:
         jumped = outcome.legs if "jump" in outcome.flags else ()
         stepped = self.steps.update(self._instant, self._readings, jumped)
         if stepped:  # on a locked fixture a leg moved alone: brake slip or encoder, six readings cannot tell
-            self._latch("moved_while_locked" if was_locked else "discontinuity", stepped, t)
+            self.alarm.latch("moved_while_locked" if was_locked else "discontinuity", stepped, t)
         if self.lock.slipped:
-            self._latch("moved_while_locked", self.lock.slipped, t)
+            self.alarm.latch("moved_while_locked", self.lock.slipped, t)
         if outcome.status == "ok":
             if self._check_moved:
                 self._compare_recovered(t, outcome)
@@ -308,7 +282,7 @@ class FixtureCycle:
         self._drift_logged = self.lock.drift
         if self.lock.drift:
             if len(self.lock.drift_legs) < MOTION_LEGS:
-                self._latch("moved_while_locked", self.lock.drift_legs, t)
+                self.alarm.latch("moved_while_locked", self.lock.drift_legs, t)
             flags += [f"drift:leg{k + 1}" for k in self.lock.drift_legs]
         status = {"ok": "ok", "flagged": "flagged", "failed": "not_converged"}[outcome.status]
         if self.steps.pending and "jump" not in flags:  # a jump that may be a step: not ok until it is known

@@ -1,4 +1,4 @@
-"""A record's pose values from a 4x4 pose, in plain floats (the cycle's per-record conversion).
+"""A record's pose values from a 4x4 pose, in plain floats (the cycle's per-record conversion), and its store row.
 
 :func:`quaternion` is Eigen's rotation-matrix-to-quaternion conversion (the one
 ``pin.Quaternion(R)`` runs, the same operations in the same order, so the same bits) on
@@ -8,6 +8,7 @@ conversion.
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -48,3 +49,22 @@ def pose_record(T: np.ndarray) -> dict[str, float]:
     R = T[:3, :3]
     values = T[:3, 3].tolist() + quaternion(R) + np.degrees(pin.rpy.matrixToRpy(R)).tolist()
     return dict(zip(POSE_KEYS, values))
+
+
+def sample_row(rec: dict) -> tuple:
+    """A record as a row of the store's ``samples`` table."""
+    pose, flags = rec["pose"], rec["flags"]
+    pose_values = _NO_POSE if pose is None else [pose[k] for k in _POSE_COLUMNS]
+    return (
+        rec["fixture"],
+        rec["t"],
+        rec["status"],
+        json.dumps(flags) if flags else "[]",  # json.dumps([]): most records carry no flag
+        rec["state"],
+        *rec["readings"],
+        *pose_values,
+    )
+
+
+_POSE_COLUMNS = ("x", "y", "z", "qx", "qy", "qz", "qw")
+_NO_POSE = (None,) * 7

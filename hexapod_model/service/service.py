@@ -6,7 +6,7 @@
 ...     svc.record("left")            # the latest one; also GET /fixtures/left/pose
 
 Threads: one reads the bus and runs every fixture's cycle (so a record is published within the
-frame's own iteration), one writes the store (:class:`~hexapod_model.service.store.StoreWriter`),
+frame's own iteration), one writes the store (:class:`~hexapod_model.service.writer.StoreWriter`),
 and the HTTP server's. Subscribers run on the bus thread: keep them short.
 """
 
@@ -24,40 +24,22 @@ from typing import TYPE_CHECKING, Any
 import can
 
 from .alarms import Acknowledgement
+from .bus import open_bus
 from .changeover import Changeover
 from .config import ServiceConfig, geometry_hash
 from .cycle import FixtureCycle
 from .errors import ServiceError
+from .health import health
+from .pose import sample_row
 from .solve import warm_up
-from .store import Store, StoreWriter
+from .store import Store
+from .writer import StoreWriter
 
 if TYPE_CHECKING:
     from .server import HttpServer
 
 log = logging.getLogger(__name__)
 Record = dict
-
-
-def open_bus(config: ServiceConfig, receive: bool = True) -> can.BusABC:
-    """The configured python-can bus (:class:`ServiceError` if it cannot be opened).
-
-    With ``receive`` on SocketCAN the kernel delivers only the fixtures' CAN ids. Other interfaces
-    would filter in Python, frame by frame (30 us a frame with 120 ids on the virtual bus), so
-    there the service's own id table drops the others.
-    """
-    b = config.bus
-    filters = None
-    if receive and b.interface == "socketcan":
-        filters = [
-            {"can_id": leg.can_id, "can_mask": 0x1FFFFFFF if leg.extended_id else 0x7FF, "extended": leg.extended_id}
-            for f in config.fixtures
-            for leg in f.legs
-        ]
-    kwargs: dict[str, Any] = {"bitrate": b.bitrate} if b.bitrate else {}
-    try:
-        return can.Bus(interface=b.interface, channel=b.channel, can_filters=filters, **kwargs)
-    except (can.CanError, OSError, ImportError, ValueError) as exc:
-        raise ServiceError(f"bus {b.interface}/{b.channel}: cannot open: {exc}") from None
 
 
 class FixtureService:
@@ -197,6 +179,16 @@ class FixtureService:
             self._ready.set()
 
     @property
+    def running(self) -> bool:
+        """Whether the cycle thread runs."""
+        return self._thread is not None and self._thread.is_alive()
+
+    @property
+    def started(self) -> float:
+        """Unix time (s) of the last :meth:`start`."""
+        return self._started
+
+    @property
     def ready(self) -> bool:
         """Whether the cycle runs (before: HTTP answers ``503`` with :meth:`starting`)."""
         return self._ready.is_set()
@@ -320,46 +312,8 @@ class FixtureService:
         return ack
 
     def health(self) -> dict:
-        """Service state: ``ok`` or ``degraded``, with every problem as one line in ``problems``.
-
-        Degraded: a store error, the cycle stopped, or a fixture whose latest record is not ``ok``
-        (its status and flags say why) or whose fault waits for an acknowledgement.
-        """
-        now = time.time()
-        fixtures, problems = {}, []
-        for name, c in self.cycles.items():
-            rec = c.last
-            fixtures[name] = {
-                "status": rec["status"],
-                "flags": rec["flags"],
-                "state": rec["state"],
-                "stored": rec["stored"],
-                "age_s": now - rec["t"],
-                "recovery": c.recovery,
-                "recovered_t": None if c.recovered is None else c.recovered.t,
-                "fault": None if c.fault is None else c.fault.describe(),
-                "acknowledged": None if c.acknowledged is None else c.acknowledged.describe(),
-                "counters": dict(c.counters),
-            }
-            if rec["status"] != "ok":
-                problems.append(f"{name}: {rec['status']}" + (f" ({', '.join(rec['flags'])})" if rec["flags"] else ""))
-            if c.fault is not None and rec["status"] != "unacknowledged_fault":
-                problems.append(f"{name}: {', '.join(c.fault.flags())} waits for an acknowledgement")
-        store_error = None if self.writer is None else self.writer.error
-        if store_error is not None:
-            problems.append(f"store: {store_error}")
-        running = self._thread is not None and self._thread.is_alive()
-        if not running:
-            problems.append("the cycle thread is not running")
-        return {
-            "status": "ok" if not problems else "degraded",
-            "problems": problems,
-            "uptime_s": now - self._started,
-            "frames": self.frames,
-            "unknown_frames": self.unknown_frames,
-            "store": {"file": self.config.store.path.name, "error": store_error},
-            "fixtures": fixtures,
-        }
+        """Service state: ``ok`` or ``degraded``, each problem one line (:mod:`~hexapod_model.service.health`)."""
+        return health(self)
 
     # ----- the cycle thread -----
     def _loop(self) -> None:
@@ -408,22 +362,3 @@ class FixtureService:
                 callback(rec)
             except Exception:  # noqa: BLE001 - one bad subscriber must not stop the fixtures
                 log.exception("record subscriber %r failed", callback)
-
-
-def sample_row(rec: Record) -> tuple:
-    """A record as a row of the store's ``samples`` table."""
-    pose, flags = rec["pose"], rec["flags"]
-    pose_values = _NO_POSE if pose is None else [pose[k] for k in _POSE_COLUMNS]
-    return (
-        rec["fixture"],
-        rec["t"],
-        rec["status"],
-        json.dumps(flags) if flags else "[]",  # json.dumps([]): most records carry no flag
-        rec["state"],
-        *rec["readings"],
-        *pose_values,
-    )
-
-
-_POSE_COLUMNS = ("x", "y", "z", "qx", "qy", "qz", "qw")
-_NO_POSE = (None,) * 7

@@ -19,6 +19,7 @@ import numpy as np
 
 GAP_INSTANTS = 3  # sampling instants without a set after which a leg's speed estimate restarts
 STEP_SIGMAS = 5.0  # a step estimate beyond this many of its sigmas is a step (StepDetector)
+REPEATS = 3  # a count repeated this many sets after it first came can be stuck (fewer happen as a leg stops)
 MOTION_LEGS = 3  # legs leaving the band together: the plate moves (fewer: a leg moved alone, an alarm)
 
 
@@ -179,7 +180,10 @@ class StuckDetector:
         prev, since, value, v = self._counts, self._since, self._value, self._v
         for k in range(6):
             if prev is not None and counts[k] == prev[k]:
-                if abs(v[k]) * (instant - since[k]) > self.limit:
+                n = instant - since[k]
+                # a leg slowing down to a stop repeats its count naturally for a set or two while
+                # the average still says it moves: REPEATS sets
+                if n >= REPEATS and abs(v[k]) * n > self.limit:
                     stuck.append(k)
                 continue
             n = instant - since[k]
@@ -202,8 +206,9 @@ class StepDetector:
     a *spike* at it. A leg is stepped when the step model fits better, its step exceeds
     :data:`STEP_SIGMAS` of its own uncertainty (the reading noise through the fit) and a quarter
     of the largest step found. Until then
-    the caller keeps the records off ``ok``. A step below the tracker's jump threshold (about 5
-    noise sigma) and a creep slower than the noise are not seen.
+    the caller keeps the records off ``ok``. The trend restarts after a gap of more than
+    :data:`GAP_INSTANTS` instants. A step below the tracker's jump threshold (about 5 sigma of
+    its prediction), one within a gap, and a creep slower than the noise are not seen.
 
     Args:
         noise: 1-sigma reading noise (m).
@@ -229,6 +234,8 @@ class StepDetector:
     def update(self, instant: int, readings, jump_legs: tuple[int, ...]) -> tuple[int, ...]:
         """Add a set (sampling instant, readings in m, legs the tracker flags ``jump``); returns stepped legs."""
         x = [float(v) for v in readings]
+        if self._jump is not None and instant - self._post[-1][0] > GAP_INSTANTS:
+            self.reset()  # a gap in the check: what happened in it is not known
         if self._jump is not None:
             self._post.append((instant, x))
             if len(self._post) <= self.after:
@@ -238,6 +245,8 @@ class StepDetector:
             self.reset()
             self._history = after  # the readings after the jump: the new level (or the old, after a spike)
             return stepped
+        if self._history and instant - self._history[-1][0] > GAP_INSTANTS:
+            self._history = []  # a gap (sets lost or failed): the trend restarts
         if jump_legs and len(self._history) >= self.before:
             self._jump, self._post = (instant, tuple(jump_legs)), [(instant, x)]
             return ()

@@ -16,21 +16,21 @@ Schema (version 2; the tables ``docs/service.md`` documents):
 
 ``synchronous=FULL``: a commit is on disk (the WAL file fsync'ed) when :meth:`Store.add_lock`
 returns, so a lock published as stored survives a crash or a power loss. Writes happen on one
-writer thread (:class:`StoreWriter`), off the cycle's path.
+writer thread (:class:`~hexapod_model.service.writer.StoreWriter`), off the cycle's path.
 """
 
 from __future__ import annotations
 
 import json
 import logging
-import queue
+import os
 import sqlite3
 import threading
-from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -97,14 +97,12 @@ class Store:
         create: create the file when missing (else :class:`ServiceError`).
     """
 
-    def __init__(self, path: str | Path, samples: int = 100_000, create: bool = True):
-        self.path, self.max_samples = Path(path), samples
+    def __init__(self, path: str | Path, samples: int = 100_000, create: bool = True, timeout: float = 10.0):
+        self.path, self.max_samples, self.timeout = Path(path), samples, timeout
         if not create and not self.path.is_file():
             raise ServiceError(f"store {self.path} does not exist (the service creates it on its first start)")
         try:
-            self.db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None, timeout=10.0)
-            mode = self.db.execute("PRAGMA journal_mode=WAL").fetchone()[0]
-            self.db.execute("PRAGMA synchronous=FULL")
+            self.db = self._connect()
             check = self.db.execute("PRAGMA quick_check").fetchone()[0]
             if check != "ok":
                 raise ServiceError(f"store {self.path} is damaged: {check}")
@@ -112,11 +110,64 @@ class Store:
             migrate(self.db, self.path)
         except sqlite3.Error as exc:
             raise ServiceError(f"store {self.path}: {exc}") from None
-        if mode.lower() != "wal":
-            raise ServiceError(f"store {self.path}: SQLite refused WAL mode (journal_mode={mode})")
+        self._file = _identity(self.path)
         self._lock = threading.Lock()
         #: the changeover's targets, recipes and activations
-        self.targets = TargetStore(self.db, self._lock)
+        self.targets = TargetStore(self)
+
+    def _connect(self) -> sqlite3.Connection:
+        db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None, timeout=self.timeout)
+        mode = db.execute("PRAGMA journal_mode=WAL").fetchone()[0]
+        db.execute("PRAGMA synchronous=FULL")
+        if mode.lower() != "wal":
+            db.close()
+            raise ServiceError(f"store {self.path}: SQLite refused WAL mode (journal_mode={mode})")
+        return db
+
+    def _same_file(self) -> None:
+        """Make sure the open database is the file at :attr:`path` (the one the next start reads).
+
+        A file deleted while the service runs is written again from the open database (SQLite's
+        backup), so nothing stored is lost; a file replaced by another is an error (not written).
+        """
+        now = _identity(self.path)
+        if now == self._file:
+            return
+        if now is not None:
+            raise sqlite3.OperationalError(f"{self.path} was replaced by another file while the service ran")
+        log.error(
+            "store %s: the file was deleted while the service ran: written again from the open database", self.path
+        )
+        fresh = self._connect()
+        try:
+            self.db.backup(fresh)
+        except BaseException:
+            fresh.close()
+            raise
+        self.db.close()
+        self.db, self._file = fresh, _identity(self.path)
+
+    def _transaction(self, work: Callable[[], Any]) -> Any:
+        """Run ``work`` in one immediate transaction, committed durably to the file at :attr:`path`.
+
+        A failed statement's own error is raised (SQLite may have rolled back already: the
+        rollback's error never hides it).
+        """
+        with self._lock:
+            self._same_file()
+            self.db.execute("BEGIN IMMEDIATE")
+            try:
+                result = work()
+                self.db.execute("COMMIT")
+            except BaseException:
+                if self.db.in_transaction:
+                    try:
+                        self.db.execute("ROLLBACK")
+                    except sqlite3.Error:
+                        pass
+                raise
+            self._same_file()  # deleted between the check and the commit: the backup holds the commit
+        return result
 
     def close(self) -> None:
         """Close the connection (the WAL is checkpointed by SQLite)."""
@@ -134,31 +185,19 @@ class Store:
         values = (event.t, *event.position, *event.quaternion, *event.readings)
         q = json.dumps(event.q.tolist())
         row = (event.fixture, *map(float, values), event.status, event.geometry_hash, q, event.target_id, event.recipe)
-        with self._lock:
-            self.db.execute("BEGIN IMMEDIATE")
-            try:
-                cur = self.db.execute(
-                    f"INSERT INTO lock_events (fixture, t, {POSE}, {LEGS}, {_LOCK_TAIL}) "
-                    f"VALUES ({', '.join('?' * len(row))})",
-                    row,
-                )
-                self._insert_samples(samples)
-                self.db.execute("COMMIT")
-            except BaseException:
-                self.db.execute("ROLLBACK")
-                raise
-        return replace(event, id=cur.lastrowid)
+        sql = f"INSERT INTO lock_events (fixture, t, {POSE}, {LEGS}, {_LOCK_TAIL}) VALUES "
+        sql += f"({', '.join('?' * len(row))})"
+
+        def work() -> int | None:
+            row_id = self.db.execute(sql, row).lastrowid
+            self._insert_samples(samples)
+            return row_id
+
+        return replace(event, id=self._transaction(work))
 
     def add_samples(self, samples: Sequence[tuple]) -> None:
         """Append sample rows (``SAMPLE_COLUMNS`` order) and drop the oldest beyond the bound."""
-        with self._lock:
-            self.db.execute("BEGIN IMMEDIATE")
-            try:
-                self._insert_samples(samples)
-                self.db.execute("COMMIT")
-            except BaseException:
-                self.db.execute("ROLLBACK")
-                raise
+        self._transaction(partial(self._insert_samples, samples))
 
     def _insert_samples(self, samples: Sequence[tuple]) -> None:
         if not samples:
@@ -205,89 +244,14 @@ class Store:
             return self.db.execute(sql, (fixture, fixture, _since(since))).fetchall()
 
 
+def _identity(path: Path) -> tuple[int, int] | None:
+    """``(device, inode)`` of the file at ``path`` (None when there is none)."""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        return None
+    return st.st_dev, st.st_ino
+
+
 def _since(since: float | None) -> float:
     return -1e300 if since is None else float(since)
-
-
-MAX_PENDING = 100_000  # sample rows held for the writer at most (a stalled disk drops the oldest)
-
-
-class StoreWriter:
-    """The one thread that writes to the store: samples in batches, lock events at once.
-
-    :meth:`sample` only appends to a bounded in-memory log (no wake-up of this thread per
-    record: the cycle thread keeps the GIL and the CPU); the thread takes the log every
-    ``flush_interval`` and writes it in one transaction. :meth:`lock` wakes it at once: the
-    event is committed durably together with the samples queued before it.
-
-    Args:
-        store: the open :class:`Store`.
-        flush_interval: seconds between sample batches.
-        max_pending: sample rows kept while the store lags (the oldest are dropped beyond).
-    """
-
-    def __init__(self, store: Store, flush_interval: float = 0.5, max_pending: int = MAX_PENDING):
-        self.store, self.flush_interval = store, flush_interval
-        self.error: str | None = None
-        self.dropped = 0  # sample rows dropped because the log was full
-        self._rows: deque[tuple] = deque()  # append / popleft are atomic: no lock on the cycle's path
-        self._max = max_pending
-        self._locks: queue.SimpleQueue = queue.SimpleQueue()
-        self._wake = threading.Event()
-        self._stopping = False
-        self._thread = threading.Thread(target=self._run, name="hexapod-store", daemon=True)
-        self._thread.start()
-
-    def sample(self, row: tuple) -> None:
-        """Queue a sample row (``SAMPLE_COLUMNS`` order); written within ``flush_interval``."""
-        rows = self._rows
-        rows.append(row)
-        if len(rows) > self._max:
-            rows.popleft()
-            self.dropped += 1
-
-    def lock(self, event: LockEvent, done: Callable[[LockEvent], None]) -> None:
-        """Queue a lock event; ``done(stored_event)`` is called once it is committed durably."""
-        self._locks.put((event, done))
-        self._wake.set()
-
-    def stop(self) -> None:
-        """Write what is queued and end the thread."""
-        self._stopping = True
-        self._wake.set()
-        self._thread.join()
-
-    def _take(self) -> list[tuple]:
-        rows, out = self._rows, []
-        for _ in range(len(rows)):  # what is there now; later rows wait for the next batch
-            out.append(rows.popleft())
-        return out
-
-    def _run(self) -> None:
-        while True:
-            self._wake.wait(self.flush_interval)
-            self._wake.clear()  # a lock queued from here on sets it again
-            stopping = self._stopping
-            pending = self._take()
-            while True:
-                try:
-                    event, done = self._locks.get_nowait()
-                except queue.Empty:
-                    break
-                self._write(partial(self.store.add_lock, event, pending), done)
-                pending = []  # committed with the lock (or dropped with it on a store error)
-            if pending:
-                self._write(partial(self.store.add_samples, pending))
-            if stopping:
-                return
-
-    def _write(self, commit: Callable[[], LockEvent | None], done: Callable[[LockEvent], None] | None = None) -> None:
-        """Run ``commit``, then ``done`` with its result; a store error is recorded and logged instead."""
-        try:
-            result = commit()
-        except (sqlite3.Error, OSError) as exc:
-            self.error = f"store {self.store.path}: {exc}"
-            log.error("%s", self.error)
-            return
-        if done is not None and result is not None:
-            done(result)

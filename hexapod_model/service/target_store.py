@@ -19,10 +19,10 @@ from __future__ import annotations
 
 import json
 import sqlite3
-import threading
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -83,27 +83,30 @@ class StoredTarget:
 
 
 class TargetStore:
-    """Targets, recipes and activations in an open store's database.
+    """Targets, recipes and activations in an open store.
+
+    Writes go through the store's transactions (committed durably to the file at its path, see
+    :class:`~hexapod_model.service.store.Store`); reads hold its lock.
 
     Args:
-        db: the store's connection (``isolation_level=None``).
-        lock: the lock serialising its use between threads.
+        store: the open :class:`~hexapod_model.service.store.Store`.
     """
 
-    def __init__(self, db: sqlite3.Connection, lock: threading.Lock):
-        self.db, self._lock = db, lock
+    def __init__(self, store: Any):
+        self._store = store
 
     def _write(self, statements: Iterable[tuple[str, tuple]]) -> list[int]:
         """Run ``statements`` in one committed transaction; returns each one's ``lastrowid``."""
-        with self._lock:
-            self.db.execute("BEGIN IMMEDIATE")
-            try:
-                ids = [self.db.execute(sql, args).lastrowid or 0 for sql, args in statements]
-                self.db.execute("COMMIT")
-            except BaseException:
-                self.db.execute("ROLLBACK")
-                raise
-        return ids
+        db = self._store
+
+        def work() -> list[int]:
+            return [db.db.execute(sql, args).lastrowid or 0 for sql, args in statements]
+
+        return db._transaction(work)
+
+    def _read(self, sql: str, args: tuple = ()) -> list[tuple]:
+        with self._store._lock:
+            return self._store.db.execute(sql, args).fetchall()
 
     @staticmethod
     def _target_row(t: Target) -> tuple[str, tuple]:
@@ -124,9 +127,8 @@ class TargetStore:
             "UPDATE targets SET cleared_by = ?, cleared_at = ? WHERE id = "
             "(SELECT MAX(id) FROM targets WHERE fixture = ?) AND cleared_at IS NULL"
         )
-        with self._lock:
-            changed = self.db.execute(sql, (by, float(at), fixture)).rowcount
-        return changed > 0
+        db = self._store
+        return db._transaction(lambda: db.db.execute(sql, (by, float(at), fixture)).rowcount) > 0
 
     def current_targets(self) -> dict[str, StoredTarget]:
         """Each fixture's current target (its newest row, when not cleared)."""
@@ -134,8 +136,7 @@ class TargetStore:
             f"SELECT id, fixture, {', '.join(_POSE)}, translation_tol, rotation_tol, set_by, set_at, recipe "
             "FROM targets WHERE id IN (SELECT MAX(id) FROM targets GROUP BY fixture) AND cleared_at IS NULL"
         )
-        with self._lock:
-            rows = self.db.execute(sql).fetchall()
+        rows = self._read(sql)
         out = {}
         for r in rows:
             T = np.eye(4)
@@ -153,8 +154,7 @@ class TargetStore:
         """Current recipes by name: ``(body, set_by, set_at)``, ``body`` as stored (``{"targets": ...}``)."""
         newest = "SELECT MAX(id) FROM recipes GROUP BY name"
         sql = f"SELECT name, targets, set_by, set_at FROM recipes WHERE id IN ({newest}) ORDER BY name"
-        with self._lock:
-            rows = self.db.execute(sql).fetchall()
+        rows = self._read(sql)
         return {r[0]: (json.loads(r[1]), r[2], r[3]) for r in rows}
 
     def activate(self, recipe: Recipe, by: str, at: float) -> list[int]:
@@ -165,6 +165,5 @@ class TargetStore:
 
     def active(self) -> tuple[str, str, float] | None:
         """The active recipe ``(name, set_by, set_at)``, or None."""
-        with self._lock:
-            row = self.db.execute("SELECT recipe, set_by, set_at FROM activations ORDER BY id DESC LIMIT 1").fetchone()
-        return None if row is None else (row[0], row[1], row[2])
+        rows = self._read("SELECT recipe, set_by, set_at FROM activations ORDER BY id DESC LIMIT 1")
+        return None if not rows else (rows[0][0], rows[0][1], rows[0][2])

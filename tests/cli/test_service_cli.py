@@ -150,6 +150,15 @@ def test_simulate_encoders_sends_the_fixtures_own_frames(tmp_path, capsys):
     assert np.allclose([readings[0x181 + k] for k in range(6)], truth, atol=0.6e-6)  # 1 um counts, no noise
 
 
+def test_bad_http_host_names_the_host_not_the_port(tmp_path, capsys):
+    cfg = write_config(tmp_path, extra="allow_unauthenticated_reads = true\n")
+    cfg.write_text(cfg.read_text().replace('host = "127.0.0.1"', 'host = "no-such-host.invalid"'))
+    assert main(["serve", str(cfg), "--duration", "0.1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no-such-host.invalid" in err[0] and "set [http] host" in err[0], err
+    assert "port" not in err[0].split("(")[0]
+
+
 # ----- process level -----
 def env():
     e = dict(os.environ)
@@ -385,3 +394,65 @@ def test_a_step_needs_an_acknowledgement_from_the_command_line_then_ok_again(tmp
     first = next(k for k, r in enumerate(served.records) if r["status"] == "unacknowledged_fault")
     later_ok = next(k for k, r in enumerate(served.records) if k > first and r["status"] == "ok")
     assert all(r["status"] != "ok" and "discontinuity:leg2" in r["flags"] for r in served.records[first:later_ok])
+
+
+def test_process_late_legs_duplicate_id_store_deleted_and_http_limits(tmp_path):
+    """Through `hexapod serve`: a record per instant naming late and duplicated legs, a store file
+    deleted while serving keeps every lock published stored, JSON 405, 100 concurrent GETs."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    ids2 = [0x191 + k for k in range(6)]
+    cfg = write_config(
+        tmp_path,
+        fixtures=[
+            ("left", "reference", [0x181 + k for k in range(6)], "lock_time = 0.15\n"),
+            ("right", "reference", ids2, ""),
+        ],
+    )
+    body = '[[fixtures]]\nname = "left"\nrate = 100.0\ntrajectory = "A"\nscale = 0.004\nperiod = 4.0\n'
+    body += "move = 0.4\nlock = 0.4\nramp = 0.1\n"
+    body += '[[fixtures]]\nname = "right"\nrate = 100.0\ntrajectory = "A"\n'
+    for leg in (5, 6):
+        body += f'[[fixtures.faults]]\nkind = "late_frame"\nleg = {leg}\nstart = 0.0\nduration = 1000.0\n'
+    body += '[[fixtures.faults]]\nkind = "duplicate_id"\nleg = 3\nstart = 2.0\nduration = 1000.0\n'
+    served = Served(str(cfg), "--simulate", str(write_sim(tmp_path, body)), "--jsonl")
+
+    def stored_locks():
+        out, prev = set(), None
+        for r in [r for r in list(served.records) if r["fixture"] == "left"]:
+            if r["state"] == "locked" and prev != "locked":
+                first = r["t"]
+            if r["state"] == "locked" and r["stored"]:
+                out.add(first)
+            prev = r["state"]
+        return out
+
+    try:
+        served.wait_port()
+        served.wait_for(lambda: len(stored_locks()) >= 1)
+        for suffix in ("", "-wal", "-shm"):
+            (tmp_path / f"store.sqlite{suffix}").unlink(missing_ok=True)
+        served.wait_for(lambda: len(stored_locks()) >= 3)
+        health = served.get("/health")
+        req = urllib.request.Request(f"http://127.0.0.1:{served.port}/health", method="OPTIONS")
+        with pytest.raises(urllib.error.HTTPError) as info:
+            urllib.request.urlopen(req, timeout=5)
+        assert info.value.code == 405 and "error" in json.load(info.value)
+        with ThreadPoolExecutor(max_workers=25) as pool:
+            codes = list(pool.map(lambda _: served.status("/fixtures/left/pose"), range(100)))
+        assert codes == [200] * 100
+    finally:
+        code = served.finish(signal.SIGINT)
+    assert code == 0, "".join(served.err)
+    right = health["fixtures"]["right"]
+    assert right["status"] in ("incomplete", "duplicate_frame") and right["age_s"] < 0.5
+    assert {"missing:leg5", "missing:leg6", "late_frame:leg5", "late_frame:leg6"} & set(right["flags"])
+    assert any(p.startswith("right: ") for p in health["problems"]) and health["store"]["error"] is None
+    late = [r for r in served.records if r["fixture"] == "right"]
+    assert late and not any(r["status"] == "ok" for r in late[10:])
+    assert any("duplicate:leg3" in r["flags"] for r in late)
+    db = sqlite3.connect(tmp_path / "store.sqlite")
+    events = {t for (t,) in db.execute("SELECT t FROM lock_events WHERE fixture = 'left'")}
+    db.close()
+    assert stored_locks() <= events
+    assert "Traceback" not in "".join(served.err)

@@ -60,6 +60,12 @@ can_ids = [1, 2, 3, 4, 5, 6]
         (BASE + "predictor = 'eq99'\n", "fixtures[0].predictor", "eq22"),
         (BASE.replace("[bus]", "[http]\nport = 70000\n[bus]"), "http.port", "65535"),
         ("fixtures = []", "fixtures", "one or more"),
+        (BASE.replace('"reference"', '"."'), "fixtures[0].hexapod", "is a folder"),
+        (BASE.replace('name = "a"', 'name = ".."'), "fixtures[0].name", "not dots alone"),
+        (BASE.replace('name = "a"', 'name = "."'), "fixtures[0].name", "not dots alone"),
+        (BASE.replace("[bus]", '[http]\nhost = "10.1.2.3"\n[bus]'), "http.host", "token_file"),
+        (BASE.replace("[bus]", '[http]\ntoken_file = "none.token"\n[bus]'), "http.token_file", "cannot read"),
+        (BASE.replace("[bus]", '[http]\ncertfile = "c.pem"\n[bus]'), "http.keyfile", "both"),
         ("[bus\n", "<file>", "not valid TOML"),
     ],
 )

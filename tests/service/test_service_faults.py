@@ -122,3 +122,43 @@ def test_late_legs_and_a_second_sender_give_a_record_per_instant_and_health_says
         assert len(during) > 0.7 * 100 * (during[-1]["t"] - during[0]["t"]) and not any(
             r["status"] == "ok" for r in during
         )
+
+
+def test_store_file_deleted_while_serving_every_lock_published_stored_is_in_the_file(tmp_path):
+    config = service_config(tmp_path, [fixture_table("left", lock_time=0.15)])
+    spec = {"name": "left", "rate": 100.0, "trajectory": "A", "scale": 0.004, "period": 4.0}
+    sim = sim_config(config, [{**spec, "move": 0.4, "lock": 0.4, "ramp": 0.1}])
+    records = []
+    hexa = hexapod("reference")
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    service = FixtureService(config, hexapods={"left": hexa})
+    service.subscribe(records.append)
+
+    def stored_locks():
+        out, prev = set(), None
+        for r in list(records):
+            if r["state"] == "locked" and prev != "locked":
+                first = r["t"]
+            if r["state"] == "locked" and r["stored"]:
+                out.add(first)
+            prev = r["state"]
+        return out
+
+    try:
+        service.start()
+        simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
+        simulator.start()
+        wait_until(lambda: len(stored_locks()) >= 1)
+        for suffix in ("", "-wal", "-shm"):
+            (tmp_path / f"store.sqlite{suffix}").unlink(missing_ok=True)
+        wait_until(lambda: len(stored_locks()) >= 3)
+        health = service.health()
+        simulator.stop()
+    finally:
+        service.stop()
+        bus.shutdown()
+    assert health["store"]["error"] is None
+    from hexapod_model.service import Store
+
+    with Store(config.store.path, create=False) as store:
+        assert stored_locks() <= {e.t for e in store.locks("left")}

@@ -150,3 +150,20 @@ def test_a_nan_reading_neither_unlocks_nor_counts_as_a_step_as_with_numpy():
     det = LockDetector(0.2, 10 * NOISE, 3 * NOISE, 1)
     det.lock(0.0, np.zeros(6))
     assert det.update(0.1, [np.nan, 1.0, 0, 0, 0, 0]) is False and det.state == "locked"
+
+
+def test_a_leg_stopping_repeats_counts_naturally_and_is_not_stuck():
+    """1 um counts, 10 um noise, 100 sets/s: a leg that slows to a stop repeats its count while its
+    average speed still says it moves (the old check flagged it about every 6 s here)."""
+    rng = np.random.default_rng(7)
+    det = StuckDetector(8, NOISE, 1e-6)
+    hits, k, x = 0, 0, 0.0
+    ramp = np.linspace(0.0, 0.05, 20)  # m/s: 0.2 s ramps, 0.6 s at 50 mm/s, 0.5 s still
+    profile = np.concatenate([ramp, np.full(60, 0.05), ramp[::-1], np.zeros(50)])
+    for _ in range(100):
+        for v in profile:
+            x += v / 100.0
+            r = x + rng.normal(0, NOISE, 6)
+            hits += len(det.update(k, [round(u / 1e-6) for u in r], r))
+            k += 1
+    assert hits == 0

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from hexapod_model.service import LockEvent, ServiceError, Store
-from hexapod_model.service.store import SAMPLE_COLUMNS, StoreWriter
+from hexapod_model.service.store import SAMPLE_COLUMNS
+from hexapod_model.service.writer import StoreWriter
 
 
 def event(fixture="left", t=1.5, k=0.0):
@@ -84,3 +85,58 @@ def test_a_damaged_or_missing_store_is_refused(tmp_path):
         Store(tmp_path / "bad.sqlite")
     with pytest.raises(ServiceError, match="does not exist"):
         Store(tmp_path / "none.sqlite", create=False)
+
+
+def _writer_lock(writer, ev, timeout=10.0):
+    stored, done = [], threading.Event()
+    writer.lock(ev, lambda e: (stored.append(e), done.set()))
+    return stored, done
+
+
+def test_a_deleted_file_is_written_again_before_a_lock_is_reported_stored(tmp_path):
+    path = tmp_path / "s.sqlite"
+    store = Store(path)
+    writer = StoreWriter(store, flush_interval=0.05)
+    stored, done = _writer_lock(writer, event(t=1.0))
+    assert done.wait(10)
+    for suffix in ("", "-wal", "-shm"):
+        (tmp_path / f"s.sqlite{suffix}").unlink(missing_ok=True)
+    stored, done = _writer_lock(writer, event(t=2.0))
+    assert done.wait(10) and writer.error is None
+    again = Store(path, create=False)  # what the next start reads: both locks
+    assert [e.t for e in again.locks()] == [1.0, 2.0]
+    again.close()
+    writer.stop()
+    store.close()
+
+
+def test_disk_full_reports_the_real_error_and_the_lock_is_stored_once_it_clears(tmp_path):
+    store = Store(tmp_path / "s.sqlite")
+    writer = StoreWriter(store, flush_interval=0.05)
+    pages = store.db.execute("PRAGMA page_count").fetchone()[0]
+    store.db.execute(f"PRAGMA max_page_count = {pages + 1}")  # a full disk, as SQLite sees it
+    from dataclasses import replace
+
+    stored, done = _writer_lock(writer, replace(event(t=5.0), q=np.linspace(0, 1, 20_000)))  # needs new pages
+    assert not done.wait(1.0)
+    assert writer.error is not None and "full" in writer.error and "rollback" not in writer.error, writer.error
+    store.db.execute("PRAGMA max_page_count = 1073741823")  # space again
+    assert done.wait(10) and stored[0].t == 5.0
+    assert writer.error is None  # the fault cleared: so does the error
+    writer.stop()
+    store.close()
+
+
+def test_another_process_holding_the_database_is_an_error_until_it_lets_go(tmp_path):
+    store = Store(tmp_path / "s.sqlite", timeout=0.2)
+    writer = StoreWriter(store, flush_interval=0.05)
+    other = sqlite3.connect(tmp_path / "s.sqlite", isolation_level=None)
+    other.execute("BEGIN EXCLUSIVE")
+    stored, done = _writer_lock(writer, event(t=7.0))
+    assert not done.wait(1.0) and writer.error is not None and "locked" in writer.error
+    other.execute("ROLLBACK")
+    other.close()
+    assert done.wait(10) and writer.error is None
+    writer.stop()
+    assert [e.t for e in store.locks()] == [7.0]
+    store.close()
