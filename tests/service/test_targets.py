@@ -158,3 +158,15 @@ def test_a_store_of_a_newer_schema_is_refused(tmp_path):
     store.close()
     with pytest.raises(Exception, match="schema version 99 is newer"):
         Store(tmp_path / "s.sqlite")
+
+
+def test_a_target_set_after_the_store_file_was_deleted_is_in_the_file_the_next_start_reads(tmp_path):
+    store = Store(tmp_path / "s.sqlite")
+    store.targets.add_target(target_from_json(body(), "right", hexapod("reference"), "anna", 1.0))
+    (tmp_path / "s.sqlite").unlink()
+    second = store.targets.add_target(target_from_json(body(z=0.42), "left", hexapod("reference"), "bo", 2.0))
+    store.close()
+    again = Store(tmp_path / "s.sqlite", create=False)
+    current = again.targets.current_targets()
+    assert set(current) == {"right", "left"} and current["left"].id == second
+    again.close()
