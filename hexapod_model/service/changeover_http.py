@@ -67,14 +67,20 @@ def _target_json(target: Target | None) -> dict[str, Any]:
     return {"target": None if target is None else target.to_json()}
 
 
-@requires_token
-async def _put_target(request: Request) -> Response:
-    body, name = await read_json(request), request.path_params["name"]
+async def _write(request: Request, work: Callable[[Any, dict, str], Any]) -> Response:
+    """A write with a JSON body: ``work(changeover, body, who)`` (``by`` taken out of the body)."""
+    body = await read_json(request)
     try:
         who = _who(request, body)
     except TargetError as exc:
         return error_response(422, str(exc), field=exc.field)
-    return await _call(request, lambda c: _target_json(c.set_target(name, body, who)))
+    return await _call(request, lambda c: work(c, body, who))
+
+
+@requires_token
+async def _put_target(request: Request) -> Response:
+    name = request.path_params["name"]
+    return await _write(request, lambda c, body, who: _target_json(c.set_target(name, body, who)))
 
 
 @requires_token
@@ -99,12 +105,8 @@ async def _guidance(request: Request) -> Response:
 
 @requires_token
 async def _put_recipe(request: Request) -> Response:
-    body, name = await read_json(request), request.path_params["recipe"]
-    try:
-        who = _who(request, body)
-    except TargetError as exc:
-        return error_response(422, str(exc), field=exc.field)
-    return await _call(request, lambda c: {"recipe": c.put_recipe(name, body, who).to_json()})
+    name = request.path_params["recipe"]
+    return await _write(request, lambda c, body, who: {"recipe": c.put_recipe(name, body, who).to_json()})
 
 
 @requires_token

@@ -79,11 +79,12 @@ def legs(readings: list[float | None], target: Target) -> list[dict[str, Any]]:
 def guidance(rec: dict, target: Target | None, extra: dict[str, Any] | None = None) -> dict[str, Any]:
     """The guidance of one fixture from its latest record and its target (``None``: no target set).
 
-    Keys: ``fixture``, ``t``, ``status``, ``state``, ``stored``, ``flags``, ``pose``, ``sigma`` (the
-    record's), ``target`` (as stored, or ``None``), ``deviation`` (``None`` without a pose or a
+    Keys: ``fixture``, ``t``, ``status``, ``state``, ``stored``, ``flags``, ``pose``, ``sigma``,
+    ``pose_in_robot`` (the record's), ``target`` (as stored, or ``None``), ``deviation`` (``None`` without a pose or a
     target), ``legs`` (``[]`` without a target), ``in_tolerance``; ``extra`` is merged in.
     """
-    out: dict[str, Any] = {k: rec[k] for k in ("fixture", "t", "status", "state", "stored", "flags", "pose", "sigma")}
+    keys = ("fixture", "t", "status", "state", "stored", "flags", "pose", "sigma", "pose_in_robot")
+    out: dict[str, Any] = {k: rec.get(k) for k in keys}
     out.update({"target": None, "deviation": None, "legs": [], "in_tolerance": False})
     if target is not None:
         out["target"] = target.to_json()

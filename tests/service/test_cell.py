@@ -9,7 +9,7 @@ import pytest
 from hexapod_model.exceptions import InputError
 from hexapod_model.service import ConfigError
 from hexapod_model.service.cell import Cell, locate, placement
-from hexapod_model.service.guidance import record_pose
+from hexapod_model.service.guidance import guidance, record_pose
 from hexapod_model.service.solve import PoseSolver
 
 from ..conftest import hexapod
@@ -79,6 +79,7 @@ def test_records_carry_pose_in_robot_from_the_configured_cell(tmp_path):
         s, r = rec["pose_in_robot"]["sigma"], rec["sigma"]
         assert s["rotation_deg"] == r["rotation_deg"]
         assert s["translation_mm"] == pytest.approx(coupling.translation_sigma(X, 10e-6) * 1e3, rel=1e-3)
+    assert guidance(ok[-1], None)["pose_in_robot"] == ok[-1]["pose_in_robot"]  # /guidance gives it too
     plain = service_config(tmp_path, [fixture_table("right", 1)])
     _, out = drive(plain, sim_config(plain, [{"name": "right", "rate": 100.0, "hold": HOLD}]), 0.1)
     assert all(rec["pose_in_robot"] is None for _, rec in out)

@@ -16,6 +16,14 @@ from .helpers import CollectingBus, fixture_table, service_config, sim_config
 HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]
 
 
+def following(service, sim, name):
+    """A simulator of ``name`` on a collecting bus, and the dict whose ``key`` and ``pose`` are its target."""
+    current: dict = {"key": None, "pose": None}
+    bus = CollectingBus()
+    targets = lambda _: (current["key"], current["pose"])  # noqa: E731
+    return Simulator(service, sim, bus, hexapods={name: hexapod("reference")}, targets=targets), current  # type: ignore[arg-type]
+
+
 def test_the_progress_overshoots_and_settles_on_the_target():
     s = ChangeoverScript(move=2.0, overshoot=0.2, settle=1.0)
     values = [s.progress(t) for t in np.linspace(0.0, 4.0, 401)]
@@ -29,14 +37,7 @@ def test_a_simulated_plate_follows_its_target_when_it_changes(tmp_path):
     script = {"move": 1.0, "overshoot": 0.25, "settle": 0.5}
     sim = sim_config(service, [{"name": "right", "rate": 50.0, "noise": 0.0, "hold": HOLD, "changeover": script}])
     goal = placement([0.012, -0.02, 0.412, 5.0, -3.0, 10.5])
-    current: dict = {"key": None, "pose": None}
-    simulator = Simulator(
-        service,
-        sim,
-        CollectingBus(),
-        hexapods={"right": hexapod("reference")},
-        targets=lambda name: (current["key"], current["pose"]),
-    )  # type: ignore[arg-type]
+    simulator, current = following(service, sim, "right")
     before = [simulator.send_set(0, k / 50.0) for k in range(10)]
     assert all(np.allclose(s.pose, placement(HOLD), atol=1e-9) for s in before)
     current.update(key=7, pose=goal)
@@ -65,14 +66,7 @@ def test_a_playing_plate_slows_to_a_stop_before_it_moves_to_its_target(tmp_path)
     script = {"move": 1.0, "overshoot": 0.1, "settle": 0.5}
     fixture = {"name": "left", "rate": 100.0, "noise": 0.0, "trajectory": "A", "period": 4.0, "changeover": script}
     sim = sim_config(service, [fixture])
-    current: dict = {"key": None, "pose": None}
-    simulator = Simulator(
-        service,
-        sim,
-        CollectingBus(),
-        hexapods={"left": hexapod("reference")},
-        targets=lambda n: tuple(current.values()),
-    )  # type: ignore[arg-type]
+    simulator, current = following(service, sim, "left")
     goal = placement([0.0, 0.003, 0.405, 1.0, 0.0, -2.0])
     positions = []
     for k in range(460):  # 1 s of trajectory, the request, the stop (ramp 0.2 s), two moves of 1.5 s
