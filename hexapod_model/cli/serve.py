@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
+import gc
 import logging
 import os
 import signal
@@ -137,6 +138,7 @@ def _serve(args: argparse.Namespace) -> int:
             sys.stderr.flush()
             os._exit(0)
     note("serve", f"stopped; store {config.store.path}")
+    gc.freeze()  # the process ends: the collector's last pass over numba's and pinocchio's objects took 1-5 s
     return 0
 
 

@@ -30,6 +30,8 @@ from hexapod_model.cli.main import main
 from hexapod_model.kinematics.rotations import rpy_to_matrix
 from hexapod_model.service import RECORD_KEYS, FixtureService, Simulator, decode, load_config, load_simulation
 
+from ..service.helpers import stored_locks
+
 ROOT = Path(__file__).resolve().parents[2]
 HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]
 
@@ -248,8 +250,11 @@ def test_serve_simulated_over_http_and_json_lines_then_ctrl_c_and_fixture_status
         pose = served.get("/fixtures/left/pose")
         health = served.get("/health")
     finally:
+        t0 = time.monotonic()
         code = served.finish(signal.SIGINT)
+        stopped = time.monotonic() - t0
     assert code == 0, "".join(served.err)
+    assert stopped < 2.0  # Ctrl-C of a running service: stopped and exited within 2 s
     assert tuple(pose) == RECORD_KEYS and pose["status"] == "ok" and pose["state"] == "locked" and pose["stored"]
     assert health["status"] == "ok" and health["fixtures"]["left"]["stored"]
     ok = [r for r in served.records if r["status"] == "ok"]
@@ -417,22 +422,12 @@ def test_process_late_legs_duplicate_id_store_deleted_and_http_limits(tmp_path):
     body += '[[fixtures.faults]]\nkind = "duplicate_id"\nleg = 3\nstart = 2.0\nduration = 1000.0\n'
     served = Served(str(cfg), "--simulate", str(write_sim(tmp_path, body)), "--jsonl")
 
-    def stored_locks():
-        out, prev = set(), None
-        for r in [r for r in list(served.records) if r["fixture"] == "left"]:
-            if r["state"] == "locked" and prev != "locked":
-                first = r["t"]
-            if r["state"] == "locked" and r["stored"]:
-                out.add(first)
-            prev = r["state"]
-        return out
-
     try:
         served.wait_port()
-        served.wait_for(lambda: len(stored_locks()) >= 1)
+        served.wait_for(lambda: len(stored_locks(served.records)) >= 1)
         for suffix in ("", "-wal", "-shm"):
             (tmp_path / f"store.sqlite{suffix}").unlink(missing_ok=True)
-        served.wait_for(lambda: len(stored_locks()) >= 3)
+        served.wait_for(lambda: len(stored_locks(served.records)) >= 3)
         health = served.get("/health")
         req = urllib.request.Request(f"http://127.0.0.1:{served.port}/health", method="OPTIONS")
         with pytest.raises(urllib.error.HTTPError) as info:
@@ -454,5 +449,5 @@ def test_process_late_legs_duplicate_id_store_deleted_and_http_limits(tmp_path):
     db = sqlite3.connect(tmp_path / "store.sqlite")
     events = {t for (t,) in db.execute("SELECT t FROM lock_events WHERE fixture = 'left'")}
     db.close()
-    assert stored_locks() <= events
+    assert stored_locks(served.records) <= events
     assert "Traceback" not in "".join(served.err)

@@ -82,3 +82,15 @@ def pose_error(rec: dict, truth: np.ndarray) -> tuple[float, float]:
     R = pin.Quaternion(p["qw"], p["qx"], p["qy"], p["qz"]).toRotationMatrix()
     dp = float(np.linalg.norm(np.array([p["x"], p["y"], p["z"]]) - truth[:3, 3]))
     return dp, float(np.linalg.norm(pin.log3(truth[:3, :3].T @ R)))
+
+
+def stored_locks(records, fixture: str = "left") -> set[float]:
+    """``t`` of the first record of each lock of ``fixture`` that some record published as stored."""
+    out, prev, first = set(), None, None
+    for r in [r for r in list(records) if r["fixture"] == fixture]:
+        if r["state"] == "locked" and prev != "locked":
+            first = r["t"]
+        if r["state"] == "locked" and r["stored"]:
+            out.add(first)
+        prev = r["state"]
+    return out

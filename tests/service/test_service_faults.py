@@ -12,7 +12,7 @@ import can
 from hexapod_model.service import FixtureService, Simulator
 
 from ..conftest import hexapod
-from .helpers import fixture_table, service_config, sim_config
+from .helpers import fixture_table, service_config, sim_config, stored_locks
 
 TOKEN = "acknowledge-token-0123456789"
 
@@ -134,24 +134,14 @@ def test_store_file_deleted_while_serving_every_lock_published_stored_is_in_the_
     service = FixtureService(config, hexapods={"left": hexa})
     service.subscribe(records.append)
 
-    def stored_locks():
-        out, prev = set(), None
-        for r in list(records):
-            if r["state"] == "locked" and prev != "locked":
-                first = r["t"]
-            if r["state"] == "locked" and r["stored"]:
-                out.add(first)
-            prev = r["state"]
-        return out
-
     try:
         service.start()
         simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
         simulator.start()
-        wait_until(lambda: len(stored_locks()) >= 1)
+        wait_until(lambda: len(stored_locks(records)) >= 1)
         for suffix in ("", "-wal", "-shm"):
             (tmp_path / f"store.sqlite{suffix}").unlink(missing_ok=True)
-        wait_until(lambda: len(stored_locks()) >= 3)
+        wait_until(lambda: len(stored_locks(records)) >= 3)
         health = service.health()
         simulator.stop()
     finally:
@@ -161,4 +151,4 @@ def test_store_file_deleted_while_serving_every_lock_published_stored_is_in_the_
     from hexapod_model.service import Store
 
     with Store(config.store.path, create=False) as store:
-        assert stored_locks() <= {e.t for e in store.locks("left")}
+        assert stored_locks(records) <= {e.t for e in store.locks("left")}
