@@ -64,6 +64,7 @@ class Changeover:
         self._write = threading.Lock()  # one write at a time: store row and cycle target change together
         self._targets: dict[str, Target] = {}
         self.problems: dict[str, str] = {}  # stored targets that no longer solve (geometry changed)
+        self._active = self.store.active()  # (name, set_by, set_at) of the active recipe, kept here
         for name, row in self.store.current_targets().items():
             if name not in cycles:
                 continue  # a fixture no longer configured: its rows stay in the store
@@ -132,7 +133,7 @@ class Changeover:
 
     def recipes(self) -> dict[str, Any]:
         """``{"active": {"name", "set_by", "set_at"} | None, "recipes": {name: {"targets", "set_by", "set_at"}}}``."""
-        active = self.store.active()
+        active = self._active
         recipes = {}
         for name, (body, who, at) in self.store.recipes().items():
             try:
@@ -154,6 +155,7 @@ class Changeover:
             ids = self.store.activate(recipe, by, recipe.set_at)
             for target, row in zip(recipe.targets.values(), ids):
                 self._install(_with_id(target, row))
+            self._active = (name, by, recipe.set_at)
         log.info("recipe %s activated by %s", name, by)
         return recipe
 
@@ -161,7 +163,7 @@ class Changeover:
     def guidance(self, name: str) -> dict[str, Any]:
         """The fixture's guidance (:func:`hexapod_model.service.guidance.guidance`) and the active recipe."""
         self._fixture(name)
-        active = self.store.active()
+        active = self._active
         extra: dict[str, Any] = {"active_recipe": None if active is None else active[0]}
         if name in self.problems:
             extra["target_problem"] = self.problems[name]
@@ -169,7 +171,7 @@ class Changeover:
 
     def overview(self) -> dict[str, Any]:
         """Every fixture's guidance and the active recipe: what the dashboard shows."""
-        active = self.store.active()
+        active = self._active
         return {
             "t": self.clock(),
             "active_recipe": None if active is None else active[0],
