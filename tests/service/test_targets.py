@@ -5,11 +5,13 @@ from __future__ import annotations
 import json
 import math
 import sqlite3
+from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from hexapod_model.service import Store
+from hexapod_model.service import Changeover, Store, UnknownError
 from hexapod_model.service.target_store import SCHEMA_VERSION
 from hexapod_model.service.targets import TargetError, parse_pose, recipe_from_json, target_from_json
 
@@ -140,8 +142,6 @@ def test_a_version_1_store_is_migrated_in_place_and_keeps_its_locks(tmp_path):
     old = store.last_lock("left")
     assert old is not None and old.t == 5.0 and old.target_id is None and old.recipe is None
     assert np.array_equal(old.q, [0.5] * 43)
-    from dataclasses import replace
-
     new = store.add_lock(replace(old, t=6.0, id=None, target_id=7, recipe="bracket"))
     store.targets.add_target(target_from_json(body(), "left", hexapod("reference"), "anna", 1.0))
     store.close()
@@ -170,3 +170,23 @@ def test_a_target_set_after_the_store_file_was_deleted_is_in_the_file_the_next_s
     current = again.targets.current_targets()
     assert set(current) == {"right", "left"} and current["left"].id == second
     again.close()
+
+
+def test_a_stored_target_that_no_longer_solves_is_not_used_and_guidance_says_why(tmp_path):
+    store = Store(tmp_path / "s.sqlite")
+    good = target_from_json(body(), "right", hexapod("reference"), "anna", 1.0)
+    store.targets.add_target(good)
+    far = good.pose.copy()
+    far[2, 3] = 0.6  # e.g. after a change to a shorter-stroke geometry: outside the workspace now
+    store.targets.add_target(replace(good, fixture="left", pose=far))
+    record = {"fixture": "left", "t": 1.0, "readings": [0.0] * 6, "pose": None, "status": "no_data", "flags": []}
+    record |= {"state": "moving", "stored": False, "sigma": None}
+    cycles = {name: SimpleNamespace(target=None, last={**record, "fixture": name}) for name in ("left", "right")}
+    changeover = Changeover(store, {"left": hexapod("reference"), "right": hexapod("reference")}, cycles)  # type: ignore[arg-type]
+    assert changeover.target("left") is None and cycles["left"].target is None
+    g = changeover.guidance("left")
+    assert g["target"] is None and "stroke limit" in g["target_problem"]
+    assert changeover.target("right") is not None and cycles["right"].target is changeover.target("right")
+    with pytest.raises(UnknownError, match="no fixture 'middle'"):
+        changeover.guidance("middle")
+    store.close()
