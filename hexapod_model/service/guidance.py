@@ -37,9 +37,9 @@ def record_pose(rec: dict) -> np.ndarray | None:
 
 def deviation(current: np.ndarray, target: np.ndarray) -> dict[str, float]:
     """``current`` relative to ``target`` (4x4 each, same frame), in the target's frame: mm and deg."""
-    E = np.linalg.solve(target, current)
-    d = E[:3, 3] * 1e3
-    w = np.degrees(pin.log3(E[:3, :3]))
+    Rt = target[:3, :3].T  # E = T_target^-1 T_current of rigid transforms
+    d = Rt @ (current[:3, 3] - target[:3, 3]) * 1e3
+    w = np.degrees(pin.log3(Rt @ current[:3, :3]))
     return {
         "translation_mm": float(np.linalg.norm(d)),
         "rotation_deg": float(np.linalg.norm(w)),

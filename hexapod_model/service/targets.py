@@ -16,6 +16,7 @@ workspace is refused with the leg (or Cardan joint) and the limit it breaks.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -88,16 +89,21 @@ class Target:
         ``brief``: a PUT body (``pose`` as position and quaternion, ``tolerance``): how the store keeps it.
         """
         if brief:
-            pose = {k: v for k, v in pose_json(self.pose).items() if k in QUATERNION_KEYS}
+            pose = {k: v for k, v in self._pose_json.items() if k in QUATERNION_KEYS}
             return {"pose": pose, "tolerance": self.tolerance.to_json()}
         return {
-            "pose": pose_json(self.pose),
+            "pose": dict(self._pose_json),
             "tolerance": self.tolerance.to_json(),
             "recipe": self.recipe,
             "set_by": self.set_by,
             "set_at": self.set_at,
             "id": self.id,
         }
+
+    @functools.cached_property
+    def _pose_json(self) -> dict[str, float]:
+        """:func:`pose_json` of the pose, made once (the dashboard's stream asks for it four times a second)."""
+        return pose_json(self.pose)
 
 
 @dataclass(frozen=True)
