@@ -59,6 +59,7 @@ RECORD_KEYS = (
     "pose_in_robot",
 )
 _POSE_STATUSES = ("ok", "flagged", "drift")
+CLOCK_BACK_FRAMES = 12  # late frames in a row (two sets, no frame on time): the bus's clock went back
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
 
 
@@ -95,6 +96,7 @@ class FixtureCycle:
         self._t_set = math.nan
         self._t_newest = self._t_first = -math.inf  # newest frame seen; first frame of the set being collected
         self._late: set[int] = set()  # legs whose late frames were dropped since the last record
+        self._late_run = 0  # late frames in a row (more than CLOCK_BACK_FRAMES: the bus clock went back)
         self._duplicate: set[int] = set()  # legs with a second frame in the set being collected
         #: frames and sets that could not be used, since the start (``/health``)
         self.counters = {"late_frames": 0, "duplicate_frames": 0, "incomplete_sets": 0}
@@ -135,9 +137,13 @@ class FixtureCycle:
         skew = self.cfg.max_skew or 0.75 * self._period  # NaN until the period is measured
         published = None
         if t < self._t_newest - skew:  # older than this instant: a late frame (False for NaN)
-            self.counters["late_frames"] += 1
-            self._late.add(leg)
-            return None
+            self._late_run += 1
+            if self._late_run <= CLOCK_BACK_FRAMES:
+                self.counters["late_frames"] += 1
+                self._late.add(leg)
+                return None
+            self._clock_went_back(t)
+        self._late_run = 0
         if self._n_fresh:
             repeat = self._fresh[leg]
             if t - self._t_first > skew or (repeat and not t - self._t[leg] <= skew):
@@ -176,6 +182,16 @@ class FixtureCycle:
                 return self._failure(self._t_newest, "duplicate_frame", self._set_flags([]))
             return self._complete(self._t_newest)
         return published
+
+    def _clock_went_back(self, t: float) -> None:
+        """Frames keep coming older than the newest one: the bus's clock was set back; follow it."""
+        back = self._t_newest - t
+        log.warning("fixture %s: frame times went back %.3g s: following the bus clock", self.cfg.name, back)
+        self._t_newest, self._t_set, self._t = t, math.nan, [min(tk, t) for tk in self._t]
+        self._fresh, self._n_fresh = [False] * 6, 0
+        self._lost += round(self._late_run / 6)  # the sets whose frames were taken for late ones
+        self._late.clear()
+        self.lock.restart_clock(t)
 
     def _close_incomplete(self) -> dict:
         """Publish the unfinished set: ``silent_leg`` when a missing leg is stale, else what went wrong."""

@@ -9,8 +9,9 @@ from typing import Any
 def health(service: Any) -> dict:
     """Service state: ``ok`` or ``degraded``, with every problem as one line in ``problems``.
 
-    Degraded: a store error, the cycle stopped, or a fixture whose latest record is not ``ok``
-    (its status and flags say why) or whose fault waits for an acknowledgement.
+    Degraded: a store error, the cycle stopped, a fixture whose latest record is not ``ok``
+    (its status and flags say why) or whose fault waits for an acknowledgement, or a section of
+    ``service.health_sections`` (other parts' own state, by name) with an ``error``.
     """
     now = time.time()
     fixtures, problems = {}, []
@@ -37,6 +38,8 @@ def health(service: Any) -> dict:
         problems.append(f"store: {store_error}")
     if not service.running:
         problems.append("the cycle thread is not running")
+    extra = {name: section() for name, section in service.health_sections.items()}
+    problems += [f"{name}: {section['error']}" for name, section in extra.items() if section.get("error") is not None]
     return {
         "status": "ok" if not problems else "degraded",
         "problems": problems,
@@ -45,4 +48,5 @@ def health(service: Any) -> dict:
         "unknown_frames": service.unknown_frames,
         "store": {"file": service.config.store.path.name, "error": store_error},
         "fixtures": fixtures,
+        **extra,
     }

@@ -76,6 +76,8 @@ class FixtureService:
         #: the error that stopped a background start (``start(wait=False)``), else None
         self.failure: Exception | None = None
         self._subscribers: list[Callable[[Record], None]] = []
+        #: more ``/health`` sections by name, each a dict (one whose ``error`` is not None: ``degraded``)
+        self.health_sections: dict[str, Callable[[], dict]] = {}
         self._json: dict[str, tuple[Record, str]] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None

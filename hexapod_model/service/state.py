@@ -116,6 +116,12 @@ class LockDetector:
         """Start a new steady run at this set (a lock could not be taken)."""
         self._restart(t, [float(v) for v in readings])
 
+    def restart_clock(self, t: float) -> None:
+        """The clock was set back to ``t`` (s): a steady run restarts, a lock's average goes on from ``t``."""
+        self._t_last = min(self._t_last, t)
+        if self._run_start is not None:
+            self._restart(t, self._run_start[1])
+
     def release(self, t: float, readings) -> None:
         """Leave ``locked`` (an acknowledged alarm): a new lock is taken from the readings as they are now."""
         self.state, self.reference, self.drift, self._outside = "moving", None, False, 0

@@ -26,7 +26,7 @@ def run(tmp_path, faults, seconds=2.0, fixture=None, **sim):
     return drive(svc, sim_config(svc, [spec]), seconds)
 
 
-def feed(tmp_path, sets, faults=(), on_set=None, route=None):
+def feed(tmp_path, sets, faults=(), on_set=None, route=None, shift=None):
     """Drive a cycle set by set (like drive()), with a hook before each set and a frame-to-leg router."""
     svc = service_config(tmp_path, [fixture_table()])
     sim = sim_config(svc, [{"name": "left", "rate": RATE, "trajectory": "A", "faults": list(faults)}])
@@ -43,7 +43,8 @@ def feed(tmp_path, sets, faults=(), on_set=None, route=None):
         sent = simulator.send_set(0, k / RATE, stamp=1.0e9 + k / RATE, stall_check=False)
         for msg in bus.sent:
             leg = leg_of[msg.arbitration_id]
-            rec = cycle.on_frame(leg if route is None else route(k, leg), msg.data, msg.timestamp)
+            t = msg.timestamp + (0.0 if shift is None else shift(k))
+            rec = cycle.on_frame(leg if route is None else route(k, leg), msg.data, t)
             if rec is not None:
                 out.append((sent, rec))
     return cycle, out
@@ -157,3 +158,11 @@ def test_a_leg_moving_while_locked_is_an_alarm_and_a_lock_stored_meanwhile_carri
     assert events and events[0].status.startswith("unacknowledged:moved_while_locked:leg4@")
     restarted = FixtureCycle(svc.fixtures[0], cycle.hexa, cycle.geometry_hash, events[0], 2.0e9)
     assert restarted.fault == cycle.fault  # a restart recovers the waiting fault with the lock
+
+
+def test_a_bus_clock_set_back_is_followed_not_taken_for_late_frames(tmp_path, caplog):
+    cycle, out = feed(tmp_path, 250, shift=lambda k: -10.0 if k >= 150 else 0.0)
+    after = [r for s, r in out if s.t_sim >= 1.5]  # stamped by the clock set back 10 s
+    assert len(after) >= 97 and all(r["t"] < 1.0e9 for r in after)  # records go on within two sets
+    assert all(r["status"] == "ok" for r in after[10:]) and cycle.fault is None
+    assert any("went back" in m for m in caplog.messages)

@@ -211,3 +211,12 @@ def test_health_does_not_show_the_store_path(tmp_path):
     with FixtureService(config, bus=can.Bus(interface="virtual", channel=config.bus.channel), http=False) as svc:
         health = svc.health()
     assert health["store"]["file"] == "store.sqlite" and str(tmp_path) not in json.dumps(health)
+
+
+def test_a_health_section_with_an_error_degrades_the_service(tmp_path):
+    config = service_config(tmp_path)
+    with FixtureService(config, bus=can.Bus(interface="virtual", channel=config.bus.channel), http=False) as svc:
+        svc.health_sections["bridge"] = lambda: {"error": "peer gone", "sent": 3}
+        health = svc.health()
+    assert health["status"] == "degraded" and "bridge: peer gone" in health["problems"]
+    assert health["bridge"] == {"error": "peer gone", "sent": 3}

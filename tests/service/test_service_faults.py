@@ -152,3 +152,28 @@ def test_store_file_deleted_while_serving_every_lock_published_stored_is_in_the_
 
     with Store(config.store.path, create=False) as store:
         assert stored_locks(records) <= {e.t for e in store.locks("left")}
+
+
+def test_a_stale_frame_of_20_sets_ago_never_completes_a_set_on_the_bus(tmp_path):
+    config = service_config(tmp_path)
+    fault = {"kind": "late_frame", "leg": 6, "sets": 20, "start": 0.5, "duration": 30}
+    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A", "faults": [fault]}])
+    records = []
+    hexa = hexapod("reference")
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    service = FixtureService(config, hexapods={"left": hexa}, http=False)
+    service.subscribe(records.append)
+    try:
+        service.start()
+        simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
+        simulator.start()
+        time.sleep(1.5)
+        simulator.stop()
+    finally:
+        service.stop()
+        bus.shutdown()
+    t0 = records[0]["t"]
+    during = [r for r in records if r["t"] >= t0 + 0.8]
+    assert len(during) > 40 and not any(r["status"] == "ok" for r in during)  # was: ok, up to 4.7 mm off
+    assert all("missing:leg6" in r["flags"] or "silent:leg6" in r["flags"] for r in during)
+    assert service.cycles["left"].counters["late_frames"] > 40
