@@ -1,4 +1,4 @@
-"""``hexapod fixture status`` and ``hexapod fixture history``: what the service's store holds (and ``acknowledge``)."""
+"""`hexapod fixture status`, `history` (what the store holds); `acknowledge`, `target`, `recipe`, `locate`."""
 
 from __future__ import annotations
 
@@ -16,11 +16,12 @@ from ..io.tables import LENGTH_COLUMNS, POSE_COLUMNS
 from .acknowledge import register_action
 
 LOCK_COLUMNS = ["fixture", "t", "time", *POSE_COLUMNS, *LENGTH_COLUMNS, "status", "geometry_hash"]
+LOCK_COLUMNS += ["target_id", "recipe"]  # the changeover target the lock met (empty: none)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``fixture status``, ``fixture history`` and ``fixture acknowledge``."""
-    p = sub.add_parser("fixture", help="stored lock poses and sample log of the pose service")
+    """Add ``fixture status``, ``history``, ``acknowledge``, ``target``, ``recipe`` and ``locate``."""
+    p = sub.add_parser("fixture", help="stored lock poses and sample log of the pose service; targets and recipes")
     actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
     s = actions.add_parser("status", help="the last stored lock pose of every fixture")
     s.add_argument("config", metavar="FIXTURE.toml")
@@ -36,6 +37,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     h.set_defaults(func=run_history)
     register_action(actions)
+    from .changeover import register_actions
+
+    register_actions(actions)
 
 
 def parse_time(text: str) -> float:
@@ -135,6 +139,8 @@ def run_history(args: argparse.Namespace) -> int:
                     *e.readings,
                     e.status,
                     e.geometry_hash,
+                    e.target_id,
+                    e.recipe,
                 ]
                 for e in store.locks(args.fixture, since)
             ]

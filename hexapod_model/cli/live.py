@@ -40,11 +40,14 @@ def live_view(
     stop: threading.Event,
     deadline: float | None = None,
     count: int | None = None,
+    cell=None,
 ) -> int:
     """Show the pose of ``latest()`` (a record) in a local meshcat view.
 
     Until ``stop`` is set, the monotonic clock passes ``deadline``, or ``count`` poses were shown.
-    Poses are shown through inverse kinematics (warm started); returns the number shown.
+    Poses are shown through inverse kinematics (warm started); returns the number shown. With
+    ``cell`` (the fixture's :class:`~hexapod_model.service.cell.Cell`) the UR10 stands where
+    ``base_in_robot`` puts it and its flange follows the record's ``pose_in_robot``.
     """
     from ..viz.meshcat_scene import HexapodScene, start_visualizer, stop_visualizer
 
@@ -52,6 +55,7 @@ def live_view(
     shown, last_t, guess = 0, None, None
     try:
         scene = HexapodScene(hexa, vis)
+        robot = None if cell is None else _Robot(scene, cell)
         print(f"meshcat: {vis.url()}", flush=True)
         while not stop.is_set() and (deadline is None or time.monotonic() < deadline) and shown != count:
             rec = latest()
@@ -62,12 +66,48 @@ def live_view(
                     guess = hexa.inverse(T, guess=guess)
                     scene.show(guess)
                     shown += 1
+                    if robot is not None:
+                        robot.show(rec)
                 except HexapodError as exc:
                     note("view", f"pose at t={rec['t']} not shown: {exc}")
             stop.wait(FRAME_S)
     finally:
         stop_visualizer(vis)
     return shown
+
+
+class _Robot:
+    """The UR10 of ``hexapod view --live --cell``: placed by ``base_in_robot``, its flange at ``pose_in_robot``."""
+
+    def __init__(self, scene, cell):
+        self.scene, self.cell = scene, cell
+        self.base = np.linalg.inv(cell.base_in_robot)  # the robot's base in the hexapod base frame
+        self.viz = None
+        self.q = None
+        self.failed = False
+
+    def show(self, record: dict) -> None:
+        from ..viz.robot_cell import add_ur10, reach
+
+        placed = record.get("pose_in_robot")
+        target = pose_of_record(placed)
+        if target is None:
+            return
+        try:
+            cell = reach(target, self.q)
+        except HexapodError as exc:
+            if not self.failed:
+                note("view", f"UR10 not shown at pose_in_robot: {exc}")
+            self.failed = True
+            return
+        self.q = cell.q
+        if self.viz is None:
+            self.scene.recentre((0.4, 0.0, 0.4))
+            self.viz = add_ur10(self.scene.vis, cell, world=self.scene.world, base=self.base)
+            sigma = (placed or {}).get("sigma") or {}
+            note("view", f"UR10 flange at pose_in_robot (IK error {cell.error:.1e}; sigma {sigma})")
+        else:
+            self.viz.display(cell.q)
 
 
 def run_live(args: argparse.Namespace) -> int:
@@ -82,12 +122,18 @@ def run_live(args: argparse.Namespace) -> int:
         hexa = config.fixture(name).load_hexapod()
     except KeyError:
         raise HexapodError(f"--fixture {name!r}: not a fixture of {args.hexapod}") from None
+    cell = None
+    if getattr(args, "cell", False):
+        cell = config.fixture(name).cell
+        if cell is None:
+            raise HexapodError(f"--cell: fixture {name!r} of {args.hexapod} has no [fixtures.cell] base_in_robot")
     url = f"http://{config.http.host}:{config.http.port}/fixtures/{name}/pose"
+    headers = {"Authorization": f"Bearer {config.http.token}"} if config.http.token else {}
     errors: list[str] = []
 
     def latest() -> dict | None:
         try:
-            with urllib.request.urlopen(url, timeout=1.0) as r:
+            with urllib.request.urlopen(urllib.request.Request(url, headers=headers), timeout=1.0) as r:
                 return json.load(r)
         except (urllib.error.URLError, OSError, ValueError) as exc:
             if not errors:
@@ -98,7 +144,7 @@ def run_live(args: argparse.Namespace) -> int:
     stop = threading.Event()
     try:  # --once: the first pose served, or nothing after ONCE_S
         shown = live_view(
-            hexa, latest, stop, time.monotonic() + ONCE_S if args.once else None, 1 if args.once else None
+            hexa, latest, stop, time.monotonic() + ONCE_S if args.once else None, 1 if args.once else None, cell
         )
     except KeyboardInterrupt:
         return 0

@@ -172,7 +172,8 @@ def _start_simulator(config, sim_config, service):
     from ..service import Simulator
 
     sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
-    sim = Simulator(config, sim_config, sim_bus, truth=1, hexapods=service.hexapods)
+    follow = service.changeover.followed  # fixtures with a scripted changeover move to their targets
+    sim = Simulator(config, sim_config, sim_bus, truth=1, hexapods=service.hexapods, targets=follow)
     sim.start()
     return sim, sim_bus
 

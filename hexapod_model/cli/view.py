@@ -28,7 +28,12 @@ def _pose_options(p: argparse.ArgumentParser) -> None:
         metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
         help="platform pose as `hexapod fk` writes it: metres and degrees, R = Rz(yaw) Ry(pitch) Rx(roll)",
     )
-    p.add_argument("--cell", action="store_true", help="add the UR10 coupled to the top plate (Bem et al. (2026) §5.5)")
+    p.add_argument(
+        "--cell",
+        action="store_true",
+        help="add the UR10 coupled to the top plate (Bem et al. (2026) §5.5); with --live: placed by the "
+        "fixture's [fixtures.cell], its flange at the served pose_in_robot",
+    )
 
 
 def register(sub: argparse._SubParsersAction) -> None:

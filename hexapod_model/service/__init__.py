@@ -12,10 +12,15 @@ Public API::
     from hexapod_model.service import FixtureService, load_config
     svc = FixtureService(load_config("fixture.toml")).start()
     svc.record("left")      # the latest record (dict), also GET /fixtures/left/pose
+    svc.changeover.set_target("left", {"pose": {...}, "tolerance": {...}}, by="anna")
+    svc.changeover.guidance("left")   # deviation, per-leg changes; docs/changeover.md
     svc.stop()
 """
 
 from .bus import open_bus
+from .cell import Cell, Located, locate
+from .changeover import Changeover, UnknownError
+from .client import RequestError, ServiceClient
 from .codec import Decoded, FrameLayout, LegCodec, decode, encode
 from .config import (
     BusConfig,
@@ -29,14 +34,18 @@ from .config import (
 )
 from .cycle import RECORD_KEYS, FixtureCycle
 from .errors import ConfigError, FrameError, ServiceError
+from .guidance import guidance
 from .service import FixtureService
 from .simconfig import Fault, SimConfig, SimFixture, load_simulation, simulation_from_dict
 from .simulate import SentSet, Simulator
 from .solve import PoseSolver, SolveOutcome, Uncertainty
 from .store import LockEvent, Store
+from .targets import Recipe, Target, TargetError, Tolerance
 
 __all__ = [
     "BusConfig",
+    "Cell",
+    "Changeover",
     "ConfigError",
     "Decoded",
     "Fault",
@@ -47,10 +56,14 @@ __all__ = [
     "FrameLayout",
     "HttpConfig",
     "LegCodec",
+    "Located",
     "LockEvent",
     "PoseSolver",
     "RECORD_KEYS",
+    "Recipe",
+    "RequestError",
     "SentSet",
+    "ServiceClient",
     "ServiceConfig",
     "ServiceError",
     "SimConfig",
@@ -59,13 +72,19 @@ __all__ = [
     "SolveOutcome",
     "Store",
     "StoreConfig",
+    "Target",
+    "TargetError",
+    "Tolerance",
     "Uncertainty",
+    "UnknownError",
     "config_from_dict",
     "decode",
     "encode",
     "geometry_hash",
+    "guidance",
     "load_config",
     "load_simulation",
+    "locate",
     "open_bus",
     "simulation_from_dict",
 ]

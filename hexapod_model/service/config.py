@@ -22,6 +22,7 @@ from ..description.presets import PRESETS
 from ..exceptions import HexapodError
 from ..kinematics.hexapod import Hexapod
 from ..tracking.tracker import PREDICTORS
+from .cell import Cell, cell_from_table
 from .codec import FrameLayout, LegCodec
 from .errors import ConfigError, Table
 from .rosconfig import RosConfig, ros_config
@@ -111,6 +112,8 @@ class FixtureConfig:
         wrench_point: where the process force acts (m, platform frame).
         brake_capacity: axial force a brake holds (N); None: the geometry file's ``brake_capacity``.
         index: position in the file's ``[[fixtures]]`` list (for messages).
+        cell: the base's placement in the robot cell and the coupling on the plate
+            (``[fixtures.cell]``; ``None``: records carry no ``pose_in_robot``).
     """
 
     name: str
@@ -131,6 +134,7 @@ class FixtureConfig:
     brake_capacity: float | None = None
     index: int = 0
     source: str = field(default="<dict>", compare=False)
+    cell: Cell | None = field(default=None, compare=False)
 
     def load_hexapod(self) -> Hexapod:
         """The fixture's :class:`Hexapod`; a file that cannot be read is a :class:`ConfigError`."""
@@ -340,6 +344,7 @@ def _fixture(t: Table, index: int, folder: Path) -> FixtureConfig:
         brake_capacity=t.number("brake_capacity", None, 1e-9, 1e9) if "brake_capacity" in t.data else None,
         index=index,
         source=t.source,
+        cell=cell_from_table(t.table("cell")) if "cell" in t.data else None,
     )
     if cfg.drift_limit >= cfg.steady_band:
         raise t.error("drift_limit", cfg.drift_limit, f"must be below steady_band = {cfg.steady_band:g} m")

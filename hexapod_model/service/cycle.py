@@ -27,18 +27,22 @@ from __future__ import annotations
 
 import logging
 import math
+from dataclasses import replace
 
 import numpy as np
 import pinocchio as pin
 
 from ..kinematics.hexapod import Hexapod
 from .alarms import UNACKNOWLEDGED, Acknowledgement, FaultLatch, LatchedFault
+from .cell import InRobot
 from .config import FixtureConfig
+from .guidance import deviation, within
 from .load import lock_load
 from .pose import pose_record, quaternion
 from .solve import PoseSolver, SolveOutcome
 from .state import MOTION_LEGS, LockDetector, StepDetector, StuckDetector
 from .store import LockEvent
+from .targets import Target
 
 log = logging.getLogger(__name__)
 RECORD_KEYS = (
@@ -54,6 +58,7 @@ RECORD_KEYS = (
     "sigma",
     "singularity_margin",
     "load",
+    "pose_in_robot",
 )
 _POSE_STATUSES = ("ok", "flagged", "drift")
 CLOCK_BACK_FRAMES = 12  # late frames in a row (two sets, no frame on time): the bus's clock went back
@@ -116,8 +121,12 @@ class FixtureCycle:
         self._check_moved = self.recovered is not None
         initial = None if self.recovered is None else self.recovered.q
         self.solver = PoseSolver(hexa, cfg.noise, cfg.predictor, initial, cfg.confirm_samples)
+        #: the changeover target (set by :class:`~hexapod_model.service.changeover.Changeover`): a lock
+        #: pose within its tolerance is stored naming it
+        self.target: Target | None = None
         #: the lock to commit: the service takes it, stores it and calls :meth:`lock_stored`
         self.pending_lock: tuple[int, LockEvent] | None = None
+        self._in_robot = None if cfg.cell is None else InRobot(cfg.cell, cfg.noise, self.solver.propagation)
         self.last: dict = self._record(t0, "no_data", [], None)
 
     # ----- input -----
@@ -335,6 +344,11 @@ class FixtureCycle:
         quat = _quaternion(sol.pose[:3, :3])
         status = "ok" if self.fault is None else self.fault.stored_status()  # the lock carries a waiting fault
         event = LockEvent(self.cfg.name, t, sol.pose[:3, 3].copy(), quat, mean, status, self.geometry_hash, sol.q)
+        target, u = self.target, outcome.uncertainty
+        if target is not None and u is not None and status == "ok":  # a lock with a fault meets no target
+            sigma = {"translation_mm": u.translation * 1e3, "rotation_deg": math.degrees(u.rotation)}
+            if within(deviation(sol.pose, target.pose), sigma, target.tolerance):
+                event = replace(event, target_id=target.id, recipe=target.recipe)
         self.lock.lock(t, mean)
         self._load = lock_load(self.cfg, self.hexa, sol.q)
         self._episode += 1
@@ -383,6 +397,7 @@ class FixtureCycle:
             "sigma": sigma,
             "singularity_margin": margin,
             "load": self._load if locked else None,
+            "pose_in_robot": None if pose is None or self._in_robot is None else self._in_robot.record(outcome, sigma),
         }
         self.last_q = None if pose is None else outcome.q  # type: ignore[union-attr]
         self.last = record

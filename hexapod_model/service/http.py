@@ -162,6 +162,11 @@ def core_routes() -> list[BaseRoute]:
 
 
 # ----- the application -----
+def _static(path: str) -> bool:
+    """The dashboard's page and assets: no data, served without the token (its script sends the token)."""
+    return path == "/" or path.startswith("/dashboard/")
+
+
 class _Gate:
     """ASGI middleware: ``503 starting`` before the service is ready, the read token, no traceback out."""
 
@@ -175,7 +180,7 @@ class _Gate:
         refusal = None
         if not self.service.ready:
             refusal = json_response(self.service.starting(), 503, {"Retry-After": "1"})
-        elif self.service.config.http.reads_need_token:
+        elif self.service.config.http.reads_need_token and not _static(scope.get("path", "")):
             headers = dict(scope.get("headers") or [])
             if not bearer_matches(headers.get(b"authorization", b"").decode("latin-1"), self.service.config.http.token):
                 refusal = _unauthorized()

@@ -25,6 +25,7 @@ import can
 
 from .alarms import Acknowledgement
 from .bus import open_bus
+from .changeover import Changeover
 from .config import ServiceConfig, geometry_hash
 from .cycle import FixtureCycle
 from .errors import ServiceError
@@ -83,6 +84,8 @@ class FixtureService:
         self.cycles: dict[str, FixtureCycle] = {}
         self.endpoint: HttpServer | None = None
         self.store: Store | None = None
+        #: targets, recipes and guidance (:class:`~hexapod_model.service.changeover.Changeover`), once started
+        self.changeover: Changeover | None = None
         self.writer: StoreWriter | None = None
         self.frames = self.unknown_frames = 0
         self._started = 0.0
@@ -109,7 +112,9 @@ class FixtureService:
                     from .server import INSTALL_HINT
 
                     raise ServiceError(INSTALL_HINT) from None
-                self.endpoint = HttpServer(build_app(self, self._extra_routes), cfg.http)
+                from .changeover_http import changeover_routes
+
+                self.endpoint = HttpServer(build_app(self, [*changeover_routes(), *self._extra_routes]), cfg.http)
             if self._bus is None:
                 self._bus = open_bus(cfg)
             if self.endpoint is not None:
@@ -157,6 +162,7 @@ class FixtureService:
                 store.close()
                 return
             self.store, self.cycles = store, cycles
+            self.changeover = Changeover(store, self.hexapods, cycles)
             self._routes = {
                 (leg.can_id, leg.extended_id): (self.cycles[f.name], k)
                 for f in cfg.fixtures

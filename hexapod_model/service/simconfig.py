@@ -19,6 +19,7 @@ from ..io.tables import poses_from_table, read_table
 from ..kinematics.rotations import rpy_to_matrix
 from .config import ServiceConfig, read_toml
 from .errors import ConfigError, Table
+from .sim_changeover import ChangeoverScript
 
 FAULTS = (
     "dropped_frames",
@@ -76,6 +77,7 @@ class SimFixture:
         move, lock: seconds of motion, then seconds still (``lock = 0``: always moving).
         ramp: seconds to slow down before and speed up after a lock phase.
         faults: injected faults.
+        changeover: follow the fixture's target when it changes (``None``: never).
     """
 
     name: str
@@ -86,6 +88,7 @@ class SimFixture:
     lock: float = 0.0
     ramp: float = 0.2
     faults: tuple[Fault, ...] = ()
+    changeover: ChangeoverScript | None = None
 
     def speed(self, t: float) -> float:
         """Playback speed (0..1) of the pose sequence at simulation time ``t`` (s)."""
@@ -193,12 +196,23 @@ def _fixture(t: Table, service: ServiceConfig, folder: Path) -> SimFixture:
         lock=t.number("lock", 0.0, 0.0, 3600.0),
         ramp=t.number("ramp", 0.2, 0.0, 60.0),
         faults=tuple(_fault(Table(f, t.name(f"faults[{k}]"), t.source)) for k, f in enumerate(faults)),
+        changeover=_changeover(t.table("changeover")) if "changeover" in t.data else None,
     )
     if 2 * sim.ramp > sim.move and sim.lock > 0:
         raise t.error("ramp", sim.ramp, f"two ramps must fit in move = {sim.move:g} s")
     t.finish()
     _check_reachable(t, sources[0], hexa, poses)
     return sim
+
+
+def _changeover(t: Table) -> ChangeoverScript:
+    script = ChangeoverScript(
+        move=t.number("move", 4.0, 0.01, 3600.0),
+        overshoot=t.number("overshoot", 0.0, 0.0, 1.0),
+        settle=t.number("settle", 1.0, 0.01, 3600.0),
+    )
+    t.finish()
+    return script
 
 
 def _fault(t: Table) -> Fault:

@@ -14,6 +14,7 @@ import logging
 import threading
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import can
@@ -25,6 +26,7 @@ from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
 from .config import FixtureConfig, ServiceConfig
 from .errors import FrameError
+from .sim_changeover import Follower
 from .simconfig import SimConfig, SimFixture
 
 log = logging.getLogger(__name__)
@@ -59,8 +61,10 @@ class SentSet:
 class _Encoders:
     """The six simulated encoders of one fixture."""
 
-    def __init__(self, sim: SimFixture, cfg: FixtureConfig, hexa: Hexapod, rng: np.random.Generator):
+    def __init__(self, sim: SimFixture, cfg: FixtureConfig, hexa: Hexapod, rng: np.random.Generator, targets=None):
         self.sim, self.cfg, self.hexa, self.rng = sim, cfg, hexa, rng
+        self.follower = None if sim.changeover is None or targets is None else Follower(sim.changeover, sim.ramp)
+        self._targets = targets
         self.tau = 0.0  # position in the pose sequence (samples)
         self._key: float | None = None
         self._sol: Solution | None = None
@@ -82,6 +86,18 @@ class _Encoders:
 
     def advance(self, t_sim: float) -> tuple[np.ndarray, np.ndarray]:
         """True pose and readings at ``t_sim``; the sequence position then moves on one set."""
+        factor = 1.0
+        if self.follower is not None:
+            f = self.follower
+            key, target = self._targets(self.sim.name)
+            f.request(key, target)
+            playing = len(self.sim.poses) > 1 and self.sim.speed(t_sim) > 0.0
+            current = self.pose() if self._sol is None else self._sol.pose
+            if f.follow(current, t_sim, playing):
+                self._sol = self.hexa.inverse(f.pose(t_sim), guess=self._sol)
+                self._key = None
+                return self._sol.pose, self._sol.lengths.copy()
+            factor = f.sequence_speed(t_sim, playing)
         if self._key != self.tau:
             pose = self.pose()
             self._sol = self.hexa.inverse(pose, guess=self._sol)
@@ -89,13 +105,18 @@ class _Encoders:
         assert self._sol is not None
         pose, true = self._sol.pose, self._sol.lengths.copy()
         if len(self.sim.poses) > 1:
-            self.tau = (self.tau + self.sim.speed(t_sim)) % len(self.sim.poses)
+            self.tau = (self.tau + factor * self.sim.speed(t_sim)) % len(self.sim.poses)
         return pose, true
 
     def skip(self, t_sim: float) -> None:
         """Let a set's time pass unsent: the plate moves on."""
+        f = self.follower
+        if f is not None and f.active:
+            return  # the move is a function of time: nothing to advance
         if len(self.sim.poses) > 1:
-            self.tau = (self.tau + self.sim.speed(t_sim)) % len(self.sim.poses)
+            playing = self.sim.speed(t_sim) > 0.0
+            factor = 1.0 if f is None else f.sequence_speed(t_sim, playing)
+            self.tau = (self.tau + factor * self.sim.speed(t_sim)) % len(self.sim.poses)
 
     def frames(self, t_sim: float, true: np.ndarray) -> tuple[list[can.Message | None], tuple[str, ...]]:
         """The six frames (``None``: not sent) of a set at ``t_sim``."""
@@ -155,6 +176,8 @@ class Simulator:
             keeps the sampling-time stamps when created with ``preserve_timestamps=True``).
         truth: how many sent sets :attr:`truth` keeps.
         hexapods: already loaded hexapods by fixture name (else loaded here).
+        targets: ``targets(name) -> (key, 4x4 pose or None)``: each fixture's current target (the
+            key changes with it), which fixtures with a ``changeover`` script move to.
     """
 
     def __init__(
@@ -164,6 +187,7 @@ class Simulator:
         bus: can.BusABC,
         truth: int = 200_000,
         hexapods: dict[str, Hexapod] | None = None,
+        targets: Callable[[str], tuple[object, np.ndarray | None]] | None = None,
     ):
         self.bus, self.sim = bus, sim
         rng = np.random.default_rng(sim.seed)
@@ -172,7 +196,7 @@ class Simulator:
         for s in sim.fixtures:
             cfg = service.fixture(s.name)
             hexa = hexapods.get(s.name) or cfg.load_hexapod()
-            self._encoders.append(_Encoders(s, cfg, hexa, np.random.default_rng(rng.integers(2**63))))
+            self._encoders.append(_Encoders(s, cfg, hexa, np.random.default_rng(rng.integers(2**63)), targets))
         self.truth: deque[SentSet] = deque(maxlen=truth)
         self.frames_sent = self.sets_skipped = 0
         self._stop = threading.Event()

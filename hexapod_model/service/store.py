@@ -1,15 +1,18 @@
 """The fixture store: SQLite in WAL mode, lock events committed durably, a bounded sample log.
 
-Schema (version 1; the tables ``docs/service.md`` documents):
+Schema (version 2; the tables ``docs/service.md`` documents):
 
 * ``lock_events``: one row per lock (the brakes' engaged pose): ``fixture``, ``t`` (s, Unix
   time of the reading set that completed the lock), ``x, y, z`` (m) and ``qx, qy, qz, qw`` (base
   -> platform), ``l1..l6`` (m, the mean readings of the steady run the pose was solved from),
   ``status``, ``geometry_hash`` (SHA-256 of the URDF it was solved with) and ``q`` (JSON list: the
-  Pinocchio configuration, the tracker's initial guess after a restart).
+  Pinocchio configuration, the tracker's initial guess after a restart), ``target_id`` and
+  ``recipe`` (the changeover target the lock met, NULL when none; added in version 2).
 * ``samples``: published records (``fixture``, ``t``, ``status``, ``flags`` as JSON, ``state``,
   ``l1..l6``, pose columns; NULL when there is none), the newest ``samples`` rows kept.
 * ``meta``: ``schema_version``.
+* ``targets``, ``recipes``, ``activations``: the changeover's (:mod:`~hexapod_model.service.target_store`,
+  which also migrates a version-1 file when it is opened).
 
 ``synchronous=FULL``: a commit is on disk (the WAL file fsync'ed) when :meth:`Store.add_lock`
 returns, so a lock published as stored survives a crash or a power loss. Writes happen on one
@@ -32,11 +35,12 @@ from typing import Any
 import numpy as np
 
 from .errors import ServiceError
+from .target_store import TargetStore, migrate
 
 log = logging.getLogger(__name__)
-SCHEMA_VERSION = 1
 LEGS = ", ".join(f"l{i}" for i in range(1, 7))
 POSE = "x, y, z, qx, qy, qz, qw"
+_LOCK_TAIL = "status, geometry_hash, q, target_id, recipe"
 SAMPLE_COLUMNS = ("fixture", "t", "status", "flags", "state", *LEGS.split(", "), *POSE.split(", "))
 _SCHEMA = f"""
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -44,7 +48,7 @@ CREATE TABLE IF NOT EXISTS lock_events (
     id INTEGER PRIMARY KEY AUTOINCREMENT, fixture TEXT NOT NULL, t REAL NOT NULL,
     {", ".join(c + " REAL NOT NULL" for c in POSE.split(", "))},
     {", ".join(c + " REAL NOT NULL" for c in LEGS.split(", "))},
-    status TEXT NOT NULL, geometry_hash TEXT NOT NULL, q TEXT NOT NULL);
+    status TEXT NOT NULL, geometry_hash TEXT NOT NULL, q TEXT NOT NULL, target_id INTEGER, recipe TEXT);
 CREATE INDEX IF NOT EXISTS lock_events_fixture ON lock_events (fixture, id);
 CREATE TABLE IF NOT EXISTS samples (
     id INTEGER PRIMARY KEY AUTOINCREMENT, fixture TEXT NOT NULL, t REAL NOT NULL, status TEXT NOT NULL,
@@ -67,6 +71,8 @@ class LockEvent:
         geometry_hash: :func:`hexapod_model.service.config.geometry_hash` of the hexapod used.
         q: the solution's Pinocchio configuration.
         id: row id once stored.
+        target_id: the stored target the lock pose met (within its tolerance), or None.
+        recipe: the recipe that target came from, or None.
     """
 
     fixture: str
@@ -78,6 +84,8 @@ class LockEvent:
     geometry_hash: str
     q: np.ndarray
     id: int | None = None
+    target_id: int | None = None
+    recipe: str | None = None
 
 
 class Store:
@@ -99,11 +107,13 @@ class Store:
             if check != "ok":
                 raise ServiceError(f"store {self.path} is damaged: {check}")
             self.db.executescript(_SCHEMA)
-            self.db.execute("INSERT OR IGNORE INTO meta VALUES ('schema_version', ?)", (str(SCHEMA_VERSION),))
+            migrate(self.db, self.path)
         except sqlite3.Error as exc:
             raise ServiceError(f"store {self.path}: {exc}") from None
         self._file = _identity(self.path)
         self._lock = threading.Lock()
+        #: the changeover's targets, recipes and activations
+        self.targets = TargetStore(self)
 
     def _connect(self) -> sqlite3.Connection:
         db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None, timeout=self.timeout)
@@ -173,8 +183,9 @@ class Store:
     def add_lock(self, event: LockEvent, samples: Sequence[tuple] = ()) -> LockEvent:
         """Commit ``event`` (and pending ``samples``) durably; returns it with its ``id``."""
         values = (event.t, *event.position, *event.quaternion, *event.readings)
-        row = (event.fixture, *map(float, values), event.status, event.geometry_hash, json.dumps(event.q.tolist()))
-        sql = f"INSERT INTO lock_events (fixture, t, {POSE}, {LEGS}, status, geometry_hash, q) VALUES "
+        q = json.dumps(event.q.tolist())
+        row = (event.fixture, *map(float, values), event.status, event.geometry_hash, q, event.target_id, event.recipe)
+        sql = f"INSERT INTO lock_events (fixture, t, {POSE}, {LEGS}, {_LOCK_TAIL}) VALUES "
         sql += f"({', '.join('?' * len(row))})"
 
         def work() -> int | None:
@@ -206,7 +217,7 @@ class Store:
         return found[0] if found else None
 
     def _locks(self, where: str, args: tuple) -> list[LockEvent]:
-        sql = f"SELECT id, fixture, t, {POSE}, {LEGS}, status, geometry_hash, q FROM lock_events WHERE {where}"
+        sql = f"SELECT id, fixture, t, {POSE}, {LEGS}, {_LOCK_TAIL} FROM lock_events WHERE {where}"
         with self._lock:
             rows = self.db.execute(sql, args).fetchall()
         return [
@@ -220,6 +231,8 @@ class Store:
                 r[17],
                 np.array(json.loads(r[18]), dtype=float),
                 r[0],
+                r[19],
+                r[20],
             )
             for r in rows
         ]

@@ -90,13 +90,24 @@ def couple_to_plate(platform_pose: np.ndarray, tol: float = 1e-6, max_iter: int 
         UnreachableError: the pose is beyond the arm's reach, or the damped least-squares IK
             does not converge to ``tol``.
     """
+    base = robot_base_pose()
+    cell = reach(np.linalg.inv(base) @ tool_changer_pose(platform_pose), tol=tol, max_iter=max_iter)
+    return CellPose(cell.q, base @ cell.flange, cell.error)
+
+
+def reach(target_np: np.ndarray, q_start: np.ndarray | None = None, tol: float = 1e-6, max_iter: int = 300) -> CellPose:
+    """UR10 IK putting ``tool0`` at ``target_np`` (4x4 in the robot's base frame); ``flange`` in that frame.
+
+    ``q_start``: the joint configuration to start from (default elbow up, wrist down).
+
+    Raises:
+        UnreachableError: beyond the arm's reach, no convergence to ``tol``, or outside the joint limits.
+    """
     import pinocchio as pin
 
     model, _ = load_ur10()
     data = model.createData()
     fid = model.getFrameId(FLANGE_FRAME)
-    base = robot_base_pose()
-    target_np = np.linalg.inv(base) @ tool_changer_pose(platform_pose)
     target = pin.SE3(target_np[:3, :3], target_np[:3, 3])
     shoulder = np.array([0.0, 0.0, 0.1273])
     distance = float(np.linalg.norm(target_np[:3, 3] - shoulder))
@@ -104,7 +115,7 @@ def couple_to_plate(platform_pose: np.ndarray, tol: float = 1e-6, max_iter: int 
         raise UnreachableError(
             target_np, distance - UR10_REACH, f"{distance:.3f} m from the shoulder, reach {UR10_REACH} m"
         )
-    q, damping, err = Q_START.copy(), 1e-4, np.inf
+    q, damping, err = (Q_START if q_start is None else np.asarray(q_start, dtype=float)).copy(), 1e-4, np.inf
     for _ in range(max_iter):
         pin.framesForwardKinematics(model, data, q)
         e = pin.log6(data.oMf[fid].actInv(target)).vector  # in the flange frame
@@ -118,14 +129,15 @@ def couple_to_plate(platform_pose: np.ndarray, tol: float = 1e-6, max_iter: int 
     if np.any(q < model.lowerPositionLimit) or np.any(q > model.upperPositionLimit):
         raise UnreachableError(target_np, err, "the solution violates the UR10 joint limits")
     pin.framesForwardKinematics(model, data, q)
-    return CellPose(q, base @ data.oMf[fid].homogeneous, err)
+    return CellPose(q, data.oMf[fid].homogeneous, err)
 
 
-def add_ur10(vis, cell: CellPose, world: np.ndarray | None = None):
+def add_ur10(vis, cell: CellPose, world: np.ndarray | None = None, base: np.ndarray | None = None):
     """Draw the UR10.
 
     Draw the UR10 at ``cell.q`` in the meshcat visualizer ``vis`` (node ``/ur10``);
-    ``world`` is the placement of the hexapod base frame in the meshcat world (default identity).
+    ``world`` is the placement of the hexapod base frame in the meshcat world (default identity),
+    ``base`` the robot's base in the hexapod base frame (default :func:`robot_base_pose`).
     """
     from pinocchio.visualize import MeshcatVisualizer
 
@@ -133,7 +145,7 @@ def add_ur10(vis, cell: CellPose, world: np.ndarray | None = None):
     viz = MeshcatVisualizer(model, visual, visual)
     viz.initViewer(viewer=vis)
     viz.loadViewerModel(rootNodeName="ur10")
-    vis["ur10"].set_transform((np.eye(4) if world is None else world) @ robot_base_pose())
+    vis["ur10"].set_transform((np.eye(4) if world is None else world) @ (robot_base_pose() if base is None else base))
     viz.display(cell.q)
     return viz
 

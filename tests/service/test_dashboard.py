@@ -1,0 +1,145 @@
+"""The dashboard in a real browser: headless Chromium renders GET / of a service on the simulated bus.
+
+The page's values (``data-field`` elements, the number itself in ``data-value``) are read from the
+rendered DOM and checked against ``/fixtures/NAME/guidance`` of the same service.
+"""
+
+from __future__ import annotations
+
+import http.client
+import json
+import shutil
+import subprocess
+import time
+from html.parser import HTMLParser
+
+import can
+import pytest
+
+from hexapod_model.service import FixtureService, Simulator
+from hexapod_model.viz.render import CHROMIUM_NAMES
+
+from ..conftest import hexapod
+from .helpers import fixture_table, service_config, sim_config
+from .test_http import TOKEN, token_file
+
+HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]
+POSE = dict(zip(("x", "y", "z", "roll", "pitch", "yaw"), HOLD))
+TOL = {"translation_mm": 0.1, "rotation_deg": 0.05}
+
+
+class Fields(HTMLParser):
+    """``(fixture, field) -> (text, data-value)`` of every element with a ``data-field``."""
+
+    def __init__(self):
+        super().__init__()
+        self.found: dict[tuple[str | None, str], list] = {}
+        self._open: list | None = None
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if "data-field" in a:
+            self._open = ["", a.get("data-value")]
+            self.found[(a.get("data-fixture"), a["data-field"])] = self._open
+        elif self._open is not None and tag not in ("span",):
+            self._open = None
+
+    def handle_data(self, data):
+        if self._open is not None:
+            self._open[0] += data
+
+    def handle_endtag(self, tag):
+        self._open = None
+
+
+def render(url: str, profile) -> str:
+    chromium = next(shutil.which(n) for n in CHROMIUM_NAMES if shutil.which(n))
+    args = [
+        chromium,
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--no-first-run",
+        f"--user-data-dir={profile}",
+        "--dump-dom",
+        "--virtual-time-budget=4000",
+        url,
+    ]
+    done = subprocess.run(args, capture_output=True, text=True, timeout=120, check=True)
+    return done.stdout
+
+
+def guidance(address, name):
+    c = http.client.HTTPConnection(*address, timeout=5)
+    c.request("GET", f"/fixtures/{name}/guidance", headers={"Authorization": f"Bearer {TOKEN}"})
+    r = c.getresponse()
+    body = json.loads(r.read())
+    c.close()
+    assert r.status == 200, body
+    return body
+
+
+@pytest.mark.chromium
+def test_the_dashboard_shows_what_guidance_says(tmp_path):
+    config = service_config(
+        tmp_path,
+        [fixture_table("left"), fixture_table("right", 1)],
+        http={"host": "127.0.0.1", "port": 0, "token_file": str(token_file(tmp_path))},
+    )
+    sim = sim_config(
+        config, [{"name": "right", "rate": 50.0, "hold": HOLD}, {"name": "left", "rate": 50.0, "hold": HOLD}]
+    )
+    hexa = hexapod("reference")
+    service = FixtureService(config, hexapods={"left": hexa, "right": hexa})
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    simulator = Simulator(config, sim, bus, hexapods={"left": hexa, "right": hexa})
+    try:
+        service.start()
+        simulator.start()
+        assert service.changeover is not None
+        away = {**POSE, "z": POSE["z"] + 0.002}
+        service.changeover.put_recipe(
+            "bracket",
+            {"targets": {"right": {"pose": away, "tolerance": TOL}, "left": {"pose": POSE, "tolerance": TOL}}},
+            "test",
+        )
+        service.changeover.activate("bracket", "test")
+        deadline = time.monotonic() + 30.0  # both held plates locked: the state no longer changes
+        while not all((service.record(n) or {}).get("stored") for n in ("left", "right")):
+            assert time.monotonic() < deadline, [service.record(n) for n in ("left", "right")]
+            time.sleep(0.05)
+        host, port = service.address
+        dom = render(f"http://{host}:{port}/#token={TOKEN}", tmp_path / "profile")
+        want = {name: guidance(service.address, name) for name in ("left", "right")}
+    finally:
+        simulator.stop()
+        service.stop()
+        bus.shutdown()
+    page = Fields()
+    page.feed(dom)
+    shown = page.found
+    assert shown[(None, "active_recipe")][0] == "bracket"
+    for name, g in want.items():
+        assert g["status"] == "ok" and shown[(name, "status")][0] == "ok"
+        assert shown[(name, "state")][0] == g["state"]
+        # the target is fixed: shown to the bit
+        for leg in g["legs"]:
+            assert float(shown[(name, f"legs.{leg['leg']}.target_mm")][1]) == leg["target_mm"]
+        assert float(shown[(name, "target.z_mm")][1]) == pytest.approx(g["target"]["pose"]["z"] * 1e3, abs=1e-9)
+        assert float(shown[(name, "tolerance.translation_mm")][1]) == 0.1
+        # what moves with the reading noise (sigma ~0.025 mm): the page's record and this one differ a little
+        dev = float(shown[(name, "deviation.translation_mm")][1])
+        assert dev == pytest.approx(g["deviation"]["translation_mm"], abs=0.15)
+        for leg in g["legs"]:
+            change = float(shown[(name, f"legs.{leg['leg']}.change_mm")][1])
+            assert change == pytest.approx(leg["change_mm"], abs=0.15)
+            text = shown[(name, f"legs.{leg['leg']}.change_mm")][0]
+            assert text == f"{abs(change):.3f}"
+    assert float(shown[("right", "deviation.translation_mm")][1]) == pytest.approx(2.0, abs=0.15)
+    assert shown[("right", "in_tolerance")][0] == "not in tolerance"
+    assert shown[("left", "in_tolerance")][0] == (
+        "in tolerance" if want["left"]["in_tolerance"] else "not in tolerance"
+    )
+    assert (("left", "acknowledge") in shown) and ("right", "flags") in shown
