@@ -186,5 +186,7 @@ def test_the_compiled_loops_compile_the_iteration_once():
     followed = [hexa.forward(x, check=False) for x in rows[inside][:40]]  # the readings path from Python
     warm = hexa.forward_batch(rows, warm=True)  # each row from the last converged: the plain solve from a guess
     hexa.forward_batch(rows, hexa.forward(rows[inside][0]))
+    if not iterate_schur.signatures:  # its callers came from numba's cache: nothing compiled in this process
+        pytest.skip("the compiled loops were loaded from numba's cache; run with an empty NUMBA_CACHE_DIR")
     assert len(iterate_schur.signatures) == 1
     assert any(s.converged and s.iterations > 10 for s in followed) and "converged" in list(warm.status)
