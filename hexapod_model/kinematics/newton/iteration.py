@@ -45,7 +45,7 @@ from .kernels import (
 )
 from .lie import integrate_free_flyer
 from .outcomes import CONVERGED, FLIPPED, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED
-from .packing import unpack_floats, unpack_ints, unpack_iwork, unpack_work
+from .packing import unpack_floats, unpack_ints, unpack_iwork, unpack_limits, unpack_work
 from .structured import blocks_solve, schur_solve
 
 
@@ -148,53 +148,57 @@ def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
 
 
 @njit(cache=True, inline="always")
-def _solve(
-    schur, start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
-):
-    """:func:`_iterate` from ``start`` (prismatic joints set to ``joints`` unless empty), and a ``Solution``'s arrays.
+def _solve(schur, start, offset, settings, arrays):
+    """:func:`_iterate` from ``start`` (prismatic joints from ``settings`` if given), and a ``Solution``'s arrays.
 
-    ``arrays = (ints, floats, work, iwork, q_solver, q, pose, G)``. The iteration runs from
-    ``q`` (``start``'s copy) and leaves its last iterate in ``q_solver``, as :func:`_iterate`
-    does. With ``finish``, unless a ``certify``-ing solve did not converge certified, it also
-    writes the configuration into ``q``, the platform pose ``home * X(q_p)`` into ``pose``, the
-    reduced Jacobian (:func:`.kernels.jacobian`) into ``G`` and, when converged, finds the first
-    joint outside ``limits = (limited q indices, lower, upper, slack)``. Returns
-    :func:`_iterate`'s tuple and that joint (-1 if none or not looked for).
+    ``settings = (tol, max_iter, sign, scale, certify, finish, given, joints...)`` (:data:`.packing.SETTINGS`);
+    ``arrays = (ints, floats, work, iwork, q_solver, out)``: the packed tables and buffers, the
+    solver's iterate and ``out = (q, pose, G)`` flat (``nq + 16 + 6n nf``). The iteration runs
+    from ``q`` (``start``'s copy) and leaves its last iterate in ``q_solver``, as
+    :func:`_iterate` does. With ``finish``, unless a ``certify``-ing solve did not converge
+    certified, it also writes the configuration into ``q``, the platform pose ``home * X(q_p)``
+    into ``pose``, the reduced Jacobian (:func:`.kernels.jacobian`) into ``G`` and, when
+    converged, finds the first joint outside the packed limits. Returns :func:`_iterate`'s
+    tuple and that joint (-1 if none or not looked for).
     """
-    ints, floats, work, iwork, q_solver, q, pose, G = arrays
-    for k in range(q.shape[0]):
+    ints, floats, work, iwork, q_solver, out = arrays
+    tol, max_iter, sign, scale = settings[0], int(settings[1]), settings[2], settings[3]
+    certify, finish = settings[4] != 0.0, settings[5] != 0.0
+    (prismatic_q, limited, lower, upper, slack), _ = unpack_limits(ints, floats)
+    nq = start.shape[0]
+    q = out[:nq]
+    for k in range(nq):
         q[k] = start[k]
-    if joints.shape[0] == prismatic_q.shape[0]:
+    if settings[6] != 0.0:
         for i in range(prismatic_q.shape[0]):
-            q[prismatic_q[i]] = joints[i]
+            q[prismatic_q[i]] = settings[7 + i]
     code, it, norm, ratio, theta, sign, certified = _iterate(
         schur, q, q_solver, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork
     )
     bad = -1
     if finish and (not certify or (code == CONVERGED and certified)):
         (_, leg_v, platform_v, _, colmap, _, _), _ = unpack_ints(ints)
+        home = unpack_floats(ints, floats)[0][3]
         views = unpack_work(ints, work)[0]
         copy_into(q, q_solver)
+        G = out[nq + 16 :].reshape(views[9].shape)
         jacobian(views[2], leg_v, platform_v, colmap, ints[0], views[4], views[5], G)
-        xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
+        xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, out[nq : nq + 16].reshape((4, 4)))
         if code == CONVERGED:
-            bad = first_outside_at(q, limits[0], limits[1], limits[2], limits[3])
+            bad = first_outside_at(q, limited, lower, upper, slack)
     return code, it, norm, ratio, theta, sign, certified, bad
 
 
 # The entry points from Python: one per step, the iteration inlined in each (numba re-optimises
 # a called compiled function in every caller's unit, so a second entry would compile it again).
+# Four arguments: numba's dispatch costs per argument unboxed.
 @njit(cache=True)
-def solve_schur(start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays):
+def solve_schur(start, offset, settings, arrays):
     """:func:`_solve` with the Schur step (direct kinematics: the certified first attempt, plain solves)."""
-    return _solve(
-        True, start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
-    )
+    return _solve(True, start, offset, settings, arrays)
 
 
 @njit(cache=True)
-def solve_blocks(start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays):
+def solve_blocks(start, offset, settings, arrays):
     """:func:`_solve` with the block step (inverse kinematics)."""
-    return _solve(
-        False, start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
-    )
+    return _solve(False, start, offset, settings, arrays)
