@@ -28,14 +28,14 @@ from .follow import follow, rescale
 from .iteration import iterate_blocks, iterate_schur
 from .kernels import copy_into, first_outside, first_outside_at, pose_to_xyzquat, rigid_error, xyzquat_to_pose
 from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
-from .packing import unpack_floats, unpack_limits, unpack_work
+from .packing import unpack_constants, unpack_work
 
 
 @njit(cache=True, inline="always")
 def _finish_row(k, q, code, it, norm, ratio, kappa, sign, ints, floats, out):
-    """The packed limit check (:func:`.packing.unpack_limits`) and the outputs of row ``k``."""
-    (_, limited, lo, hi, slack), _ = unpack_limits(ints, floats)
-    platform_q, home = ints[3], unpack_floats(ints, floats)[0][3]
+    """The packed limit check (:func:`.packing.unpack_constants`) and the outputs of row ``k``."""
+    (_, limited, lo, hi, slack, home), _ = unpack_constants(ints, floats)
+    platform_q = ints[3]
     Q, poses, codes, iterations, residuals, ratios, kappas, signs, bad = out
     bad[k] = -1
     if code == CONVERGED:
@@ -105,7 +105,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, stroke, pac
     """
     tol, max_iter, near_kappa = settings
     ints, floats, work, iwork = packed
-    (prismatic_q, _, _, _, slack), _ = unpack_limits(ints, floats)
+    (prismatic_q, _, _, _, slack, _), _ = unpack_constants(ints, floats)
     state = unpack_work(ints, work)[0][18]  # the last Schur step's sign and condition bound
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
     yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
@@ -145,7 +145,7 @@ def inverse_rows(targets, start, warm, settings, packed, out):
     """
     tol, max_iter, pose_tolerance, max_position = settings
     ints, floats, work, iwork = packed
-    platform_q, home = ints[3], unpack_floats(ints, floats)[0][3]
+    platform_q, home = ints[3], unpack_constants(ints, floats)[0][5]
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
     for k in range(targets.shape[0]):
         T = targets[k]

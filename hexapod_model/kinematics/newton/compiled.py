@@ -71,10 +71,8 @@ class CompiledSolver(NewtonSolver):
         self._forward_settings[3:7] = (0.0, 1.0, 1.0, 1.0)  # no homotopy, certify, finish, joints given
         self._checked_settings = np.zeros(SETTINGS)
         self._checked_settings[2:7] = (0.0, 0.0, 0.0, 1.0, 0.0)  # no sign, no homotopy, finish
-        # an entry's ``out``: q, pose (4x4) and reduced Jacobian, flat
-        self._size, self._out_size = (clm.nq, clm.nq + 16, self.G.shape), clm.nq + 16 + self.G.size
-        self._fixed = (*packed.arrays, self._q)
-        self._scratch = (*self._fixed, np.empty(self._out_size))
+        self._fixed = (*packed.arrays, self._q)  # then an entry's outputs q, pose, G
+        self._scratch = self._outputs()
         if schur:  # home's sign and condition bound, now from the compiled path
             self.iterate(clm.q_home, np.inf, 0)
             self.home_sign, self.home_kappa = self.sign, self.kappa
@@ -101,10 +99,9 @@ class CompiledSolver(NewtonSolver):
         status, it, norm, message, _ = self._call(_contiguous(q0), _contiguous(offset), settings, self._scratch, tol)
         return status, it, norm, message
 
-    def _outputs(self, out: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The views ``(q, pose, G)`` of an entry's ``out`` (a Solution keeps them)."""
-        nq, end, shape = self._size
-        return out[:nq], out[nq:end].reshape((4, 4)), out[end:].reshape(shape)
+    def _outputs(self) -> tuple:
+        """The entries' ``arrays`` with new output arrays ``q``, ``pose``, ``G`` (a Solution keeps them)."""
+        return (*self._fixed, np.empty(self._q.shape[0]), np.empty((4, 4)), np.empty(self.G.shape))
 
     def certified_forward(
         self, start: np.ndarray, joints: np.ndarray, tol: float, max_iter: int, sign: float
@@ -128,12 +125,10 @@ class CompiledSolver(NewtonSolver):
         settings[0], settings[1], settings[2] = tol, max_iter, sign
         settings[7:] = joints  # any float dtype or stride: the entry's one signature
         # one compiled signature: a contiguous float64 start (a strided or float32 array would compile another)
-        out = np.empty(self._out_size)
-        status, it, norm, message, bad = self._call(
-            _contiguous(start), self._no_offset, settings, (*self._fixed, out), tol
-        )
+        arrays = self._outputs()
+        status, it, norm, message, bad = self._call(_contiguous(start), self._no_offset, settings, arrays, tol)
         if status == "converged" and self.certified:
-            return (*self._outputs(out), it, norm, bad)
+            return arrays[5], arrays[6], arrays[7], it, norm, bad
         return status, it, norm, message
 
     def run_checked(self, q0: np.ndarray, tol: float, max_iter: int) -> tuple[tuple, np.ndarray, int] | None:
@@ -146,12 +141,9 @@ class CompiledSolver(NewtonSolver):
             return None
         settings = self._checked_settings
         settings[0], settings[1] = tol, max_iter
-        out = np.empty(self._out_size)
-        status, it, norm, message, bad = self._call(
-            _contiguous(q0), self._no_offset, settings, (*self._fixed, out), tol
-        )
-        q, pose, G = self._outputs(out)
-        return (q, status, it, norm, G, message), pose, bad
+        arrays = self._outputs()
+        status, it, norm, message, bad = self._call(_contiguous(q0), self._no_offset, settings, arrays, tol)
+        return (arrays[5], status, it, norm, arrays[7], message), arrays[6], bad
 
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residual (copy) and reduced Jacobian (copy) at URDF configuration ``q``, compiled."""

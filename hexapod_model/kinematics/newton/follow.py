@@ -29,7 +29,7 @@ from .chains import evaluate_chains
 from .iteration import CONVERGED, _integrate, iterate_schur
 from .kernels import closure_residual, copy_into
 from .lie import difference_free_flyer
-from .packing import unpack_floats, unpack_ints, unpack_limits, unpack_work
+from .packing import unpack_constants, unpack_floats, unpack_ints, unpack_work
 from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP
 
 rescale = njit(cache=True)(path_rules.rescale)  # the Python follower's rule, compiled
@@ -93,7 +93,7 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, packe
     """
     ints, floats, work, iwork = packed
     r = unpack_work(ints, work)[0][6]
-    prismatic_q = unpack_limits(ints, floats)[0][0]
+    prismatic_q = unpack_constants(ints, floats)[0][0]
     nq, n = start.shape[0], prismatic_q.shape[0]
     q0, before, dv = np.empty(nq), np.empty(nq), np.empty(ints[1])
     scratch = (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3))

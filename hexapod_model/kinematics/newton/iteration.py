@@ -45,7 +45,7 @@ from .kernels import (
 )
 from .lie import integrate_free_flyer
 from .outcomes import CONVERGED, FLIPPED, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED
-from .packing import unpack_floats, unpack_ints, unpack_iwork, unpack_limits, unpack_work
+from .packing import unpack_constants, unpack_floats, unpack_ints, unpack_iwork, unpack_work
 from .structured import blocks_solve, schur_solve
 
 
@@ -152,8 +152,8 @@ def _solve(schur, start, offset, settings, arrays):
     """:func:`_iterate` from ``start`` (prismatic joints from ``settings`` if given), and a ``Solution``'s arrays.
 
     ``settings = (tol, max_iter, sign, scale, certify, finish, given, joints...)`` (:data:`.packing.SETTINGS`);
-    ``arrays = (ints, floats, work, iwork, q_solver, out)``: the packed tables and buffers, the
-    solver's iterate and ``out = (q, pose, G)`` flat (``nq + 16 + 6n nf``). The iteration runs
+    ``arrays = (ints, floats, work, iwork, q_solver, q, pose, G)``: the packed tables and
+    buffers, the solver's iterate and the outputs. The iteration runs
     from ``q`` (``start``'s copy) and leaves its last iterate in ``q_solver``, as
     :func:`_iterate` does. With ``finish``, unless a ``certify``-ing solve did not converge
     certified, it also writes the configuration into ``q``, the platform pose ``home * X(q_p)``
@@ -161,13 +161,11 @@ def _solve(schur, start, offset, settings, arrays):
     converged, finds the first joint outside the packed limits. Returns :func:`_iterate`'s
     tuple and that joint (-1 if none or not looked for).
     """
-    ints, floats, work, iwork, q_solver, out = arrays
+    ints, floats, work, iwork, q_solver, q, pose, G = arrays
     tol, max_iter, sign, scale = settings[0], int(settings[1]), settings[2], settings[3]
     certify, finish = settings[4] != 0.0, settings[5] != 0.0
-    (prismatic_q, limited, lower, upper, slack), _ = unpack_limits(ints, floats)
-    nq = start.shape[0]
-    q = out[:nq]
-    for k in range(nq):
+    (prismatic_q, limited, lower, upper, slack, home), _ = unpack_constants(ints, floats)
+    for k in range(q.shape[0]):
         q[k] = start[k]
     if settings[6] != 0.0:
         for i in range(prismatic_q.shape[0]):
@@ -178,12 +176,10 @@ def _solve(schur, start, offset, settings, arrays):
     bad = -1
     if finish and (not certify or (code == CONVERGED and certified)):
         (_, leg_v, platform_v, _, colmap, _, _), _ = unpack_ints(ints)
-        home = unpack_floats(ints, floats)[0][3]
         views = unpack_work(ints, work)[0]
         copy_into(q, q_solver)
-        G = out[nq + 16 :].reshape(views[9].shape)
         jacobian(views[2], leg_v, platform_v, colmap, ints[0], views[4], views[5], G)
-        xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, out[nq : nq + 16].reshape((4, 4)))
+        xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
         if code == CONVERGED:
             bad = first_outside_at(q, limited, lower, upper, slack)
     return code, it, norm, ratio, theta, sign, certified, bad

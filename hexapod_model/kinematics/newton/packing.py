@@ -80,15 +80,20 @@ def unpack_floats(ints, floats):
     return (placements, motions, closure, home), o + 208
 
 
-@njit(cache=True, inline="always")
-def unpack_limits(ints, floats):
-    """Views ``(prismatic_q, limited, lower, upper)`` and the value ``slack`` of the limit tables, and their ends."""
+@njit(cache=True)  # called, not inlined: numba's inlining costs compile time at every call site
+def unpack_constants(ints, floats):
+    """Views ``(prismatic_q, limited, lower, upper)``, the value ``slack`` and ``home`` (4, 4), and the tables' ends.
+
+    What a solve reads beside the iteration: the joints a reading sets, the limit check, the
+    platform's home placement (the view of :func:`unpack_floats`).
+    """
     n, nv, nf, nl = ints[0], ints[1], ints[2], ints[5]
     o = HEADER + 18 * n + 12 + nv + nf  # the ends of unpack_ints and unpack_floats
     f = FHEADER + 132 * n + 208
     prismatic_q, limited = ints[o : o + 6], ints[o + 6 : o + 6 + nl]
     lower, upper = floats[f : f + nl], floats[f + nl : f + 2 * nl]
-    return (prismatic_q, limited, lower, upper, floats[f + 2 * nl]), (o + 6 + nl, f + 2 * nl + 1)
+    home = floats[f - 16 : f].reshape((4, 4))
+    return (prismatic_q, limited, lower, upper, floats[f + 2 * nl], home), (o + 6 + nl, f + 2 * nl + 1)
 
 
 @njit(cache=True, inline="always")
@@ -170,7 +175,7 @@ class Packed:
         # the compiled functions' Python source: the same layout, nothing compiled here
         (leg_q, leg_v, platform_v, held, cmap, free, kinds), _ = unpack_ints.py_func(self.ints)
         (placements, motions, closure, home), _ = unpack_floats.py_func(self.ints, self.floats)
-        (prismatic, limited, lower, upper, _), (end_i, end_f) = unpack_limits.py_func(self.ints, self.floats)
+        (prismatic, limited, lower, upper, _, _), (end_i, end_f) = unpack_constants.py_func(self.ints, self.floats)
         views, end_w = unpack_work.py_func(self.ints, self.work)
         (PB, pm), end_iw = unpack_iwork.py_func(self.ints, self.iwork)
         ends = (end_i, end_f, end_w, end_iw)
