@@ -23,9 +23,10 @@ for ball joints) and the two structured problems: one joint held per leg, the pl
    platform (:func:`.lie.integrate_free_flyer`).
 
 The entries called from Python are :func:`solve_schur` and :func:`solve_blocks` (the iteration,
-and with ``finish`` the Jacobian, pose and limit check a ``Solution`` needs); the compiled
-loops of :mod:`.follow` and :mod:`.batch_kernels` call :func:`iterate_schur` /
-:func:`iterate_blocks`. :class:`.compiled_solver.CompiledSolver` is the solver object on top.
+and with ``finish`` the Jacobian, pose and limit check a ``Solution`` needs), four arguments
+each: the start, the homotopy offset, the per-call settings and the packed arrays
+(:mod:`.packing`); the compiled loops of :mod:`.follow` and :mod:`.batch_kernels` call
+:func:`iterate_schur` / :func:`iterate_blocks`. :class:`.compiled.CompiledSolver` is the solver object on top.
 """
 
 from __future__ import annotations
@@ -151,14 +152,14 @@ def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
 def _solve(schur, start, offset, settings, arrays):
     """:func:`_iterate` from ``start`` (prismatic joints from ``settings`` if given), and a ``Solution``'s arrays.
 
-    ``settings = (tol, max_iter, sign, scale, certify, finish, given, joints...)`` (:data:`.packing.SETTINGS`);
-    ``arrays = (ints, floats, work, iwork, q_solver, q, pose, G)``: the packed tables and
-    buffers, the solver's iterate and the outputs. The iteration runs
-    from ``q`` (``start``'s copy) and leaves its last iterate in ``q_solver``, as
-    :func:`_iterate` does. With ``finish``, unless a ``certify``-ing solve did not converge
-    certified, it also writes the configuration into ``q``, the platform pose ``home * X(q_p)``
-    into ``pose``, the reduced Jacobian (:func:`.kernels.jacobian`) into ``G`` and, when
-    converged, finds the first joint outside the packed limits. Returns :func:`_iterate`'s
+    ``settings = (tol, max_iter, sign, scale, certify, finish, given, joints...)``
+    (:data:`.packing.SETTINGS`); ``arrays = (ints, floats, work, iwork, q_solver, q, pose, G)``:
+    the packed tables and buffers, the solver's iterate and the outputs. The iteration runs from
+    ``q`` (``start``'s copy) and leaves its last iterate in ``q_solver``, as :func:`_iterate` does.
+    With ``finish``, unless a ``certify``-ing solve did not converge certified, it also writes
+    the configuration into ``q``, the platform pose ``home * X(q_p)`` into ``pose``, the reduced
+    Jacobian (:func:`.kernels.jacobian`) into ``G`` and, when converged, finds the first joint
+    outside the packed limits. Returns :func:`_iterate`'s
     tuple and that joint (-1 if none or not looked for).
     """
     ints, floats, work, iwork, q_solver, q, pose, G = arrays
@@ -187,7 +188,7 @@ def _solve(schur, start, offset, settings, arrays):
 
 # The entry points from Python: one per step, the iteration inlined in each (numba re-optimises
 # a called compiled function in every caller's unit, so a second entry would compile it again).
-# Four arguments: numba's dispatch costs per argument unboxed.
+# Four arguments (.packing): numba's dispatch costs per argument unboxed.
 @njit(cache=True)
 def solve_schur(start, offset, settings, arrays):
     """:func:`_solve` with the Schur step (direct kinematics: the certified first attempt, plain solves)."""

@@ -1,11 +1,12 @@
 """The fast path's tables and work buffers, packed in four flat arrays, and its per-call settings.
 
-A compiled call pays for every argument it unboxes (~1.2 us for thirteen, ~0.17 us for one
-array); the Newton iteration needs about forty arrays and a dozen values. The constants of one
-solver (the chains, the held joints, the prismatic joints, the joint limits) and its buffers
-travel as four flat arrays (integer tables, float tables, float and integer work buffers) that
-the unpack functions cut into views again inside the compiled code, with no copy. The same
-functions build the views that :class:`Packed` fills from Python, so the layout is written once.
+A compiled call pays for every argument it unboxes (tens of nanoseconds each, an array in a
+tuple included); the Newton iteration needs about forty arrays and a dozen values. The constants
+of one solver (the chains, the held joints, the prismatic joints, the joint limits, home) and its
+buffers travel as four flat arrays (integer tables, float tables, float and integer work buffers)
+that the unpack functions cut into views again inside the compiled code, with no copy
+(:func:`unpack_constants`: what a solve reads beside the iteration). The same functions build
+the views that :class:`Packed` fills from Python, so the layout is written once.
 What changes from call to call travels in one small float array, ``settings`` (:data:`SETTINGS`
 entries), owned by the solver and filled in place.
 
