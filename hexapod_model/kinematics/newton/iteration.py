@@ -46,7 +46,7 @@ from .kernels import (
 )
 from .lie import integrate_free_flyer
 from .outcomes import CONVERGED, FLIPPED, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED
-from .packing import unpack_constants, unpack_floats, unpack_ints, unpack_iwork, unpack_work
+from .packing import unpack_floats, unpack_ints, unpack_iwork, unpack_work
 from .structured import blocks_solve, schur_solve
 
 
@@ -163,9 +163,13 @@ def _solve(schur, start, offset, settings, arrays):
     tuple and that joint (-1 if none or not looked for).
     """
     ints, floats, work, iwork, q_solver, q, pose, G = arrays
-    tol, max_iter, sign, scale = settings[0], int(settings[1]), settings[2], settings[3]
+    tol, max_iter, sign, scale = settings[0], settings[1], settings[2], settings[3]  # max_iter: a whole float
     certify, finish = settings[4] != 0.0, settings[5] != 0.0
-    (prismatic_q, limited, lower, upper, slack, home), _ = unpack_constants(ints, floats)
+    # .packing.unpack_constants written out: a called function would compile once more at the first solve
+    nl, oc, fc = ints[5], ints[6], ints[7]
+    prismatic_q, limited = ints[oc : oc + 6], ints[oc + 6 : oc + 6 + nl]
+    lower, upper, slack = floats[fc : fc + nl], floats[fc + nl : fc + 2 * nl], floats[fc + 2 * nl]
+    home = floats[fc - 16 : fc].reshape((4, 4))
     for k in range(q.shape[0]):
         q[k] = start[k]
     if settings[6] != 0.0:

@@ -13,7 +13,8 @@ entries), owned by the solver and filled in place.
 Layout (``n`` joints per leg, ``nv`` velocities, ``nf`` free velocities, ``nl`` limited joints,
 all C order):
 
-* ``ints``: header ``(n, nv, nf, platform_q, schur, nl)``, ``leg_q`` (6, n), ``leg_v`` (6, n),
+* ``ints``: header ``(n, nv, nf, platform_q, schur, nl, oc, fc)`` (``oc``, ``fc``: where
+  ``prismatic_q`` starts in ``ints`` and ``lower`` in ``floats``), ``leg_q`` (6, n), ``leg_v`` (6, n),
   ``platform_v`` (6,), ``held_pos`` (6,), ``colmap`` (nv,), ``free_v`` (nf,), ``kinds`` (6, n)
   (:attr:`.legs.ChainTables.kinds`), then ``prismatic_q`` (6,) (configuration index of each leg's
   prismatic joint) and ``limited`` (nl,) (the configuration indices the limit check reads);
@@ -38,7 +39,7 @@ from numba import njit
 
 from .legs import ChainTables
 
-HEADER = 6
+HEADER = 8
 FHEADER = 5
 #: entries of the per-call ``settings`` array: seven values, then six joint values
 SETTINGS = 13
@@ -88,9 +89,7 @@ def unpack_constants(ints, floats):
     What a solve reads beside the iteration: the joints a reading sets, the limit check, the
     platform's home placement (the view of :func:`unpack_floats`).
     """
-    n, nv, nf, nl = ints[0], ints[1], ints[2], ints[5]
-    o = HEADER + 18 * n + 12 + nv + nf  # the ends of unpack_ints and unpack_floats
-    f = FHEADER + 132 * n + 208
+    nl, o, f = ints[5], ints[6], ints[7]  # after the tables of unpack_ints and unpack_floats
     prismatic_q, limited = ints[o : o + 6], ints[o + 6 : o + 6 + nl]
     lower, upper = floats[f : f + nl], floats[f + nl : f + 2 * nl]
     home = floats[f - 16 : f].reshape((4, 4))
@@ -168,14 +167,14 @@ class Packed:
     ):
         n, nf, nl = tables.placements.shape[1], free_v.size, len(limits[0])
         self.ints = np.zeros(HEADER + 18 * n + 12 + nv + nf + 6 + nl, dtype=np.int64)
-        self.ints[:HEADER] = (n, nv, nf, tables.platform_q, int(schur), nl)
+        self.ints[:6] = (n, nv, nf, tables.platform_q, int(schur), nl)
         self.floats = np.zeros(FHEADER + 6 * n * 22 + 12 * 16 + 16 + 2 * nl + 1)
         self.floats[:FHEADER] = constants
         self.work = np.zeros(6 * n * (9 + 3 + 1 + nf + n + 6) + 6 * nv + 108 + 36 + 54 + nf + nv + 36 + 12 + 39)
         self.iwork = np.zeros(6 * n + 6, dtype=np.int64)
         # the compiled functions' Python source: the same layout, nothing compiled here
-        (leg_q, leg_v, platform_v, held, cmap, free, kinds), _ = unpack_ints.py_func(self.ints)
-        (placements, motions, closure, home), _ = unpack_floats.py_func(self.ints, self.floats)
+        (leg_q, leg_v, platform_v, held, cmap, free, kinds), self.ints[6] = unpack_ints.py_func(self.ints)
+        (placements, motions, closure, home), self.ints[7] = unpack_floats.py_func(self.ints, self.floats)
         (prismatic, limited, lower, upper, _, _), (end_i, end_f) = unpack_constants.py_func(self.ints, self.floats)
         views, end_w = unpack_work.py_func(self.ints, self.work)
         (PB, pm), end_iw = unpack_iwork.py_func(self.ints, self.iwork)
