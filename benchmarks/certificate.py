@@ -26,14 +26,12 @@ import numpy as np
 from hexapod_model import Hexapod
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.description.presets import PRESETS
-from hexapod_model.kinematics.checks import LIMIT_SLACK
 
 
 def run(name: str, n: int, seed: int, offset: float) -> dict:
     """Median times (us) and refusal counts of cold and warm solves of preset ``name``."""
     hexa = Hexapod.load(name)
     solver = hexa._solver(hexa._held_forward)
-    limits = (hexa._limited, hexa._limited_lo, hexa._limited_hi, LIMIT_SLACK)
     rng = np.random.default_rng(seed + 1)
     hexa.forward(np.zeros(6))  # compile / warm up
     out: dict = {"preset": name}
@@ -61,7 +59,7 @@ def run(name: str, n: int, seed: int, offset: float) -> dict:
             t0 = time.perf_counter()
             solver.iterate(q0, 1e-12, 20)
             t1 = time.perf_counter()
-            attempt = solver.certified_forward(start, joints, 1e-12, 20, sign, limits, hexa._home_h)
+            attempt = solver.certified_forward(start, joints, 1e-12, 20, sign)
             t2 = time.perf_counter()
             sol = hexa.forward(truth.lengths, guess, check=False)
             t3 = time.perf_counter()

@@ -203,8 +203,7 @@ def _follow_compiled(
 
     first = tried[1] if tried[1] is not None else start
     x = np.empty_like(start)
-    pq = solver.clm.prismatic_q.astype(np.int64)
-    args = (float(tol), int(max_iter), float(sign), int(total), float(h), pq, solver.arrays, x, solver._q)
+    args = (float(tol), int(max_iter), float(sign), int(total), float(h), solver.arrays, x, solver._q)
     t, total, res = follow(start, lengths, first, tried[1] is not None, *args)
     solver.sign, solver.kappa = solver._state.tolist()  # the last Schur step's, as iterate() leaves them
     if t == 1.0:

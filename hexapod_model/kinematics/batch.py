@@ -189,7 +189,7 @@ def _message_of(call) -> str:
     return "invalid input"  # not reached: the compiled checks are the per-row checks
 
 
-def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, slack: float) -> BatchResult:
+def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter) -> BatchResult:
     """:meth:`.hexapod.Hexapod.forward_batch`."""
     rows = as_rows("lengths", readings, (6,))
     tol, max_iter = check_tolerance(tol), check_max_iter(max_iter)
@@ -213,8 +213,7 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, sla
     joints = rows if hexa._encoder is None else hexa.joints_of(rows)
     out, fallback = _outputs(len(rows), hexa.nq), {}
     settings = (tol, max_iter, NEAR_SINGULAR_FACTOR * solver.home_kappa)
-    stroke, prismatic_q = (hexa._stroke_lo, hexa._stroke_hi), hexa.closed_loop.prismatic_q.astype(np.int64)
-    limits = (hexa._limited, hexa._limited_lo, hexa._limited_hi, slack)
+    stroke = (hexa._stroke_lo, hexa._stroke_hi)
     k = 0
     while k < len(rows):
         k = forward_rows(
@@ -225,10 +224,7 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter, sla
             carry,
             warm,
             settings,
-            prismatic_q,
             stroke,
-            limits,
-            hexa._home_h,
             solver.arrays,
             out,
         )
@@ -291,7 +287,7 @@ def _reviewed(
     )
 
 
-def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter, slack: float) -> BatchResult:
+def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter) -> BatchResult:
     """:meth:`.hexapod.Hexapod.inverse_batch`."""
     if np.ndim(poses) == 2 and np.shape(poses)[1:] == (7,):
         xyzquat = as_rows("poses", poses, (7,))
@@ -318,6 +314,5 @@ def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter, slack:
 
     out = _outputs(len(rows), hexa.nq)
     settings = (tol, max_iter, POSE_TOLERANCE, MAX_POSITION)
-    limits = (hexa._limited, hexa._limited_lo, hexa._limited_hi, slack)
-    inverse_rows(rows, hexa._start(guess), warm, settings, limits, hexa._home_h, solver.arrays, out)
+    inverse_rows(rows, hexa._start(guess), warm, settings, solver.arrays, out)
     return _result(hexa, out, tol, retry, {}, False, max_iter)

@@ -217,7 +217,7 @@ class Hexapod:
         if solver is None and self.compiled:
             from .newton.compiled import solver_for  # numba: imported by the first compiled solve
 
-            solver = solvers[held] = solver_for(self.closed_loop, held)
+            solver = solvers[held] = solver_for(self.closed_loop, held, self._limits)
         elif solver is None:
             solver = solvers[held] = NewtonSolver(self.closed_loop, held, self._kernels)
         return solver
@@ -288,7 +288,7 @@ class Hexapod:
         review = self._finder.exact is not None  # a 3-6 hexapod: every assembly is accounted for
         if fast and solver.compiled_loop:
             # the certified first attempt in one compiled call; solve_forward goes on from it
-            done = solver.certified_forward(start, joints, tol, max_iter, sign, self._limits, self._home_h)  # type: ignore[attr-defined]
+            done = solver.certified_forward(start, joints, tol, max_iter, sign)  # type: ignore[attr-defined]
             if len(done) == 6:
                 q, pose, jac, it, res, bad = done
                 sol = self._solution(
@@ -413,7 +413,7 @@ class Hexapod:
             out = assembly.solve_forward(solver, q0, forward[0], tol, max_iter, *forward[1:])
             return self._solution(out, check, max_iter=max_iter)
         if solver.compiled_loop:  # inverse kinematics: the solve, pose and limit check in one compiled call
-            done = solver.run_checked(q0, tol, max_iter, self._limits, self._home_h)  # type: ignore[attr-defined]
+            done = solver.run_checked(q0, tol, max_iter)  # type: ignore[attr-defined]
             if done is not None:
                 return self._solution(Outcome(*done[0]), check, done[1], done[2], max_iter)
         return self._solution(Outcome(*solver.run(q0, tol, max_iter)), check, max_iter=max_iter)
@@ -494,7 +494,7 @@ class Hexapod:
             gives (``invalid_input`` where it raises: NaN, out of stroke); never raises on a row.
         """
         tol = self.default_tol if tol is None else tol
-        return batch.forward_batch(self, lengths, guess, warm, tol, max_iter, LIMIT_SLACK)
+        return batch.forward_batch(self, lengths, guess, warm, tol, max_iter)
 
     def inverse_batch(
         self,
@@ -519,7 +519,7 @@ class Hexapod:
             A :class:`~.batch.BatchResult`: per row what :meth:`inverse` with ``check=False`` gives.
         """
         tol = self.default_tol if tol is None else tol
-        return batch.inverse_batch(self, poses, guess, warm, tol, max_iter, LIMIT_SLACK)
+        return batch.inverse_batch(self, poses, guess, warm, tol, max_iter)
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:
         """Per-leg closure error at ``q`` computed by Pinocchio's constraint models."""

@@ -12,7 +12,6 @@ from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.description.urdf import geometry_to_urdf
 from hexapod_model.kinematics.assembly import Outcome
-from hexapod_model.kinematics.checks import LIMIT_SLACK
 from hexapod_model.kinematics.newton.compiled import CompiledSolver, solver_for
 from hexapod_model.kinematics.newton.solver import NewtonSolver
 
@@ -211,14 +210,13 @@ def test_one_call_forward_equals_the_python_path(name):
     hexa = hexapod(name)
     solver = hexa._solver(hexa._held_forward)
     assert solver.compiled_loop
-    limits = (hexa._limited, hexa._limited_lo, hexa._limited_hi, LIMIT_SLACK)
     rng = np.random.default_rng(37)
     seen, flags, previous = set(), set(), None
 
     def check(readings: np.ndarray, guess: hm.Solution | None) -> hm.Solution:
         sign = solver.home_sign if guess is None else guess.det_sign
         joints = hexa.joints_of(readings)
-        attempt = solver.certified_forward(hexa._start(guess), joints, 1e-10, 50, sign, limits, hexa._home_h)
+        attempt = solver.certified_forward(hexa._start(guess), joints, 1e-10, 50, sign)
         one_call = len(attempt) == 6  # converged certified: (q, pose, jacobian, iterations, residual, bad)
         slow = hexa._finish(solver, hexa._start(guess), 1e-10, 50, False, (joints, sign, guess is not None))
         slow = hexa._reviewed(slow, readings, guess, False)  # a 3-6 hexapod's every assembly (forward does it)

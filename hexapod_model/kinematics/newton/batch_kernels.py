@@ -28,13 +28,14 @@ from .follow import follow, rescale
 from .iteration import iterate_blocks, iterate_schur
 from .kernels import copy_into, first_outside, first_outside_at, pose_to_xyzquat, rigid_error, xyzquat_to_pose
 from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
-from .packing import unpack_work
+from .packing import unpack_constants, unpack_work
 
 
 @njit(cache=True, inline="always")
-def _finish_row(k, q, code, it, norm, ratio, kappa, sign, limits, platform_q, home, out):
-    """Limit check (``limits = (limited q indices, lower, upper, slack)``) and the outputs of row ``k``."""
-    limited, lo, hi, slack = limits
+def _finish_row(k, q, code, it, norm, ratio, kappa, sign, ints, floats, out):
+    """The packed limit check (:func:`.packing.unpack_constants`) and the outputs of row ``k``."""
+    (_, limited, lo, hi, slack, home), _ = unpack_constants(ints, floats)
+    platform_q = ints[3]
     Q, poses, codes, iterations, residuals, ratios, kappas, signs, bad = out
     bad[k] = -1
     if code == CONVERGED:
@@ -68,7 +69,7 @@ def _invalid_row(k, out):
 
 
 @njit(cache=True, inline="always")
-def _follow_row(q0, q, start, target, attempt, tol, max_iter, sign, guessed, near_kappa, prismatic_q, packed):
+def _follow_row(q0, q, start, target, attempt, tol, max_iter, sign, guessed, near_kappa, packed):
     """The rest of :func:`.assembly.solve_forward` after a failed certified attempt from ``q0``.
 
     ``attempt = (iterations, theta)`` of that attempt, whose last iterate is in ``q``;
@@ -89,27 +90,27 @@ def _follow_row(q0, q, start, target, attempt, tol, max_iter, sign, guessed, nea
         if code == CONVERGED and not state[1] <= near_kappa:
             return False, it, 0.0
     h = rescale(theta, False, 1)
-    t, it, norm = follow(
-        start, target, first, attempt[0] == 1, tol, max_iter, sign, it, h, prismatic_q, packed, first.copy(), q
-    )
+    t, it, norm = follow(start, target, first, attempt[0] == 1, tol, max_iter, sign, it, h, packed, first.copy(), q)
     return t == 1.0, it, norm
 
 
 @njit(cache=True)
-def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q, stroke, limits, home, packed, out):
+def forward_rows(k0, readings, joints, start, carry, warm, settings, stroke, packed, out):
     """Direct kinematics of rows ``k0:`` of ``readings`` (N, 6) (``joints``: their prismatic values).
 
     ``settings = (tol, max_iter, near_singular_kappa)``; ``stroke = (lower, upper)`` of the
-    readings; ``packed``: the solver's :class:`.packing.Packed` arrays. Returns the first row
-    left to the caller (the certified attempt failed), or N.
+    readings; ``packed``: the solver's :class:`.packing.Packed` arrays (with the prismatic joints
+    and the joint limits). Returns the first row left to the caller (the certified attempt
+    failed), or N.
     """
     tol, max_iter, near_kappa = settings
     ints, floats, work, iwork = packed
-    platform_q, state = ints[3], unpack_work(ints, work)[0][18]  # the last Schur step's sign and condition bound
+    (prismatic_q, _, _, _, slack, _), _ = unpack_constants(ints, floats)
+    state = unpack_work(ints, work)[0][18]  # the last Schur step's sign and condition bound
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
     yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
     for k in range(k0, readings.shape[0]):
-        if first_outside(readings[k], stroke[0], stroke[1], limits[3]) >= 0:  # NaN, inf or out of stroke
+        if first_outside(readings[k], stroke[0], stroke[1], slack) >= 0:  # NaN, inf or out of stroke
             _invalid_row(k, out)
             continue
         copy_into(q0, start)
@@ -121,13 +122,13 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q
         if not certified or (code != CONVERGED and code != NO_CONVERGENCE):  # follow the readings path
             attempt, guessed = (it, theta), carry[1] == 1.0 or carry[2] == 1.0
             done, it, norm = _follow_row(
-                q0, q, start, joints[k], attempt, tol, max_iter, carry[0], guessed, near_kappa, prismatic_q, packed
+                q0, q, start, joints[k], attempt, tol, max_iter, carry[0], guessed, near_kappa, packed
             )
             if not done:
                 return k  # blocked (the candidates) or uncertified near a singularity: forward() solves it
             code, ratio = CONVERGED, 1.0
         kappa, sign = (state[1], state[0]) if code == CONVERGED else (np.inf, 0.0)
-        code = _finish_row(k, q, code, it, norm, ratio, kappa, sign, limits, platform_q, home, out)
+        code = _finish_row(k, q, code, it, norm, ratio, kappa, sign, ints, floats, out)
         if warm and code == CONVERGED:
             copy_into(start, q)
             carry[0], carry[1] = sign, 1.0
@@ -135,7 +136,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, prismatic_q
 
 
 @njit(cache=True)
-def inverse_rows(targets, start, warm, settings, limits, home, packed, out):
+def inverse_rows(targets, start, warm, settings, packed, out):
     """Inverse kinematics of every pose of ``targets`` (N, 4, 4); arguments as :func:`forward_rows`.
 
     ``settings = (tol, max_iter, pose_tolerance, max_position)``: a row whose matrix is not a
@@ -144,7 +145,7 @@ def inverse_rows(targets, start, warm, settings, limits, home, packed, out):
     """
     tol, max_iter, pose_tolerance, max_position = settings
     ints, floats, work, iwork = packed
-    platform_q = ints[3]
+    platform_q, home = ints[3], unpack_constants(ints, floats)[0][5]
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
     for k in range(targets.shape[0]):
         T = targets[k]
@@ -157,6 +158,6 @@ def inverse_rows(targets, start, warm, settings, limits, home, packed, out):
         code, it, norm, ratio, _, _, _ = iterate_blocks(
             q0, q, tol, max_iter, 0.0, no_offset, 0.0, False, ints, floats, work, iwork
         )
-        code = _finish_row(k, q, code, it, norm, ratio, np.inf, 0.0, limits, platform_q, home, out)
+        code = _finish_row(k, q, code, it, norm, ratio, np.inf, 0.0, ints, floats, out)
         if warm and code == CONVERGED:
             copy_into(start, q)

@@ -29,7 +29,7 @@ from .chains import evaluate_chains
 from .iteration import CONVERGED, _integrate, iterate_schur
 from .kernels import closure_residual, copy_into
 from .lie import difference_free_flyer
-from .packing import unpack_floats, unpack_ints, unpack_work
+from .packing import unpack_constants, unpack_floats, unpack_ints, unpack_work
 from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP
 
 rescale = njit(cache=True)(path_rules.rescale)  # the Python follower's rule, compiled
@@ -70,7 +70,7 @@ def _residual(q, ints, floats, work):
 
 
 @njit(cache=True, inline="always")  # inlined into batch_kernels.forward_rows: one compiled unit, not two
-def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prismatic_q, packed, x, q):
+def follow(start, target, first, predicted, tol, max_iter, sign, total, h, packed, x, q):
     """Follow the readings path from ``start`` to ``target`` in certified substeps, the first of ``h``.
 
     Args:
@@ -83,8 +83,7 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prism
         sign: determinant sign of the start's assembly (0 when unknown).
         total: Newton steps taken so far (the count goes on).
         h: the first substep.
-        prismatic_q: configuration index of each leg's prismatic joint.
-        packed: the solver's :class:`.packing.Packed` arrays.
+        packed: the solver's :class:`.packing.Packed` arrays (with each leg's prismatic joint).
         x: output, the last certified point of the path (``start`` when none).
         q: output, the last corrector's final iterate (the result when ``t == 1``).
 
@@ -94,6 +93,7 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, prism
     """
     ints, floats, work, iwork = packed
     r = unpack_work(ints, work)[0][6]
+    prismatic_q = unpack_constants(ints, floats)[0][0]
     nq, n = start.shape[0], prismatic_q.shape[0]
     q0, before, dv = np.empty(nq), np.empty(nq), np.empty(ints[1])
     scratch = (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3))

@@ -23,9 +23,10 @@ for ball joints) and the two structured problems: one joint held per leg, the pl
    platform (:func:`.lie.integrate_free_flyer`).
 
 The entries called from Python are :func:`solve_schur` and :func:`solve_blocks` (the iteration,
-and with ``finish`` the Jacobian, pose and limit check a ``Solution`` needs); the compiled
-loops of :mod:`.follow` and :mod:`.batch_kernels` call :func:`iterate_schur` /
-:func:`iterate_blocks`. :class:`.compiled_solver.CompiledSolver` is the solver object on top.
+and with ``finish`` the Jacobian, pose and limit check a ``Solution`` needs), four arguments
+each: the start, the homotopy offset, the per-call settings and the packed arrays
+(:mod:`.packing`); the compiled loops of :mod:`.follow` and :mod:`.batch_kernels` call
+:func:`iterate_schur` / :func:`iterate_blocks`. :class:`.compiled.CompiledSolver` is the solver object on top.
 """
 
 from __future__ import annotations
@@ -148,25 +149,32 @@ def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
 
 
 @njit(cache=True, inline="always")
-def _solve(
-    schur, start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
-):
-    """:func:`_iterate` from ``start`` (prismatic joints set to ``joints`` unless empty), and a ``Solution``'s arrays.
+def _solve(schur, start, offset, settings, arrays):
+    """:func:`_iterate` from ``start`` (prismatic joints from ``settings`` if given), and a ``Solution``'s arrays.
 
-    ``arrays = (ints, floats, work, iwork, q_solver, q, pose, G)``. The iteration runs from
-    ``q`` (``start``'s copy) and leaves its last iterate in ``q_solver``, as :func:`_iterate`
-    does. With ``finish``, unless a ``certify``-ing solve did not converge certified, it also
-    writes the configuration into ``q``, the platform pose ``home * X(q_p)`` into ``pose``, the
-    reduced Jacobian (:func:`.kernels.jacobian`) into ``G`` and, when converged, finds the first
-    joint outside ``limits = (limited q indices, lower, upper, slack)``. Returns
-    :func:`_iterate`'s tuple and that joint (-1 if none or not looked for).
+    ``settings = (tol, max_iter, sign, scale, certify, finish, given, joints...)``
+    (:data:`.packing.SETTINGS`); ``arrays = (ints, floats, work, iwork, q_solver, q, pose, G)``:
+    the packed tables and buffers, the solver's iterate and the outputs. The iteration runs from
+    ``q`` (``start``'s copy) and leaves its last iterate in ``q_solver``, as :func:`_iterate` does.
+    With ``finish``, unless a ``certify``-ing solve did not converge certified, it also writes
+    the configuration into ``q``, the platform pose ``home * X(q_p)`` into ``pose``, the reduced
+    Jacobian (:func:`.kernels.jacobian`) into ``G`` and, when converged, finds the first joint
+    outside the packed limits. Returns :func:`_iterate`'s
+    tuple and that joint (-1 if none or not looked for).
     """
     ints, floats, work, iwork, q_solver, q, pose, G = arrays
+    tol, max_iter, sign, scale = settings[0], settings[1], settings[2], settings[3]  # max_iter: a whole float
+    certify, finish = settings[4] != 0.0, settings[5] != 0.0
+    # .packing.unpack_constants written out: a called function would compile once more at the first solve
+    nl, oc, fc = ints[5], ints[6], ints[7]
+    prismatic_q, limited = ints[oc : oc + 6], ints[oc + 6 : oc + 6 + nl]
+    lower, upper, slack = floats[fc : fc + nl], floats[fc + nl : fc + 2 * nl], floats[fc + 2 * nl]
+    home = floats[fc - 16 : fc].reshape((4, 4))
     for k in range(q.shape[0]):
         q[k] = start[k]
-    if joints.shape[0] == prismatic_q.shape[0]:
+    if settings[6] != 0.0:
         for i in range(prismatic_q.shape[0]):
-            q[prismatic_q[i]] = joints[i]
+            q[prismatic_q[i]] = settings[7 + i]
     code, it, norm, ratio, theta, sign, certified = _iterate(
         schur, q, q_solver, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork
     )
@@ -178,23 +186,20 @@ def _solve(
         jacobian(views[2], leg_v, platform_v, colmap, ints[0], views[4], views[5], G)
         xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
         if code == CONVERGED:
-            bad = first_outside_at(q, limits[0], limits[1], limits[2], limits[3])
+            bad = first_outside_at(q, limited, lower, upper, slack)
     return code, it, norm, ratio, theta, sign, certified, bad
 
 
 # The entry points from Python: one per step, the iteration inlined in each (numba re-optimises
 # a called compiled function in every caller's unit, so a second entry would compile it again).
+# Four arguments (.packing): numba's dispatch costs per argument unboxed.
 @njit(cache=True)
-def solve_schur(start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays):
+def solve_schur(start, offset, settings, arrays):
     """:func:`_solve` with the Schur step (direct kinematics: the certified first attempt, plain solves)."""
-    return _solve(
-        True, start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
-    )
+    return _solve(True, start, offset, settings, arrays)
 
 
 @njit(cache=True)
-def solve_blocks(start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays):
+def solve_blocks(start, offset, settings, arrays):
     """:func:`_solve` with the block step (inverse kinematics)."""
-    return _solve(
-        False, start, joints, prismatic_q, tol, max_iter, sign, offset, scale, certify, finish, limits, home, arrays
-    )
+    return _solve(False, start, offset, settings, arrays)

@@ -1,25 +1,35 @@
-"""The fast path's tables and work buffers, packed in four flat arrays.
+"""The fast path's tables and work buffers, packed in four flat arrays, and its per-call settings.
 
-A compiled call pays ~60 ns per array argument; the Newton iteration needs about forty arrays.
-They travel instead as four flat arrays (integer tables, float tables, float and integer work
-buffers) and :func:`unpack` cuts them into views again inside the compiled code, with no copy.
-The same function builds the views that :class:`Packed` fills from Python, so the layout is
-written once.
+A compiled call pays for every argument it unboxes (tens of nanoseconds each, an array in a
+tuple included); the Newton iteration needs about forty arrays and a dozen values. The constants
+of one solver (the chains, the held joints, the prismatic joints, the joint limits, home) and its
+buffers travel as four flat arrays (integer tables, float tables, float and integer work buffers)
+that the unpack functions cut into views again inside the compiled code, with no copy
+(:func:`unpack_constants`: what a solve reads beside the iteration). The same functions build
+the views that :class:`Packed` fills from Python, so the layout is written once.
+What changes from call to call travels in one small float array, ``settings`` (:data:`SETTINGS`
+entries), owned by the solver and filled in place.
 
-Layout (``n`` joints per leg, ``nv`` velocities, ``nf`` free velocities, all C order):
+Layout (``n`` joints per leg, ``nv`` velocities, ``nf`` free velocities, ``nl`` limited joints,
+all C order):
 
-* ``ints``: header ``(n, nv, nf, platform_q, schur)``, ``leg_q`` (6, n), ``leg_v`` (6, n),
+* ``ints``: header ``(n, nv, nf, platform_q, schur, nl, oc, fc)`` (``oc``, ``fc``: where
+  ``prismatic_q`` starts in ``ints`` and ``lower`` in ``floats``), ``leg_q`` (6, n), ``leg_v`` (6, n),
   ``platform_v`` (6,), ``held_pos`` (6,), ``colmap`` (nv,), ``free_v`` (nf,), ``kinds`` (6, n)
-  (:attr:`.legs.ChainTables.kinds`);
+  (:attr:`.legs.ChainTables.kinds`), then ``prismatic_q`` (6,) (configuration index of each leg's
+  prismatic joint) and ``limited`` (nl,) (the configuration indices the limit check reads);
 * ``floats``: the solver's constants ``(max_step, singular_ratio, theta_max, theta_floor,
   one_step)``, then ``placements`` (6, n, 4, 4), ``motions`` (6, n, 6), ``closure`` (12, 4, 4),
-  ``home`` (4, 4) (:class:`.chains.ChainTables`);
+  ``home`` (4, 4) (:class:`.chains.ChainTables`), then ``lower`` (nl,), ``upper`` (nl,) of the
+  limited joints and the limit check's ``slack`` (1,);
 * ``work``: ``oR`` (6, n, 3, 3), ``op`` (6, n, 3), ``J`` (6, nv), ``R`` (12, 3, 3), ``p`` (12, 3),
   ``E`` (6, 3, 3), ``r`` (6n,), ``x`` (nf,), ``dv`` (nv,), ``G`` (6n, nf), ``LB`` (6, n, n),
   ``A`` (6, n, 6), ``M`` (6, 6), ``nb``, ``wb`` (6,), ``Rs`` (3, 3, 3), ``ps`` (2, 3), ``quat`` (4,),
   ``state`` (2,): the determinant sign and condition bound of the last Schur step
   (``NewtonSolver.sign``, ``kappa``);
-* ``iwork``: ``PB`` (6, n), ``pm`` (6,).
+* ``iwork``: ``PB`` (6, n), ``pm`` (6,);
+* ``settings`` (float): ``(tol, max_iter, sign, scale, certify, finish, given)`` then the six
+  prismatic joint values to hold when ``given`` is not 0 (:data:`SETTINGS` in all; flags as 0 or 1).
 """
 
 from __future__ import annotations
@@ -29,8 +39,10 @@ from numba import njit
 
 from .legs import ChainTables
 
-HEADER = 5
+HEADER = 8
 FHEADER = 5
+#: entries of the per-call ``settings`` array: seven values, then six joint values
+SETTINGS = 13
 WORK_NAMES = tuple("oR op J R p E r x dv G LB A M nb wb Rs ps quat state".split())
 
 
@@ -68,6 +80,20 @@ def unpack_floats(ints, floats):
     closure = floats[o : o + 192].reshape((12, 4, 4))
     home = floats[o + 192 : o + 208].reshape((4, 4))
     return (placements, motions, closure, home), o + 208
+
+
+@njit(cache=True)  # called, not inlined: numba's inlining costs compile time at every call site
+def unpack_constants(ints, floats):
+    """Views ``(prismatic_q, limited, lower, upper)``, the value ``slack`` and ``home`` (4, 4), and the tables' ends.
+
+    What a solve reads beside the iteration: the joints a reading sets, the limit check, the
+    platform's home placement (the view of :func:`unpack_floats`).
+    """
+    nl, o, f = ints[5], ints[6], ints[7]  # after the tables of unpack_ints and unpack_floats
+    prismatic_q, limited = ints[o : o + 6], ints[o + 6 : o + 6 + nl]
+    lower, upper = floats[f : f + nl], floats[f + nl : f + 2 * nl]
+    home = floats[f - 16 : f].reshape((4, 4))
+    return (prismatic_q, limited, lower, upper, floats[f + 2 * nl], home), (o + 6 + nl, f + 2 * nl + 1)
 
 
 @njit(cache=True, inline="always")
@@ -123,6 +149,8 @@ class Packed:
         colmap: column of each velocity in the reduced Jacobian (-1 when held).
         free_v: the free velocities.
         nv: velocity dimension of the model.
+        prismatic_q: configuration index of each leg's prismatic joint.
+        limits: ``(limited q indices, lower, upper, slack)`` of the joint-limit check.
     """
 
     def __init__(
@@ -134,17 +162,20 @@ class Packed:
         colmap: np.ndarray,
         free_v: np.ndarray,
         nv: int,
+        prismatic_q: np.ndarray,
+        limits: tuple,
     ):
-        n, nf = tables.placements.shape[1], free_v.size
-        self.ints = np.zeros(HEADER + 18 * n + 12 + nv + nf, dtype=np.int64)
-        self.ints[:HEADER] = (n, nv, nf, tables.platform_q, int(schur))
-        self.floats = np.zeros(FHEADER + 6 * n * 22 + 12 * 16 + 16)
+        n, nf, nl = tables.placements.shape[1], free_v.size, len(limits[0])
+        self.ints = np.zeros(HEADER + 18 * n + 12 + nv + nf + 6 + nl, dtype=np.int64)
+        self.ints[:6] = (n, nv, nf, tables.platform_q, int(schur), nl)
+        self.floats = np.zeros(FHEADER + 6 * n * 22 + 12 * 16 + 16 + 2 * nl + 1)
         self.floats[:FHEADER] = constants
         self.work = np.zeros(6 * n * (9 + 3 + 1 + nf + n + 6) + 6 * nv + 108 + 36 + 54 + nf + nv + 36 + 12 + 39)
         self.iwork = np.zeros(6 * n + 6, dtype=np.int64)
         # the compiled functions' Python source: the same layout, nothing compiled here
-        (leg_q, leg_v, platform_v, held, cmap, free, kinds), end_i = unpack_ints.py_func(self.ints)
-        (placements, motions, closure, home), end_f = unpack_floats.py_func(self.ints, self.floats)
+        (leg_q, leg_v, platform_v, held, cmap, free, kinds), self.ints[6] = unpack_ints.py_func(self.ints)
+        (placements, motions, closure, home), self.ints[7] = unpack_floats.py_func(self.ints, self.floats)
+        (prismatic, limited, lower, upper, _, _), (end_i, end_f) = unpack_constants.py_func(self.ints, self.floats)
         views, end_w = unpack_work.py_func(self.ints, self.work)
         (PB, pm), end_iw = unpack_iwork.py_func(self.ints, self.iwork)
         ends = (end_i, end_f, end_w, end_iw)
@@ -154,6 +185,7 @@ class Packed:
         held[:] = -1 if held_pos is None else held_pos
         cmap[:], free[:] = colmap, free_v
         placements[:], motions[:], closure[:], home[:] = tables.placements, tables.motions, tables.closure, tables.home
+        prismatic[:], limited[:], lower[:], upper[:], self.floats[-1] = prismatic_q, *limits
         #: ``(ints, floats, work, iwork)``: the arguments of the compiled functions
         self.arrays = (self.ints, self.floats, self.work, self.iwork)
         #: the work buffers by name (views on ``work`` and ``iwork``)
