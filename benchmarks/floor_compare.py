@@ -19,6 +19,8 @@ Both solve to ``BENCH_TOL``. The figures of the first solves (compilation) are i
 from __future__ import annotations
 
 import argparse
+import json
+from pathlib import Path
 
 import floor_newton as floor
 import numpy as np
@@ -36,6 +38,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--samples", type=int, default=1000)
+    ap.add_argument("--json", type=Path, help="also write the figures as JSON")
     args = ap.parse_args(argv)
     hexa = Hexapod.from_preset("reference")
     tables = floor.extract(hexa)
@@ -109,6 +112,11 @@ def main(argv=None) -> int:
     print(f"  ratio package / floor {ratio:.2f}x (target <= 1.5x)")
     a, b = (warm_steps[k] / (len(warm) - 1) for k in ("package", "floor"))
     print(f"  Newton steps per solve: package {a:.2f} (the certificate's), floor {b:.2f}")
+    report: dict = {
+        "warm_fk_us": {k: float(np.median(best[k])) for k in ("package", "floor")},
+        "warm_fk_ratio": float(ratio),
+        "batch": {},
+    }
     for name, r in rates.items():
         pkg, ref = max(r["package"]), max(r["floor"])
         label = f"{name} (solves/s)"
@@ -116,6 +124,9 @@ def main(argv=None) -> int:
         a, b = steps[name]
         per_step = (pkg * a) / (ref * b)
         print(f"{'':38s} Newton steps per row: package {a:.2f}, floor {b:.2f}; steps/s ratio {per_step:.2f}x")
+        report["batch"][name] = {"package": pkg, "floor": ref, "ratio": pkg / ref}
+    if args.json:
+        args.json.write_text(json.dumps(report, indent=1))
     return 0
 
 

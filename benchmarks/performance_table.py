@@ -76,9 +76,50 @@ def calibration_rows(data: dict) -> list[tuple[str, str]]:
     ]
 
 
+def startup_rows(data: dict) -> list[tuple[str, str]]:
+    """``startup.py``: a short job's start-up against ``import pinocchio, numpy``, the first compilation."""
+    base, cmd = data["baseline"], data["command"]
+    rows = [
+        (
+            f"start-up of `{cmd['label'].replace(str(ROOT) + '/', '')}`",
+            f"{cmd['wall_s']:.2f} s wall, {cmd['peak_mb']:.0f} MB peak "
+            f"(`import pinocchio, numpy`: {base['wall_s']:.2f} s, {base['peak_mb']:.0f} MB)",
+        )
+    ]
+    if "cold" in data:
+        c = data["cold"]
+        rows.append(
+            (
+                "first compiled forward after installation (empty numba cache), CPU",
+                f"{c['first_forward_cpu_s']:.1f} s, {c['first_forward_cpu_s'] / c['floor_compile_cpu_s']:.2f}x the "
+                f"one-function floor's compile ({c['floor_compile_cpu_s']:.1f} s); then inverse "
+                f"{c['first_inverse_cpu_s']:.1f} s, forward_batch {c['first_batch_cpu_s']:.1f} s",
+            )
+        )
+    return rows
+
+
+def floor_rows(data: dict) -> list[tuple[str, str]]:
+    """``floor_compare.py``: warm FK and batch throughput against the one-function floor."""
+    w = data["warm_fk_us"]
+    rows = [
+        (
+            "reference: warm FK against the floor, CPU per solve",
+            f"{w['package']:.1f} µs vs {w['floor']:.1f} µs ({data['warm_fk_ratio']:.2f}x)",
+        )
+    ]
+    rows += [
+        (f"reference: {name} against the floor", f"{r['package']:.0f}/s vs {r['floor']:.0f}/s ({r['ratio']:.2f}x)")
+        for name, r in data["batch"].items()
+    ]
+    return rows
+
+
 #: (script and its quick arguments, its full arguments, the rows of its JSON)
 BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str]]]]] = [
     (["run_benchmarks.py", "reference", "--samples", "300"], ["run_benchmarks.py"], bench_rows),
+    (["floor_compare.py", "--rounds", "2", "--samples", "300"], ["floor_compare.py"], floor_rows),
+    (["startup.py", "--runs", "3", "--cold"], ["startup.py", "--cold"], startup_rows),
     (["robustness.py", "reference", "--poses", "300"], ["robustness.py"], robustness_rows),
     (
         ["calibration_study.py", "--poses", "60", "--folds", "3", "--hold", "*_axis.*"],

@@ -15,6 +15,7 @@ as one njit function, its first solve), and their ratio.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import shutil
 import subprocess
@@ -95,6 +96,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=7)
     ap.add_argument("--cold", action="store_true", help="also time a first run with an empty numba cache")
+    ap.add_argument("--json", type=Path, help="also write the figures as JSON")
     ap.add_argument("command", nargs="*", help="the command to time (default: hexapod fk reference lengths.csv)")
     args = ap.parse_args(argv)
     command = args.command or COMMAND
@@ -106,10 +108,12 @@ def main(argv=None) -> int:
         results["command"].append(run(command, env))
     base = [median([r[i] for r in results["baseline"]]) for i in range(2)]
     print(f"{'':34s}{'wall s':>9s}{'CPU s':>9s}{'peak MB':>9s}   (median of {args.runs}, alternating)")
+    report: dict = {}
     for name, label in (("baseline", "python -c 'import pinocchio, numpy'"), ("command", " ".join(command[2:]))):
         wall, cpu = (median([r[i] for r in results[name]]) for i in range(2))
         rss = max(r[2] for r in results[name])
         print(f"{label[:33]:34s}{wall:9.3f}{cpu:9.3f}{rss:9.0f}   x{wall / base[0]:.2f} wall, x{cpu / base[1]:.2f} CPU")
+        report[name] = {"label": label, "wall_s": wall, "cpu_s": cpu, "peak_mb": rss}
     if args.cold:
         cache = tempfile.mkdtemp(prefix="numba-cold-")
         try:
@@ -124,6 +128,10 @@ def main(argv=None) -> int:
         print(f"  then first inverse                  {inverse:8.2f}")
         print(f"  then first forward_batch (3 rows)   {batch:8.2f}")
         print(f"  floor_newton.fk_newton first solve  {floor:8.2f}   (its compilation; target: first forward <= x1.5)")
+        report["cold"] = {"first_forward_cpu_s": forward, "first_inverse_cpu_s": inverse, "first_batch_cpu_s": batch}
+        report["cold"]["floor_compile_cpu_s"] = floor
+    if args.json:
+        args.json.write_text(json.dumps(report, indent=1))
     return 0
 
 

@@ -247,26 +247,32 @@ def test_compiled_newton_benchmark_runs():
     assert "Pinocchio Newton" in out.stdout and "forward_batch" in out.stdout
 
 
-def test_floor_compare_benchmark_runs():
+def test_floor_compare_benchmark_runs(tmp_path):
+    report = tmp_path / "floor.json"
     out = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "floor_compare.py"), "--rounds", "1", "--samples", "20"],
+        [sys.executable, str(ROOT / "benchmarks" / "floor_compare.py"), "--rounds", "1", "--samples", "20"]
+        + ["--json", str(report)],
         capture_output=True,
         text=True,
         timeout=600,
     )
     assert out.returncode == 0, out.stderr
     assert "ratio package / floor" in out.stdout and "target >= 0.85x" in out.stdout
+    data = json.loads(report.read_text())  # what docs/performance.md's rows are made of
+    assert data["warm_fk_us"]["package"] > 0 and data["warm_fk_ratio"] > 0 and len(data["batch"]) == 2
 
 
-def test_startup_benchmark_runs():
+def test_startup_benchmark_runs(tmp_path):
     out = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "startup.py"), "--runs", "1"],
+        [sys.executable, str(ROOT / "benchmarks" / "startup.py"), "--runs", "1", "--json", str(tmp_path / "s.json")],
         capture_output=True,
         text=True,
         timeout=600,
     )
     assert out.returncode == 0, out.stderr
     assert "peak MB" in out.stdout and "x1.00 wall" in out.stdout  # the baseline row
+    data = json.loads((tmp_path / "s.json").read_text())
+    assert data["baseline"]["peak_mb"] > 0 and data["command"]["wall_s"] > 0 and "cold" not in data
 
 
 def test_service_benchmark_runs():
