@@ -84,8 +84,6 @@ def test_a_working_bridge_is_healthy_and_counts_what_it_published(tmp_path):
 
 def test_the_cell_placement_is_on_tf_static_for_a_late_joiner(tmp_path):
     need_extra()
-    from types import SimpleNamespace
-
     from cyclonedds.core import Qos
     from cyclonedds.domain import DomainParticipant
     from cyclonedds.qos import Policy
@@ -95,6 +93,7 @@ def test_the_cell_placement_is_on_tf_static_for_a_late_joiner(tmp_path):
 
     from hexapod_model.kinematics.rotations import rpy_to_matrix
     from hexapod_model.ros.messages import TFMessage
+    from hexapod_model.service.cell import Cell
 
     config = service_config(
         tmp_path, [fixture_table("right")], ros={"robot_frame": "ur10e/base_link", "domain_id": run_domain()}
@@ -102,7 +101,7 @@ def test_the_cell_placement_is_on_tf_static_for_a_late_joiner(tmp_path):
     T = np.eye(4)
     T[:3, :3] = rpy_to_matrix(0.0, 0.0, np.pi / 2)
     T[:3, 3] = [0.85, -0.3, 0.02]
-    object.__setattr__(config.fixtures[0], "cell", SimpleNamespace(base_in_robot=T))  # [fixtures.cell]
+    object.__setattr__(config.fixtures[0], "cell", Cell(base_in_robot=T, coupling=np.eye(4)))  # [fixtures.cell]
     got = []
 
     def late_reader():  # joins after the placement was written: transient local keeps it
