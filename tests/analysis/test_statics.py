@@ -150,7 +150,7 @@ def _mujoco_at_rest(hexa, q, wrench, timestep=2e-4):
 def test_mujoco_constraint_forces_at_rest(name, where):
     """The brake equalities' forces are the axial leg forces; each closure's force on the platform is the
     leg's force and moment (a small wrench: MuJoCo's soft closures deflect in proportion to the load)."""
-    import mujoco
+    mujoco = pytest.importorskip("mujoco", reason="MuJoCo is a test dependency: pip install -e '.[test]'")
 
     hexa = hexapod(name)
     T = _pose(hexa, *where)
