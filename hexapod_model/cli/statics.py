@@ -11,7 +11,7 @@ from ..analysis.statics import FRAMES, LegLoads, loads_at, stiffness_of
 from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
 from ..kinematics.checks import check_vector
-from ..kinematics.rotations import rpy_to_matrix
+from ..kinematics.rotations import xyz_rpy_to_pose
 from ._common import add_hexapod_argument, hexapod_of
 
 DESCRIPTION = """\
@@ -93,11 +93,7 @@ def run(args: argparse.Namespace) -> int:
     hexa = hexapod_of(args, compiled=False)  # one solve: no numba start-up
     if capacity is None and hexa.geometry is not None:
         capacity = hexa.geometry.brake_capacity
-    pose = hexa.home_pose.copy()
-    if args.pose is not None:
-        p = check_vector("--pose", args.pose, 6)
-        pose[:3, 3] = p[:3]
-        pose[:3, :3] = rpy_to_matrix(*np.radians(p[3:]))
+    pose = hexa.home_pose if args.pose is None else xyz_rpy_to_pose(check_vector("--pose", args.pose, 6))
     sol = hexa.inverse(pose)
     loads = loads_at(hexa, sol.q, args.wrench, args.frame, args.point)
     print(format_loads(loads, capacity))

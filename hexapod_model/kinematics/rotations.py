@@ -43,6 +43,19 @@ def rpy_to_matrix(roll: ArrayLike, pitch: ArrayLike, yaw: ArrayLike) -> np.ndarr
     return R
 
 
+def xyz_rpy_to_pose(values: ArrayLike) -> np.ndarray:
+    """4x4 pose of ``(x, y, z, roll, pitch, yaw)``: metres and degrees, ``R = Rz(yaw) Ry(pitch) Rx(roll)``.
+
+    The six numbers as ``hexapod fk`` writes a pose and the command line and configuration files
+    take one (``--pose``, ``base_in_robot``, a simulated hold pose).
+    """
+    v = np.asarray(values, dtype=float)
+    T = np.eye(4)
+    T[:3, :3] = rpy_to_matrix(*np.radians(v[3:6]))
+    T[:3, 3] = v[:3]
+    return T
+
+
 def matrix_to_rpy(R: ArrayLike) -> np.ndarray:
     """(..., 3) ``roll, pitch, yaw`` (rad) of rotation matrices; pitch in [-pi/2, pi/2].
 

@@ -157,14 +157,11 @@ def placement(base_in_robot: object, robot_frame: str, names: FixtureNames, t: f
 
 
 def _homogeneous(value: object) -> np.ndarray:
-    from ..kinematics.rotations import rpy_to_matrix
+    from ..kinematics.rotations import xyz_rpy_to_pose
 
     a = np.asarray(getattr(value, "homogeneous", value), dtype=float)
     if a.shape == (4, 4):
         return a
     if a.shape == (6,):
-        T = np.eye(4)
-        T[:3, :3] = rpy_to_matrix(*np.radians(a[3:]))
-        T[:3, 3] = a[:3]
-        return T
+        return xyz_rpy_to_pose(a)
     raise ValueError(f"base_in_robot: expected a 4x4 transform or x, y, z, roll, pitch, yaw, got shape {a.shape}")

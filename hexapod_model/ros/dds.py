@@ -205,10 +205,8 @@ class RosBridge:
 
         now, transforms = time.time(), []
         for f in self.service.config.fixtures:
-            cell = getattr(f, "cell", None)
-            value = getattr(cell, "base_in_robot", None) if cell is not None else None
-            if value is not None:
-                transforms.append(placement(value, self.cfg.robot_frame, self.names[f.name], now))
+            if f.cell is not None:
+                transforms.append(placement(f.cell.base_in_robot, self.cfg.robot_frame, self.names[f.name], now))
         if transforms:
             self._write(lambda w: w.tf_static.write(TFMessage(transforms)))
 

@@ -27,17 +27,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import InputError
-from ..kinematics.rotations import matrix_to_rpy, rpy_to_matrix
+from ..kinematics.rotations import matrix_to_rpy, xyz_rpy_to_pose
 from .errors import Table
 from .pose import pose_record
-
-
-def placement(values: list[float]) -> np.ndarray:
-    """4x4 of ``[x, y, z, roll, pitch, yaw]`` (m, deg; ``R = Rz(yaw) Ry(pitch) Rx(roll)``)."""
-    T = np.eye(4)
-    T[:3, :3] = rpy_to_matrix(*np.radians(values[3:6]))
-    T[:3, 3] = values[:3]
-    return T
 
 
 @dataclass(frozen=True)
@@ -142,7 +134,10 @@ def _placement_field(t: Table, key: str, default: list[float] | None = None) -> 
 
 def cell_from_table(t: Table) -> Cell:
     """``[fixtures.cell]`` of ``fixture.toml``: ``base_in_robot`` (required) and ``coupling`` (default none)."""
-    cell = Cell(placement(_placement_field(t, "base_in_robot")), placement(_placement_field(t, "coupling", [0.0] * 6)))
+    cell = Cell(
+        xyz_rpy_to_pose(_placement_field(t, "base_in_robot")),
+        xyz_rpy_to_pose(_placement_field(t, "coupling", [0.0] * 6)),
+    )
     t.finish()
     return cell
 

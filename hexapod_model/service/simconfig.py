@@ -16,7 +16,7 @@ import numpy as np
 from ..analysis.trajectories import DURATION_S, trajectory_coordinates
 from ..exceptions import HexapodError
 from ..io.tables import poses_from_table, read_table
-from ..kinematics.rotations import rpy_to_matrix
+from ..kinematics.rotations import rpy_to_matrix, xyz_rpy_to_pose
 from .config import ServiceConfig, read_toml
 from .errors import ConfigError, Table
 from .sim_changeover import ChangeoverScript
@@ -181,9 +181,7 @@ def _fixture(t: Table, service: ServiceConfig, folder: Path) -> SimFixture:
         v = t.take("hold")
         if not isinstance(v, list) or len(v) != 6 or not all(isinstance(x, (int, float)) for x in v):
             raise t.error("hold", v, "expected [x, y, z, roll, pitch, yaw] in m and degrees")
-        poses = np.eye(4)[None].copy()
-        poses[0, :3, :3] = rpy_to_matrix(*np.radians(v[3:]))
-        poses[0, :3, 3] = v[:3]
+        poses = xyz_rpy_to_pose(v)[None]
     faults = t.take("faults", [])
     if not isinstance(faults, list):
         raise t.error("faults", faults, "expected [[fixtures.faults]] tables")

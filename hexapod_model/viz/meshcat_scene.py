@@ -130,7 +130,7 @@ def solve_view_configuration(hexa: Hexapod, lengths=None, pose_xyz_rpy=None) -> 
     ``(x, y, z, roll, pitch, yaw)`` in metres and degrees as ``hexapod fk`` writes it
     (``R = Rz(yaw) Ry(pitch) Rx(roll)``), or home when both are None.
     """
-    from ..kinematics.rotations import rpy_to_matrix
+    from ..kinematics.rotations import xyz_rpy_to_pose
 
     if lengths is not None and pose_xyz_rpy is not None:
         raise ViewError("give either leg lengths or a pose, not both")
@@ -140,8 +140,5 @@ def solve_view_configuration(hexa: Hexapod, lengths=None, pose_xyz_rpy=None) -> 
         v = np.asarray(pose_xyz_rpy, dtype=float)
         if v.shape != (6,):
             raise ViewError(f"a pose is X Y Z ROLL PITCH YAW (6 numbers), got {v.size}")
-        T = np.eye(4)
-        T[:3, :3] = rpy_to_matrix(*np.radians(v[3:]))
-        T[:3, 3] = v[:3]
-        return hexa.inverse(T)
+        return hexa.inverse(xyz_rpy_to_pose(v))
     return hexa.forward(np.zeros(6))

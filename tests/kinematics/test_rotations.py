@@ -110,3 +110,12 @@ def test_closed_forms_agree_with_scipy_and_round_trip_at_the_edges():
         ref = Rotation.from_matrix(R).as_euler("xyz")
     wrapped = np.angle(np.exp(1j * (rpy[regular] - ref[regular])))  # -pi and pi are the same angle
     np.testing.assert_allclose(wrapped, 0.0, rtol=0, atol=1e-12)
+
+
+def test_xyz_rpy_to_pose_is_the_pose_fk_writes():
+    from hexapod_model.kinematics.rotations import matrix_to_rpy, xyz_rpy_to_pose
+
+    T = xyz_rpy_to_pose([0.01, -0.02, 0.41, 12.0, -8.0, 20.0])
+    assert T.shape == (4, 4) and T[3].tolist() == [0.0, 0.0, 0.0, 1.0]
+    assert T[:3, 3].tolist() == [0.01, -0.02, 0.41]
+    np.testing.assert_allclose(np.degrees(matrix_to_rpy(T[:3, :3])), [12.0, -8.0, 20.0], atol=1e-12)

@@ -7,8 +7,9 @@ import pinocchio as pin
 import pytest
 
 from hexapod_model.exceptions import InputError
+from hexapod_model.kinematics.rotations import xyz_rpy_to_pose as placement
 from hexapod_model.service import ConfigError
-from hexapod_model.service.cell import Cell, locate, placement
+from hexapod_model.service.cell import Cell, locate
 from hexapod_model.service.guidance import guidance, record_pose
 from hexapod_model.service.solve import PoseSolver
 
