@@ -21,12 +21,13 @@ import threading
 import time
 from typing import Any
 
+from ..extras import install_hint
 from ..service.rosconfig import RosConfig
 from ..service.service import FixtureService
 from .names import FixtureNames
 
 log = logging.getLogger(__name__)
-INSTALL_HINT = "pip install 'hexapod_model[ros]'"
+INSTALL_HINT = install_hint("ros")
 QUEUE_LENGTH = 1000  # records waiting for the publisher thread; more are dropped (counted on /health)
 MAX_PARTICIPANTS = 32  # participant indices probed on each peer: ROS 2 nodes of one machine and domain
 

@@ -16,11 +16,12 @@ import threading
 import time
 from typing import Any
 
+from ..extras import install_hint
 from .config import HttpConfig
 from .errors import ServiceError
 
 log = logging.getLogger(__name__)
-INSTALL_HINT = "the HTTP endpoint needs starlette and uvicorn: pip install 'hexapod_model[service]'"
+INSTALL_HINT = f"the HTTP endpoint needs starlette and uvicorn: {install_hint('service')}"
 
 
 def bind(host: str, port: int) -> socket.socket:
