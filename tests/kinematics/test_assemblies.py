@@ -138,3 +138,37 @@ def test_a_3_6_hexapod_loaded_from_a_file_checks_every_assembly_as_the_preset_do
 def test_a_spherical_hexapod_from_a_file_is_not_taken_for_a_3_6():
     hexa = hm.Hexapod.from_urdf(ROOT / "urdf" / "spherical.urdf", compiled=False)
     assert not hexa.assemblies(np.zeros(6), starts=4).complete
+
+
+def _tracker_end(hexa, lengths, steps: int = 256):
+    """Where a tracker fed the readings path from home in ``steps`` samples ends (plain Newton,
+    each sample warm-started at the last, through folds and determinant sign changes alike)."""
+    from hexapod_model.kinematics.newton.solver import NewtonSolver
+
+    fk = NewtonSolver(hexa.closed_loop, hexa._held_forward)
+    pq = hexa.closed_loop.prismatic_q
+    q = hexa.q_home.copy()
+    l0, l1 = q[pq].copy(), hexa.joints_of(lengths)
+    for t in np.linspace(0.0, 1.0, steps + 1)[1:]:
+        q0 = q.copy()
+        q0[pq] = l0 + t * (l1 - l0)
+        q, status = fk.run(q0, 1e-12, 30)[:2]
+        if status != "converged":
+            return None
+    return q
+
+
+@pytest.mark.parametrize(("name", "index"), [("spherical", 494), ("spherical", 2615), ("guideway", 675)])
+def test_a_blocked_path_lists_the_assembly_a_tracker_reaches_past_the_fold(name, index):
+    """Beyond the box (+-100 mm / +-40 deg) on presets without a resultant: the readings path from
+    home is blocked; a tracker fed that path crosses it and ends on an assembly, which must be
+    among the candidates (so is the generating pose)."""
+    hexa = hexapod(name)
+    T = box_poses(hexa.home_pose, 4000, seed=7, translation=0.1, angle_deg=40)[index]
+    readings = hexa.inverse(T).lengths
+    sol = hexa.forward(readings, check=False)
+    assert sol.status == "ambiguous_assembly", sol.message
+    end = _tracker_end(hexa, readings)
+    assert end is not None
+    assert _has(sol.candidates, hexa.pose_of(end))
+    assert _has(sol.candidates, T)
