@@ -26,7 +26,7 @@ from ..description.urdf import geometry_to_urdf
 from ..exceptions import AssemblyError, ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
 from . import assembly, batch, hybrid
 from .assemblies import DEFAULT_STARTS, Assemblies, AssemblyFinder, review
-from .assembly import Outcome
+from .assembly import NEAR_SINGULAR_FACTOR, Outcome
 from .batch import BatchResult
 from .checks import (
     LIMIT_SLACK,
@@ -41,6 +41,7 @@ from .checks import (
     failure_status,
 )
 from .newton.kernel_sets import KernelSet, kernel_set
+from .newton.outcomes import new_solution
 from .newton.solver import NewtonSolver, Solution
 
 DEFAULT_TOL = 1e-12  # closure residual (m, rad) at a 0.25 m base radius: pose errors below 1e-9 on every preset
@@ -100,6 +101,8 @@ class Hexapod:
         self._limited = model.limited_q()
         self._local = threading.local()  # .solvers: {held joints: NewtonSolver}, one per thread
         self._home_h = model.home.homogeneous
+        self._q_shape = (self.nq,)
+        self._prismatic_q = model.prismatic_q
         self._stroke_lo = np.ascontiguousarray(self.stroke[:, 0])
         self._stroke_hi = np.ascontiguousarray(self.stroke[:, 1])
         self._limited_lo = model.lower[self._limited].copy()
@@ -119,7 +122,7 @@ class Hexapod:
         #: the closure residual a solve stops at by default (m, rad): ``DEFAULT_TOL * scale``
         self.default_tol = min(DEFAULT_TOL * self.scale, MAX_TOL)
 
-    @property
+    @functools.cached_property
     def _kernels(self) -> KernelSet:
         """The kernels of :attr:`compiled`: numba is imported at the first solve, not on loading."""
         return kernel_set(self.compiled)
@@ -279,10 +282,17 @@ class Hexapod:
         if k >= 0:
             check_vector("lengths", lengths, 6)  # names NaN / inf first
             raise LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
-        solver = self._solver(self._held_forward)
-        sign = solver.home_sign if guess is None else getattr(guess, "det_sign", 0)
+        try:  # the hot path of a warm solve: _solver() and _start() inlined where they find what they need
+            solver = self._local.solvers[self._held_forward]
+        except (AttributeError, KeyError):
+            solver = self._solver(self._held_forward)
+        if guess is None:
+            sign, start = solver.home_sign, self.closed_loop.q_home
+        else:
+            sign = getattr(guess, "det_sign", 0)
+            fits = type(guess) is Solution and type(guess.q) is np.ndarray and guess.q.shape == self._q_shape
+            start = guess.q if fits else self._start(guess, copy=False)  # solve_forward writes its own copy
         joints = lengths if self._encoder is None else self.joints_of(lengths)
-        start = self._start(guess, copy=False)  # solve_forward writes its own copy
         fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
         attempt = None
         review = self._finder.exact is not None  # a 3-6 hexapod: every assembly is accounted for
@@ -291,6 +301,10 @@ class Hexapod:
             done = solver.certified_forward(start, joints, tol, max_iter, sign)  # type: ignore[attr-defined]
             if len(done) == 6:
                 q, pose, jac, it, res, bad = done
+                if bad < 0 and not review and solver.kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
+                    # within the limits, not near a singularity: what _solution() gives, built directly
+                    lengths = q[self._prismatic_q] if self._encoder is None else self.lengths_of(q)
+                    return new_solution(pose, q, lengths, "converged", it, res, jac, "", (), (), int(solver.sign))
                 sol = self._solution(
                     assembly.certified_outcome(solver, q, jac, it, res), check and not review, pose, bad
                 )

@@ -72,6 +72,8 @@ class CompiledSolver(NewtonSolver):
         self._checked_settings = np.zeros(SETTINGS)
         self._checked_settings[2:7] = (0.0, 0.0, 0.0, 1.0, 0.0)  # no sign, no homotopy, finish
         self._fixed = (*packed.arrays, self._q)  # then an entry's outputs q, pose, G
+        self._nq, self._g_shape = self._q.shape[0], self.G.shape
+        self._forward_joints = self._forward_settings[7:]  # the held joints' entries, a view
         self._scratch = self._outputs()
         if schur:  # home's sign and condition bound, now from the compiled path
             self.iterate(clm.q_home, np.inf, 0)
@@ -101,7 +103,7 @@ class CompiledSolver(NewtonSolver):
 
     def _outputs(self) -> tuple:
         """The entries' ``arrays`` with new output arrays ``q``, ``pose``, ``G`` (a Solution keeps them)."""
-        return (*self._fixed, np.empty(self._q.shape[0]), np.empty((4, 4)), np.empty(self.G.shape))
+        return (*self._fixed, np.empty(self._nq), np.empty((4, 4)), np.empty(self._g_shape))
 
     def certified_forward(
         self, start: np.ndarray, joints: np.ndarray, tol: float, max_iter: int, sign: float
@@ -121,14 +123,24 @@ class CompiledSolver(NewtonSolver):
             ``(status, iterations, residual, message)``, for :func:`.assembly.solve_forward` to
             go on from (its ``attempt``). The solver's state is :meth:`iterate`'s either way.
         """
+        # the hot path of a warm solve: :meth:`_call` and :meth:`_outputs` written out
         settings = self._forward_settings
-        settings[0], settings[1], settings[2] = tol, max_iter, sign
-        settings[7:] = joints  # any float dtype or stride: the entry's one signature
+        settings[0] = tol
+        settings[1] = max_iter
+        settings[2] = sign
+        self._forward_joints[:] = joints  # any float dtype or stride: the entry's one signature
+        q, pose, G = np.empty(self._nq), np.empty((4, 4)), np.empty(self._g_shape)
         # one compiled signature: a contiguous float64 start (a strided or float32 array would compile another)
-        arrays = self._outputs()
-        status, it, norm, message, bad = self._call(_contiguous(start), self._no_offset, settings, arrays, tol)
-        if status == "converged" and self.certified:
-            return arrays[5], arrays[6], arrays[7], it, norm, bad
+        if start.dtype != np.float64 or not start.flags.c_contiguous:
+            start = np.ascontiguousarray(start, dtype=np.float64)
+        code, it, norm, ratio, self.theta, self.det_sign, certified, bad = self._kernel(
+            start, self._no_offset, settings, (*self._fixed, q, pose, G)
+        )
+        self.certified = certified
+        self.sign, self.kappa = self._state.tolist()
+        if code == CONVERGED and certified:
+            return q, pose, G, it, norm, bad
+        status, message = outcome(code, tol, it, norm, ratio)
         return status, it, norm, message
 
     def run_checked(self, q0: np.ndarray, tol: float, max_iter: int) -> tuple[tuple, np.ndarray, int] | None:
