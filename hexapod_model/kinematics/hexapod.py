@@ -278,41 +278,63 @@ class Hexapod:
         tol = self.default_tol if tol is None else tol
         if not (isinstance(lengths, np.ndarray) and lengths.shape == (6,) and lengths.dtype == np.float64):
             lengths = check_vector("lengths", lengths, 6)
+        fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
+        solver = getattr(self._local, "staged", None)  # the one-call path's solver, once this thread has it
+        fits = (
+            guess is None or type(guess) is Solution and type(guess.q) is np.ndarray and guess.q.shape == self._q_shape
+        )
+        if solver is not None and fast and fits:
+            # the hot path of a warm solve: the stroke check and the attempt's settings in one compiled call
+            start, sign = (self.closed_loop.q_home, solver.home_sign) if guess is None else (guess.q, guess.det_sign)
+            settings = solver.forward_settings
+            k = solver.stage(
+                lengths, self._stroke_lo, self._stroke_hi, LIMIT_SLACK, settings, tol, float(max_iter), float(sign)
+            )
+            if k >= 0:
+                raise self._stroke_error(lengths, k)
+            done = solver.attempt(start, tol)
+            if len(done) == 6 and done[5] < 0 and solver.kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
+                # converged certified within the limits, not near a singularity: _attempted()'s Solution, built here
+                q, pose, jac, it, res, _ = done
+                lengths = q[self._prismatic_q]  # lengths_of(q) without an encoder model
+                return new_solution(pose, q, lengths, "converged", it, res, jac, "", (), (), int(solver.sign))
+            return self._attempted(solver, done, lengths, lengths, start, tol, max_iter, sign, guess, check, False)
         k = self._kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, LIMIT_SLACK)
         if k >= 0:
-            check_vector("lengths", lengths, 6)  # names NaN / inf first
-            raise LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
-        try:  # the hot path of a warm solve: _solver() and _start() inlined where they find what they need
-            solver = self._local.solvers[self._held_forward]
-        except (AttributeError, KeyError):
-            solver = self._solver(self._held_forward)
-        if guess is None:
-            sign, start = solver.home_sign, self.closed_loop.q_home
-        else:
-            sign = getattr(guess, "det_sign", 0)
-            fits = type(guess) is Solution and type(guess.q) is np.ndarray and guess.q.shape == self._q_shape
-            start = guess.q if fits else self._start(guess, copy=False)  # solve_forward writes its own copy
+            raise self._stroke_error(lengths, k)
+        solver = self._solver(self._held_forward)
+        sign = solver.home_sign if guess is None else getattr(guess, "det_sign", 0)
         joints = lengths if self._encoder is None else self.joints_of(lengths)
-        fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
-        attempt = None
+        start = self._start(guess, copy=False)  # solve_forward writes its own copy
         review = self._finder.exact is not None  # a 3-6 hexapod: every assembly is accounted for
         if fast and solver.compiled_loop:
+            if self._encoder is None and not review:  # the next solves on this thread take the hot path
+                self._local.staged = solver
             # the certified first attempt in one compiled call; solve_forward goes on from it
             done = solver.certified_forward(start, joints, tol, max_iter, sign)  # type: ignore[attr-defined]
-            if len(done) == 6:
-                q, pose, jac, it, res, bad = done
-                if bad < 0 and not review and solver.kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
-                    # within the limits, not near a singularity: what _solution() gives, built directly
-                    lengths = q[self._prismatic_q] if self._encoder is None else self.lengths_of(q)
-                    return new_solution(pose, q, lengths, "converged", it, res, jac, "", (), (), int(solver.sign))
-                sol = self._solution(
-                    assembly.certified_outcome(solver, q, jac, it, res), check and not review, pose, bad
-                )
-                return self._reviewed(sol, lengths, guess, check) if review else sol
-            attempt = done
-        sol = self._finish(
-            solver, start.copy(), tol, max_iter, check and not review, (joints, sign, guess is not None, attempt)
-        )
+            return self._attempted(solver, done, lengths, joints, start, tol, max_iter, sign, guess, check, review)
+        sol = self._finish(solver, start.copy(), tol, max_iter, check and not review, (joints, sign, guess is not None))
+        return self._reviewed(sol, lengths, guess, check) if review else sol
+
+    def _stroke_error(self, lengths: np.ndarray, k: int) -> LimitError:
+        """The error for reading ``k`` outside its stroke (an :class:`InputError` first for NaN / inf)."""
+        check_vector("lengths", lengths, 6)  # names NaN / inf first
+        return LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
+
+    def _attempted(
+        self, solver, done: tuple, lengths, joints, start, tol, max_iter, sign, guess, check: bool, review: bool
+    ) -> Solution:
+        """The :class:`Solution` of :meth:`forward` after the compiled certified attempt ``done``.
+
+        Its result when it converged certified (:meth:`.compiled.CompiledSolver.certified_forward`),
+        else :func:`.assembly.solve_forward` goes on from it.
+        """
+        if len(done) == 6:
+            q, pose, jac, it, res, bad = done
+            sol = self._solution(assembly.certified_outcome(solver, q, jac, it, res), check and not review, pose, bad)
+        else:
+            forward = (joints, sign, guess is not None, done)
+            sol = self._finish(solver, start.copy(), tol, max_iter, check and not review, forward)
         return self._reviewed(sol, lengths, guess, check) if review else sol
 
     @functools.cached_property
