@@ -10,7 +10,7 @@ a flag). :func:`as_rows` and :func:`poses_of_xyzquat` check and convert the batc
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, SupportsIndex
 
 import numpy as np
 
@@ -128,10 +128,10 @@ class _Statuses:
         self.names = list(_NAMES)
         self.index = _NAME_OF_CODE[codes]  # FALLBACK (-1) reads the last entry: "converged" until replaced
 
-    def __getitem__(self, k: int) -> str:
+    def __getitem__(self, k: SupportsIndex) -> str:
         return self.names[self.index[k]]
 
-    def __setitem__(self, k: int, name: str) -> None:
+    def __setitem__(self, k: SupportsIndex, name: str) -> None:
         if name not in self.names:
             self.names.append(name)
         self.index[k] = self.names.index(name)

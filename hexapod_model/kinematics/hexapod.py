@@ -296,8 +296,8 @@ class Hexapod:
             if len(done) == 6 and done[5] < 0 and solver.kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
                 # converged certified within the limits, not near a singularity: _attempted()'s Solution, built here
                 q, pose, jac, it, res, _ = done
-                lengths = q[self._prismatic_q]  # lengths_of(q) without an encoder model
-                return new_solution(pose, q, lengths, "converged", it, res, jac, "", (), (), int(solver.sign))
+                readings = q[self._prismatic_q]  # lengths_of(q) without an encoder model
+                return new_solution(pose, q, readings, "converged", it, res, jac, "", (), (), int(solver.sign))
             return self._attempted(solver, done, lengths, lengths, start, tol, max_iter, sign, guess, check, False)
         k = self._kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, LIMIT_SLACK)
         if k >= 0:
