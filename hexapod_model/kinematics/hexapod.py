@@ -488,7 +488,7 @@ class Hexapod:
             status, msg = failure_status(status, msg, res, max_iter, self._outside(q), self.scale)
             flags = ("not_closed",) if status == "out_of_limits" else flags
         poses = tuple(self.pose_of(c) for c in out.candidates) if out.candidates else ()
-        sol = Solution(
+        sol = new_solution(
             self.pose_of(q) if pose is None else pose,
             q,
             self.lengths_of(q),

@@ -5,7 +5,9 @@
 compiled entries of :mod:`.newton` (:func:`.newton.solve_schur`, :func:`.newton.solve_blocks`)
 on the packed tables and buffers of :mod:`.packing`; it adds the one-call solves of
 :meth:`~.hexapod.Hexapod.forward` and :meth:`~.hexapod.Hexapod.inverse`
-(:meth:`CompiledSolver.certified_forward`, :meth:`CompiledSolver.run_checked`).
+(:meth:`CompiledSolver.certified_forward`, :meth:`CompiledSolver.run_checked`). A warm ``forward``
+checks its readings and fills the attempt's settings in one compiled call (:func:`stage_forward`),
+then makes the attempt (:meth:`CompiledSolver.attempt`).
 :func:`solver_for` picks it when the model's layout allows.
 """
 

@@ -1,4 +1,4 @@
-"""Outcome codes of the compiled solves and loops, and their statuses and messages.
+"""Outcome codes of the compiled solves and loops, their statuses and messages, and the :class:`Solution` built fast.
 
 Plain integers shared by the numba code (:mod:`.newton`, :mod:`.batch_kernels`, where they are
 compile-time constants) and the Python code that reads their results (:mod:`.batch`), which
