@@ -10,8 +10,11 @@ Alternating rounds (the machine is shared: the load affects both alike), CPU tim
   ``fk_batch_cold`` / ``fk_batch_warm``: solves per CPU second and the ratio (target: at least
   0.85x the floor).
 
-Both solve to ``BENCH_TOL``. The figures of the first solves (compilation) are in
-``startup.py --cold``.
+Both solve to ``BENCH_TOL``. Then where the package's time goes beside the floor's: the warm
+solve's compiled call alone (the iteration, and the finish a ``Solution`` needs: Jacobian, pose,
+limit check) and the Python around it; the rows of the box whose certified first attempt fails
+(the certificate then follows the readings path, :mod:`hexapod_model.kinematics.assembly`). The
+figures of the first solves (compilation) are in ``startup.py --cold``.
 
     python benchmarks/floor_compare.py [--rounds 5] [--samples 1000]
 """
@@ -20,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import time
 from pathlib import Path
 
 import floor_newton as floor
@@ -32,6 +36,37 @@ from hexapod_model.kinematics.newton.solver import MAX_STEP
 from hexapod_model.studies.bench import BENCH_TOL, trajectory_readings
 
 MAX_ITER = 50
+
+
+def call_breakdown(hexa: Hexapod, readings: np.ndarray, first) -> dict[str, float]:
+    """Median CPU microseconds of the warm solve's compiled call along ``readings``, with and without its finish.
+
+    The call :meth:`Hexapod.forward` makes (the certified attempt, into new output arrays), from
+    the previous solve's configuration; ``finish`` off leaves the Jacobian, pose and limit
+    check out (the iteration alone).
+    """
+    solver = hexa._solver(hexa._held_forward)
+    starts = [first]
+    for x in readings[:-1]:
+        starts.append(hexa.forward(x, starts[-1], tol=BENCH_TOL))
+    times: dict[str, list[float]] = {"compiled_call": [], "iteration": []}
+    for x, start in zip(readings, starts):
+        for key, finish in (("compiled_call", 1.0), ("iteration", 0.0)):
+            settings = solver.forward_settings.copy()
+            settings[:3], settings[5], settings[7:] = (BENCH_TOL, MAX_ITER, start.det_sign), finish, x
+            outputs = solver._outputs()  # new arrays, as a Solution keeps them
+            t0 = time.thread_time_ns()
+            solver._kernel(start.q, solver._no_offset, settings, outputs)
+            times[key].append((time.thread_time_ns() - t0) / 1e3)
+    return {key: float(np.median(t)) for key, t in times.items()}
+
+
+def uncertified_attempts(hexa: Hexapod, readings: np.ndarray) -> np.ndarray:
+    """Which rows' certified first attempt from home fails (the certificate follows their readings path)."""
+    solver = hexa._solver(hexa._held_forward)
+    home = hexa.closed_loop.q_home
+    attempts = [solver.certified_forward(home, x, BENCH_TOL, MAX_ITER, solver.home_sign) for x in readings]
+    return np.array([len(a) != 6 for a in attempts], dtype=bool)
 
 
 def main(argv=None) -> int:
@@ -125,6 +160,26 @@ def main(argv=None) -> int:
         per_step = (pkg * a) / (ref * b)
         print(f"{'':38s} Newton steps per row: package {a:.2f}, floor {b:.2f}; steps/s ratio {per_step:.2f}x")
         report["batch"][name] = {"package": pkg, "floor": ref, "ratio": pkg / ref}
+    parts = call_breakdown(hexa, warm[1 : 1 + args.samples], first)
+    python = report["warm_fk_us"]["package"] - parts["compiled_call"]
+    print(f"warm FK, where the package's time goes (median us): compiled call {parts['compiled_call']:.1f}", end="")
+    print(f" (iteration {parts['iteration']:.1f}, finish {parts['compiled_call'] - parts['iteration']:.1f});", end="")
+    print(f" Python around it {python:.1f}")
+    failed = uncertified_attempts(hexa, cold)
+    print(f"box poses from home: the certified first attempt fails on {failed.sum()} of {len(cold)} rows", end="")
+    print(" (the certificate follows their readings path); forward_batch of each part against the floor:")
+    report["warm_fk_breakdown_us"] = {**parts, "python": python}
+    report["box_rows_following_the_path"] = int(failed.sum())
+    for label, part in (("certified at once", cold[~failed]), ("following the path", cold[failed])):
+        if not len(part):
+            continue
+        pkg_rates, ref_rates = [], []
+        for _ in range(args.rounds):
+            pkg_rates.append(rate(lambda part=part: hexa.forward_batch(part, tol=BENCH_TOL), len(part)))
+            ref_rates.append(rate(lambda part=part: floor_batch(part, False), len(part)))
+        pkg, ref = max(pkg_rates), max(ref_rates)
+        print(f"  {label:36s} package {pkg:8.0f}  floor {ref:8.0f}  ratio {pkg / ref:.2f}x")
+        report["batch"]["forward_batch, box poses from home"][label] = {"package": pkg, "floor": ref}
     if args.json:
         args.json.write_text(json.dumps(report, indent=1))
     return 0

@@ -26,7 +26,7 @@ from ..description.urdf import geometry_to_urdf
 from ..exceptions import AssemblyError, ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
 from . import assembly, batch, hybrid
 from .assemblies import DEFAULT_STARTS, Assemblies, AssemblyFinder, review
-from .assembly import Outcome
+from .assembly import NEAR_SINGULAR_FACTOR, Outcome
 from .batch import BatchResult
 from .checks import (
     LIMIT_SLACK,
@@ -41,6 +41,7 @@ from .checks import (
     failure_status,
 )
 from .newton.kernel_sets import KernelSet, kernel_set
+from .newton.outcomes import new_solution
 from .newton.solver import NewtonSolver, Solution
 
 DEFAULT_TOL = 1e-12  # closure residual (m, rad) at a 0.25 m base radius: pose errors below 1e-9 on every preset
@@ -100,6 +101,8 @@ class Hexapod:
         self._limited = model.limited_q()
         self._local = threading.local()  # .solvers: {held joints: NewtonSolver}, one per thread
         self._home_h = model.home.homogeneous
+        self._q_shape = (self.nq,)
+        self._prismatic_q = model.prismatic_q
         self._stroke_lo = np.ascontiguousarray(self.stroke[:, 0])
         self._stroke_hi = np.ascontiguousarray(self.stroke[:, 1])
         self._limited_lo = model.lower[self._limited].copy()
@@ -119,7 +122,7 @@ class Hexapod:
         #: the closure residual a solve stops at by default (m, rad): ``DEFAULT_TOL * scale``
         self.default_tol = min(DEFAULT_TOL * self.scale, MAX_TOL)
 
-    @property
+    @functools.cached_property
     def _kernels(self) -> KernelSet:
         """The kernels of :attr:`compiled`: numba is imported at the first solve, not on loading."""
         return kernel_set(self.compiled)
@@ -275,30 +278,63 @@ class Hexapod:
         tol = self.default_tol if tol is None else tol
         if not (isinstance(lengths, np.ndarray) and lengths.shape == (6,) and lengths.dtype == np.float64):
             lengths = check_vector("lengths", lengths, 6)
+        fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
+        solver = getattr(self._local, "staged", None)  # the one-call path's solver, once this thread has it
+        fits = (
+            guess is None or type(guess) is Solution and type(guess.q) is np.ndarray and guess.q.shape == self._q_shape
+        )
+        if solver is not None and fast and fits:
+            # the hot path of a warm solve: the stroke check and the attempt's settings in one compiled call
+            start, sign = (self.closed_loop.q_home, solver.home_sign) if guess is None else (guess.q, guess.det_sign)
+            settings = solver.forward_settings
+            k = solver.stage(
+                lengths, self._stroke_lo, self._stroke_hi, LIMIT_SLACK, settings, tol, float(max_iter), float(sign)
+            )
+            if k >= 0:
+                raise self._stroke_error(lengths, k)
+            done = solver.attempt(start, tol)
+            if len(done) == 6 and done[5] < 0 and solver.kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
+                # converged certified within the limits, not near a singularity: _attempted()'s Solution, built here
+                q, pose, jac, it, res, _ = done
+                readings = q[self._prismatic_q]  # lengths_of(q) without an encoder model
+                return new_solution(pose, q, readings, "converged", it, res, jac, "", (), (), int(solver.sign))
+            return self._attempted(solver, done, lengths, lengths, start, tol, max_iter, sign, guess, check, False)
         k = self._kernels.first_outside(lengths, self._stroke_lo, self._stroke_hi, LIMIT_SLACK)
         if k >= 0:
-            check_vector("lengths", lengths, 6)  # names NaN / inf first
-            raise LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
+            raise self._stroke_error(lengths, k)
         solver = self._solver(self._held_forward)
         sign = solver.home_sign if guess is None else getattr(guess, "det_sign", 0)
         joints = lengths if self._encoder is None else self.joints_of(lengths)
         start = self._start(guess, copy=False)  # solve_forward writes its own copy
-        fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
-        attempt = None
         review = self._finder.exact is not None  # a 3-6 hexapod: every assembly is accounted for
         if fast and solver.compiled_loop:
+            if self._encoder is None and not review:  # the next solves on this thread take the hot path
+                self._local.staged = solver
             # the certified first attempt in one compiled call; solve_forward goes on from it
             done = solver.certified_forward(start, joints, tol, max_iter, sign)  # type: ignore[attr-defined]
-            if len(done) == 6:
-                q, pose, jac, it, res, bad = done
-                sol = self._solution(
-                    assembly.certified_outcome(solver, q, jac, it, res), check and not review, pose, bad
-                )
-                return self._reviewed(sol, lengths, guess, check) if review else sol
-            attempt = done
-        sol = self._finish(
-            solver, start.copy(), tol, max_iter, check and not review, (joints, sign, guess is not None, attempt)
-        )
+            return self._attempted(solver, done, lengths, joints, start, tol, max_iter, sign, guess, check, review)
+        sol = self._finish(solver, start.copy(), tol, max_iter, check and not review, (joints, sign, guess is not None))
+        return self._reviewed(sol, lengths, guess, check) if review else sol
+
+    def _stroke_error(self, lengths: np.ndarray, k: int) -> LimitError:
+        """The error for reading ``k`` outside its stroke (an :class:`InputError` first for NaN / inf)."""
+        check_vector("lengths", lengths, 6)  # names NaN / inf first
+        return LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
+
+    def _attempted(
+        self, solver, done: tuple, lengths, joints, start, tol, max_iter, sign, guess, check: bool, review: bool
+    ) -> Solution:
+        """The :class:`Solution` of :meth:`forward` after the compiled certified attempt ``done``.
+
+        Its result when it converged certified (:meth:`.compiled.CompiledSolver.certified_forward`),
+        else :func:`.assembly.solve_forward` goes on from it.
+        """
+        if len(done) == 6:
+            q, pose, jac, it, res, bad = done
+            sol = self._solution(assembly.certified_outcome(solver, q, jac, it, res), check and not review, pose, bad)
+        else:
+            forward = (joints, sign, guess is not None, done)
+            sol = self._finish(solver, start.copy(), tol, max_iter, check and not review, forward)
         return self._reviewed(sol, lengths, guess, check) if review else sol
 
     @functools.cached_property
@@ -452,7 +488,7 @@ class Hexapod:
             status, msg = failure_status(status, msg, res, max_iter, self._outside(q), self.scale)
             flags = ("not_closed",) if status == "out_of_limits" else flags
         poses = tuple(self.pose_of(c) for c in out.candidates) if out.candidates else ()
-        sol = Solution(
+        sol = new_solution(
             self.pose_of(q) if pose is None else pose,
             q,
             self.lengths_of(q),

@@ -5,22 +5,42 @@
 compiled entries of :mod:`.newton` (:func:`.newton.solve_schur`, :func:`.newton.solve_blocks`)
 on the packed tables and buffers of :mod:`.packing`; it adds the one-call solves of
 :meth:`~.hexapod.Hexapod.forward` and :meth:`~.hexapod.Hexapod.inverse`
-(:meth:`CompiledSolver.certified_forward`, :meth:`CompiledSolver.run_checked`).
+(:meth:`CompiledSolver.certified_forward`, :meth:`CompiledSolver.run_checked`). A warm ``forward``
+checks its readings and fills the attempt's settings in one compiled call (:func:`stage_forward`),
+then makes the attempt (:meth:`CompiledSolver.attempt`).
 :func:`solver_for` picks it when the model's layout allows.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from ...description.model import ClosedLoopModel
 from .first_compile import announce
 from .iteration import solve_blocks, solve_schur
-from .kernels import jacobian
+from .kernels import first_outside, jacobian
 from .legs import ChainTables
 from .outcomes import CONVERGED, outcome
 from .packing import SETTINGS, Packed
 from .solver import _ONE_STEP, _THETA_FLOOR, MAX_STEP, SINGULAR_PIVOT_RATIO, THETA_MAX, NewtonSolver
+
+
+@njit(cache=True)
+def stage_forward(readings, lower, upper, slack, settings, tol, max_iter, sign):
+    """:func:`.kernels.first_outside` of the readings and, when all are inside, the settings of the certified attempt.
+
+    ``settings`` (:data:`.packing.SETTINGS`) gets ``tol``, ``max_iter``, ``sign`` and the
+    readings as the held joints' values (a hexapod without an encoder model). Returns the index
+    of the first reading outside ``[lower - slack, upper + slack]`` (or NaN), -1 if none.
+    """
+    k = first_outside(readings, lower, upper, slack)
+    if k < 0:
+        settings[0], settings[1], settings[2] = tol, max_iter, sign
+        for i in range(readings.shape[0]):
+            settings[7 + i] = readings[i]
+    return k
+
 
 _BUFFERS = ("J", "R", "p", "E", "r", "x", "G", "dv", "LB", "PB", "A", "M", "pm", "nb", "wb")
 
@@ -34,6 +54,9 @@ class CompiledSolver(NewtonSolver):
     """
 
     compiled_loop = True
+    #: :func:`stage_forward`, for :meth:`.hexapod.Hexapod.forward` to check its readings and fill
+    #: :attr:`forward_settings` in one compiled call before :meth:`attempt`
+    stage = staticmethod(stage_forward)
 
     def __init__(
         self, clm: ClosedLoopModel, held_joints: tuple[int, ...], tables: ChainTables, limits: tuple | None = None
@@ -67,11 +90,14 @@ class CompiledSolver(NewtonSolver):
         announce(self._kernel)  # the first solve after installation compiles it
         # the entries' settings (.packing.SETTINGS), filled in place: per kind of call, the constant ones set here
         self._settings = np.zeros(SETTINGS)
-        self._forward_settings = np.zeros(SETTINGS)
-        self._forward_settings[3:7] = (0.0, 1.0, 1.0, 1.0)  # no homotopy, certify, finish, joints given
+        #: the settings of the next certified attempt of direct kinematics (:meth:`attempt`)
+        self.forward_settings = np.zeros(SETTINGS)
+        self.forward_settings[3:7] = (0.0, 1.0, 1.0, 1.0)  # no homotopy, certify, finish, joints given
         self._checked_settings = np.zeros(SETTINGS)
         self._checked_settings[2:7] = (0.0, 0.0, 0.0, 1.0, 0.0)  # no sign, no homotopy, finish
         self._fixed = (*packed.arrays, self._q)  # then an entry's outputs q, pose, G
+        self._nq, self._g_shape = self._q.shape[0], self.G.shape
+        self._forward_joints = self.forward_settings[7:]  # the held joints' entries, a view
         self._scratch = self._outputs()
         if schur:  # home's sign and condition bound, now from the compiled path
             self.iterate(clm.q_home, np.inf, 0)
@@ -101,7 +127,7 @@ class CompiledSolver(NewtonSolver):
 
     def _outputs(self) -> tuple:
         """The entries' ``arrays`` with new output arrays ``q``, ``pose``, ``G`` (a Solution keeps them)."""
-        return (*self._fixed, np.empty(self._q.shape[0]), np.empty((4, 4)), np.empty(self.G.shape))
+        return (*self._fixed, np.empty(self._nq), np.empty((4, 4)), np.empty(self._g_shape))
 
     def certified_forward(
         self, start: np.ndarray, joints: np.ndarray, tol: float, max_iter: int, sign: float
@@ -121,14 +147,30 @@ class CompiledSolver(NewtonSolver):
             ``(status, iterations, residual, message)``, for :func:`.assembly.solve_forward` to
             go on from (its ``attempt``). The solver's state is :meth:`iterate`'s either way.
         """
-        settings = self._forward_settings
-        settings[0], settings[1], settings[2] = tol, max_iter, sign
-        settings[7:] = joints  # any float dtype or stride: the entry's one signature
+        settings = self.forward_settings
+        settings[0] = tol
+        settings[1] = max_iter
+        settings[2] = sign
+        self._forward_joints[:] = joints  # any float dtype or stride: the entry's one signature
+        return self.attempt(start, tol)
+
+    def attempt(
+        self, start: np.ndarray, tol: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, float, int] | tuple[str, int, float, str]:
+        """:meth:`certified_forward` with the settings in :attr:`forward_settings` already (see :meth:`stage`)."""
+        # the hot path of a warm solve: :meth:`_call` and :meth:`_outputs` written out
+        q, pose, G = np.empty(self._nq), np.empty((4, 4)), np.empty(self._g_shape)
         # one compiled signature: a contiguous float64 start (a strided or float32 array would compile another)
-        arrays = self._outputs()
-        status, it, norm, message, bad = self._call(_contiguous(start), self._no_offset, settings, arrays, tol)
-        if status == "converged" and self.certified:
-            return arrays[5], arrays[6], arrays[7], it, norm, bad
+        if start.dtype != np.float64 or not start.flags.c_contiguous:
+            start = np.ascontiguousarray(start, dtype=np.float64)
+        code, it, norm, ratio, self.theta, self.det_sign, certified, bad = self._kernel(
+            start, self._no_offset, self.forward_settings, (*self._fixed, q, pose, G)
+        )
+        self.certified = certified
+        self.sign, self.kappa = self._state.tolist()
+        if code == CONVERGED and certified:
+            return q, pose, G, it, norm, bad
+        status, message = outcome(code, tol, it, norm, ratio)
         return status, it, norm, message
 
     def run_checked(self, q0: np.ndarray, tol: float, max_iter: int) -> tuple[tuple, np.ndarray, int] | None:
