@@ -82,13 +82,22 @@ def assert_same_to_scale(a: Solution, b: Solution, factor: float, slack: int) ->
         np.testing.assert_allclose(b.lengths / factor, a.lengths, rtol=0, atol=POSE_TOL)
 
 
+def pair(name: str, factor: float, path: str) -> tuple[hm.Hexapod, hm.Hexapod, int]:
+    """The preset, it scaled by ``factor``, both on ``path``, and the step counts' slack (:func:`step_slack`)."""
+    unit, big = on_path(name, 1.0, path), on_path(name, factor, path)
+    return unit, big, step_slack(unit, big, factor)
+
+
+sizes = pytest.mark.parametrize("factor", FACTORS)
+presets = pytest.mark.parametrize("name", ["reference", "3-6", "spherical"])
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("path", PATHS)
-@pytest.mark.parametrize("factor", FACTORS)
-@pytest.mark.parametrize("name", ["reference", "3-6", "spherical"])
+@sizes
+@presets
 def test_scaled_geometries_give_the_same_statuses_steps_and_poses_to_scale(name, factor, path):
-    unit, big = on_path(name, 1.0, path), on_path(name, factor, path)
-    slack = step_slack(unit, big, factor)
+    unit, big, slack = pair(name, factor, path)
     rng = np.random.default_rng(3)
     statuses = set()
     for T in box_poses(unit.home_pose, 25, seed=11, translation=0.1, angle_deg=40):
@@ -112,11 +121,10 @@ def test_scaled_geometries_give_the_same_statuses_steps_and_poses_to_scale(name,
 
 @pytest.mark.slow
 @pytest.mark.parametrize("path", PATHS[:2])
-@pytest.mark.parametrize("factor", FACTORS)
-@pytest.mark.parametrize("name", ["reference", "3-6", "spherical"])
+@sizes
+@presets
 def test_scaled_geometries_give_the_same_batch_results_to_scale(name, factor, path):
-    unit, big = on_path(name, 1.0, path), on_path(name, factor, path)
-    slack = step_slack(unit, big, factor)
+    unit, big, slack = pair(name, factor, path)
     rng = np.random.default_rng(4)
     poses = box_poses(unit.home_pose, 20, seed=12, translation=0.1, angle_deg=40)
     reachable = unit.inverse_batch(poses).lengths
