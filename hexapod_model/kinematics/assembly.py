@@ -293,6 +293,6 @@ def _ambiguous(
             return Outcome(q, "out_of_limits", total, 0.0, G, f"{where}; every assembly found is outside the limits")
         return Outcome(q, status, total, res, G, f"{msg}; {where}")
     residual, G = solver.evaluate(inside[0])
-    residual.reshape(6, -1)[:, 3:] *= solver.length_scale  # rotation rows: the iteration's norm
+    residual *= solver.residual_weights  # rotation rows times the length scale: the iteration's norm
     msg = f"cannot certify the assembly connected to the start: {where}; {len(inside)} candidate assemblies"
     return Outcome(inside[0], "ambiguous_assembly", total, float(np.linalg.norm(residual)), G, msg, (), tuple(inside))

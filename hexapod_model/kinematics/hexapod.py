@@ -107,7 +107,7 @@ class Hexapod:
         self._held_forward = tuple(leg.prismatic for leg in model.legs)
         self._held_inverse = (model.platform_joint,)
         self._free_directions: dict[tuple[int, ...], tuple[int, int]] = {}  # held set -> (free, rank)
-        #: 2-norm condition number of the direct-kinematics constraint Jacobian at home
+        #: 2-norm condition number of the direct-kinematics constraint Jacobian at home (scale-free)
         self.home_condition_number = self._check_home_conditioning()
         #: largest horizontal distance of a leg's first joint from the base origin (m), and
         #: the size ratio, to the nearest power of two (1 for the presets), the constants scale by
@@ -221,10 +221,15 @@ class Hexapod:
     def _check_home_conditioning(self) -> float:
         """Condition number of the direct-kinematics Jacobian at home; GeometryError above the limit.
 
+        Scale-free: rotation rows times the length scale, metre columns divided by it (the
+        solver's weights), so a hexapod scaled by a power of two has its preset's figure.
+
         Evaluated with the NumPy kernels: loading a hexapod compiles nothing (the first solve
         compiles what it runs).
         """
-        _, G = NewtonSolver(self.closed_loop, self._held_forward, kernel_set(False)).evaluate(self.closed_loop.q_home)
+        solver = NewtonSolver(self.closed_loop, self._held_forward, kernel_set(False))
+        _, G = solver.evaluate(self.closed_loop.q_home)
+        G = solver.residual_weights[:, None] * G / solver.step_weights  # scale-free rows and columns
         return check_home_conditioning(G, self.closed_loop.source, HOME_CONDITION_LIMIT)
 
     def _start(self, guess, copy: bool = True) -> np.ndarray:

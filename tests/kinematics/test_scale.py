@@ -146,3 +146,22 @@ def test_scaled_geometries_give_the_same_batch_results_to_scale(name, factor, pa
     a, b = unit.inverse_batch(poses), big.inverse_batch(S)
     assert list(b.status) == list(a.status) and np.all(np.abs(b.iterations - a.iterations) <= slack)
     np.testing.assert_allclose(b.lengths / factor, a.lengths, rtol=0, atol=POSE_TOL)
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("factor", [1 / 16, 8.0])
+@presets
+def test_condition_figures_are_scale_free(name, factor, path):
+    # the home conditioning check and the near_singular flag's condition bound (relative to home's)
+    unit, big, _ = pair(name, factor, path)
+    assert big.home_condition_number == pytest.approx(unit.home_condition_number, rel=1e-9)
+    su, sb = unit._solver(unit._held_forward), big._solver(big._held_forward)
+    assert sb.home_kappa == pytest.approx(su.home_kappa, rel=1e-9)
+    for T in box_poses(unit.home_pose, 10, seed=13, translation=0.1, angle_deg=40):
+        S = T.copy()
+        S[:3, 3] *= factor
+        a, b = unit.inverse(T, check=False), big.inverse(S, check=False)
+        if a.converged:
+            fa, fb = unit.forward(a.lengths, a, check=False), big.forward(b.lengths, b, check=False)
+            assert (fa.status, fb.status) == ("converged", "converged")
+            assert sb.kappa == pytest.approx(su.kappa, rel=1e-6)

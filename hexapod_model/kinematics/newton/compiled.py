@@ -63,7 +63,7 @@ class CompiledSolver(NewtonSolver):
         if schur:
             s = self
             a = [s.J, s.leg_cols, s.held_pos, s.ff_cols, s.colmap, s.rows, s.p, s.E, s.r, s.x, s.LB, s.PB]
-            self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb])
+            self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb, s.length_scale])
         self.packed = packed
         self._kernel = solve_schur if schur else solve_blocks
         announce(self._kernel)  # the first solve after installation compiles it

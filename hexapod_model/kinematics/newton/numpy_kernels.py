@@ -161,7 +161,7 @@ def block_solve(G, r, rows, block_cols, LUb, piv, rb, xb, x):
     return min(1.0, ratio)
 
 
-def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w):
+def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w, length):
     """Newton step with each leg eliminated (:func:`.structured.schur_solve`): ``(signed ratio, kappa)``.
 
     The pivot ratios, determinant signs and condition bound come from the same pivoted
@@ -187,7 +187,8 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
         return 0.0, np.inf
     worst = min(worst, ratio)
     sign *= float(_det_signs(M[None], pm[None])[0])
-    kappa = 2.0 * (float(np.sum(M0 * M0)) / 6.0) ** 3 / abs(float(np.prod(np.diagonal(M))))
+    Mw = M0 if length == 1.0 else M0 / np.array([1.0, 1.0, 1.0, length, length, length])  # scale-free
+    kappa = 2.0 * (float(np.sum(Mw * Mw)) / 6.0) ** 3 / abs(float(np.prod(np.diagonal(M)))) * length**3
     v = np.linalg.solve(M0, rhs)
     x[colmap[ff_cols]] = -v
     W = np.linalg.solve(L, -(r6 + A @ v)[..., None])[..., 0]

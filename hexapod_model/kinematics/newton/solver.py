@@ -168,7 +168,7 @@ class NewtonSolver:
     Buffers are allocated once here; :meth:`run` allocates only the new configuration
     returned by ``pin.integrate``. ``length_scale`` and ``weights`` (:func:`size_of`,
     :func:`velocity_weights`) make the step's limits scale-free; ``step_weights`` are the free
-    velocities' ``weights``.
+    velocities' ``weights``; ``residual_weights`` weigh the residual's rows in its norm.
     """
 
     #: whether :meth:`iterate` runs as one compiled call (:class:`.compiled_solver.CompiledSolver`)
@@ -200,6 +200,10 @@ class NewtonSolver:
             self.leg_cols[i, : len(cols)] = cols
         self.ff_cols = np.arange(clm.platform_v, clm.platform_v + 6, dtype=np.int64)
         self.rows = 6 if clm.kind == "6d" else 3
+        #: (6 rows,) weights of the residual's rows in its norm: 1 (m), the length scale for rotation rows (rad)
+        self.residual_weights = np.tile(
+            [1.0, 1.0, 1.0, self.length_scale, self.length_scale, self.length_scale][: self.rows], 6
+        )
         n_res, n_free = 6 * self.rows, self.free_v.size
         self.square = n_res == n_free
         self.R = np.zeros((12, 3, 3))
@@ -231,7 +235,7 @@ class NewtonSolver:
         if self.held_pos is not None:  # Schur path: arguments bound once (17 attribute loads cost 1 us)
             s = self
             a = [s.J, s.leg_cols, s.held_pos, s.ff_cols, s.colmap, s.rows, s.p, s.E, s.r, s.x, s.LB, s.PB]
-            self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb])
+            self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb, s.length_scale])
             self.iterate(clm.q_home, np.inf, 0)  # converged at once: one Schur step at home
             self.home_sign, self.home_kappa = self.sign, self.kappa
 
