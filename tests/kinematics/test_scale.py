@@ -165,3 +165,19 @@ def test_condition_figures_are_scale_free(name, factor, path):
             fa, fb = unit.forward(a.lengths, a, check=False), big.forward(b.lengths, b, check=False)
             assert (fa.status, fb.status) == ("converged", "converged")
             assert sb.kappa == pytest.approx(su.kappa, rel=1e-6)
+
+
+@pytest.mark.parametrize("factor", [1 / 64, 256.0])  # a 3 mm and a 51 m base radius
+def test_three_six_assemblies_and_solves_to_scale_far_from_the_presets(factor):
+    unit, big, slack = pair("3-6", factor, "numpy")
+    assert slack == 0
+    for T in box_poses(unit.home_pose, 8, seed=5, translation=0.05, angle_deg=20):
+        a = unit.inverse(T, check=False)
+        if not a.converged:
+            continue
+        A, B = unit.assemblies(a.lengths), big.assemblies(a.lengths * factor)
+        assert len(B.solutions) == len(A.solutions) and B.complete == A.complete
+        for sa, sb in zip(A.solutions, B.solutions):
+            assert_same_to_scale(sa, sb, factor, 0)
+        fa, fb = unit.forward(a.lengths, check=False), big.forward(a.lengths * factor, check=False)
+        assert_same_to_scale(fa, fb, factor, 0)

@@ -59,7 +59,12 @@ def size_of(clm: ClosedLoopModel) -> tuple[float, float]:
     """
     anchors = np.array([clm.model.jointPlacements[leg.joints[0]].translation for leg in clm.legs])
     radius = float(np.max(np.linalg.norm(anchors[:, :2], axis=1))) or REFERENCE_RADIUS
-    return radius, 2.0 ** round(math.log2(radius / REFERENCE_RADIUS))
+    return radius, length_scale(radius)
+
+
+def length_scale(radius: float) -> float:
+    """``radius`` (m) over ``REFERENCE_RADIUS``, rounded to the nearest power of two (:func:`size_of`)."""
+    return 2.0 ** round(math.log2(radius / REFERENCE_RADIUS))
 
 
 def velocity_weights(clm: ClosedLoopModel, scale: float) -> np.ndarray:
