@@ -181,3 +181,52 @@ def test_three_six_assemblies_and_solves_to_scale_far_from_the_presets(factor):
             assert_same_to_scale(sa, sb, factor, 0)
         fa, fb = unit.forward(a.lengths, check=False), big.forward(a.lengths * factor, check=False)
         assert_same_to_scale(fa, fb, factor, 0)
+
+
+def held_values(hexa: hm.Hexapod, q: np.ndarray, passive: str, step: np.ndarray, factor: float) -> dict:
+    """Five prismatic joints (not leg 5's) and joint ``passive`` of ``q``, moved by ``step`` (m times ``factor``, rad).
+
+    Within their limits.
+    """
+    clm = hexa.closed_loop
+    legs = [0, 1, 2, 3, 5]  # leg 5 free, leg 6 holds two joints: no structured step, the general solver
+    pq, iq = clm.prismatic_q[legs], hexa.model.joints[hexa.model.getJointId(passive)].idx_q
+    values = np.clip(q[pq] + step[:5] * factor, clm.lower[pq], clm.upper[pq])
+    return dict(zip([hexa.prismatic_names[i] for i in legs], values)) | {
+        passive: float(np.clip(q[iq] + step[5], clm.lower[iq], clm.upper[iq]))
+    }
+
+
+@pytest.mark.parametrize("factor", FACTORS)
+@presets
+def test_hybrid_solves_on_the_general_path_to_scale(name, factor):
+    # five prismatic joints and a Cardan angle of leg 6 held: the general solver (no structured step)
+    unit, big, slack = pair(name, factor, "compiled")
+    assert not unit._solver(held_ids(unit)).compiled_loop
+    passive = "leg6_cardan_base_1"
+    rng, statuses = np.random.default_rng(6), []
+    for T in box_poses(unit.home_pose, 10, seed=14, translation=0.1, angle_deg=40):
+        a, b = unit.inverse(T, check=False), big.inverse(scaled_pose(T, factor), check=False)
+        if not a.converged:
+            continue
+        # each held set from its own hexapod's solution (the scaled geometry file rounds its numbers)
+        for step in (np.zeros(6), rng.normal(scale=3e-3, size=6)):  # cold from home; warm, 3 mm / 3 mrad away
+            guesses = (None, None) if not step.any() else (a, b)
+            sa = unit.solve(held_values(unit, a.q, passive, step, 1.0), guesses[0], check=False)
+            sb = big.solve(held_values(big, b.q, passive, step, factor), guesses[1], check=False)
+            assert_same_to_scale(sa, sb, factor, slack)
+            statuses.append(sa.status)
+    assert statuses.count("converged") >= len(statuses) // 2
+
+
+def held_ids(hexa: hm.Hexapod) -> tuple[int, ...]:
+    """The joint ids :func:`held_values` holds."""
+    names = [hexa.prismatic_names[i] for i in (0, 1, 2, 3, 5)] + ["leg6_cardan_base_1"]
+    return tuple(sorted(hexa.model.getJointId(n) for n in names))
+
+
+def scaled_pose(T: np.ndarray, factor: float) -> np.ndarray:
+    """``T`` with its translation times ``factor``."""
+    S = T.copy()
+    S[:3, 3] *= factor
+    return S
