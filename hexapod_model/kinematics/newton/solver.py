@@ -14,7 +14,9 @@ The step's size is measured scale-free (:func:`velocity_weights`): its entries i
 they are, those in metres (prismatic joints, the platform's translation) divided by the
 geometry's length scale (:func:`size_of`: the base radius over ``REFERENCE_RADIUS``, to the
 nearest power of two, 1 on the presets). So ``MAX_STEP``, ``_ONE_STEP`` and ``_THETA_FLOOR``
-mean the same on a 1 cm and on a 2 m hexapod.
+mean the same on a 1 cm and on a 2 m hexapod. Likewise the residual's norm counts a 6-D
+closure's rotation rows (rad) times the length scale, so that it and the tolerance (scaled by
+the caller, :attr:`.hexapod.Hexapod.default_tol`) are metres at that scale.
 :meth:`NewtonSolver.iterate` also records what :mod:`~hexapod_model.kinematics.assembly` certifies.
 """
 
@@ -94,7 +96,8 @@ class Solution:
         lengths: (6,) measured-joint readings, leg order (metres, zero at home).
         status: one of ``STATUSES`` (docs/solver.md says what each means and what to do).
         iterations: Newton steps taken.
-        residual: final closure residual norm (metres and radians mixed).
+        residual: final closure residual norm (metres; a 6-D closure's rotation rows in radians
+            times the geometry's length scale, 1 on the presets).
         jacobian: reduced constraint Jacobian at the final configuration (rows: closures,
             columns: free velocities), or ``None`` if the input was rejected.
         message: human-readable detail when ``status != "converged"`` or a flag is set.
