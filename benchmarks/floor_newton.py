@@ -201,7 +201,7 @@ def fk_newton(theta, Rp, pp, lengths, JR, Jp, jt, ja, tR, tp, aR, ap, held, tol,
         if norm <= tol or it >= max_iter or not norm < np.inf:
             break
         ratio, kappa = linalg.schur_solve(
-            J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, nb, wb
+            J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, nb, wb, 1.0
         )
         if abs(ratio) < 1e-13:
             return -1, norm

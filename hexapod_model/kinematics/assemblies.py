@@ -170,7 +170,7 @@ class AssemblyFinder:
         for q in configurations:
             q0 = q.copy()
             q0[pq] = joints
-            q1, status = solver.run(q0, 1e-12, 30)[:2]
+            q1, status = solver.run(q0, hexa.default_tol, 30)[:2]
             if status != "converged":
                 continue
             T = hexa.pose_of(q1)

@@ -62,7 +62,7 @@ if TYPE_CHECKING:
 __all__ = ["INTERMEDIATE_TOL", "MAX_SUBSTEPS", "MIN_STEP", "NEAR_SINGULAR_FACTOR", "Outcome", "solve_forward"]
 
 NEAR_SINGULAR_FACTOR = 30.0  # flag when the condition bound of M exceeds this times its home value
-_DISTINCT = 1e-7  # configurations farther apart than this (m, rad) are different assemblies
+_DISTINCT = 1e-7  # configurations farther apart than this (rad, m per length scale) are different assemblies
 
 
 class Outcome(NamedTuple):
@@ -157,8 +157,9 @@ def _follow(
     A start that does not close at its own readings follows ``r - (1 - t) r_start`` instead.
     """
     model, nq, pq = solver.clm.model, solver.clm.nq, solver.clm.prismatic_q
+    intermediate = INTERMEDIATE_TOL * solver.length_scale  # m, rad: scaled as the tolerance
     _, _, res, _ = solver.iterate(start, np.inf, 0)  # the start's own closure residual
-    offset = solver.r.copy() if res > INTERMEDIATE_TOL else None
+    offset = solver.r.copy() if res > intermediate else None
     x, t, substeps, it, before = start, 0.0, 0, 0, None
     predicted = tried[1] is not None
     while t < 1.0 and substeps < MAX_SUBSTEPS and h >= MIN_STEP:
@@ -171,7 +172,7 @@ def _follow(
             q0 = x.copy()
         q0[pq] = l0 + tn * (lengths - l0)
         scale = 0.0 if offset is None else 1.0 - tn
-        tol_n = tol if tn == 1.0 else INTERMEDIATE_TOL
+        tol_n = tol if tn == 1.0 else intermediate
         status, it, res, _ = solver.iterate(q0, tol_n, max_iter, sign, offset, scale, certify=True)
         total += it
         substeps += 1
@@ -280,7 +281,7 @@ def _ambiguous(
             status, res, msg = st, r, m
     distinct: list[np.ndarray] = []
     for q in found:
-        if all(np.abs(pin.difference(clm.model, q, c)).max() > _DISTINCT for c in distinct):
+        if all((np.abs(pin.difference(clm.model, q, c)) * solver.weights).max() > _DISTINCT for c in distinct):
             distinct.append(q)
     idx = clm.limited_q()
     inside = [q for q in distinct if solver.kernels.first_outside_at(q, idx, clm.lower[idx], clm.upper[idx], 1e-12) < 0]
@@ -292,5 +293,6 @@ def _ambiguous(
             return Outcome(q, "out_of_limits", total, 0.0, G, f"{where}; every assembly found is outside the limits")
         return Outcome(q, status, total, res, G, f"{msg}; {where}")
     residual, G = solver.evaluate(inside[0])
+    residual *= solver.residual_weights  # rotation rows times the length scale: the iteration's norm
     msg = f"cannot certify the assembly connected to the start: {where}; {len(inside)} candidate assemblies"
     return Outcome(inside[0], "ambiguous_assembly", total, float(np.linalg.norm(residual)), G, msg, (), tuple(inside))

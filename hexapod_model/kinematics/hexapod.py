@@ -9,7 +9,6 @@
 from __future__ import annotations
 
 import functools
-import math
 import threading
 from collections.abc import Mapping
 from pathlib import Path
@@ -42,10 +41,9 @@ from .checks import (
 )
 from .newton.kernel_sets import KernelSet, kernel_set
 from .newton.outcomes import new_solution
-from .newton.solver import NewtonSolver, Solution
+from .newton.solver import NewtonSolver, Solution, size_of
 
 DEFAULT_TOL = 1e-12  # closure residual (m, rad) at a 0.25 m base radius: pose errors below 1e-9 on every preset
-REFERENCE_RADIUS = 0.25  # m: the base radius DEFAULT_TOL is stated for
 DEFAULT_MAX_ITER = 20
 #: largest 2-norm condition number of the direct-kinematics constraint Jacobian at home
 #: (metres and radians; the presets have 9-67, a 20x smaller hexapod about 700, a singular
@@ -112,13 +110,11 @@ class Hexapod:
         self._held_forward = tuple(leg.prismatic for leg in model.legs)
         self._held_inverse = (model.platform_joint,)
         self._free_directions: dict[tuple[int, ...], tuple[int, int]] = {}  # held set -> (free, rank)
-        #: 2-norm condition number of the direct-kinematics constraint Jacobian at home
+        #: 2-norm condition number of the direct-kinematics constraint Jacobian at home (scale-free)
         self.home_condition_number = self._check_home_conditioning()
-        anchors = np.array([m.jointPlacements[leg.joints[0]].translation for leg in model.legs])
-        #: largest horizontal distance of a leg's first joint from the base origin (m)
-        self.base_radius = float(np.max(np.linalg.norm(anchors[:, :2], axis=1))) or REFERENCE_RADIUS
+        #: largest horizontal distance of a leg's first joint from the base origin (m), and
         #: the size ratio, to the nearest power of two (1 for the presets), the constants scale by
-        self.scale = 2.0 ** round(math.log2(self.base_radius / REFERENCE_RADIUS))
+        self.base_radius, self.scale = size_of(model)
         #: the closure residual a solve stops at by default (m, rad): ``DEFAULT_TOL * scale``
         self.default_tol = min(DEFAULT_TOL * self.scale, MAX_TOL)
 
@@ -228,10 +224,15 @@ class Hexapod:
     def _check_home_conditioning(self) -> float:
         """Condition number of the direct-kinematics Jacobian at home; GeometryError above the limit.
 
+        Scale-free: rotation rows times the length scale, metre columns divided by it (the
+        solver's weights), so a hexapod scaled by a power of two has its preset's figure.
+
         Evaluated with the NumPy kernels: loading a hexapod compiles nothing (the first solve
         compiles what it runs).
         """
-        _, G = NewtonSolver(self.closed_loop, self._held_forward, kernel_set(False)).evaluate(self.closed_loop.q_home)
+        solver = NewtonSolver(self.closed_loop, self._held_forward, kernel_set(False))
+        _, G = solver.evaluate(self.closed_loop.q_home)
+        G = solver.residual_weights[:, None] * G / solver.step_weights  # scale-free rows and columns
         return check_home_conditioning(G, self.closed_loop.source, HOME_CONDITION_LIMIT)
 
     def _start(self, guess, copy: bool = True) -> np.ndarray:

@@ -21,7 +21,8 @@ interpolation error) and solved as a degree-16 polynomial in ``z = exp(i psi_0)`
 eigenvalues of its companion matrix are all its roots at once. Roots on the unit circle (to
 ``1e-4``, generous so that the nearly double roots at a fold are kept) give ``psi_0``;
 ``psi_1``, ``psi_2`` follow from ``a cos psi + b sin psi = c``; every combination is polished by
-Newton on the 3x3 system and kept only if it satisfies eq. 9 to ``ACCEPT`` (duplicates merged).
+Newton on the 3x3 system and kept only if it satisfies eq. 9 to ``ACCEPT`` (times the square of the
+geometry's length scale, :func:`.newton.solver.length_scale`; duplicates merged).
 Hence **at most 16 assemblies** (``MAX_ASSEMBLIES``, the degree of the polynomial; a planar base
 gives them in mirror pairs about the base plane), all of them, in 1 to 2 ms.
 :meth:`ThreeSixFK.solve` picks the one nearest a reference from this complete set.
@@ -42,10 +43,11 @@ import numpy as np
 
 from ..description.geometry import HexapodGeometry
 from ..exceptions import GeometryError, InputError, WorkspaceError
+from .newton.solver import length_scale
 from .rotations import pose_distance
 
 MAX_ASSEMBLIES = 16  # roots of the order-8 trigonometric polynomial in psi_0
-ACCEPT = 1e-12  # m^2: largest eq. 9 error of a returned assembly (about 1e-11 m in distance)
+ACCEPT = 1e-12  # m^2 at length scale 1: largest eq. 9 error of a returned assembly (about 1e-11 m in distance)
 _SAMPLES = 32  # angles at which the resultant is evaluated (>= 17 Fourier coefficients)
 _CIRCLE = 1e-4  # |log |z|| below which a polynomial root counts as a real angle
 _NEAR = 1e-2  # largest eq. 9 error (relative to the largest D^2) of a root's branch before polishing
@@ -90,8 +92,11 @@ class ThreeSixFK:
     def __init__(self, geometry: HexapodGeometry):
         self.geometry = geometry
         b, p = geometry.base_points(), geometry.platform_points()
+        self.length = float(np.max(np.linalg.norm(b[:, :2], axis=1)))  # m per rad in pose distances
+        scale = length_scale(self.length) if self.length > 0.0 else 1.0
+        self._accept = ACCEPT * scale * scale  # m^2: eq. 9 is in squared lengths
         for k in range(3):
-            if np.linalg.norm(p[2 * k] - p[2 * k + 1]) > 1e-12:
+            if np.linalg.norm(p[2 * k] - p[2 * k + 1]) > 1e-12 * scale:
                 raise GeometryError(
                     f"legs[{2 * k + 1}].platform_anchor",
                     tuple(p[2 * k + 1]),
@@ -120,7 +125,6 @@ class ThreeSixFK:
             self.f[k] = np.cross(self.u[k], self.e[k])
         self.home_pose = np.eye(4)
         self.home_pose[:3, 3] = geometry.home_translation
-        self.length = float(np.max(np.linalg.norm(b[:, :2], axis=1)))  # m per rad in pose distances
         self._home_frame = _frames(self.platform[None])[0]
 
     def circles(self, lengths) -> tuple[np.ndarray, np.ndarray]:
@@ -228,7 +232,7 @@ class ThreeSixFK:
         p1, p2 = self._partner(w0 @ Ks[0]), self._partner(w0 @ Ks[2].T)
         psi = np.stack([np.repeat(psi0, 4), np.repeat(p1, 2, axis=1).ravel(), np.tile(p2, 2).ravel()], -1)
         psi, F = self._polish(psi[np.all(np.isfinite(psi), axis=1)], C, d)
-        keep = np.abs(F).max(axis=1) <= ACCEPT
+        keep = np.abs(F).max(axis=1) <= self._accept
         psi, residual = np.angle(np.exp(1j * psi[keep])), np.abs(F[keep]).max(axis=1)
         wrapped = np.abs(np.angle(np.exp(1j * (psi[:, None] - psi[None])))).max(axis=2)
         unique = [k for k in range(len(psi)) if not np.any(wrapped[k, :k] < 1e-7)]
@@ -249,7 +253,7 @@ class ThreeSixFK:
         err = np.abs(F).max(axis=1)
         active = err <= _NEAR * self.D2.max()  # the other branch choices are off by ~D^2
         for _ in range(8):
-            active &= err > 1e-3 * ACCEPT
+            active &= err > 1e-3 * self._accept
             if not active.any():
                 break
             Ga, Fa = G[active], F[active]

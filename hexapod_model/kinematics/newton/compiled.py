@@ -63,7 +63,7 @@ class CompiledSolver(NewtonSolver):
     ):
         self.packed: Packed | None = None  # NewtonSolver.__init__ iterates once, on the general path
         super().__init__(clm, held_joints)
-        constants = (MAX_STEP, SINGULAR_PIVOT_RATIO, THETA_MAX, _THETA_FLOOR, _ONE_STEP)
+        constants = (MAX_STEP, SINGULAR_PIVOT_RATIO, THETA_MAX, _THETA_FLOOR, _ONE_STEP, self.length_scale)
         schur = self.held_pos is not None
         if not schur and self.block_cols is None:  # solver_for checks the layout first
             raise ValueError("no structured step for these held joints")
@@ -72,7 +72,9 @@ class CompiledSolver(NewtonSolver):
             limits = (limited, clm.lower[limited], clm.upper[limited], 0.0)
         self._prismatic_q = clm.prismatic_q.astype(np.int64)
         held, colmap, free_v = self.held_pos, self.colmap[: clm.nv], self.free_v
-        packed = Packed(tables, constants, schur, held, colmap, free_v, clm.nv, self._prismatic_q, limits)
+        packed = Packed(
+            tables, constants, self.step_weights, schur, held, colmap, free_v, clm.nv, self._prismatic_q, limits
+        )
         for name in _BUFFERS:
             setattr(self, name, packed.views[name])
         self._state = packed.views["state"]
@@ -84,7 +86,7 @@ class CompiledSolver(NewtonSolver):
         if schur:
             s = self
             a = [s.J, s.leg_cols, s.held_pos, s.ff_cols, s.colmap, s.rows, s.p, s.E, s.r, s.x, s.LB, s.PB]
-            self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb])
+            self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb, s.length_scale])
         self.packed = packed
         self._kernel = solve_schur if schur else solve_blocks
         announce(self._kernel)  # the first solve after installation compiles it

@@ -11,8 +11,8 @@ determinant sign kept. Same rules as the Python follower:
 * predictor: the secant of the last two path points, or the plain attempt's first Newton step
   before the first accepted substep (``pin.interpolate`` / ``pin.integrate`` on the manifold:
   leg joints add, the platform's free flyer moves by ``exp6`` of ``log6``, :mod:`.lie`);
-* closure residual ``INTERMEDIATE_TOL`` before the last substep; a start that does not close at
-  its own readings follows ``r - (1 - t) r_start``.
+* closure residual ``INTERMEDIATE_TOL`` (times the geometry's length scale, packed) before the
+  last substep; a start that does not close at its own readings follows ``r - (1 - t) r_start``.
 
 What the path's end leaves is the caller's: a certified end (``t == 1``, the solver's buffers
 hold the last Schur step) or the last certified point ``x`` at ``t < 1``, where
@@ -29,7 +29,7 @@ from .chains import evaluate_chains
 from .iteration import CONVERGED, _integrate, iterate_schur
 from .kernels import closure_residual, copy_into
 from .lie import difference_free_flyer
-from .packing import unpack_constants, unpack_floats, unpack_ints, unpack_work
+from .packing import LENGTH_SCALE, unpack_constants, unpack_floats, unpack_ints, unpack_work
 from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP
 
 rescale = njit(cache=True)(path_rules.rescale)  # the Python follower's rule, compiled
@@ -66,7 +66,7 @@ def _residual(q, ints, floats, work):
     (placements, motions, closure, home), _ = unpack_floats(ints, floats)
     oR, op, J, R, p, E, r = unpack_work(ints, work)[0][:7]
     evaluate_chains(q, placements, kinds, motions, leg_q, leg_v, closure, home, ints[3], platform_v, oR, op, J, R, p)
-    return closure_residual(R, p, ints[0], E, r)[0]
+    return closure_residual(R, p, ints[0], E, r, floats[LENGTH_SCALE])[0]
 
 
 @njit(cache=True, inline="always")  # inlined into batch_kernels.forward_rows: one compiled unit, not two
@@ -99,9 +99,10 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, packe
     scratch = (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3))
     offset = np.zeros(r.shape[0])
     yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
+    intermediate = INTERMEDIATE_TOL * floats[LENGTH_SCALE]  # m, rad: scaled as the tolerance
     # the start's own closure residual: a start off the manifold follows r - (1 - t) r_start
     res = _residual(start, ints, floats, work)
-    shifted = res > INTERMEDIATE_TOL
+    shifted = res > intermediate
     if shifted:
         copy_into(offset, r)
     copy_into(x, start)
@@ -118,7 +119,7 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, packe
             l0 = start[prismatic_q[i]]
             q0[prismatic_q[i]] = l0 + tn * (target[i] - l0)
         scale = 1.0 - tn if shifted else 0.0
-        tol_n = tol if tn == 1.0 else INTERMEDIATE_TOL
+        tol_n = tol if tn == 1.0 else intermediate
         code, it, res, _, theta, kept, certified = iterate_schur(
             q0, q, tol_n, max_iter, sign, offset, scale, yes, ints, floats, work, iwork
         )

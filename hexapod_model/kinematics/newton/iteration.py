@@ -18,7 +18,8 @@ for ball joints) and the two structured problems: one joint held per leg, the pl
 4. with ``certify``: the step's determinant sign equals the start's, it is not shortened and
    the contraction ``|dx_k+1| / |dx_k|`` stays below ``theta_max`` (the certificate of
    :mod:`.assembly`); otherwise the solve stops, ``UNCERTIFIED``;
-5. the step limited to ``max_step`` along its direction (:func:`.kernels.scatter_step`) and
+5. the step limited to ``max_step`` along its direction (:func:`.kernels.scatter_step`; its size,
+   like ``one_step``'s and ``theta_floor``'s, weighted scale-free: the packed step weights) and
    applied on the manifold: ``q_j += dq_j`` for the leg joints, ``M_p <- M_p exp6(v_p)`` for the
    platform (:func:`.lie.integrate_free_flyer`).
 
@@ -46,7 +47,7 @@ from .kernels import (
 )
 from .lie import integrate_free_flyer
 from .outcomes import CONVERGED, FLIPPED, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED
-from .packing import unpack_floats, unpack_ints, unpack_iwork, unpack_work
+from .packing import FHEADER, LENGTH_SCALE, unpack_floats, unpack_ints, unpack_iwork, unpack_work
 from .structured import blocks_solve, schur_solve
 
 
@@ -61,17 +62,19 @@ def _integrate(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat):
 
 
 @njit(cache=True, inline="always")
-def _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state):
+def _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state, length):
     """Solve ``G x = r`` (Schur elimination or blocks); returns the smallest pivot ratio.
 
     ``frames = (J, p, E, r, x)``, ``blocks = (LB, PB, A, M, pm, nb, wb)``. The Schur step leaves
     the determinant sign (``-1`` when singular, as the general path) and the condition bound in
-    ``state``.
+    ``state`` (scale-free with the geometry's ``length`` scale).
     """
     J, p, E, r, x = frames
     LB, PB, A, M, pm, nb, wb = blocks
     if schur:
-        ratio, kappa = schur_solve(J, leg_v, held_pos, platform_v, colmap, rows, p, E, r, x, LB, PB, A, M, pm, nb, wb)
+        ratio, kappa = schur_solve(
+            J, leg_v, held_pos, platform_v, colmap, rows, p, E, r, x, LB, PB, A, M, pm, nb, wb, length
+        )
         state[0], state[1] = (1.0 if ratio > 0.0 else -1.0), kappa
         return abs(ratio)
     return blocks_solve(J, leg_v, colmap, rows, p, E, r, x, LB, PB, wb)
@@ -87,6 +90,8 @@ def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, fl
     """
     rows, platform_q = ints[0], ints[3]
     max_step, singular_ratio, theta_max, theta_floor, one_step = floats[0], floats[1], floats[2], floats[3], floats[4]
+    weights = floats[FHEADER : FHEADER + ints[2]]  # the free velocities' step weights (.packing)
+    length = floats[LENGTH_SCALE]  # the geometry's length scale
     (leg_q, leg_v, platform_v, held_pos, colmap, free_v, kinds), _ = unpack_ints(ints)
     (placements, motions, closure, home), _ = unpack_floats(ints, floats)
     (oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, Rs, ps, quat, state), _ = unpack_work(ints, work)
@@ -99,26 +104,26 @@ def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, fl
         evaluate_chains(
             q, placements, kinds, motions, leg_q, leg_v, closure, home, platform_q, platform_v, oR, op, J, R, p
         )
-        norm, min_trace = closure_residual(R, p, rows, E, r)
+        norm, min_trace = closure_residual(R, p, rows, E, r, length)
         if scale != 0.0:
-            norm = shift_residual(r, offset, scale)
+            norm = shift_residual(r, offset, scale, rows, length)
         if norm <= tol and (it != 1 or previous <= one_step):
             code = CONVERGED
             if min_trace < 1.0:
                 code, certified = FLIPPED, False
             elif it == 0:  # no step factored the Jacobian: check the start itself is not singular
-                ratio = _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state)
+                ratio = _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state, length)
                 if ratio < singular_ratio:
                     code, certified = START_SINGULAR, False
             break
         if it >= max_iter or not norm < np.inf:  # also stops on NaN
             code = NO_CONVERGENCE
             break
-        ratio = _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state)
+        ratio = _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state, length)
         if ratio < singular_ratio:
             code, certified = SINGULAR, False
             break
-        biggest = scatter_step(x, free_v, dv, max_step)
+        biggest = scatter_step(x, free_v, dv, max_step, weights)
         if certify:
             certified = sign == 0.0 or state[0] == sign  # the sign is only known on the Schur path
             sign = sign if sign != 0.0 else state[0]

@@ -25,10 +25,11 @@ from numba import njit
 
 
 @njit(cache=True)
-def closure_residual(R, p, rows, E, r):
+def closure_residual(R, p, rows, E, r, length):
     """Fill ``r`` (6*rows) and ``E`` (6, 3, 3) from the closure frames ``R``, ``p`` (tips, then anchors).
 
-    Returns ``(norm(r), min trace(E))``.
+    Returns ``(norm, min trace(E))``, ``norm`` the residual's norm with its rotation rows (rad)
+    times ``length`` (the geometry's length scale, :func:`.solver.size_of`): metres at that scale.
     """
     min_trace = 3.0
     for i in range(6):
@@ -47,7 +48,8 @@ def closure_residual(R, p, rows, E, r):
                 min_trace = tr
     s = 0.0
     for k in range(r.shape[0]):
-        s += r[k] * r[k]
+        v = r[k] * length if rows == 6 and k % 6 >= 3 else r[k]
+        s += v * v
     return np.sqrt(s), min_trace
 
 
@@ -126,16 +128,17 @@ def copy_into(dst, src):
 
 
 @njit(cache=True)
-def scatter_step(x, free_v, dv, max_step):
+def scatter_step(x, free_v, dv, max_step, weights):
     """Scatter a Newton step into the full velocity space, limited in size.
 
     ``dv[free_v] = -x`` (the Newton step in the full velocity space; held entries stay 0),
-    scaled down, direction kept, so that no entry exceeds ``max_step`` (rad or m). Returns the
-    largest entry of the full step, before shortening.
+    scaled down, direction kept, so that no weighted entry ``weights[k] * |x[k]|`` exceeds
+    ``max_step`` (rad, or m per length scale: :func:`.solver.velocity_weights`). Returns the
+    largest weighted entry of the step, before shortening.
     """
     biggest = 0.0
     for k in range(x.shape[0]):
-        biggest = max(biggest, abs(x[k]))
+        biggest = max(biggest, abs(x[k]) * weights[k])
     scale = 1.0 if biggest <= max_step else max_step / biggest
     for k in range(free_v.shape[0]):
         dv[free_v[k]] = -scale * x[k]
@@ -143,12 +146,13 @@ def scatter_step(x, free_v, dv, max_step):
 
 
 @njit(cache=True)
-def shift_residual(r, offset, scale):
-    """``r -= scale * offset`` (a homotopy from a start that does not close); returns ``norm(r)``."""
+def shift_residual(r, offset, scale, rows, length):
+    """``r -= scale * offset`` (a homotopy from a start that does not close); its norm as :func:`closure_residual`'s."""
     s = 0.0
     for k in range(r.shape[0]):
         r[k] -= scale * offset[k]
-        s += r[k] * r[k]
+        v = r[k] * length if rows == 6 and k % 6 >= 3 else r[k]
+        s += v * v
     return np.sqrt(s)
 
 

@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 
-def closure_residual(R, p, rows, E, r):
-    """Fill ``r``, ``E`` from the closure frames ``R``, ``p``; ``(norm(r), min trace(E))`` as the compiled kernel."""
+def closure_residual(R, p, rows, E, r, length):
+    """Fill ``r``, ``E`` from the closure frames ``R``, ``p``; ``(norm, min trace(E))`` as the compiled kernel."""
     r6 = r.reshape(6, rows)
     r6[:, :3] = p[:6] - p[6:]
     min_trace = 3.0
@@ -25,7 +25,14 @@ def closure_residual(R, p, rows, E, r):
         r6[:, 4] = 0.5 * (E[:, 0, 2] - E[:, 2, 0])
         r6[:, 5] = 0.5 * (E[:, 1, 0] - E[:, 0, 1])
         min_trace = min(3.0, float(np.min(np.trace(E, axis1=1, axis2=2))))
-    return float(np.sqrt(np.sum(r * r))), min_trace
+    return _norm(r, rows, length), min_trace
+
+
+def _norm(r, rows, length):
+    """``norm(r)``, the rotation rows (rad) times ``length``, as :func:`.kernels.closure_residual`."""
+    if rows == 6 and length != 1.0:
+        r = r.reshape(6, rows) * np.array([1.0, 1.0, 1.0, length, length, length])
+    return float(np.sqrt(np.sum(r * r)))
 
 
 def _weights(E):
@@ -65,18 +72,18 @@ def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
         )
 
 
-def scatter_step(x, free_v, dv, max_step):
-    """``dv[free_v] = -x``, shortened so that no entry exceeds ``max_step``; returns ``max |x|``."""
-    biggest = float(np.max(np.abs(x))) if x.size else 0.0
+def scatter_step(x, free_v, dv, max_step, weights):
+    """``dv[free_v] = -x``, shortened so that no ``weights * |x|`` exceeds ``max_step``; returns its largest."""
+    biggest = float(np.max(np.abs(x) * weights)) if x.size else 0.0
     scale = 1.0 if biggest <= max_step else max_step / biggest
     dv[free_v] = -scale * x
     return biggest
 
 
-def shift_residual(r, offset, scale):
-    """``r -= scale * offset`` (a homotopy from a start that does not close); returns ``norm(r)``."""
+def shift_residual(r, offset, scale, rows, length):
+    """``r -= scale * offset`` (a homotopy from a start that does not close); returns its norm as :func:`_norm`."""
     r -= scale * offset
-    return float(np.sqrt(np.sum(r * r)))
+    return _norm(r, rows, length)
 
 
 def _factor(LU, piv):
@@ -154,7 +161,7 @@ def block_solve(G, r, rows, block_cols, LUb, piv, rb, xb, x):
     return min(1.0, ratio)
 
 
-def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w):
+def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w, length):
     """Newton step with each leg eliminated (:func:`.structured.schur_solve`): ``(signed ratio, kappa)``.
 
     The pivot ratios, determinant signs and condition bound come from the same pivoted
@@ -180,7 +187,8 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
         return 0.0, np.inf
     worst = min(worst, ratio)
     sign *= float(_det_signs(M[None], pm[None])[0])
-    kappa = 2.0 * (float(np.sum(M0 * M0)) / 6.0) ** 3 / abs(float(np.prod(np.diagonal(M))))
+    Mw = M0 if length == 1.0 else M0 / np.array([1.0, 1.0, 1.0, length, length, length])  # scale-free
+    kappa = 2.0 * (float(np.sum(Mw * Mw)) / 6.0) ** 3 / abs(float(np.prod(np.diagonal(M)))) * length**3
     v = np.linalg.solve(M0, rhs)
     x[colmap[ff_cols]] = -v
     W = np.linalg.solve(L, -(r6 + A @ v)[..., None])[..., 0]

@@ -19,9 +19,11 @@ all C order):
   (:attr:`.legs.ChainTables.kinds`), then ``prismatic_q`` (6,) (configuration index of each leg's
   prismatic joint) and ``limited`` (nl,) (the configuration indices the limit check reads);
 * ``floats``: the solver's constants ``(max_step, singular_ratio, theta_max, theta_floor,
-  one_step)``, then ``placements`` (6, n, 4, 4), ``motions`` (6, n, 6), ``closure`` (12, 4, 4),
-  ``home`` (4, 4) (:class:`.chains.ChainTables`), then ``lower`` (nl,), ``upper`` (nl,) of the
-  limited joints and the limit check's ``slack`` (1,);
+  one_step, length_scale)`` (:data:`LENGTH_SCALE`: the geometry's, :func:`.solver.size_of`),
+  the free velocities' ``step_weights`` (nf,) (:func:`.solver.velocity_weights`: the step's
+  entries in metres count divided by the length scale), then ``placements`` (6, n, 4, 4),
+  ``motions`` (6, n, 6), ``closure`` (12, 4, 4), ``home`` (4, 4) (:class:`.chains.ChainTables`),
+  then ``lower`` (nl,), ``upper`` (nl,) of the limited joints and the limit check's ``slack`` (1,);
 * ``work``: ``oR`` (6, n, 3, 3), ``op`` (6, n, 3), ``J`` (6, nv), ``R`` (12, 3, 3), ``p`` (12, 3),
   ``E`` (6, 3, 3), ``r`` (6n,), ``x`` (nf,), ``dv`` (nv,), ``G`` (6n, nf), ``LB`` (6, n, n),
   ``A`` (6, n, 6), ``M`` (6, 6), ``nb``, ``wb`` (6,), ``Rs`` (3, 3, 3), ``ps`` (2, 3), ``quat`` (4,),
@@ -40,7 +42,8 @@ from numba import njit
 from .legs import ChainTables
 
 HEADER = 8
-FHEADER = 5
+FHEADER = 6
+LENGTH_SCALE = 5  # index of the geometry's length scale in ``floats`` (after the five step constants)
 #: entries of the per-call ``settings`` array: seven values, then six joint values
 SETTINGS = 13
 WORK_NAMES = tuple("oR op J R p E r x dv G LB A M nb wb Rs ps quat state".split())
@@ -72,7 +75,7 @@ def unpack_ints(ints):
 def unpack_floats(ints, floats):
     """Views ``(placements, motions, closure, home)`` of the float tables, and their end."""
     n = ints[0]
-    o = FHEADER
+    o = FHEADER + ints[2]  # after the step weights
     placements = floats[o : o + 96 * n].reshape((6, n, 4, 4))
     o += 96 * n
     motions = floats[o : o + 36 * n].reshape((6, n, 6))
@@ -143,7 +146,8 @@ class Packed:
 
     Args:
         tables: the leg chains read from the Pinocchio model.
-        constants: ``(max_step, singular_ratio, theta_max, theta_floor, one_step)`` of the solver.
+        constants: ``(max_step, singular_ratio, theta_max, theta_floor, one_step, length_scale)`` of the solver.
+        step_weights: (nf,) weight of each free velocity in the step's size (:func:`.solver.velocity_weights`).
         schur: direct kinematics (Schur elimination); else inverse kinematics (blocks).
         held_pos: held joint of each leg (direct kinematics) or None.
         colmap: column of each velocity in the reduced Jacobian (-1 when held).
@@ -157,6 +161,7 @@ class Packed:
         self,
         tables: ChainTables,
         constants: tuple,
+        step_weights: np.ndarray,
         schur: bool,
         held_pos: np.ndarray | None,
         colmap: np.ndarray,
@@ -168,8 +173,9 @@ class Packed:
         n, nf, nl = tables.placements.shape[1], free_v.size, len(limits[0])
         self.ints = np.zeros(HEADER + 18 * n + 12 + nv + nf + 6 + nl, dtype=np.int64)
         self.ints[:6] = (n, nv, nf, tables.platform_q, int(schur), nl)
-        self.floats = np.zeros(FHEADER + 6 * n * 22 + 12 * 16 + 16 + 2 * nl + 1)
+        self.floats = np.zeros(FHEADER + nf + 6 * n * 22 + 12 * 16 + 16 + 2 * nl + 1)
         self.floats[:FHEADER] = constants
+        self.floats[FHEADER : FHEADER + nf] = step_weights
         self.work = np.zeros(6 * n * (9 + 3 + 1 + nf + n + 6) + 6 * nv + 108 + 36 + 54 + nf + nv + 36 + 12 + 39)
         self.iwork = np.zeros(6 * n + 6, dtype=np.int64)
         # the compiled functions' Python source: the same layout, nothing compiled here

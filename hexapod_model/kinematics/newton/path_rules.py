@@ -10,7 +10,7 @@ from .solver import THETA_MAX
 
 MIN_STEP = 1.0 / 1024  # smallest substep of the readings path before giving up
 MAX_SUBSTEPS = 64
-INTERMEDIATE_TOL = 1e-4  # closure residual of the substeps before the last one
+INTERMEDIATE_TOL = 1e-4  # closure residual (m, rad) of the substeps before the last one, times the length scale
 
 
 def rescale(theta: float, accepted: bool, order: int) -> float:

@@ -9,11 +9,20 @@ The stopping rule is on the closure residual itself (``tol``, mixed metres/radia
 after every step (a warm start 1 ms away takes two steps to 1e-10). A step with an entry
 larger than ``MAX_STEP`` is shortened along its direction: cold starts far from home
 otherwise overshoot into a spurious 180-degree-flipped closure.
+
+The step's size is measured scale-free (:func:`velocity_weights`): its entries in radians as
+they are, those in metres (prismatic joints, the platform's translation) divided by the
+geometry's length scale (:func:`size_of`: the base radius over ``REFERENCE_RADIUS``, to the
+nearest power of two, 1 on the presets). So ``MAX_STEP``, ``_ONE_STEP`` and ``_THETA_FLOOR``
+mean the same on a 1 cm and on a 2 m hexapod. Likewise the residual's norm counts a 6-D
+closure's rotation rows (rad) times the length scale, so that it and the tolerance (scaled by
+the caller, :attr:`.hexapod.Hexapod.default_tol`) are metres at that scale.
 :meth:`NewtonSolver.iterate` also records what :mod:`~hexapod_model.kinematics.assembly` certifies.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,9 +43,47 @@ STATUSES = (
     "invalid_input",
 )
 SINGULAR_PIVOT_RATIO = 1e-13
-MAX_STEP = 0.5  # rad or m: largest entry of one Newton step (cold starts far from the solution)
+#: m: the base radius the solver's constants in metres are stated for (their length scale 1)
+REFERENCE_RADIUS = 0.25
+# The step sizes below are of the weighted step (rad, and m per length scale: velocity_weights)
+MAX_STEP = 0.5  # rad or m at the reference radius: largest entry of one Newton step (cold starts far away)
 THETA_MAX = 0.25  # largest Newton contraction |dx_k+1| / |dx_k| of a checked solve (an estimate, not a bound)
 _THETA_FLOOR, _ONE_STEP = 1e-9, 1e-6  # rounding-level step (no contraction); largest step a solve may end on
+
+
+def size_of(clm: ClosedLoopModel) -> tuple[float, float]:
+    """``(base radius, length scale)`` of a hexapod: what its constants in metres scale by.
+
+    The base radius (m) is the largest horizontal distance of a leg's first joint from the base
+    origin (``REFERENCE_RADIUS`` when all lie on the axis); the length scale is its ratio to
+    ``REFERENCE_RADIUS`` rounded to the nearest power of two (1 on every preset), so that
+    scaling a constant by it is exact.
+    """
+    anchors = np.array([clm.model.jointPlacements[leg.joints[0]].translation for leg in clm.legs])
+    radius = float(np.max(np.linalg.norm(anchors[:, :2], axis=1))) or REFERENCE_RADIUS
+    return radius, length_scale(radius)
+
+
+def length_scale(radius: float) -> float:
+    """``radius`` (m) over ``REFERENCE_RADIUS``, rounded to the nearest power of two (:func:`size_of`)."""
+    return 2.0 ** round(math.log2(radius / REFERENCE_RADIUS))
+
+
+def velocity_weights(clm: ClosedLoopModel, scale: float) -> np.ndarray:
+    """(nv,) weights that make a velocity (or step) scale-free: ``1 / scale`` for entries in metres, else 1.
+
+    Metres: the prismatic joints and the first three (linear) entries of the platform's free
+    flyer; radians: the revolute joints and the free flyer's angular entries.
+    """
+    m = clm.model
+    w = np.ones(m.nv)
+    for j in range(1, m.njoints):
+        joint = m.joints[j]
+        if j == clm.platform_joint:
+            w[joint.idx_v : joint.idx_v + 3] = 1.0 / scale
+        elif joint.shortname().startswith("JointModelP"):  # PX, PY, PZ, PrismaticUnaligned
+            w[joint.idx_v : joint.idx_v + joint.nv] = 1.0 / scale
+    return w
 
 
 @dataclass(frozen=True)
@@ -49,7 +96,8 @@ class Solution:
         lengths: (6,) measured-joint readings, leg order (metres, zero at home).
         status: one of ``STATUSES`` (docs/solver.md says what each means and what to do).
         iterations: Newton steps taken.
-        residual: final closure residual norm (metres and radians mixed).
+        residual: final closure residual norm (metres; a 6-D closure's rotation rows in radians
+            times the geometry's length scale, 1 on the presets).
         jacobian: reduced constraint Jacobian at the final configuration (rows: closures,
             columns: free velocities), or ``None`` if the input was rejected.
         message: human-readable detail when ``status != "converged"`` or a flag is set.
@@ -126,7 +174,9 @@ class NewtonSolver:
             :mod:`~hexapod_model.kinematics.newton.kernel_sets`).
 
     Buffers are allocated once here; :meth:`run` allocates only the new configuration
-    returned by ``pin.integrate``.
+    returned by ``pin.integrate``. ``length_scale`` and ``weights`` (:func:`size_of`,
+    :func:`velocity_weights`) make the step's limits scale-free; ``step_weights`` are the free
+    velocities' ``weights``; ``residual_weights`` weigh the residual's rows in its norm.
     """
 
     #: whether :meth:`iterate` runs as one compiled call (:class:`.compiled_solver.CompiledSolver`)
@@ -148,6 +198,9 @@ class NewtonSolver:
         self.free_v = np.flatnonzero(~held_v).astype(np.int64)
         self.colmap = np.full(self.model.nv, -1, dtype=np.int64)
         self.colmap[self.free_v] = np.arange(self.free_v.size)
+        self.length_scale = size_of(clm)[1]
+        self.weights = velocity_weights(clm, self.length_scale)
+        self.step_weights = np.ascontiguousarray(self.weights[self.free_v])
         nmax = max(len(leg.joints) for leg in clm.legs)
         self.leg_cols = np.full((6, nmax), -1, dtype=np.int64)
         for i, leg in enumerate(clm.legs):
@@ -155,6 +208,10 @@ class NewtonSolver:
             self.leg_cols[i, : len(cols)] = cols
         self.ff_cols = np.arange(clm.platform_v, clm.platform_v + 6, dtype=np.int64)
         self.rows = 6 if clm.kind == "6d" else 3
+        #: (6 rows,) weights of the residual's rows in its norm: 1 (m), the length scale for rotation rows (rad)
+        self.residual_weights = np.tile(
+            [1.0, 1.0, 1.0, self.length_scale, self.length_scale, self.length_scale][: self.rows], 6
+        )
         n_res, n_free = 6 * self.rows, self.free_v.size
         self.square = n_res == n_free
         self.R = np.zeros((12, 3, 3))
@@ -186,7 +243,7 @@ class NewtonSolver:
         if self.held_pos is not None:  # Schur path: arguments bound once (17 attribute loads cost 1 us)
             s = self
             a = [s.J, s.leg_cols, s.held_pos, s.ff_cols, s.colmap, s.rows, s.p, s.E, s.r, s.x, s.LB, s.PB]
-            self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb])
+            self._schur_args = tuple(a + [s.A, s.M, s.pm, s.nb, s.wb, s.length_scale])
             self.iterate(clm.q_home, np.inf, 0)  # converged at once: one Schur step at home
             self.home_sign, self.home_kappa = self.sign, self.kappa
 
@@ -269,7 +326,7 @@ class NewtonSolver:
         self.q_aug[: self.clm.nq] = q
         pin.computeJointJacobians(self.model, self.data, self.q_aug)
         self._frames()
-        self.kernels.closure_residual(self.R, self.p, self.rows, self.E, self.r)
+        self.kernels.closure_residual(self.R, self.p, self.rows, self.E, self.r, self.length_scale)
         self.kernels.jacobian(*self._jac_args)
         return self.r.copy(), self.G.copy()
 
@@ -292,7 +349,8 @@ class NewtonSolver:
         """
         model, data = self.model, self.data
         rows, R, p, E, r, frames = self.rows, self.R, self.p, self.E, self.r, self._frames
-        x, free_v, dv, solve_step = self.x, self.free_v, self.dv, self._solve_step
+        x, free_v, dv, solve_step, weights = self.x, self.free_v, self.dv, self._solve_step, self.step_weights
+        length = self.length_scale
         kernels = self.kernels
         q = self.q_aug
         q[: self.clm.nq] = q0
@@ -301,9 +359,9 @@ class NewtonSolver:
         while True:
             pin.computeJointJacobians(model, data, q)
             frames()
-            norm, min_trace = kernels.closure_residual(R, p, rows, E, r)
+            norm, min_trace = kernels.closure_residual(R, p, rows, E, r, length)  # rotations times length
             if scale != 0.0:
-                norm = kernels.shift_residual(r, offset, scale)
+                norm = kernels.shift_residual(r, offset, scale, rows, length)
             if norm <= tol and (it != 1 or previous <= _ONE_STEP):  # one large step: measure a contraction
                 status = "converged"
                 if min_trace < 1.0:
@@ -322,7 +380,7 @@ class NewtonSolver:
                 status, certified = "singular", False
                 message = f"constraint Jacobian singular (pivot ratio {ratio:.2g} < {SINGULAR_PIVOT_RATIO:g})"
                 break
-            biggest = kernels.scatter_step(x, free_v, dv, MAX_STEP)
+            biggest = kernels.scatter_step(x, free_v, dv, MAX_STEP, weights)  # weighted: scale-free
             if certify:
                 certified = sign == 0.0 or self.sign == sign  # the sign is only known on the Schur path
                 sign = sign or self.sign

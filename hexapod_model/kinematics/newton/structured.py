@@ -78,7 +78,7 @@ def _tip_weights(E, i):
 
 
 @njit(cache=True)
-def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w):
+def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w, length):
     """Newton step when the platform is free and each leg has ``rows`` joints, one held.
 
     Per leg the square block ``L_i`` (all its joints) is factored once; ``n_i`` with
@@ -88,7 +88,8 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
     the step is ``-x``) and returns ``(ratio, kappa)``: the smallest pivot ratio (0 = singular)
     times the sign of ``prod_i det L_i * det M``, which is the sign of ``det G`` up to a
     constant of the layout, and ``2 (|M|_F / sqrt 6)^6 / |det M|``, an upper bound of the 2-norm
-    condition number of ``M`` (Guggenheimer, Edelman and Johnson, 1995) at no extra solve.
+    condition number of ``M`` (Guggenheimer, Edelman and Johnson, 1995) at no extra solve, ``M``'s
+    rotation columns (m/rad) divided by ``length`` (the geometry's length scale): scale-free.
 
     The loops run over ``rows`` and the legs as variables: with them constants (unrolled) a
     Schur step took 15 % less time, but every compiled unit that holds the Newton iteration
@@ -123,7 +124,8 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
     fro2 = 0.0
     for i in range(6):
         for k in range(6):
-            fro2 += M[i, k] * M[i, k]
+            v = M[i, k] / length if k >= 3 else M[i, k]  # rotation columns: scale-free
+            fro2 += v * v
     ratio = _factor(M, pm, 6)
     if ratio == 0.0:
         return 0.0, np.inf
@@ -132,7 +134,7 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
     det = 1.0
     for k in range(6):
         det *= M[k, k]
-    kappa = 2.0 * (fro2 / 6.0) ** 3 / abs(det)
+    kappa = 2.0 * (fro2 / 6.0) ** 3 / abs(det) * (length * length * length)  # det of the weighted M
     v = rhs
     _solve(M, pm, v, 6)
     for k in range(6):
