@@ -83,6 +83,10 @@ class Tracker(PassageMixin):
             :func:`characteristic_length`).
         settings: a :class:`TrackerSettings`; keyword ``options`` replace its fields
             (``noise=50e-6``, ``recover=False``, ...).
+        sensitivity: the evaluator of ``hexa`` to use, with ``length`` (default: one of its own).
+            Its buffers only hold what one step computes, so trackers stepped one after another
+            on one thread may share one (its Pinocchio data is ~3 MB); never trackers stepped on
+            different threads.
 
     A tracker keeps per-stream state and its own solver buffers: one tracker per stream and
     thread (the :class:`Hexapod` may be shared).
@@ -98,6 +102,7 @@ class Tracker(PassageMixin):
         max_iter: int = 20,
         length: float | None = None,
         settings: TrackerSettings | None = None,
+        sensitivity: SensitivityEvaluator | None = None,
         **options,
     ):
         if predictor not in PREDICTORS:
@@ -107,7 +112,9 @@ class Tracker(PassageMixin):
         self.settings = s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
         self.length = characteristic_length(hexa) if length is None else float(length)
         self._motion = MotionModel()
-        self._sens = SensitivityEvaluator(hexa, self.length)
+        if sensitivity is not None and (sensitivity._hexa is not hexa or sensitivity.length != self.length):
+            raise InputError("sensitivity", sensitivity, "expected an evaluator of this hexapod with this length")
+        self._sens = SensitivityEvaluator(hexa, self.length) if sensitivity is None else sensitivity
         clm = hexa.closed_loop
         self._prism_q, self._ff = clm.prismatic_q, slice(clm.platform_v, clm.platform_v + 6)
         self._ffq = slice(clm.platform_q, clm.platform_q + 7)  # the platform's free-flyer coordinates
