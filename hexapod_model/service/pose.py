@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+from operator import itemgetter
 
 import numpy as np
 import pinocchio as pin
@@ -54,7 +55,7 @@ def pose_record(T: np.ndarray) -> dict[str, float]:
 def sample_row(rec: dict) -> tuple:
     """A record as a row of the store's ``samples`` table."""
     pose, flags = rec["pose"], rec["flags"]
-    pose_values = _NO_POSE if pose is None else [pose[k] for k in _POSE_COLUMNS]
+    pose_values = _NO_POSE if pose is None else _pose_columns(pose)
     return (
         rec["fixture"],
         rec["t"],
@@ -67,4 +68,5 @@ def sample_row(rec: dict) -> tuple:
 
 
 _POSE_COLUMNS = ("x", "y", "z", "qx", "qy", "qz", "qw")
+_pose_columns = itemgetter(*_POSE_COLUMNS)
 _NO_POSE = (None,) * 7

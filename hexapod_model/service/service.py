@@ -26,7 +26,7 @@ import can
 from ..analysis.sensitivity import SensitivityEvaluator
 from ..tracking.tracker import characteristic_length
 from .alarms import Acknowledgement
-from .bus import open_bus
+from .bus import open_bus, receiver
 from .changeover import Changeover
 from .config import ServiceConfig, geometry_hash
 from .cycle import FixtureCycle
@@ -332,10 +332,10 @@ class FixtureService:
     def _loop(self) -> None:
         assert self._bus is not None
         tick = min(0.05, max(0.002, min(f.staleness for f in self.config.fixtures) / 2))
-        routes, bus, last_check = self._routes, self._bus, time.time()
+        routes, recv, last_check = self._routes, receiver(self._bus), time.time()
         while not self._stop.is_set():
             try:
-                msg = bus.recv(timeout=tick)
+                msg = recv(tick)
             except (can.CanError, OSError) as exc:
                 log.error("bus: %s", exc)
                 self._stop.wait(tick)

@@ -190,7 +190,10 @@ class Tracker(PassageMixin):
         s = self.settings
         self._ages += 1  # every sample, readable or not, is one period
         self._k += 1
-        l = np.asarray(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
+        if type(lengths) is np.ndarray and lengths.dtype == np.float64:  # the common case, without a trial conversion
+            l = lengths.reshape(-1)
+        else:
+            l = np.asarray(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
         n, m = self._n, self._gap + 1
         checked = l.shape == (6,) and n >= s.settle_samples and m <= s.max_gap + 1
         lhat, w, spread = _NONE, None, 0.0
