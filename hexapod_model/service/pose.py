@@ -48,7 +48,8 @@ def quaternion(R: np.ndarray) -> list[float]:
 def pose_record(T: np.ndarray) -> dict[str, float]:
     """The record's ``pose``: position (m), quaternion and roll-pitch-yaw (deg) of ``T``."""
     R = T[:3, :3]
-    values = T[:3, 3].tolist() + quaternion(R) + np.degrees(pin.rpy.matrixToRpy(R)).tolist()
+    rpy = [math.degrees(a) for a in pin.rpy.matrixToRpy(R).tolist()]  # np.degrees' product, without its dispatch
+    values = T[:3, 3].tolist() + quaternion(R) + rpy
     return dict(zip(POSE_KEYS, values))
 
 

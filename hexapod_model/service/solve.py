@@ -151,7 +151,7 @@ class PoseSolver:
         u = Uncertainty(r.sigma_translation, r.sigma_rotation, r.singularity_margin)
         status = "flagged" if r.flags else "ok"
         sol = r.solution
-        return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, _since(t0), r.legs)
+        return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, time.perf_counter() - t0, r.legs)
 
 
 def _since(t0: float) -> float:
