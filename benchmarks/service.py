@@ -15,9 +15,11 @@ subscriber's call; a backlog counts), and the CPU time
 of the service's threads (cycle + store + HTTP) and of the whole process (feeder included), in
 percent of one core. A rate is *sustained* when at least 99 % of the sets sent are solved and
 the p99 latency stays under 10 ms (no backlog). The machine's other load is part of the figures:
-run it on an idle machine for the capacity. ``--capacity`` also queues the frames of 3 s of
-sets before the cycle thread reads them and prints its CPU per set with no idle gaps (1 x 1000 Hz
-and FIXTURES x 100 Hz): the cost of a set when the thread's caches stay warm.
+run it on an idle machine for the capacity. Each run prints the service's CPU per solved set
+beside the tracker step's and the solve's own (measured first, alone, in this process).
+``--capacity`` also queues the frames of 3 s of sets before the cycle thread reads them and
+prints its CPU per set with no idle gaps (1 x 1000 Hz and FIXTURES x 100 Hz): the cost of a set
+when the thread's caches stay warm.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from __future__ import annotations
 import argparse
 import copy
 import json
+import queue
 import tempfile
 import threading
 import time
@@ -35,7 +38,7 @@ import can
 import numpy as np
 
 from hexapod_model import Hexapod
-from hexapod_model.service import FixtureService, config_from_dict
+from hexapod_model.service import FixtureService, PoseSolver, config_from_dict
 from hexapod_model.service.simconfig import trajectory_sequence
 
 SETS = 2000  # one there-and-back of trajectory A, whatever the rate
@@ -91,44 +94,67 @@ def make_config(fixtures: int, folder: Path):
 def capacity(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, sets: int, folder: Path) -> float:
     """Cycle-thread CPU (us) per set when the frames of ``sets`` periods are queued before they are read.
 
-    No feeder thread and no idle gaps: the thread runs from a full queue, as it would under a
-    sustained load; the frames carry the timestamps of ``rate`` sets per second per fixture.
+    No feeder thread and no idle gaps: every frame is encoded into a queue of its own first, then
+    that queue replaces the receiving bus's at once, so the thread runs from a full queue, as it
+    would under a sustained load; the frames carry the timestamps of ``rate`` sets per second per
+    fixture. (Queued while the thread read them, the frames came slower than the thread took
+    them: the count started late and the thread's CPU included waiting for the producer.)
     """
     channel, config = make_config(fixtures, folder)
     bus = can.Bus(interface="virtual", channel=channel)
     service = FixtureService(config, bus=bus, hexapods={f.name: hexa for f in config.fixtures})
     count = [0]
-    service.subscribe(lambda rec: count.__setitem__(0, count[0] + 1))
+    service.subscribe(lambda rec: count.__setitem__(0, count[0] + (rec["status"] != "silent_leg")))
     wall = time.time()
 
-    def queue(k0: int, k1: int) -> None:
+    def frames(k0: int, k1: int) -> queue.Queue:
+        q: queue.Queue = queue.Queue()
         for k in range(k0, k1):
             for fl in (f.legs for f in config.fixtures):
                 for j, leg in enumerate(fl):
                     m = leg.message(float(readings[k % len(readings), j]))
                     m.timestamp = wall + k / rate + j * 130e-6
-                    bus.queue.put(m)
+                    q.put(m)
+        return q
 
     def settle(target: float) -> None:
         end = time.monotonic() + 60.0
         while count[0] < target and time.monotonic() < end:
-            time.sleep(0.01)
+            time.sleep(0.002)
 
-    warm = 200
-    queue(0, warm)
+    warm, receiving = 200, bus.queue
+    bus.queue = frames(0, warm)
     service.start()
     try:
-        settle(0.98 * warm * fixtures)  # warm-up: caches, first solves
-        time.sleep(0.2)
+        settle(warm * fixtures)  # warm-up: caches, first solves
+        full = frames(warm, warm + sets)
         clock = time.pthread_getcpuclockid(service._thread.ident)
-        queue(warm, warm + sets)
         r0, c0 = count[0], time.clock_gettime(clock)
-        settle(r0 + 0.99 * sets * fixtures)
+        bus.queue = full  # the thread's next read takes from the full queue
+        settle(r0 + sets * fixtures)
         done, cpu = count[0] - r0, time.clock_gettime(clock) - c0
     finally:
         service.stop()
+        bus.queue = receiving
         bus.shutdown()
     return 1e6 * cpu / max(done, 1)
+
+
+def solve_cost(hexa: Hexapod, readings: np.ndarray, noise: float = 10e-6) -> tuple[float, float]:
+    """CPU (us) a set of the tracker's step (solve, checks, uncertainty) and of the solve alone (``forward``)."""
+    solver = PoseSolver(hexa, noise)
+    for k in range(200):
+        solver.step(readings[k], k)
+    c0 = time.thread_time()
+    for k in range(200, len(readings)):
+        solver.step(readings[k], k)
+    c1 = time.thread_time()
+    q, tol = hexa.q_home, solver.tracker.tol
+    for k in range(200, len(readings)):
+        q = hexa.forward(readings[k], guess=q, tol=tol, max_iter=20, check=False).q
+    c2 = time.thread_time()
+    n = len(readings) - 200
+    return 1e6 * (c1 - c0) / n, 1e6 * (c2 - c1) / n
 
 
 def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> dict:
@@ -211,6 +237,7 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         "latency_ms_median": float(np.median(lat)) if records else float("nan"),
         "latency_ms_p99": float(np.percentile(lat, 99)) if records else float("nan"),
         "service_cpu_pct": 100.0 * (c1 - c0) / fed,  # CPU per second of stream, backlog included
+        "service_cpu_us_per_set": 1e6 * (c1 - c0) / max(records, 1),
         "process_cpu_pct": 100.0 * (p1 - p0) / fed,
         "sustained": records >= 0.99 * sent[0] * fixtures and records > 0 and float(np.percentile(lat, 99)) < 10.0,
     }
@@ -220,7 +247,8 @@ def line(r: dict) -> str:
     return (
         f"{r['fixtures']:3d} x {r['rate_hz']:6.0f} Hz  sets {r['sets_sent']:7d}  solved {r['records']:7d}  "
         f"latency median {r['latency_ms_median']:6.2f} ms  p99 {r['latency_ms_p99']:7.2f} ms  "
-        f"CPU service {r['service_cpu_pct']:5.1f} %  process {r['process_cpu_pct']:5.1f} %  "
+        f"CPU service {r['service_cpu_pct']:5.1f} % ({r['service_cpu_us_per_set']:4.0f} us a set)  "
+        f"process {r['process_cpu_pct']:5.1f} %  "
         f"{'sustained' if r['sustained'] else 'NOT sustained'}  {r['statuses']}"
     )
 
@@ -238,6 +266,12 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     hexa = Hexapod.from_preset("reference")
     readings = readings_sequence(hexa)
+    step_us, solve_us = solve_cost(hexa, readings)
+    print(
+        f"a set alone: tracker step {step_us:.0f} us CPU (solve, checks, uncertainty), of which the solve "
+        f"(forward) {solve_us:.0f} us; load average {Path('/proc/loadavg').read_text().split()[0]}",
+        flush=True,
+    )
     reports = []
     with tempfile.TemporaryDirectory() as tmp:
         for n, rates in ((1, args.one), (args.fixtures, args.many)):
@@ -250,6 +284,7 @@ def main(argv=None) -> int:
                 share = us * n * rate / 1e4  # percent of one core at that rate
                 print(
                     f"capacity {n:3d} x {rate:6.0f} Hz  cycle thread CPU {us:5.0f} us a set  ({share:.0f} % of a core)"
+                    f"  against the solve's {solve_us:.0f} us and the tracker step's {step_us:.0f} us"
                 )
     for n in (1, args.fixtures):
         ok = [r["rate_hz"] for r in reports if r["fixtures"] == n and r["sustained"]]

@@ -32,6 +32,7 @@ from dataclasses import replace
 import numpy as np
 import pinocchio as pin
 
+from ..analysis.sensitivity import SensitivityEvaluator
 from ..kinematics.hexapod import Hexapod
 from .alarms import UNACKNOWLEDGED, Acknowledgement, FaultLatch, LatchedFault
 from .cell import InRobot
@@ -74,9 +75,19 @@ class FixtureCycle:
         geometry_hash: of ``hexa`` (stored with every lock).
         recovered: the last stored lock event of this fixture, or None.
         t0: start time (s, Unix), the ``t`` of the first ``no_data`` record.
+        sensitivity: an evaluator of ``hexa`` shared with the other cycles run on the same thread
+            (default: one of its own; see :class:`~hexapod_model.service.solve.PoseSolver`).
     """
 
-    def __init__(self, cfg: FixtureConfig, hexa: Hexapod, geometry_hash: str, recovered: LockEvent | None, t0: float):
+    def __init__(
+        self,
+        cfg: FixtureConfig,
+        hexa: Hexapod,
+        geometry_hash: str,
+        recovered: LockEvent | None,
+        t0: float,
+        sensitivity: SensitivityEvaluator | None = None,
+    ):
         self.cfg, self.hexa, self.geometry_hash = cfg, hexa, geometry_hash
         self.layout = cfg.legs[0].layout
         self._unpack, self._min_length = self.layout.unpack, self.layout.length
@@ -120,7 +131,7 @@ class FixtureCycle:
             self.recovery = "stored lock pose not used: solved with another geometry (hash differs)"
         self._check_moved = self.recovered is not None
         initial = None if self.recovered is None else self.recovered.q
-        self.solver = PoseSolver(hexa, cfg.noise, cfg.predictor, initial, cfg.confirm_samples)
+        self.solver = PoseSolver(hexa, cfg.noise, cfg.predictor, initial, cfg.confirm_samples, sensitivity)
         #: the changeover target (set by :class:`~hexapod_model.service.changeover.Changeover`): a lock
         #: pose within its tolerance is stored naming it
         self.target: Target | None = None
@@ -214,10 +225,12 @@ class FixtureCycle:
 
     def _set_flags(self, flags: list[str]) -> list[str]:
         """``flags`` plus the set's duplicate and late frames (then forgotten)."""
-        flags += [f"duplicate:leg{k + 1}" for k in sorted(self._duplicate)]
-        flags += [f"late_frame:leg{k + 1}" for k in sorted(self._late)]
-        self._duplicate.clear()
-        self._late.clear()
+        if self._duplicate:
+            flags += [f"duplicate:leg{k + 1}" for k in sorted(self._duplicate)]
+            self._duplicate.clear()
+        if self._late:
+            flags += [f"late_frame:leg{k + 1}" for k in sorted(self._late)]
+            self._late.clear()
         return flags
 
     def check_silence(self, now: float) -> dict | None:
@@ -381,8 +394,12 @@ class FixtureCycle:
             elif status == "ok":
                 status = "flagged"
                 flags.append("near_singular")
-        old = t - self.cfg.staleness
-        fresh = [None if v != v or self._t[k] < old else v for k, v in enumerate(self._readings)]  # v != v: NaN
+        old, readings = t - self.cfg.staleness, self._readings
+        total = sum(readings)  # NaN when a reading is (readings are finite otherwise)
+        if total == total and min(self._t) >= old:  # every reading fresh: the common case
+            fresh: list[float | None] = list(readings)
+        else:
+            fresh = [None if v != v or self._t[k] < old else v for k, v in enumerate(readings)]  # v != v: NaN
         locked = self.lock.state == "locked"
         record = {
             "fixture": self.cfg.name,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+from operator import itemgetter
 
 import numpy as np
 import pinocchio as pin
@@ -47,14 +48,15 @@ def quaternion(R: np.ndarray) -> list[float]:
 def pose_record(T: np.ndarray) -> dict[str, float]:
     """The record's ``pose``: position (m), quaternion and roll-pitch-yaw (deg) of ``T``."""
     R = T[:3, :3]
-    values = T[:3, 3].tolist() + quaternion(R) + np.degrees(pin.rpy.matrixToRpy(R)).tolist()
+    rpy = [math.degrees(a) for a in pin.rpy.matrixToRpy(R).tolist()]  # np.degrees' product, without its dispatch
+    values = T[:3, 3].tolist() + quaternion(R) + rpy
     return dict(zip(POSE_KEYS, values))
 
 
 def sample_row(rec: dict) -> tuple:
     """A record as a row of the store's ``samples`` table."""
     pose, flags = rec["pose"], rec["flags"]
-    pose_values = _NO_POSE if pose is None else [pose[k] for k in _POSE_COLUMNS]
+    pose_values = _NO_POSE if pose is None else _pose_columns(pose)
     return (
         rec["fixture"],
         rec["t"],
@@ -67,4 +69,5 @@ def sample_row(rec: dict) -> tuple:
 
 
 _POSE_COLUMNS = ("x", "y", "z", "qx", "qy", "qz", "qw")
+_pose_columns = itemgetter(*_POSE_COLUMNS)
 _NO_POSE = (None,) * 7

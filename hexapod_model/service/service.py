@@ -23,8 +23,10 @@ from typing import TYPE_CHECKING, Any
 
 import can
 
+from ..analysis.sensitivity import SensitivityEvaluator
+from ..tracking.tracker import characteristic_length
 from .alarms import Acknowledgement
-from .bus import open_bus
+from .bus import open_bus, receiver
 from .changeover import Changeover
 from .config import ServiceConfig, geometry_hash
 from .cycle import FixtureCycle
@@ -141,16 +143,25 @@ class FixtureService:
         """Hexapods, store, recovered locks, kernels; then the store writer and the cycle thread."""
         cfg = self.config
         self.phase = "loading the hexapods"
+        loaded: dict[str, Any] = {}  # fixtures naming one file share its hexapod (a model is ~6 MB)
         for f in cfg.fixtures:
             if f.name not in self.hexapods:
-                self.hexapods[f.name] = f.load_hexapod()
+                if f.hexapod not in loaded:
+                    loaded[f.hexapod] = f.load_hexapod()
+                self.hexapods[f.name] = loaded[f.hexapod]
         self.phase = "opening the store"
         store = Store(cfg.store.path, cfg.store.samples)
         try:
             cycles = {}
+            hashes: dict[int, str] = {}
+            evaluators: dict[int, SensitivityEvaluator] = {}  # one per hexapod: every cycle runs on one thread
             for f in cfg.fixtures:
                 hexa = self.hexapods[f.name]
-                cycles[f.name] = FixtureCycle(f, hexa, geometry_hash(hexa), store.last_lock(f.name), self._started)
+                if id(hexa) not in hashes:
+                    hashes[id(hexa)] = geometry_hash(hexa)
+                    evaluators[id(hexa)] = SensitivityEvaluator(hexa, characteristic_length(hexa))
+                last = store.last_lock(f.name)
+                cycles[f.name] = FixtureCycle(f, hexa, hashes[id(hexa)], last, self._started, evaluators[id(hexa)])
                 log.info("fixture %s: %s", f.name, cycles[f.name].recovery)
             self.phase = "compiling the solver's kernels"
             self._warm_up()
@@ -321,10 +332,10 @@ class FixtureService:
     def _loop(self) -> None:
         assert self._bus is not None
         tick = min(0.05, max(0.002, min(f.staleness for f in self.config.fixtures) / 2))
-        routes, bus, last_check = self._routes, self._bus, time.time()
+        routes, recv, last_check = self._routes, receiver(self._bus), time.time()
         while not self._stop.is_set():
             try:
-                msg = bus.recv(timeout=tick)
+                msg = recv(tick)
             except (can.CanError, OSError) as exc:
                 log.error("bus: %s", exc)
                 self._stop.wait(tick)

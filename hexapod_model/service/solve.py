@@ -21,7 +21,7 @@ judge every sample against the configured reading noise; see docs/evaluate.md).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -33,9 +33,10 @@ from ..tracking.tracker import Tracker, characteristic_length
 _UNREADABLE = np.full(6, np.nan)
 
 
-@dataclass(frozen=True)
-class Uncertainty:
+class Uncertainty(NamedTuple):
     """Noise-propagated 1-sigma pose uncertainty and the distance from a singularity.
+
+    Immutable records made once per reading set (tuples: a third of a frozen dataclass's cost).
 
     Attributes:
         translation: RMS length of the position error (m).
@@ -48,9 +49,8 @@ class Uncertainty:
     margin: float
 
 
-@dataclass(frozen=True)
-class SolveOutcome:
-    """One solved reading set.
+class SolveOutcome(NamedTuple):
+    """One solved reading set (an immutable record, as :class:`Uncertainty`).
 
     Attributes:
         pose: 4x4 base -> platform (m), or ``None`` when the solve failed.
@@ -85,14 +85,29 @@ class PoseSolver:
         initial: configuration ``q`` to start from (a recovered lock pose); default home.
         confirm_samples: kept for configuration compatibility; the tracker's own checks decide
             when a doubt clears.
+        sensitivity: the tracker's evaluator (see :class:`~hexapod_model.tracking.tracker.Tracker`),
+            also used for poses outside the stream; solvers stepped on one thread may share one
+            (its Pinocchio data is ~3 MB); default: one of its own.
     """
 
-    def __init__(self, hexa: Hexapod, noise: float, predictor: str = "eq22", initial=None, confirm_samples: int = 5):
+    def __init__(
+        self,
+        hexa: Hexapod,
+        noise: float,
+        predictor: str = "eq22",
+        initial=None,
+        confirm_samples: int = 5,
+        sensitivity: SensitivityEvaluator | None = None,
+    ):
         self.hexa, self.noise, self.confirm_samples = hexa, float(noise), confirm_samples
         self.length = characteristic_length(hexa)
+        if sensitivity is None:
+            sensitivity = SensitivityEvaluator(hexa, self.length)
         q0 = hexa.q_home if initial is None else np.asarray(initial, dtype=float)
-        self.tracker = Tracker(hexa, predictor, initial=q0, length=self.length, noise=self.noise)
-        self._sens = SensitivityEvaluator(hexa, self.length)  # for poses outside the stream
+        self.tracker = Tracker(
+            hexa, predictor, initial=q0, length=self.length, noise=self.noise, sensitivity=sensitivity
+        )
+        self._sens = sensitivity  # for poses outside the stream, between two steps
         self._instant: int | None = None  # of the last set given to the tracker
 
     def propagation(self, q: np.ndarray) -> np.ndarray:
@@ -136,7 +151,7 @@ class PoseSolver:
         u = Uncertainty(r.sigma_translation, r.sigma_rotation, r.singularity_margin)
         status = "flagged" if r.flags else "ok"
         sol = r.solution
-        return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, _since(t0), r.legs)
+        return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, time.perf_counter() - t0, r.legs)
 
 
 def _since(t0: float) -> float:

@@ -83,6 +83,10 @@ class Tracker(PassageMixin):
             :func:`characteristic_length`).
         settings: a :class:`TrackerSettings`; keyword ``options`` replace its fields
             (``noise=50e-6``, ``recover=False``, ...).
+        sensitivity: the evaluator of ``hexa`` to use, with ``length`` (default: one of its own).
+            Its buffers only hold what one step computes, so trackers stepped one after another
+            on one thread may share one (its Pinocchio data is ~3 MB); never trackers stepped on
+            different threads.
 
     A tracker keeps per-stream state and its own solver buffers: one tracker per stream and
     thread (the :class:`Hexapod` may be shared).
@@ -98,6 +102,7 @@ class Tracker(PassageMixin):
         max_iter: int = 20,
         length: float | None = None,
         settings: TrackerSettings | None = None,
+        sensitivity: SensitivityEvaluator | None = None,
         **options,
     ):
         if predictor not in PREDICTORS:
@@ -107,7 +112,9 @@ class Tracker(PassageMixin):
         self.settings = s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
         self.length = characteristic_length(hexa) if length is None else float(length)
         self._motion = MotionModel()
-        self._sens = SensitivityEvaluator(hexa, self.length)
+        if sensitivity is not None and (sensitivity._hexa is not hexa or sensitivity.length != self.length):
+            raise InputError("sensitivity", sensitivity, "expected an evaluator of this hexapod with this length")
+        self._sens = SensitivityEvaluator(hexa, self.length) if sensitivity is None else sensitivity
         clm = hexa.closed_loop
         self._prism_q, self._ff = clm.prismatic_q, slice(clm.platform_v, clm.platform_v + 6)
         self._ffq = slice(clm.platform_q, clm.platform_q + 7)  # the platform's free-flyer coordinates
@@ -115,11 +122,12 @@ class Tracker(PassageMixin):
         self.home_condition = home.condition_number
         self.cond_limit = float(s.cond_limit) if s.cond_limit is not None else s.cond_factor * self.home_condition
         self._hist: deque[np.ndarray] = deque(maxlen=s.window)
-        self._L = np.zeros((s.window, 6))
-        self._F = np.zeros((s.window, 7))  # free-flyer coordinates of _hist, newest first
+        self._Lr, self._Fr = _NewestFirst(s.window, 6), _NewestFirst(s.window, 7)
+        self._L = self._Lr.rows  # readings of the trusted samples, newest first
+        self._F = self._Fr.rows  # free-flyer coordinates of _hist, newest first
         self._e = np.zeros(6)  # the branch check's residual
         self._z = np.zeros(6)  # the sample's normalised innovations
-        self._ages = np.zeros(s.window, dtype=np.int64)  # samples since each trusted one
+        self._born: list[int] = [0] * s.window  # sample number of each trusted one, newest first
         self._raw: deque[np.ndarray] = deque(maxlen=s.stuck_samples + _STUCK_LOOKBACK)
         self._calm: deque[tuple[int, np.ndarray, np.ndarray]] = deque(maxlen=_BEFORE)  # certified, not near-singular
         self._sens_b: SensitivityEvaluator | None = None  # for the candidates of a passage
@@ -163,12 +171,11 @@ class Tracker(PassageMixin):
     def _push_trusted(self, q: np.ndarray) -> None:
         if self._n > 0 or len(self._hist) > 1 or self._hist[0] is not q:
             self._hist.appendleft(q)
-            self._F[1:] = self._F[:-1].copy()
-            self._F[0] = q[self._ffq]
-        self._L[1:] = self._L[:-1].copy()
-        self._L[0] = q[self._prism_q]
-        self._ages[1:] = self._ages[:-1].copy()
-        self._ages[0] = 0
+            self._F = self._Fr.push(q[self._ffq])
+        self._L = self._Lr.push(q[self._prism_q])
+        born = self._born
+        born.insert(0, self._k)  # age 0 now, one more at each sample
+        born.pop()
         self._n = min(self._n + 1, self.settings.window)
         self._gap = 0
         self._doubt = False
@@ -181,14 +188,17 @@ class Tracker(PassageMixin):
         """
         t0 = time.perf_counter()
         s = self.settings
-        self._ages += 1  # every sample, readable or not, is one period
-        self._k += 1
-        l = np.asarray(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
+        self._k += 1  # every sample, readable or not, is one period: ages are counted from here
+        if type(lengths) is np.ndarray and lengths.dtype == np.float64:  # the common case, without a trial conversion
+            l = lengths.reshape(-1)
+        else:
+            l = np.asarray(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
         n, m = self._n, self._gap + 1
         checked = l.shape == (6,) and n >= s.settle_samples and m <= s.max_gap + 1
         lhat, w, spread = _NONE, None, 0.0
         if checked:
-            w, spread = self._motion.weights(tuple(self._ages[:n].tolist()))
+            k = self._k
+            w, spread = self._motion.weights(tuple([k - b for b in self._born[:n]]))
             lhat = w @ self._L[:n]
         # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
         last = self._raw[-1] if self._raw else _NONE
@@ -395,6 +405,33 @@ class Tracker(PassageMixin):
             sol = Solution(self.hexa.pose_of(q), q.copy(), l.copy(), status, 0, math.nan, None, message)
         nan = math.nan
         return TrackResult(sol, status, flags, legs, nan, nan, nan, nan, nan, time.perf_counter() - t0)
+
+
+class _NewestFirst:
+    """A (window, cols) array of rows, newest first, that a push shifts without copying it.
+
+    The rows live in a buffer twice as tall: :attr:`rows` is the window starting at the newest
+    row; a push writes one row above it, and only when the buffer's top is reached the window is
+    copied back to the bottom half (one copy every ``window`` pushes instead of one per push).
+    """
+
+    def __init__(self, window: int, cols: int):
+        self._buf = np.zeros((2 * window, cols))
+        self._window = self._top = window
+        #: the rows, newest first (a view; a push replaces it)
+        self.rows = self._buf[window:]
+
+    def push(self, row: np.ndarray) -> np.ndarray:
+        """Put ``row`` first (the oldest row leaves the window); returns the new :attr:`rows`."""
+        top, window = self._top, self._window
+        if top == 0:
+            self._buf[window:] = self._buf[:window]
+            top = window
+        top -= 1
+        self._buf[top] = row
+        self._top = top
+        self.rows = self._buf[top : top + window]
+        return self.rows
 
 
 def _numeric(values) -> bool:

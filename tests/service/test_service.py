@@ -220,3 +220,13 @@ def test_a_health_section_with_an_error_degrades_the_service(tmp_path):
         health = svc.health()
     assert health["status"] == "degraded" and "bridge: peer gone" in health["problems"]
     assert health["bridge"] == {"error": "peer gone", "sent": 3}
+
+
+def test_fixtures_naming_one_hexapod_share_its_model_and_sensitivity_buffers(tmp_path):
+    """Two fixtures of one geometry file: one Hexapod and one evaluator (~6 MB and ~3 MB a fixture otherwise)."""
+    config = service_config(tmp_path, [fixture_table("left"), fixture_table("right", 1)])
+    with FixtureService(config, bus=can.Bus(interface="virtual", channel=config.bus.channel), http=False) as service:
+        assert service.hexapods["left"] is service.hexapods["right"]
+        left, right = (service.cycles[name].solver for name in ("left", "right"))
+        assert left.tracker._sens is right.tracker._sens is left._sens
+        assert left.tracker is not right.tracker

@@ -96,3 +96,15 @@ def test_a_failed_solve_reports_no_pose_and_tracking_restarts():
     after = [solver.step(r) for r in L[1:]]
     settle = solver.tracker.settings.settle_samples
     assert all(o.status == "ok" for o in after[settle:]) and all(o.pose is not None for o in after)
+
+
+def test_pose_record_angles_are_numpy_degrees_of_pinocchio_rpy_bit_for_bit():
+    """The record's roll, pitch, yaw (deg): the same product as ``np.degrees`` (x * 180/pi), on floats."""
+    from hexapod_model.service.pose import pose_record
+
+    rng = np.random.default_rng(7)
+    for _ in range(2000):
+        T = np.eye(4)
+        T[:3, :3] = pin.exp3(rng.normal(size=3) * rng.uniform(0.0, 3.0))
+        rec = pose_record(T)
+        assert [rec["roll"], rec["pitch"], rec["yaw"]] == np.degrees(pin.rpy.matrixToRpy(T[:3, :3])).tolist()

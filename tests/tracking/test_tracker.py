@@ -225,3 +225,25 @@ def test_motion_model_weights_extrapolate_quadratics_exactly():
         assert w @ (3.0 - 2.0 * a + 0.5 * a**2) == pytest.approx(3.0)
         assert spread == pytest.approx(np.sqrt(1 + w @ w)) and w.sum() == pytest.approx(1.0)
     assert mm.weights((1, 2, 3))[1] == pytest.approx(np.sqrt(20.0))  # l^ = 3 l0 - 3 l1 + l2
+
+
+def test_trackers_stepped_in_turn_on_one_thread_may_share_an_evaluator(reference):
+    """Two streams stepped alternately with one shared SensitivityEvaluator give, bit for bit, what
+    each gives with its own (same code path): a step leaves nothing in the evaluator that the next reads."""
+    from hexapod_model.analysis.sensitivity import SensitivityEvaluator
+    from hexapod_model.tracking.tracker import characteristic_length
+
+    rng = np.random.default_rng(5)
+    ramps = [np.linspace(0.0, 0.004, 60)[:, None] * rng.uniform(-1, 1, 6) for _ in range(2)]
+    ramps = [r + rng.normal(0.0, 1e-6, r.shape) for r in ramps]
+    alone = [Tracker(reference, noise=1e-6) for _ in ramps]
+    shared_eval = SensitivityEvaluator(reference, characteristic_length(reference))
+    shared = [Tracker(reference, noise=1e-6, sensitivity=shared_eval) for _ in ramps]
+    for k in range(60):
+        for i, r in enumerate(ramps):
+            a, b = alone[i].step(r[k]), shared[i].step(r[k])
+            assert a.flags == b.flags and a.status == b.status
+            np.testing.assert_array_equal(a.solution.q, b.solution.q)
+            assert (a.sigma_translation, a.condition_number) == (b.sigma_translation, b.condition_number)
+    with pytest.raises(hm.InputError):
+        Tracker(reference, length=1.0, sensitivity=shared_eval)
