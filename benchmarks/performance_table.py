@@ -58,11 +58,22 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
     return [
         (
             f"pose service, {r['fixtures']} fixture(s) × {r['rate_hz']:.0f} Hz",
-            f"{r['service_cpu_pct']:.0f} % of a core, latency median {r['latency_ms_median']:.2f} ms, "
-            f"p99 {r['latency_ms_p99']:.1f} ms, {'sustained' if r['sustained'] else 'not sustained'}",
+            f"{r['service_cpu_pct']:.0f} % of a core ({r['service_cpu_us_per_set']:.0f} µs a set), latency median "
+            f"{r['latency_ms_median']:.2f} ms, p99 {r['latency_ms_p99']:.1f} ms, "
+            f"{'sustained' if r['sustained'] else 'not sustained'}",
         )
         for r in data
     ]
+
+
+def memory_rows(data: list[dict]) -> list[tuple[str, str]]:
+    """``service_memory.py``: the pose service's peak memory per fixture count, and per extra fixture."""
+    rows = [(f"pose service, {r['fixtures']} fixture(s): peak RSS", f"{r['peak_mb']:.0f} MB") for r in data]
+    if len(data) > 1:
+        lo, hi = data[0], data[-1]
+        per = (hi["peak_mb"] - lo["peak_mb"]) / (hi["fixtures"] - lo["fixtures"])
+        rows.append(("pose service: peak RSS per extra fixture", f"{per:.1f} MB"))
+    return rows
 
 
 def calibration_rows(data: dict) -> list[tuple[str, str]]:
@@ -127,10 +138,11 @@ BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str
         calibration_rows,
     ),
     (
-        ["service.py", "--seconds", "2", "--one", "1000", "--many", "100"],
+        ["service.py", "--seconds", "2", "--one", "1000", "--many", "100", "--fixtures", "50"],
         ["service.py"],
         service_rows,
     ),
+    (["service_memory.py", "--fixtures", "1,20", "--sets", "100"], ["service_memory.py"], memory_rows),
 ]
 
 
