@@ -3,7 +3,7 @@
 For hexapods whose six legs are chains of ``rows`` one-dof joints (6 for ``6d`` closures, 3
 for ball joints) and the two structured problems: one joint held per leg, the platform free
 (direct kinematics: the Schur elimination of :func:`.structured.schur_solve`), or the platform held
-(inverse kinematics: the blocks of :func:`.structured.blocks_solve`). :func:`iterate` is
+(inverse kinematics: the blocks of :func:`.structured.blocks_solve`). :func:`_newton` is
 :meth:`.solver.NewtonSolver.iterate` with Pinocchio replaced by :mod:`.chains`; per iteration:
 
 1. closure frames and WORLD Jacobian columns at ``q`` (:func:`.chains.evaluate_chains`);
@@ -26,7 +26,10 @@ The entries called from Python are :func:`solve_schur` and :func:`solve_blocks` 
 and with ``finish`` the Jacobian, pose and limit check a ``Solution`` needs), four arguments
 each: the start, the homotopy offset, the per-call settings and the packed arrays
 (:mod:`.packing`); the compiled loops of :mod:`.follow` and :mod:`.batch_kernels` call
-:func:`iterate_schur` / :func:`iterate_blocks`. :class:`.compiled.CompiledSolver` is the solver object on top.
+:func:`iterate_schur` / :func:`iterate_blocks`. :class:`.compiled.CompiledSolver` is the solver
+object on top. Each entry holds the iteration once (:func:`_entries`): numba copies an inlined
+function's IR at each call site and compiles a called one into every caller's unit again, so
+the first solve after installation compiles what it runs once.
 """
 
 from __future__ import annotations
