@@ -73,3 +73,30 @@ def test_the_command_line_shows_the_line_on_a_terminal_only():
     )
     piped = subprocess.run([sys.executable, "-c", _ANNOUNCE], capture_output=True, text=True, check=True)
     assert piped.stderr == ""
+
+
+def test_the_collector_runs_less_while_numba_compiles_and_as_before_after():
+    import gc
+
+    from numba import njit
+    from numba.core import event
+
+    first_compile.collect_less()
+    seen = []
+
+    class Probe(event.Listener):  # registered after collect_less's listener: sees the threshold it set
+        def on_start(self, ev):
+            seen.append(gc.get_threshold()[0])
+
+        def on_end(self, ev):
+            pass
+
+    before = gc.get_threshold()
+    with event.install_listener("numba:compile", Probe()):
+        assert njit(lambda x: x + 1)(1) == 2  # not cached: compiles
+        try:
+            njit(lambda x: x.no_such_attribute)(1)  # a compilation that fails
+        except Exception:
+            pass
+    assert seen == [max(before[0], first_compile.COMPILING_GC_THRESHOLD)] * 2
+    assert gc.get_threshold() == before
