@@ -25,7 +25,7 @@ LOGGER = "hexapod_model.compile"
 ENTRIES = {
     "solve_schur": ("direct kinematics", 12),
     "solve_blocks": ("inverse kinematics", 6),
-    "forward_rows": ("the direct-kinematics batch loop", 15),
+    "forward_rows": ("the direct-kinematics batch loop", 13),
     "inverse_rows": ("the inverse-kinematics batch loop", 8),
     "follow": ("the readings path", 12),
 }
