@@ -7,14 +7,18 @@ installation, compiling every kernel it calls) and, each in a fresh process with
 the CPU time of the first compiled solve (``Hexapod.from_preset("reference")``, then one
 ``forward``, then one ``inverse``, then a 3-row ``forward_batch``; numba and the package already
 imported) beside the compilation of the reference floor (``floor_newton.py``: the same iteration
-as one njit function, its first solve), and their ratio.
+as one njit function, its first solve), and their ratio. ``--phases`` also splits the first
+forward's and the floor's compile CPU by numba pass (type inference, inlining, lowering) and LLVM
+(optimisation and machine code, under numba's LLVM lock), and by compiled function (exclusive:
+what a function's own passes cost, its callees not counted).
 
-    python benchmarks/startup.py [--runs 7] [--cold] [-- hexapod fk reference docs/examples/lengths.csv]
+    python benchmarks/startup.py [--runs 7] [--cold] [--phases] [-- hexapod fk reference docs/examples/lengths.csv]
 """
 
 from __future__ import annotations
 
 import argparse
+import collections
 import json
 import os
 import shutil
@@ -61,6 +65,72 @@ assert norm <= 1e-12
 print(t1 - t0)
 """
 
+PHASES = """
+import collections, json, sys, time
+import numpy as np, numba
+import numba.core.event as ev
+import hexapod_model as hm
+stack, passes, functions = [], collections.Counter(), collections.Counter()
+class Timer(ev.Listener):
+    def __init__(self, llvm):
+        self.llvm = llvm
+    def on_start(self, event):
+        if self.llvm:
+            key = ("LLVM", stack[-1][0][1] if stack else "?")
+        else:
+            key = (event.data["name"].split(" [")[0], event.data["qualname"].split(".")[-1])
+        stack.append([key, time.process_time(), 0.0])
+    def on_end(self, event):
+        key, t0, inner = stack.pop()
+        dt = time.process_time() - t0
+        if stack:
+            stack[-1][2] += dt
+        passes[key[0]] += dt - inner
+        functions[key[1]] += dt - inner
+def first():
+    if sys.argv[1] == "floor":
+        sys.path.insert(0, sys.argv[2])
+        import floor_newton as f
+        from hexapod_model.kinematics.newton.solver import MAX_STEP
+        h = hm.Hexapod.from_preset("reference")
+        tables = f.extract(h)
+        R, p = h.home_pose[:3, :3].copy(), h.home_pose[:3, 3].copy()
+        f.fk_newton(np.zeros((6, 6)), R, p, h.joints_of(np.full(6, 0.01)), *tables, 1e-12, 50, MAX_STEP,
+                    np.zeros((6, 42)), np.zeros((1, 1)))
+    else:
+        hm.Hexapod.from_preset("reference").forward(np.full(6, 0.01))
+t0 = time.process_time()
+with ev.install_listener("numba:run_pass", Timer(False)), ev.install_listener("numba:llvm_lock", Timer(True)):
+    first()
+print(json.dumps({"total": time.process_time() - t0, "passes": passes, "functions": functions}))
+"""
+
+
+def phases(env: dict) -> None:
+    """Print the first forward's and the floor's compile CPU by numba pass and by compiled function."""
+    bench = str(Path(__file__).resolve().parent)
+    figures = {}
+    for name in ("first forward", "floor"):
+        cache = tempfile.mkdtemp(prefix="numba-cold-")
+        try:
+            cmd = [sys.executable, "-c", PHASES, name.split()[0], bench]
+            out = subprocess.run(cmd, env=dict(env, NUMBA_CACHE_DIR=cache), capture_output=True, text=True)
+        finally:
+            shutil.rmtree(cache, ignore_errors=True)
+        if out.returncode != 0:
+            raise SystemExit(out.stderr[-800:])
+        figures[name] = json.loads(out.stdout.splitlines()[-1])
+    first, floor = figures["first forward"], figures["floor"]
+    print(
+        f"\ncompile CPU by phase (s, empty numba cache){'first forward':>16s}{'floor':>8s}\n"
+        f"  {'all':42s}{first['total']:8.2f}{floor['total']:8.2f}"
+    )
+    for name, _ in collections.Counter(first["passes"]).most_common(8):
+        print(f"  {name:42s}{first['passes'][name]:8.2f}{floor['passes'].get(name, 0.0):8.2f}")
+    print("first forward by compiled function (s, its own passes and LLVM):")
+    for name, cpu in collections.Counter(first["functions"]).most_common(10):
+        print(f"  {name:42s}{cpu:8.2f}")
+
 
 def run(cmd: list[str], env: dict | None = None) -> tuple[float, float, float]:
     """Wall time (s), CPU time (s) and peak RSS (MB) of one run of ``cmd``."""
@@ -96,6 +166,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=7)
     ap.add_argument("--cold", action="store_true", help="also time a first run with an empty numba cache")
+    ap.add_argument("--phases", action="store_true", help="also split the first forward's compile CPU by phase")
     ap.add_argument("--json", type=Path, help="also write the figures as JSON")
     ap.add_argument("command", nargs="*", help="the command to time (default: hexapod fk reference lengths.csv)")
     args = ap.parse_args(argv)
@@ -130,6 +201,8 @@ def main(argv=None) -> int:
         print(f"  floor_newton.fk_newton first solve  {floor:8.2f}   (its compilation; target: first forward <= x1.5)")
         report["cold"] = {"first_forward_cpu_s": forward, "first_inverse_cpu_s": inverse, "first_batch_cpu_s": batch}
         report["cold"]["floor_compile_cpu_s"] = floor
+    if args.phases:
+        phases(env)
     if args.json:
         args.json.write_text(json.dumps(report, indent=1))
     return 0

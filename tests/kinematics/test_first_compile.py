@@ -24,7 +24,8 @@ def test_announces_a_compilation_once_per_entry(caplog, monkeypatch):
         first_compile.announce(_Entry("solve_schur", []))
         first_compile.announce(_Entry("solve_schur", []))  # the same entry: once
         first_compile.announce(_Entry("forward_rows", ["(float64[:],)"]))  # compiled in this process: silent
-    assert caplog.messages == ["compiling the solver kernels (direct kinematics), once after installation: ~14 s"]
+    what, seconds = first_compile.ENTRIES["solve_schur"]
+    assert caplog.messages == [f"compiling the solver kernels ({what}), once after installation: ~{seconds} s"]
 
 
 def test_a_cached_entry_is_not_announced(caplog, monkeypatch):
@@ -67,8 +68,34 @@ def test_the_command_line_shows_the_line_on_a_terminal_only():
     finally:
         os.close(main_fd)
         os.close(terminal)
-    assert shown.strip() == (
-        "hexapod fk: compiling the solver kernels (the direct-kinematics batch loop), once after installation: ~15 s"
-    )
+    what, seconds = first_compile.ENTRIES["forward_rows"]
+    assert shown.strip() == f"hexapod fk: compiling the solver kernels ({what}), once after installation: ~{seconds} s"
     piped = subprocess.run([sys.executable, "-c", _ANNOUNCE], capture_output=True, text=True, check=True)
     assert piped.stderr == ""
+
+
+def test_the_collector_runs_less_while_numba_compiles_and_as_before_after():
+    import gc
+
+    from numba import njit
+    from numba.core import event
+
+    first_compile.collect_less()
+    seen = []
+
+    class Probe(event.Listener):  # registered after collect_less's listener: sees the threshold it set
+        def on_start(self, ev):
+            seen.append(gc.get_threshold()[0])
+
+        def on_end(self, ev):
+            pass
+
+    before = gc.get_threshold()
+    with event.install_listener("numba:compile", Probe()):
+        assert njit(lambda x: x + 1)(1) == 2  # not cached: compiles
+        try:
+            njit(lambda x: x.no_such_attribute)(1)  # a compilation that fails
+        except Exception:
+            pass
+    assert seen == [max(before[0], first_compile.COMPILING_GC_THRESHOLD)] * 2
+    assert gc.get_threshold() == before

@@ -133,12 +133,14 @@ def _move(T, S, i, k, x):
         )  # fmt: skip
     c, s = np.cos(x), np.sin(x)
     if ay == 0.0 and az == 0.0 and ax == 1.0:
-        return _turn(T, 0, c, s)
-    if ax == 0.0 and az == 0.0 and ay == 1.0:
-        return _turn(T, 1, c, s)
-    if ax == 0.0 and ay == 0.0 and az == 1.0:
-        return _turn(T, 2, c, s)
-    return _mul(T, _rodrigues(ax, ay, az, c, s))
+        axis = 0
+    elif ax == 0.0 and az == 0.0 and ay == 1.0:
+        axis = 1
+    elif ax == 0.0 and ay == 0.0 and az == 1.0:
+        axis = 2
+    else:
+        return _mul(T, _rodrigues(ax, ay, az, c, s))
+    return _turn(T, axis, c, s)  # one call: each inlined call is a copy of _turn's three cases
 
 
 # Tuples are indexed with constants only: a computed index compiles to a switch over 12 cases.

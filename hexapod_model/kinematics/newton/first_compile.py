@@ -6,27 +6,37 @@ numba compiles an entry of the compiled path (:mod:`.iteration`, :mod:`.batch_ke
 INFO on the ``hexapod_model.compile`` logger, ``compiling the solver kernels (WHAT), once after
 installation: ~N s`` before a call that will compile (no signature in this process, no cache
 index on disk); the command line shows it on a terminal.
+
+While numba compiles, :func:`collect_less` has Python's cyclic garbage collector run less often:
+the compiler allocates millions of short-lived objects, and the collections they trigger took
+about 15 % of the first solve's compilation (``benchmarks/startup.py --cold``).
 """
 
 from __future__ import annotations
 
+import gc
 import logging
 import os
 from typing import Any
 
 LOGGER = "hexapod_model.compile"
 #: each entry: what it compiles, and the CPU seconds it took from an empty cache on a 2-core machine
-#: (benchmarks/startup.py --cold)
+#: (benchmarks/startup.py --cold: the inverse's after the forward's, whose kernels it shares)
 ENTRIES = {
-    "solve_schur": ("direct kinematics", 14),
-    "solve_blocks": ("inverse kinematics", 8),
-    "forward_rows": ("the direct-kinematics batch loop", 15),
+    "solve_schur": ("direct kinematics", 12),
+    "solve_blocks": ("inverse kinematics", 6),
+    "forward_rows": ("the direct-kinematics batch loop", 13),
     "inverse_rows": ("the inverse-kinematics batch loop", 8),
     "follow": ("the readings path", 12),
 }
 
+#: first-generation threshold of the cyclic garbage collector while numba compiles (CPython's
+#: default is 700); the process's own thresholds are restored when the compilation ends
+COMPILING_GC_THRESHOLD = 10_000
+
 log = logging.getLogger(LOGGER)
 _announced: set[str] = set()
+_collecting_less: list[Any] = []  # the numba event listener, once registered
 
 
 def announce(dispatcher: Any) -> None:
@@ -35,6 +45,7 @@ def announce(dispatcher: Any) -> None:
     if name in _announced or dispatcher.signatures or _cached(dispatcher):
         return
     _announced.add(name)
+    collect_less()
     what, seconds = ENTRIES.get(name, ("the solver", 10))
     log.info("compiling the solver kernels (%s), once after installation: ~%d s", what, seconds)
 
@@ -45,3 +56,34 @@ def _cached(dispatcher: Any) -> bool:
         return os.path.exists(dispatcher._cache._cache_file._index_path)
     except AttributeError:  # no cache (cache=False) or another numba layout: assume it compiles
         return False
+
+
+def collect_less() -> None:
+    """From now on, raise the collector's first threshold to :data:`COMPILING_GC_THRESHOLD` while numba compiles.
+
+    A listener of numba's ``numba:compile`` event (a compilation, not a load from the cache): the
+    outermost compilation saves the thresholds and the last one to end restores them, also when
+    it fails. Imports numba; registered once per process.
+    """
+    if _collecting_less:
+        return
+    from numba.core import event
+
+    class CollectLess(event.Listener):
+        def __init__(self) -> None:
+            self.depth, self.saved = 0, gc.get_threshold()
+
+        def on_start(self, event: Any) -> None:
+            if self.depth == 0:  # numba compiles under its global lock: one thread at a time
+                self.saved = gc.get_threshold()
+                gc.set_threshold(max(self.saved[0], COMPILING_GC_THRESHOLD), *self.saved[1:])
+            self.depth += 1
+
+        def on_end(self, event: Any) -> None:
+            self.depth -= 1
+            if self.depth == 0:
+                gc.set_threshold(*self.saved)
+
+    listener = CollectLess()
+    event.register("numba:compile", listener)
+    _collecting_less.append(listener)

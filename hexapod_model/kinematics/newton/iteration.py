@@ -3,7 +3,7 @@
 For hexapods whose six legs are chains of ``rows`` one-dof joints (6 for ``6d`` closures, 3
 for ball joints) and the two structured problems: one joint held per leg, the platform free
 (direct kinematics: the Schur elimination of :func:`.structured.schur_solve`), or the platform held
-(inverse kinematics: the blocks of :func:`.structured.blocks_solve`). :func:`iterate` is
+(inverse kinematics: the blocks of :func:`.structured.blocks_solve`). :func:`_newton` is
 :meth:`.solver.NewtonSolver.iterate` with Pinocchio replaced by :mod:`.chains`; per iteration:
 
 1. closure frames and WORLD Jacobian columns at ``q`` (:func:`.chains.evaluate_chains`);
@@ -27,7 +27,10 @@ The entries called from Python are :func:`solve_schur` and :func:`solve_blocks` 
 and with ``finish`` the Jacobian, pose and limit check a ``Solution`` needs), four arguments
 each: the start, the homotopy offset, the per-call settings and the packed arrays
 (:mod:`.packing`); the compiled loops of :mod:`.follow` and :mod:`.batch_kernels` call
-:func:`iterate_schur` / :func:`iterate_blocks`. :class:`.compiled.CompiledSolver` is the solver object on top.
+:func:`iterate_schur` / :func:`iterate_blocks`. :class:`.compiled.CompiledSolver` is the solver
+object on top. Each entry holds the iteration once (:func:`_entries`): numba copies an inlined
+function's IR at each call site and compiles a called one into every caller's unit again, so
+the first solve after installation compiles what it runs once.
 """
 
 from __future__ import annotations
@@ -62,27 +65,14 @@ def _integrate(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat):
 
 
 @njit(cache=True, inline="always")
-def _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state, length):
-    """Solve ``G x = r`` (Schur elimination or blocks); returns the smallest pivot ratio.
-
-    ``frames = (J, p, E, r, x)``, ``blocks = (LB, PB, A, M, pm, nb, wb)``. The Schur step leaves
-    the determinant sign (``-1`` when singular, as the general path) and the condition bound in
-    ``state`` (scale-free with the geometry's ``length`` scale).
-    """
-    J, p, E, r, x = frames
-    LB, PB, A, M, pm, nb, wb = blocks
-    if schur:
-        ratio, kappa = schur_solve(
-            J, leg_v, held_pos, platform_v, colmap, rows, p, E, r, x, LB, PB, A, M, pm, nb, wb, length
-        )
-        state[0], state[1] = (1.0 if ratio > 0.0 else -1.0), kappa
-        return abs(ratio)
-    return blocks_solve(J, leg_v, colmap, rows, p, E, r, x, LB, PB, wb)
-
-
-@njit(cache=True, inline="always")
-def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
+def _newton(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, tables, frames, buffers, pivots):
     """Newton from ``q0`` into ``q`` (see the module docstring), by the Schur or the block step.
+
+    ``tables``, ``frames``, ``buffers``, ``pivots``: the views of :func:`.packing.unpack_ints`,
+    :func:`.packing.unpack_floats`, :func:`.packing.unpack_work`, :func:`.packing.unpack_iwork`
+    (the entry unpacks them once). The Schur step leaves the determinant sign (``-1`` when
+    singular, as the general path) and the condition bound in ``state`` (scale-free with the
+    geometry's length scale).
 
     Returns ``(code, iterations, norm, ratio, theta, sign, certified)``: the outcome code, the
     last residual norm and pivot ratio, the largest contraction, the determinant sign the
@@ -92,11 +82,10 @@ def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, fl
     max_step, singular_ratio, theta_max, theta_floor, one_step = floats[0], floats[1], floats[2], floats[3], floats[4]
     weights = floats[FHEADER : FHEADER + ints[2]]  # the free velocities' step weights (.packing)
     length = floats[LENGTH_SCALE]  # the geometry's length scale
-    (leg_q, leg_v, platform_v, held_pos, colmap, free_v, kinds), _ = unpack_ints(ints)
-    (placements, motions, closure, home), _ = unpack_floats(ints, floats)
-    (oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, Rs, ps, quat, state), _ = unpack_work(ints, work)
-    (PB, pm), _ = unpack_iwork(ints, iwork)
-    frames, blocks = (J, p, E, r, x), (LB, PB, A, M, pm, nb, wb)  # the step's inputs and buffers
+    leg_q, leg_v, platform_v, held_pos, colmap, free_v, kinds = tables
+    placements, motions, closure, home = frames
+    oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, Rs, ps, quat, state = buffers
+    PB, pm = pivots
     for k in range(q.shape[0]):
         q[k] = q0[k]
     it, ratio, theta, previous, certified = 0, 1.0, 0.0, 0.0, True
@@ -107,21 +96,31 @@ def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, fl
         norm, min_trace = closure_residual(R, p, rows, E, r, length)
         if scale != 0.0:
             norm = shift_residual(r, offset, scale, rows, length)
+        closed = False  # converged at the start: one step checks the start itself is not singular
         if norm <= tol and (it != 1 or previous <= one_step):
             code = CONVERGED
             if min_trace < 1.0:
                 code, certified = FLIPPED, False
-            elif it == 0:  # no step factored the Jacobian: check the start itself is not singular
-                ratio = _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state, length)
-                if ratio < singular_ratio:
-                    code, certified = START_SINGULAR, False
-            break
-        if it >= max_iter or not norm < np.inf:  # also stops on NaN
+                break
+            if it != 0:
+                break
+            closed = True
+        elif it >= max_iter or not norm < np.inf:  # also stops on NaN
             code = NO_CONVERGENCE
             break
-        ratio = _step(schur, rows, held_pos, colmap, leg_v, platform_v, frames, blocks, state, length)
+        # the step G x = r: one call site, so that the step compiles once in each entry
+        if schur:
+            ratio, kappa = schur_solve(
+                J, leg_v, held_pos, platform_v, colmap, rows, p, E, r, x, LB, PB, A, M, pm, nb, wb, length
+            )
+            state[0], state[1] = (1.0 if ratio > 0.0 else -1.0), kappa
+            ratio = abs(ratio)
+        else:
+            ratio = blocks_solve(J, leg_v, colmap, rows, p, E, r, x, LB, PB, wb)
         if ratio < singular_ratio:
-            code, certified = SINGULAR, False
+            code, certified = (START_SINGULAR if closed else SINGULAR), False
+            break
+        if closed:
             break
         biggest = scatter_step(x, free_v, dv, max_step, weights)
         if certify:
@@ -138,73 +137,92 @@ def _iterate(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, fl
     return code, it, norm, ratio, theta, sign, certified
 
 
-# For the compiled loops of .follow and .batch_kernels, ``schur`` a constant in each. The loops pass
-# ``certify`` read from an array, never as a constant: a constant types as a literal,
-# and numba would compile the whole iteration once more per literal value.
-@njit(cache=True)
-def iterate_schur(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
-    """:func:`_iterate` with the Schur step (one joint held per leg, the platform free)."""
-    return _iterate(True, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork)
+def _entries(schur: bool, step: str) -> tuple:
+    """The two compiled entries of one step (``schur``: the Schur step, else the blocks), named for ``step``.
 
+    Each entry holds the iteration once (:func:`_newton`, inlined); ``schur`` is a constant of the
+    entry, so the other step's branch is pruned before it is typed. Written once here rather than
+    as two functions inlining a shared one: numba's inlining copies the inlined function's IR,
+    and an inlined function that itself inlines the iteration doubled the copies on a first run.
+    """
 
-@njit(cache=True)
-def iterate_blocks(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
-    """:func:`_iterate` with the block step (the platform held)."""
-    return _iterate(False, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork)
+    def iterate(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
+        tables, frames = unpack_ints(ints)[0], unpack_floats(ints, floats)[0]
+        buffers, pivots = unpack_work(ints, work)[0], unpack_iwork(ints, iwork)[0]
+        return _newton(
+            schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, tables, frames, buffers, pivots
+        )
 
+    def solve(start, offset, settings, arrays):
+        ints, floats, work, iwork, q_solver, q, pose, G = arrays
+        tol, max_iter, sign, scale = settings[0], settings[1], settings[2], settings[3]  # max_iter: a whole float
+        certify, finish = settings[4] != 0.0, settings[5] != 0.0
+        # .packing.unpack_constants written out: a called function would compile once more at the first solve
+        nl, oc, fc = ints[5], ints[6], ints[7]
+        prismatic_q, limited = ints[oc : oc + 6], ints[oc + 6 : oc + 6 + nl]
+        lower, upper, slack = floats[fc : fc + nl], floats[fc + nl : fc + 2 * nl], floats[fc + 2 * nl]
+        home = floats[fc - 16 : fc].reshape((4, 4))
+        for k in range(q.shape[0]):
+            q[k] = start[k]
+        if settings[6] != 0.0:
+            for i in range(prismatic_q.shape[0]):
+                q[prismatic_q[i]] = settings[7 + i]
+        tables, frames = unpack_ints(ints)[0], unpack_floats(ints, floats)[0]
+        buffers, pivots = unpack_work(ints, work)[0], unpack_iwork(ints, iwork)[0]
+        code, it, norm, ratio, theta, sign, certified = _newton(
+            schur,
+            q,
+            q_solver,
+            tol,
+            max_iter,
+            sign,
+            offset,
+            scale,
+            certify,
+            ints,
+            floats,
+            tables,
+            frames,
+            buffers,
+            pivots,
+        )
+        bad = -1
+        if finish and (not certify or (code == CONVERGED and certified)):
+            copy_into(q, q_solver)
+            jacobian(buffers[2], tables[1], tables[2], tables[4], ints[0], buffers[4], buffers[5], G)
+            xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
+            if code == CONVERGED:
+                bad = first_outside_at(q, limited, lower, upper, slack)
+        return code, it, norm, ratio, theta, sign, certified, bad
 
-@njit(cache=True, inline="always")
-def _solve(schur, start, offset, settings, arrays):
-    """:func:`_iterate` from ``start`` (prismatic joints from ``settings`` if given), and a ``Solution``'s arrays.
+    iterate.__doc__ = f""":func:`_newton` with the {step}.
+
+    For the compiled loops of :mod:`.follow` and :mod:`.batch_kernels`.
+
+    The loops pass ``certify`` read from an array, never as a constant: a constant types as a
+    literal, and numba would compile the whole iteration once more per literal value.
+    """
+    solve.__doc__ = f""":func:`_newton` with the {step} from ``start``, and a ``Solution``'s arrays.
+
+    The prismatic joints are set from ``settings`` if given.
 
     ``settings = (tol, max_iter, sign, scale, certify, finish, given, joints...)``
     (:data:`.packing.SETTINGS`); ``arrays = (ints, floats, work, iwork, q_solver, q, pose, G)``:
     the packed tables and buffers, the solver's iterate and the outputs. The iteration runs from
-    ``q`` (``start``'s copy) and leaves its last iterate in ``q_solver``, as :func:`_iterate` does.
-    With ``finish``, unless a ``certify``-ing solve did not converge certified, it also writes
-    the configuration into ``q``, the platform pose ``home * X(q_p)`` into ``pose``, the reduced
-    Jacobian (:func:`.kernels.jacobian`) into ``G`` and, when converged, finds the first joint
-    outside the packed limits. Returns :func:`_iterate`'s
-    tuple and that joint (-1 if none or not looked for).
+    ``q`` (``start``'s copy) and leaves its last iterate in ``q_solver``. With ``finish``, unless
+    a ``certify``-ing solve did not converge certified, it also writes the configuration into
+    ``q``, the platform pose ``home * X(q_p)`` into ``pose``, the reduced Jacobian
+    (:func:`.kernels.jacobian`) into ``G`` and, when converged, finds the first joint outside the
+    packed limits. Returns :func:`_newton`'s tuple and that joint (-1 if none or not looked for).
     """
-    ints, floats, work, iwork, q_solver, q, pose, G = arrays
-    tol, max_iter, sign, scale = settings[0], settings[1], settings[2], settings[3]  # max_iter: a whole float
-    certify, finish = settings[4] != 0.0, settings[5] != 0.0
-    # .packing.unpack_constants written out: a called function would compile once more at the first solve
-    nl, oc, fc = ints[5], ints[6], ints[7]
-    prismatic_q, limited = ints[oc : oc + 6], ints[oc + 6 : oc + 6 + nl]
-    lower, upper, slack = floats[fc : fc + nl], floats[fc + nl : fc + 2 * nl], floats[fc + 2 * nl]
-    home = floats[fc - 16 : fc].reshape((4, 4))
-    for k in range(q.shape[0]):
-        q[k] = start[k]
-    if settings[6] != 0.0:
-        for i in range(prismatic_q.shape[0]):
-            q[prismatic_q[i]] = settings[7 + i]
-    code, it, norm, ratio, theta, sign, certified = _iterate(
-        schur, q, q_solver, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork
-    )
-    bad = -1
-    if finish and (not certify or (code == CONVERGED and certified)):
-        (_, leg_v, platform_v, _, colmap, _, _), _ = unpack_ints(ints)
-        views = unpack_work(ints, work)[0]
-        copy_into(q, q_solver)
-        jacobian(views[2], leg_v, platform_v, colmap, ints[0], views[4], views[5], G)
-        xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
-        if code == CONVERGED:
-            bad = first_outside_at(q, limited, lower, upper, slack)
-    return code, it, norm, ratio, theta, sign, certified, bad
+    name = "schur" if schur else "blocks"
+    for fn, prefix in ((iterate, "iterate_"), (solve, "solve_")):
+        fn.__name__ = fn.__qualname__ = prefix + name  # numba's cache files are named by the qualified name
+    return njit(cache=True)(iterate), njit(cache=True)(solve)
 
 
-# The entry points from Python: one per step, the iteration inlined in each (numba re-optimises
-# a called compiled function in every caller's unit, so a second entry would compile it again).
-# Four arguments (.packing): numba's dispatch costs per argument unboxed.
-@njit(cache=True)
-def solve_schur(start, offset, settings, arrays):
-    """:func:`_solve` with the Schur step (direct kinematics: the certified first attempt, plain solves)."""
-    return _solve(True, start, offset, settings, arrays)
-
-
-@njit(cache=True)
-def solve_blocks(start, offset, settings, arrays):
-    """:func:`_solve` with the block step (inverse kinematics)."""
-    return _solve(False, start, offset, settings, arrays)
+# The entry points: one per step, the iteration inlined in each (numba re-optimises a called
+# compiled function in every caller's unit, so a second entry would compile it again). The
+# solves take four arguments (.packing): numba's dispatch costs per argument unboxed.
+iterate_schur, solve_schur = _entries(True, "Schur step (one joint held per leg, the platform free: direct kinematics)")
+iterate_blocks, solve_blocks = _entries(False, "block step (the platform held: inverse kinematics)")

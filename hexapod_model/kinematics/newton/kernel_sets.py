@@ -42,6 +42,10 @@ def kernel_set(compiled: bool = True) -> KernelSet:
     """The numba kernels (``compiled``, imports numba) or their NumPy twins."""
     import importlib
 
+    if compiled:  # the kernels compile on their first call
+        from .first_compile import collect_less
+
+        collect_less()
     k = importlib.import_module(".kernels" if compiled else ".numpy_kernels", __package__)
     la = importlib.import_module(".linalg" if compiled else ".numpy_kernels", __package__)
     st = importlib.import_module(".structured" if compiled else ".numpy_kernels", __package__)
