@@ -202,7 +202,7 @@ class Tracker(PassageMixin):
         if checked:
             k = self._k
             w, spread = self._motion.weights(tuple([k - b for b in self._born[:n]]))
-            lhat = w @ self._L[:n]
+            lhat = w.dot(self._L[:n])  # as w @ L, without the matmul ufunc's dispatch
         # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
         last = self._raw[-1] if self._raw else _NONE
         sigma_nu = s.innovation_sigma(spread)
@@ -308,9 +308,9 @@ class Tracker(PassageMixin):
             return False  # across a singularity without passing near one: another assembly
         e = self._e  # log6(Mm^-1 Ms) - J^-1 (l - l^), Mm the motion model's pose
         branch_residual(self._F, w.size, w, sol.q[self._ffq], self._sens.Jinv, l, lhat, e)
-        et, er = self._et, self._er  # norms as np.linalg.norm computes them, without its dispatch
+        et, er = self._et, self._er  # norms as np.linalg.norm computes them (dot), without its dispatch
         length = self.length
-        size = math.hypot(math.sqrt(et @ et), length * math.sqrt(er @ er))
+        size = math.hypot(math.sqrt(et.dot(et)), length * math.sqrt(er.dot(er)))
         return size <= bound * math.hypot(sens.translation, length * sens.rotation) + 1e-9 * length
 
     def _model_q(self, w: np.ndarray) -> np.ndarray:
