@@ -60,11 +60,14 @@ def predict(model: pin.Model, history, predictor: str) -> np.ndarray:
     p0 = history[0]
     if a1 == 0.0 and a2 == 0.0:
         return p0.copy()
-    dv = np.zeros(model.nv)
-    if a1:
-        dv += a1 * pin.difference(model, p0, history[1])
-    if a2:
-        dv += a2 * pin.difference(model, p0, history[2])
+    # dv = 0 + a1 d1 + a2 d2 in place: 0 + x is x but for -0 (+0): the "+= 0.0" below
+    dv = pin.difference(model, p0, history[1] if a1 else history[2])
+    dv *= a1 if a1 else a2
+    dv += 0.0
+    if a1 and a2:
+        d2 = pin.difference(model, p0, history[2])
+        d2 *= a2
+        dv += d2
     return pin.integrate(model, p0, dv)
 
 
