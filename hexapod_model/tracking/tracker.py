@@ -131,6 +131,8 @@ class Tracker(PassageMixin):
         self._bound = s.branch_sigmas * s.noise  # the branch check's bound per scale and spread
         self._z = np.zeros(6)  # the sample's normalised innovations
         self._born: list[int] = [0] * s.window  # sample number of each trusted one, newest first
+        self._run = 0  # trusted samples at consecutive sample numbers ending at _born[0]
+        self._ages = [tuple(range(1, n + 1)) for n in range(s.window + 1)]  # of n of them, the sample after
         self._raw: deque[np.ndarray] = deque(maxlen=s.stuck_samples + _STUCK_LOOKBACK)
         self._calm: deque[tuple[int, np.ndarray, np.ndarray]] = deque(maxlen=_BEFORE)  # certified, not near-singular
         self._sens_b: SensitivityEvaluator | None = None  # for the candidates of a passage
@@ -176,8 +178,9 @@ class Tracker(PassageMixin):
             self._hist.appendleft(q)
             self._F = self._Fr.push(q[self._ffq])
         self._L = self._Lr.push(q[self._prism_q])
-        born = self._born
-        born.insert(0, self._k)  # age 0 now, one more at each sample
+        born, k = self._born, self._k
+        self._run = self._run + 1 if born[0] == k - 1 else 1
+        born.insert(0, k)  # age 0 now, one more at each sample
         born.pop()
         self._n = min(self._n + 1, self.settings.window)
         self._gap = 0
@@ -201,7 +204,11 @@ class Tracker(PassageMixin):
         lhat, w, spread = _NONE, None, 0.0
         if checked:
             k = self._k
-            w, spread = self._motion.weights(tuple([k - b for b in self._born[:n]]))
+            if self._run >= n and self._born[0] == k - 1:  # no untrusted sample among the last n
+                ages = self._ages[n]
+            else:
+                ages = tuple([k - b for b in self._born[:n]])
+            w, spread = self._motion.weights(ages)
             lhat = w.dot(self._L[:n])  # as w @ L, without the matmul ufunc's dispatch
         # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
         last = self._raw[-1] if self._raw else _NONE
@@ -242,7 +249,10 @@ class Tracker(PassageMixin):
                 flags.append("branch_uncertain")
                 self._lost = not s.recover
                 self._doubt = suspect = s.recover
-        sol, sens, open_ = self._passage(sol, sens, l, bool(legs) or self._lost)
+        if self._resolver is None and (legs or self._lost or not sens.condition_number > self.cond_limit):
+            open_ = False  # no passage open, none to open (the first test of _passage)
+        else:
+            sol, sens, open_ = self._passage(sol, sens, l, bool(legs) or self._lost)
         uncertified = sol.status == "uncertified"  # the solver could not certify the assembly
         if (self._lost or self._uncertified or open_ or uncertified) and "branch_uncertain" not in flags:
             flags.append("branch_uncertain")

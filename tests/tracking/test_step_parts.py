@@ -93,3 +93,23 @@ def test_evaluate_solved_follows_the_calling_threads_solver(reference):
     for a, b, ja, jb in out.values():
         assert a == b and np.array_equal(ja, jb)
     assert len({a.condition_number for a, _, _, _ in out.values()}) == 4
+
+
+def test_ages_without_a_hole_give_what_the_ages_computed_give(reference):
+    """The motion model's ages taken from the table (no untrusted sample among the last ones) or
+    computed from the sample numbers: the same samples, bit for bit, through gaps and jumps."""
+    from hexapod_model.tracking.tracker import Tracker
+
+    rng = np.random.default_rng(2)
+    stream = np.linspace(0.0, 0.003, 120)[:, None] * rng.uniform(-1, 1, 6) + rng.normal(0.0, 1e-6, (120, 6))
+    stream[40:42] = np.nan  # unreadable samples: holes in the ages
+    stream[70, 3] += 1e-3  # a jump: an untrusted sample
+    stream[90:96, 1] += 4e-3  # untrusted beyond max_gap: the history restarts
+    fast, plain = Tracker(reference, noise=1e-6), Tracker(reference, noise=1e-6)
+    for x in stream:
+        plain._run = 0  # computes the ages from the sample numbers
+        a, b = fast.step(x), plain.step(x)
+        assert (a.status, a.flags, a.legs) == (b.status, b.flags, b.legs)
+        assert np.array_equal(a.solution.q, b.solution.q)
+        figures = ("innovation", "sigma_translation", "sigma_rotation", "condition_number")
+        assert np.array_equal([getattr(a, f) for f in figures], [getattr(b, f) for f in figures], equal_nan=True)
