@@ -183,6 +183,17 @@ def measure_solved(J, leg_cols, held_pos, ff_cols, rows, p, E, length, blocks, m
     return _invert_and_measure(Jout, length, mats[1], piv[1], vecs[2], vecs[3], Jinv, mats[2], vecs[4])
 
 
+@njit(cache=True)
+def _holds(q_aug, q):
+    """Whether ``q_aug[:q.size] == q`` element by element (as ``(q_aug[:n] == q).all()``)."""
+    if q_aug.shape[0] < q.shape[0]:
+        return False
+    for i in range(q.shape[0]):
+        if not q_aug[i] == q[i]:
+            return False
+    return True
+
+
 @dataclass(frozen=True)
 class Sensitivity:
     """Pose sensitivity at one configuration, per unit (1 m) reading standard deviation.
@@ -237,6 +248,8 @@ class SensitivityEvaluator:
         self.J = np.zeros((6, 6))
         self.Jinv = np.zeros((6, 6))
         self._blocks: np.ndarray | None = None  # evaluate_solved's leg blocks, made on first use
+        self._solved_by: NewtonSolver | None = None  # the solver whose buffers _solved_args holds
+        self._solved_args: tuple | None = None
 
     def evaluate_solved(self, q: np.ndarray) -> Sensitivity:
         """:meth:`evaluate` at ``q``, the configuration the calling thread's last direct-kinematics solve ended on.
@@ -248,18 +261,26 @@ class SensitivityEvaluator:
         """
         hexa = self._hexa
         s = hexa._solver(hexa._held_forward)  # the calling thread's (Hexapod keeps one per thread)
-        nq = q.shape[0]
-        if s.held_pos is None or not self.supported or s.rows != self.rows or not (s.q_aug[:nq] == q).all():
+        if s is not self._solved_by:  # the kernel's arguments from this solver (its buffers stay)
+            self._solved_by, self._solved_args = s, self._arguments(s)
+        args = self._solved_args
+        if args is None or not _holds(s.q_aug, q):
             return self.evaluate(q)
-        if self._blocks is None:
-            self._blocks = np.zeros((7, self.rows, 6))
-        tt, tr, cond, det = measure_solved(
-            s.J, s.leg_cols, s.held_pos, s.ff_cols, self.rows, s.p, s.E, self.length,
-            self._blocks, self._mats, self._vecs, self._piv, self.J, self.Jinv,
-        )  # fmt: skip
+        tt, tr, cond, det = measure_solved(*args)
         if cond == math.inf:
             self.Jinv[:] = np.nan
         return Sensitivity(math.sqrt(tt), math.sqrt(tr), cond, (det > 0.0) - (det < 0.0))
+
+    def _arguments(self, s: NewtonSolver) -> tuple | None:
+        """:func:`measure_solved`'s arguments for solver ``s`` (``None``: no Schur step of these legs)."""
+        if s.held_pos is None or not self.supported or s.rows != self.rows:
+            return None
+        if self._blocks is None:
+            self._blocks = np.zeros((7, self.rows, 6))
+        return (
+            s.J, s.leg_cols, s.held_pos, s.ff_cols, self.rows, s.p, s.E, self.length,
+            self._blocks, self._mats, self._vecs, self._piv, self.J, self.Jinv,
+        )  # fmt: skip
 
     def evaluate(self, q: np.ndarray) -> Sensitivity:
         """Fill :attr:`J` and :attr:`Jinv` at ``q``; return the figures (``inf`` when singular)."""

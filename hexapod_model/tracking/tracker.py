@@ -46,6 +46,7 @@ from .types import (
     characteristic_length,
     posed,
     predict,
+    track_result,
 )
 
 _NO_Z = np.full(6, np.nan)  # innovations when the motion model is not available (read-only)
@@ -126,8 +127,12 @@ class Tracker(PassageMixin):
         self._L = self._Lr.rows  # readings of the trusted samples, newest first
         self._F = self._Fr.rows  # free-flyer coordinates of _hist, newest first
         self._e = np.zeros(6)  # the branch check's residual
+        self._et, self._er = self._e[:3], self._e[3:]  # its translation and rotation parts (views)
+        self._bound = s.branch_sigmas * s.noise  # the branch check's bound per scale and spread
         self._z = np.zeros(6)  # the sample's normalised innovations
         self._born: list[int] = [0] * s.window  # sample number of each trusted one, newest first
+        self._run = 0  # trusted samples at consecutive sample numbers ending at _born[0]
+        self._ages = [tuple(range(1, n + 1)) for n in range(s.window + 1)]  # of n of them, the sample after
         self._raw: deque[np.ndarray] = deque(maxlen=s.stuck_samples + _STUCK_LOOKBACK)
         self._calm: deque[tuple[int, np.ndarray, np.ndarray]] = deque(maxlen=_BEFORE)  # certified, not near-singular
         self._sens_b: SensitivityEvaluator | None = None  # for the candidates of a passage
@@ -173,8 +178,9 @@ class Tracker(PassageMixin):
             self._hist.appendleft(q)
             self._F = self._Fr.push(q[self._ffq])
         self._L = self._Lr.push(q[self._prism_q])
-        born = self._born
-        born.insert(0, self._k)  # age 0 now, one more at each sample
+        born, k = self._born, self._k
+        self._run = self._run + 1 if born[0] == k - 1 else 1
+        born.insert(0, k)  # age 0 now, one more at each sample
         born.pop()
         self._n = min(self._n + 1, self.settings.window)
         self._gap = 0
@@ -198,8 +204,12 @@ class Tracker(PassageMixin):
         lhat, w, spread = _NONE, None, 0.0
         if checked:
             k = self._k
-            w, spread = self._motion.weights(tuple([k - b for b in self._born[:n]]))
-            lhat = w @ self._L[:n]
+            if self._run >= n and self._born[0] == k - 1:  # no untrusted sample among the last n
+                ages = self._ages[n]
+            else:
+                ages = tuple([k - b for b in self._born[:n]])
+            w, spread = self._motion.weights(ages)
+            lhat = w.dot(self._L[:n])  # as w @ L, without the matmul ufunc's dispatch
         # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
         last = self._raw[-1] if self._raw else _NONE
         sigma_nu = s.innovation_sigma(spread)
@@ -239,7 +249,10 @@ class Tracker(PassageMixin):
                 flags.append("branch_uncertain")
                 self._lost = not s.recover
                 self._doubt = suspect = s.recover
-        sol, sens, open_ = self._passage(sol, sens, l, bool(legs) or self._lost)
+        if self._resolver is None and (legs or self._lost or not sens.condition_number > self.cond_limit):
+            open_ = False  # no passage open, none to open (the first test of _passage)
+        else:
+            sol, sens, open_ = self._passage(sol, sens, l, bool(legs) or self._lost)
         uncertified = sol.status == "uncertified"  # the solver could not certify the assembly
         if (self._lost or self._uncertified or open_ or uncertified) and "branch_uncertain" not in flags:
             flags.append("branch_uncertain")
@@ -264,7 +277,7 @@ class Tracker(PassageMixin):
     def _guess(self) -> np.ndarray:
         if self._gap > self.settings.max_gap:
             return self._last_q
-        return predict(self.hexa.model, list(self._hist)[:3], self.predictor)
+        return predict(self.hexa.model, self._hist, self.predictor)  # reads P0, P1, P2 only
 
     def _solve(self, l: np.ndarray, guess: np.ndarray) -> Solution:
         try:
@@ -285,29 +298,30 @@ class Tracker(PassageMixin):
             alt = self._solve(l, self._model_q(w))
             if posed(alt) and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
                 sol, sens = alt, self._sens.evaluate(alt.q)
-        bound = self.settings.branch_sigmas * self.settings.noise * self._scale * spread
-
-        def consistent(sol, sens) -> bool:
-            near = self._near or sens.condition_number > self.cond_limit
-            if sens.det_sign != self._sign and not near:
-                return False  # across a singularity without passing near one: another assembly
-            e = self._e  # log6(Mm^-1 Ms) - J^-1 (l - l^), Mm the motion model's pose
-            branch_residual(self._F, w.size, w, sol.q[self._ffq], self._sens.Jinv, l, lhat, e)
-            et, er = e[:3], e[3:]  # norms as np.linalg.norm computes them, without its dispatch
-            size = math.hypot(math.sqrt(et @ et), self.length * math.sqrt(er @ er))
-            return size <= bound * math.hypot(sens.translation, self.length * sens.rotation) + 1e-9 * self.length
-
-        if consistent(sol, sens):
+        bound = self._bound * self._scale * spread
+        if self._consistent(sol, sens, l, lhat, w, bound):
             return sol, sens, True
         if not self.settings.recover:
             return sol, sens, False
         retry = self._solve(l, self._model_q(w))
         if posed(retry):
             rsens = self._sens.evaluate(retry.q)
-            if consistent(retry, rsens):
+            if self._consistent(retry, rsens, l, lhat, w, bound):
                 return retry, rsens, True
             self._sens.evaluate(sol.q)
         return sol, sens, False
+
+    def _consistent(self, sol, sens, l, lhat, w, bound) -> bool:
+        """Whether ``sol`` is within ``bound`` propagated pose sigmas of the motion model's pose."""
+        cond = sens.condition_number
+        if sens.det_sign != self._sign and not (self._near or cond > self.cond_limit):
+            return False  # across a singularity without passing near one: another assembly
+        e = self._e  # log6(Mm^-1 Ms) - J^-1 (l - l^), Mm the motion model's pose
+        branch_residual(self._F, w.size, w, sol.q[self._ffq], self._sens.Jinv, l, lhat, e)
+        et, er = self._et, self._er  # norms as np.linalg.norm computes them (dot), without its dispatch
+        length = self.length
+        size = math.hypot(math.sqrt(et.dot(et)), length * math.sqrt(er.dot(er)))
+        return size <= bound * math.hypot(sens.translation, length * sens.rotation) + 1e-9 * length
 
     def _model_q(self, w: np.ndarray) -> np.ndarray:
         """The motion model's configuration ``P0 (+) sum_j w_j (P_j (-) P0)`` (a Newton guess)."""
@@ -363,39 +377,31 @@ class Tracker(PassageMixin):
 
     def _finish(self, sol, sens, flags, legs, innovation, trusted, t0) -> TrackResult:
         s = self.settings
-        if sens.condition_number > self.cond_limit:
+        cond = sens.condition_number
+        near = cond > self.cond_limit
+        if near:
             flags.append("near_singular")
             # a re-anchored pose here: its assembly cannot be certified (until reset())
             self._uncertified = self._uncertified or (trusted is None and self._resolver is None)
         if sol.status == "out_of_limits":
             flags.append("out_of_limits")
-        sig_t, sig_r = s.noise * sens.translation, s.noise * sens.rotation
-        if (
-            s.max_sigma_factor is not None
-            and not math.hypot(sig_t, self.length * sig_r) <= s.max_sigma_factor * s.noise
-        ):
+        noise = s.noise
+        sig_t, sig_r = noise * sens.translation, noise * sens.rotation
+        if s.max_sigma_factor is not None and not math.hypot(sig_t, self.length * sig_r) <= s.max_sigma_factor * noise:
             flags.append("imprecise")
+        q = sol.q
         if trusted:
-            self._push_trusted(sol.q)
-            self._sign, self._near = sens.det_sign, sens.condition_number > self.cond_limit
-            self._cond_last = sens.condition_number
-            if not (self._near or self._lost or self._uncertified or self._resolver):
-                self._calm.append((self._k, sol.q, sol.lengths))
+            self._push_trusted(q)
+            self._sign, self._near = sens.det_sign, near
+            self._cond_last = cond
+            if not (near or self._lost or self._uncertified or self._resolver):
+                self._calm.append((self._k, q, sol.lengths))
         elif trusted is not None:
             self._gap += 1
-        self._last_q = sol.q
-        margin = self.home_condition / sens.condition_number
-        return TrackResult(
-            sol,
-            "ok",
-            tuple(flags),
-            legs,
-            innovation,
-            sig_t,
-            sig_r,
-            sens.condition_number,
-            margin,
-            time.perf_counter() - t0,
+        self._last_q = q
+        margin = self.home_condition / cond
+        return track_result(
+            sol, "ok", tuple(flags), legs, innovation, sig_t, sig_r, cond, margin, time.perf_counter() - t0
         )
 
     def _failure(self, l, status, message, flags, legs, t0, sol=None) -> TrackResult:
@@ -404,7 +410,7 @@ class Tracker(PassageMixin):
             q = self._last_q
             sol = Solution(self.hexa.pose_of(q), q.copy(), l.copy(), status, 0, math.nan, None, message)
         nan = math.nan
-        return TrackResult(sol, status, flags, legs, nan, nan, nan, nan, nan, time.perf_counter() - t0)
+        return track_result(sol, status, flags, legs, nan, nan, nan, nan, nan, time.perf_counter() - t0)
 
 
 class _NewestFirst:

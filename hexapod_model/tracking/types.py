@@ -60,11 +60,14 @@ def predict(model: pin.Model, history, predictor: str) -> np.ndarray:
     p0 = history[0]
     if a1 == 0.0 and a2 == 0.0:
         return p0.copy()
-    dv = np.zeros(model.nv)
-    if a1:
-        dv += a1 * pin.difference(model, p0, history[1])
-    if a2:
-        dv += a2 * pin.difference(model, p0, history[2])
+    # dv = 0 + a1 d1 + a2 d2 in place: 0 + x is x but for -0 (+0): the "+= 0.0" below
+    dv = pin.difference(model, p0, history[1] if a1 else history[2])
+    dv *= a1 if a1 else a2
+    dv += 0.0
+    if a1 and a2:
+        d2 = pin.difference(model, p0, history[2])
+        d2 *= a2
+        dv += d2
     return pin.integrate(model, p0, dv)
 
 
@@ -125,3 +128,39 @@ class TrackResult:
     def sigma_mm_deg(self) -> tuple[float, float]:
         """``(translation mm, rotation deg)``: the 1-sigma figures as the fixture service publishes them."""
         return self.sigma_translation * 1e3, math.degrees(self.sigma_rotation)
+
+
+def track_result(
+    solution: Solution,
+    status: str,
+    flags: tuple[str, ...],
+    legs: tuple[int, ...],
+    innovation: float,
+    sigma_translation: float,
+    sigma_rotation: float,
+    condition_number: float,
+    singularity_margin: float,
+    solve_time: float,
+) -> TrackResult:
+    """``TrackResult(...)`` of these fields, filled at once (the tracker's per-sample result).
+
+    The same frozen object as the dataclass's ``__init__`` makes (equal, immutable), without its
+    one ``object.__setattr__`` call per field.
+    """
+    r = _new(TrackResult)
+    r.__dict__.update(
+        solution=solution,
+        status=status,
+        flags=flags,
+        legs=legs,
+        innovation=innovation,
+        sigma_translation=sigma_translation,
+        sigma_rotation=sigma_rotation,
+        condition_number=condition_number,
+        singularity_margin=singularity_margin,
+        solve_time=solve_time,
+    )
+    return r
+
+
+_new = object.__new__
