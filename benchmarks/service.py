@@ -9,7 +9,8 @@ service (its cycle thread, the store writer, HTTP on 127.0.0.1:0) runs in the sa
 ``hexapod serve --simulate`` does. Frames carry their sampling time as timestamps (as a SocketCAN
 receiver stamps a burst) and are put straight into the receiving virtual bus's queue, as a kernel
 delivers them (the virtual bus's own ``send`` deep-copies each frame under this process's GIL: a
-cost of the stand-in hardware, not of the service). Per run: sets sent and solved, the latency
+cost of the stand-in hardware, not of the service); the frame objects of a run are made before
+it, so the feeder only stamps and queues them. Per run: sets sent and solved, the latency
 from the arrival of the frame that completed a set to the publication of its record (the
 subscriber's call; a backlog counts), and the CPU time
 of the service's threads (cycle + store + HTTP) and of the whole process (feeder included), in
@@ -181,16 +182,22 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
     sent, position = [0], [0]  # sets sent in the measured phase; where the trajectory is
     stop = threading.Event()
 
-    def feed() -> None:  # continues the trajectory where the warm-up left it
+    def prepared(periods: int) -> list[list[list[can.Message]]]:
+        # a message object per frame of each period, made before the phase: the feeder only
+        # stamps and queues them (as a kernel delivers frames), so its own cost stays small
+        return [
+            [[copy.copy(m) for m in msgs] for msgs in frames[(position[0] + k) % len(frames)]] for k in range(periods)
+        ]
+
+    def feed(ahead: list[list[list[can.Message]]]) -> None:  # continues the trajectory where the warm-up left it
         period, k, start, wall = 1.0 / rate, 0, time.perf_counter(), time.time()
-        while not stop.is_set():
+        while not stop.is_set() and k < len(ahead):
             wait = start + k * period - time.perf_counter()
             if wait > 0:
                 time.sleep(wait)
             stamp = wall + k * period  # the sampling time, as an encoder's frame would carry it
-            for name, msgs in zip(names, frames[(position[0] + k) % len(frames)]):
+            for name, msgs in zip(names, ahead[k]):
                 for j, m in enumerate(msgs):
-                    m = copy.copy(m)
                     m.timestamp = stamp + j * 130e-6
                     deliver(m)
                 arrived[(name, m.timestamp)] = time.time()  # the set's last frame is at the receiver
@@ -200,7 +207,7 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
 
     service.start()
     try:
-        warm = threading.Thread(target=feed, daemon=True)
+        warm = threading.Thread(target=feed, args=(prepared(int(1.5 * rate)),), daemon=True)
         warm.start()
         time.sleep(1.0)  # warm-up: caches, first solves
         stop.set()
@@ -214,15 +221,17 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         threads = [service._thread, getattr(service.writer, "_thread", None)]
         if service.endpoint is not None:
             threads.append(service.endpoint._thread)
+        ahead = prepared(int((seconds + 1.0) * rate))
         c0, p0, t0 = thread_cpu(threads), time.process_time(), time.perf_counter()
-        feeder = threading.Thread(target=feed, daemon=True)
+        k0 = thread_cpu(threads[:1])
+        feeder = threading.Thread(target=feed, args=(ahead,), daemon=True)
         feeder.start()
         time.sleep(seconds)
         stop.set()
         feeder.join()
         fed = time.perf_counter() - t0
         drain(service)  # a backlog is worked off (and its latency counted), up to 10 s
-        c1, p1 = thread_cpu(threads), time.process_time()
+        c1, p1, k1 = thread_cpu(threads), time.process_time(), thread_cpu(threads[:1])
     finally:
         service.stop()
         bus.shutdown()
@@ -238,6 +247,7 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         "latency_ms_p99": float(np.percentile(lat, 99)) if records else float("nan"),
         "service_cpu_pct": 100.0 * (c1 - c0) / fed,  # CPU per second of stream, backlog included
         "service_cpu_us_per_set": 1e6 * (c1 - c0) / max(records, 1),
+        "cycle_cpu_us_per_set": 1e6 * (k1 - k0) / max(records, 1),  # the cycle thread alone
         "process_cpu_pct": 100.0 * (p1 - p0) / fed,
         "sustained": records >= 0.99 * sent[0] * fixtures and records > 0 and float(np.percentile(lat, 99)) < 10.0,
     }
@@ -247,7 +257,8 @@ def line(r: dict) -> str:
     return (
         f"{r['fixtures']:3d} x {r['rate_hz']:6.0f} Hz  sets {r['sets_sent']:7d}  solved {r['records']:7d}  "
         f"latency median {r['latency_ms_median']:6.2f} ms  p99 {r['latency_ms_p99']:7.2f} ms  "
-        f"CPU service {r['service_cpu_pct']:5.1f} % ({r['service_cpu_us_per_set']:4.0f} us a set)  "
+        f"CPU service {r['service_cpu_pct']:5.1f} % ({r['service_cpu_us_per_set']:4.0f} us a set, "
+        f"cycle thread {r['cycle_cpu_us_per_set']:4.0f})  "
         f"process {r['process_cpu_pct']:5.1f} %  "
         f"{'sustained' if r['sustained'] else 'NOT sustained'}  {r['statuses']}"
     )
