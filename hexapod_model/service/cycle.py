@@ -99,6 +99,7 @@ class FixtureCycle:
         self._counts = [0] * 6
         self._err, self._warn, self._bad, self._fresh = [False] * 6, [False] * 6, [False] * 6, [False] * 6
         self._n_fresh = 0
+        self._max_skew, self._staleness = cfg.max_skew, cfg.staleness  # read per frame (the config is frozen)
         self.lock = LockDetector(cfg.lock_time, cfg.steady_band, cfg.drift_limit, cfg.unlock_samples)
         self.stuck = StuckDetector(cfg.stuck_sigmas, cfg.noise, self.layout.metres_per_count)
         self.steps = StepDetector(cfg.noise)
@@ -150,7 +151,7 @@ class FixtureCycle:
         is a *duplicate* (two senders?) and fails the set; a frame of a newer instant closes an
         unfinished set as ``incomplete`` (or ``silent_leg``) naming the missing legs.
         """
-        skew = self.cfg.max_skew or 0.75 * self._period  # NaN until the period is measured
+        skew = self._max_skew or 0.75 * self._period  # NaN until the period is measured
         published = None
         if t < self._t_newest - skew:  # older than this instant: a late frame (False for NaN)
             self._late_run += 1
@@ -175,7 +176,7 @@ class FixtureCycle:
         else:
             self._bad[leg], self._readings[leg] = True, math.nan
         dt = t - self._t[leg]
-        if 0.0 < dt <= self.cfg.staleness:  # the median ignores missed frames and bunched arrivals
+        if 0.0 < dt <= self._staleness:  # the median ignores missed frames and bunched arrivals
             if len(self._intervals) < 63:
                 self._intervals.append(dt)
             else:

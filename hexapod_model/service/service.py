@@ -174,10 +174,15 @@ class FixtureService:
                 return
             self.store, self.cycles = store, cycles
             self.changeover = Changeover(store, self.hexapods, cycles)
+            # by extended flag, then id: one dict look-up a frame, no key tuple built
             self._routes = {
-                (leg.can_id, leg.extended_id): (self.cycles[f.name], k)
-                for f in cfg.fixtures
-                for k, leg in enumerate(f.legs)
+                extended: {
+                    leg.can_id: (self.cycles[f.name], self.cycles[f.name].on_frame, k)
+                    for f in cfg.fixtures
+                    for k, leg in enumerate(f.legs)
+                    if leg.extended_id == extended
+                }
+                for extended in (False, True)
             }
             self.writer = StoreWriter(self.store)
             self._last_logged = {name: -1e300 for name in self.cycles}
@@ -344,14 +349,15 @@ class FixtureService:
                 clock = time.time()  # nothing queued: the bus is quiet now
             else:
                 clock = msg.timestamp or time.time()  # the bus's own clock: a backlog is not silence
-                route = routes.get((msg.arbitration_id, msg.is_extended_id))
+                route = routes[bool(msg.is_extended_id)].get(msg.arbitration_id)
                 if route is None or msg.is_error_frame or msg.is_remote_frame:
                     self.unknown_frames += 1
                 else:
                     self.frames += 1
-                    rec = route[0].on_frame(route[1], msg.data, clock)
+                    cycle, on_frame, leg = route
+                    rec = on_frame(leg, msg.data, clock)
                     if rec is not None:
-                        self._publish(route[0], rec)
+                        self._publish(cycle, rec)
             if clock - last_check >= tick:
                 last_check = clock
                 for cycle in self.cycles.values():
