@@ -40,8 +40,9 @@ def child(fixtures: int, sets: int) -> dict:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from service import make_config, readings_sequence  # this folder's throughput benchmark
 
-    readings = readings_sequence(Hexapod.from_preset("reference"))[:sets]
-    Hexapod.from_preset("reference").forward(readings[0])  # kernels loaded: not a fixture's cost
+    hexa = Hexapod.from_preset("reference")
+    readings = readings_sequence(hexa)[:sets]
+    hexa.forward(readings[0])  # kernels loaded: not a fixture's cost
     before = rss_mb()
     with tempfile.TemporaryDirectory() as tmp:
         channel, config = make_config(fixtures, Path(tmp))
