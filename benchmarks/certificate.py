@@ -31,7 +31,7 @@ from hexapod_model.description.presets import PRESETS
 def run(name: str, n: int, seed: int, offset: float) -> dict:
     """Median times (us) and refusal counts of cold and warm solves of preset ``name``."""
     hexa = Hexapod.load(name)
-    solver = hexa._solver(hexa._held_forward)
+    solver = hexa.engine.solver(hexa.engine.held_forward)
     rng = np.random.default_rng(seed + 1)
     hexa.forward(np.zeros(6))  # compile / warm up
     out: dict = {"preset": name}
@@ -52,7 +52,7 @@ def run(name: str, n: int, seed: int, offset: float) -> dict:
             starts["warm"] = near
         for mode, guess in starts.items():
             joints = hexa.joints_of(truth.lengths)
-            start = hexa._start(guess)
+            start = hexa.engine.start(guess)
             sign = solver.home_sign if guess is None else guess.det_sign
             q0 = start.copy()
             q0[hexa.closed_loop.prismatic_q] = joints

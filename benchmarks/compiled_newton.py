@@ -29,8 +29,8 @@ from hexapod_model.studies.bench import BENCH_TOL, trajectory_readings
 
 def use(hexa: Hexapod, general: bool) -> None:
     """Give the calling thread the general solvers (``general``) or the default ones."""
-    held = (hexa._held_forward, hexa._held_inverse)
-    hexa._local.solvers = {h: NewtonSolver(hexa.closed_loop, h) for h in held} if general else {}
+    held = (hexa.engine.held_forward, hexa.engine.held_inverse)
+    hexa.engine.local.solvers = {h: NewtonSolver(hexa.closed_loop, h) for h in held} if general else {}
 
 
 def per_solve(solve, inputs) -> np.ndarray:

@@ -13,7 +13,7 @@ Alternating rounds (the machine is shared: the load affects both alike), CPU tim
 Both solve to ``BENCH_TOL``. Then where the package's time goes beside the floor's: the warm
 solve's compiled call alone (the iteration, and the finish a ``Solution`` needs: Jacobian, pose,
 limit check) and the Python around it; the rows of the box whose certified first attempt fails
-(the certificate then follows the readings path, :mod:`hexapod_model.kinematics.assembly`). The
+(the certificate then follows the readings path, :mod:`hexapod_model.kinematics.certificate`). The
 figures of the first solves (compilation) are in ``startup.py --cold``.
 
     python benchmarks/floor_compare.py [--rounds 5] [--samples 1000]
@@ -45,7 +45,7 @@ def call_breakdown(hexa: Hexapod, readings: np.ndarray, first) -> dict[str, floa
     the previous solve's configuration; ``finish`` off leaves the Jacobian, pose and limit
     check out (the iteration alone).
     """
-    solver = hexa._solver(hexa._held_forward)
+    solver = hexa.engine.solver(hexa.engine.held_forward)
     starts = [first]
     for x in readings[:-1]:
         starts.append(hexa.forward(x, starts[-1], tol=BENCH_TOL))
@@ -63,7 +63,7 @@ def call_breakdown(hexa: Hexapod, readings: np.ndarray, first) -> dict[str, floa
 
 def uncertified_attempts(hexa: Hexapod, readings: np.ndarray) -> np.ndarray:
     """Which rows' certified first attempt from home fails (the certificate follows their readings path)."""
-    solver = hexa._solver(hexa._held_forward)
+    solver = hexa.engine.solver(hexa.engine.held_forward)
     home = hexa.closed_loop.q_home
     attempts = [solver.certified_forward(home, x, BENCH_TOL, MAX_ITER, solver.home_sign) for x in readings]
     return np.array([len(a) != 6 for a in attempts], dtype=bool)

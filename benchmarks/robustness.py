@@ -69,8 +69,8 @@ class Checker:
 
     def __init__(self, hexa: Hexapod):
         self.hexa = hexa
-        self.fk = NewtonSolver(hexa.closed_loop, hexa._held_forward)
-        self.ik = NewtonSolver(hexa.closed_loop, hexa._held_inverse)
+        self.fk = NewtonSolver(hexa.closed_loop, hexa.engine.held_forward)
+        self.ik = NewtonSolver(hexa.closed_loop, hexa.engine.held_inverse)
         self.length = characteristic_length(hexa)
 
     def sign(self, q: np.ndarray) -> float:
@@ -84,7 +84,7 @@ class Checker:
         q, s0 = q_start, self.sign(q_start)
         for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
             q0 = q.copy()
-            self.hexa._set_pose(q0, (pin.SE3(T0) * pin.exp6(s * xi)).homogeneous)
+            self.hexa.engine.set_pose(q0, (pin.SE3(T0) * pin.exp6(s * xi)).homogeneous)
             q, status = self.ik.run(q0, 1e-12, 30)[:2]
             if status != "converged":
                 return True  # the pose path leaves the assembled set: no connection either

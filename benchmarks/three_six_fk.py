@@ -19,8 +19,8 @@ from collections import Counter
 import numpy as np
 
 from hexapod_model import Hexapod
-from hexapod_model.analysis.three_six import MAX_ASSEMBLIES, ThreeSixFK
 from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.kinematics.three_six import MAX_ASSEMBLIES, ThreeSixFK
 from hexapod_model.tracking.tracker import pose_distance
 
 

@@ -60,3 +60,81 @@ def test_library_never_prints_parses_argv_or_picks_a_backend():
         if "matplotlib.pyplot" in imported or "matplotlib.use" in text:
             offenders.append(f"{rel}: picks a matplotlib backend / uses pyplot")
     assert not offenders, offenders
+
+
+#: underscored names that are a public API: the namedtuple methods, and documented module functions
+PUBLIC_UNDERSCORED = {
+    "_replace": "namedtuple's documented method",
+    "_fields": "namedtuple's documented attribute",
+    "_asdict": "namedtuple's documented method",
+    "os._exit": "documented: exit without cleanup (the service's second Ctrl-C)",
+}
+#: reaches into a third-party object's privates where it has no public API, by module, with the reason
+ALLOWED_PRIVATE = {
+    ("cli/main.py", "_get_subactions"): "argparse has no public list of a sub-parsers action's help entries",
+    ("kinematics/newton/first_compile.py", "_cache"): "numba has no public query of a dispatcher's cache index",
+    ("kinematics/newton/first_compile.py", "_cache_file"): "numba has no public query of a dispatcher's cache index",
+    ("kinematics/newton/first_compile.py", "_index_path"): "numba has no public query of a dispatcher's cache index",
+}
+#: argparse's type of ``add_subparsers()``'s result has no public name (the sub-commands annotate with it)
+ALLOWED_ANYWHERE = {"argparse._SubParsersAction"}
+
+
+def _private(name: str) -> bool:
+    return name.startswith("_") and not name.startswith("__")
+
+
+def _defined_names(tree: ast.AST) -> set[str]:
+    """Every name a module defines: functions, classes, arguments, assigned names and attributes."""
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, ast.arg):
+            names.add(node.arg)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            names.add(node.id)
+        elif isinstance(node, ast.Attribute) and isinstance(node.ctx, (ast.Store, ast.Del)):
+            names.add(node.attr)
+    return names
+
+
+def _reaches(tree: ast.AST, rel: str) -> list[str]:
+    """The module-level ``Name = Any`` aliases and the reaches into another module's private names of ``tree``."""
+    found = []
+    for node in tree.body if isinstance(tree, ast.Module) else ():
+        if isinstance(node, (ast.Assign, ast.AnnAssign)) and isinstance(node.value, (ast.Name, ast.Attribute)):
+            value = node.value.id if isinstance(node.value, ast.Name) else node.value.attr
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for t in targets:
+                if value == "Any" and isinstance(t, ast.Name) and t.id[:1].isupper():
+                    found.append(f"{rel}:{node.lineno}: {t.id} = Any")
+    own = _defined_names(tree)
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            for alias in node.names:
+                if _private(alias.name):
+                    found.append(f"{rel}:{node.lineno}: from {'.' * node.level}{node.module or ''} import {alias.name}")
+        elif isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Load) and _private(node.attr):
+            if isinstance(node.value, ast.Name) and node.value.id in ("self", "cls"):
+                continue
+            text = ast.unparse(node)
+            if node.attr in own or node.attr in PUBLIC_UNDERSCORED or text in PUBLIC_UNDERSCORED:
+                continue
+            if (rel, node.attr) in ALLOWED_PRIVATE or text in ALLOWED_ANYWHERE:
+                continue
+            found.append(f"{rel}:{node.lineno}: {text}")
+    return found
+
+
+def test_no_any_alias_and_no_private_reach():
+    """No ``Name = Any`` stands in for a project class, and no module reads another module's ``_private`` names.
+
+    A module may use the private names it defines itself (its helpers, its own classes'
+    attributes); ``self._x`` and ``cls._x`` are the object's own.
+    """
+    offenders = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        rel = path.relative_to(PACKAGE).as_posix()
+        offenders += _reaches(ast.parse(path.read_text()), rel)
+    assert not offenders, "\n".join(offenders)

@@ -58,7 +58,7 @@ def leg_jacobian_local(hexa: Hexapod, q: np.ndarray) -> tuple[np.ndarray, np.nda
     the platform held, i.e. the leg itself is at a singular configuration).
     """
     clm = hexa.closed_loop
-    _, G = hexa._solver(()).evaluate(np.asarray(q, dtype=float))  # every joint free; this thread's buffers
+    _, G = hexa.engine.solver(()).evaluate(np.asarray(q, dtype=float))  # every joint free; this thread's buffers
     rows = 6 if clm.kind == "6d" else 3
     m = clm.model
     ff = np.arange(clm.platform_v, clm.platform_v + 6)

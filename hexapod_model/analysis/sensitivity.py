@@ -27,8 +27,15 @@ import numpy as np
 from numba import njit
 
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.newton.kernels import _rotation_weights
-from ..kinematics.newton.linalg import _block, _factor, _solve_transposed, lu_apply, lu_apply_transposed, lu_factor
+from ..kinematics.newton.kernels import rotation_weights
+from ..kinematics.newton.linalg import (
+    closure_block,
+    lu_apply,
+    lu_apply_transposed,
+    lu_factor,
+    lu_factor_in_place,
+    lu_solve_transposed_in_place,
+)
 from ..kinematics.newton.solver import NewtonSolver
 
 _JACOBI_SWEEPS = 30
@@ -167,14 +174,14 @@ def measure_solved(J, leg_cols, held_pos, ff_cols, rows, p, E, length, blocks, m
     LB, A, PB, n = blocks[6, :rows, :rows], blocks[:6, :rows, :], piv[0, :rows], vecs[0, :rows]
     for i in range(6):
         if rows == 6:
-            _rotation_weights(E, i, Ht, Ha)
-        _block(J, leg_cols[i], rows, p[i], Ht, 1.0, LB, rows)  # L_i: the leg's joints
-        _block(J, ff_cols, rows, p[6 + i], Ha, -1.0, A[i], 6)  # A_i: the platform's velocity
-        if _factor(LB, PB, rows) == 0.0:
+            rotation_weights(E, i, Ht, Ha)
+        closure_block(J, leg_cols[i], rows, p[i], Ht, 1.0, LB, rows)  # L_i: the leg's joints
+        closure_block(J, ff_cols, rows, p[6 + i], Ha, -1.0, A[i], 6)  # A_i: the platform's velocity
+        if lu_factor_in_place(LB, PB, rows) == 0.0:
             return np.inf, np.inf, np.inf, 0.0
         for a in range(rows):
             n[a] = 1.0 if a == held_pos[i] else 0.0
-        _solve_transposed(LB, PB, n, rows)
+        lu_solve_transposed_in_place(LB, PB, n, rows)
         for k in range(6):
             s = 0.0
             for a in range(rows):
@@ -227,7 +234,7 @@ class SensitivityEvaluator:
 
     def __init__(self, hexa: Hexapod, length: float):
         clm = hexa.closed_loop
-        self._hexa = hexa
+        self.hexa = hexa
         self.length = float(length)
         self.rows = 6 if clm.kind == "6d" else 3
         m = clm.model
@@ -259,8 +266,8 @@ class SensitivityEvaluator:
         cost). Falls back to :meth:`evaluate` when the solver holds another configuration or
         has no Schur step.
         """
-        hexa = self._hexa
-        s = hexa._solver(hexa._held_forward)  # the calling thread's (Hexapod keeps one per thread)
+        hexa = self.hexa
+        s = hexa.engine.solver(hexa.engine.held_forward)  # the calling thread's (one per thread)
         if s is not self._solved_by:  # the kernel's arguments from this solver (its buffers stay)
             self._solved_by, self._solved_args = s, self._arguments(s)
         args = self._solved_args
@@ -292,7 +299,7 @@ class SensitivityEvaluator:
         else:  # general URDF: the SVD route of the jacobian module
             from .jacobian import leg_jacobian_local
 
-            self.J[:] = leg_jacobian_local(self._hexa, q)[0]
+            self.J[:] = leg_jacobian_local(self.hexa, q)[0]
             tt, tr, cond, det = np.inf, np.inf, np.inf, 0.0
             if np.all(np.isfinite(self.J)):
                 tt, tr, cond, det = _invert_and_measure(

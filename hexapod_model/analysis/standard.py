@@ -161,12 +161,6 @@ class StandardModel:
         return cls(b, p, np.linalg.norm(home[:3, 3] + p @ home[:3, :3].T - b, axis=1), home)
 
     # ----- kinematics -----
-    def leg_vectors(self, poses: np.ndarray) -> np.ndarray:
-        """(N, 6, 3) vectors ``t + R p_i - b_i`` (eq. 1), base frame, metres."""
-        poses = _poses(poses)
-        _, v = self._legs(poses[:, :3, :3], poses[:, :3, 3])
-        return np.ascontiguousarray(np.swapaxes(v, 1, 2))
-
     def _legs(self, R: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``R p_i`` and ``t + R p_i - b_i`` as (N, 3, 6) arrays (component, leg)."""
         n = R.shape[0]

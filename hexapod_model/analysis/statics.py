@@ -30,8 +30,8 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..exceptions import InputError, SingularityError
-from ..kinematics.checks import check_vector
 from ..kinematics.hexapod import Hexapod
+from ..kinematics.input_checks import check_vector
 from .jacobian import leg_jacobian
 
 FRAMES = ("platform", "base")

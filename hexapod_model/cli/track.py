@@ -12,7 +12,7 @@ from ..extras import require_extra
 from ..files import atomic_write_text, check_output_path
 from ..io.tables import LENGTH_COLUMNS, column, read_table, write_table
 from ..studies.track import SPEEDS, TRACK_LOG_COLUMNS, run_table, simulate, track_log
-from ..tracking.checks import DEFAULT_READING_NOISE
+from ..tracking.reading_tests import DEFAULT_READING_NOISE
 from ..tracking.tracker import PREDICTORS
 from ._common import add_hexapod_argument, hexapod_of, note, progress
 

@@ -4,7 +4,7 @@ Each row gets what :meth:`~.hexapod.Hexapod.forward` (``inverse``) with ``check=
 give it (status, message, flags, iterations, determinant sign), and ``invalid_input`` where
 those raise on the row's input (NaN, a reading outside the stroke, a matrix that is not a rigid
 transform). On the compiled path (:mod:`.newton`) the loop over rows runs compiled
-(:mod:`.batch_kernels`), the readings path of :mod:`.assembly` included; a direct-kinematics
+(:mod:`.batch_kernels`), the readings path of :mod:`.certificate` included; a direct-kinematics
 row whose path is blocked (``ambiguous_assembly`` and its candidates) or whose warm result is
 uncertified near a singularity is solved by ``forward`` itself. Other hexapods and held sets
 are solved row by row. :mod:`.batch_result` holds the result and how the loops' outputs become it.
@@ -13,28 +13,26 @@ are solved row by row. :mod:`.batch_result` holds the result and how the loops' 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
 
 import numpy as np
 
 from ..exceptions import HexapodError, InputError
-from .assemblies import review
-from .assembly import NEAR_SINGULAR_FACTOR
+from .all_assemblies import review
 from .batch_result import FALLBACK, BatchResult, as_rows, batch_result, loop_outputs, poses_of_xyzquat
-from .checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance
+from .certificate import NEAR_SINGULAR_FACTOR
+from .engine import SolveEngine
+from .input_checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance
 from .newton.first_compile import announce
 from .newton.outcomes import INVALID_INPUT
 from .newton.solver import Solution
 
 __all__ = ["BatchResult", "as_rows", "forward_batch", "inverse_batch", "poses_of_xyzquat"]
 
-Hexapod = Any  # a hexapod.Hexapod (this module is below it: hexapod.py imports it)
 
-
-def _per_row(hexa: Hexapod, solve, rows, guess, warm: bool, retry, forward: bool) -> BatchResult:
+def _per_row(engine: SolveEngine, solve, rows, guess, warm: bool, retry, forward: bool) -> BatchResult:
     """The general path: one solve per row (hexapods or held sets without the compiled path)."""
     n = len(rows)
-    out = loop_outputs(n, hexa.nq)
+    out = loop_outputs(n, engine.nq)
     out[2][:] = FALLBACK
     fallback: dict[int, Solution] = {}
     for k, x in enumerate(rows):
@@ -45,7 +43,7 @@ def _per_row(hexa: Hexapod, solve, rows, guess, warm: bool, retry, forward: bool
             continue
         if warm and sol.converged:
             guess = sol
-    return batch_result(hexa, out, 0.0, retry, fallback, forward)
+    return batch_result(engine, out, 0.0, retry, fallback, forward)
 
 
 def _message_of(call) -> str:
@@ -57,31 +55,32 @@ def _message_of(call) -> str:
     return "invalid input"  # not reached: the compiled checks are the per-row checks
 
 
-def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter) -> BatchResult:
+def forward_batch(engine: SolveEngine, readings, guess, warm: bool, tol, max_iter) -> BatchResult:
     """:meth:`.hexapod.Hexapod.forward_batch`."""
     rows = as_rows("lengths", readings, (6,))
     tol, max_iter = check_tolerance(tol), check_max_iter(max_iter)
 
     def solve(x: np.ndarray, g) -> Solution:
-        return hexa.forward(x, g, tol=tol, max_iter=max_iter, check=False)
+        return engine.forward(x, g, tol, max_iter, False, True)
 
     def retry(k: int) -> str:
         return _message_of(lambda: solve(rows[k], None))
 
-    solver = hexa._solver(hexa._held_forward)
-    if not solver.compiled_loop:
-        return _per_row(hexa, solve, rows, guess, warm, retry, True)
+    solver = engine.solver(engine.held_forward)
+    one_call = solver.one_call
+    if one_call is None:
+        return _per_row(engine, solve, rows, guess, warm, retry, True)
     from .newton.batch_kernels import forward_rows  # numba: only for a compiled solver
 
     announce(forward_rows)
 
-    start = hexa._start(guess)  # a bad guess raises, as forward would on every row
+    start = engine.start(guess)  # a bad guess raises, as forward would on every row
     sign = solver.home_sign if guess is None else float(getattr(guess, "det_sign", 0))
     carry = np.array([sign, 0.0, float(guess is not None)])
-    joints = rows if hexa._encoder is None else hexa.joints_of(rows)
-    out, fallback = loop_outputs(len(rows), hexa.nq), {}
+    joints = rows if engine.encoder is None else engine.joints_of(rows)
+    out, fallback = loop_outputs(len(rows), engine.nq), {}
     settings = (tol, max_iter, NEAR_SINGULAR_FACTOR * solver.home_kappa)
-    stroke = (hexa._stroke_lo, hexa._stroke_hi)
+    stroke = (engine.stroke_lo, engine.stroke_hi)
     k = 0
     while k < len(rows):
         k = forward_rows(
@@ -93,26 +92,26 @@ def forward_batch(hexa: Hexapod, readings, guess, warm: bool, tol, max_iter) -> 
             warm,
             settings,
             stroke,
-            solver.arrays,
+            one_call.arrays,
             out,
         )
         if k < len(rows):  # the path is blocked, or a warm row is near a singularity: forward() says so
             g = (
                 guess
                 if not carry[1]
-                else Solution(hexa.pose_of(start), start.copy(), rows[k], "converged", 0, 0.0, det_sign=int(carry[0]))
+                else Solution(engine.pose_of(start), start.copy(), rows[k], "converged", 0, 0.0, det_sign=int(carry[0]))
             )
             fallback[k] = sol = solve(rows[k], g)
             out[2][k] = FALLBACK
             if warm and sol.converged:
                 start[:], carry[:2] = sol.q, (sol.det_sign, 1.0)
             k += 1
-    res = batch_result(hexa, out, tol, retry, fallback, True, max_iter)
-    return _reviewed(hexa, res, rows, guess, warm, solve, set(fallback))
+    res = batch_result(engine, out, tol, retry, fallback, True, max_iter)
+    return _reviewed(engine, res, rows, guess, warm, solve, set(fallback))
 
 
 def _reviewed(
-    hexa: Hexapod, res: BatchResult, rows: np.ndarray, guess, warm: bool, solve, done: set[int]
+    engine: SolveEngine, res: BatchResult, rows: np.ndarray, guess, warm: bool, solve, done: set[int]
 ) -> BatchResult:
     """A 3-6 hexapod's rows checked against every assembly, as :meth:`.hexapod.Hexapod.forward` checks them.
 
@@ -120,7 +119,7 @@ def _reviewed(
     in ``done`` were solved by ``forward`` already. Once a warm row's status changes, the rows
     after it are solved by ``solve`` (``forward``) one by one.
     """
-    if hexa._finder.exact is None:
+    if engine.finder.exact is None:
         return res
     status, messages, flags = res.status.astype(object), list(res.messages), list(res.flags)
     poses, lengths, q, signs = res.poses.copy(), res.lengths.copy(), res.q.copy(), res.det_sign.copy()
@@ -134,7 +133,7 @@ def _reviewed(
             new, changed = res.solution(k), False
         else:
             sol = res.solution(k)
-            new = review(hexa._finder, sol, rows[k], start)
+            new = review(engine.finder, sol, rows[k], start)
             changed, redo = new is not sol, warm and new.status != sol.status
         if changed:
             status[k], messages[k], flags[k], signs[k], q[k] = new.status, new.message, new.flags, new.det_sign, new.q
@@ -155,7 +154,7 @@ def _reviewed(
     )
 
 
-def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter) -> BatchResult:
+def inverse_batch(engine: SolveEngine, poses, guess, warm: bool, tol, max_iter) -> BatchResult:
     """:meth:`.hexapod.Hexapod.inverse_batch`."""
     if np.ndim(poses) == 2 and np.shape(poses)[1:] == (7,):
         xyzquat = as_rows("poses", poses, (7,))
@@ -165,7 +164,7 @@ def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter) -> Bat
     tol, max_iter = check_tolerance(tol), check_max_iter(max_iter)
 
     def solve(T: np.ndarray, g) -> Solution:
-        return hexa.inverse(T, g, tol=tol, max_iter=max_iter, check=False)
+        return engine.inverse(T, g, tol, max_iter, False)
 
     def retry(k: int) -> str:
         if xyzquat is not None and not np.all(np.isfinite(rows[k])):
@@ -173,14 +172,14 @@ def inverse_batch(hexa: Hexapod, poses, guess, warm: bool, tol, max_iter) -> Bat
             return str(InputError("pose", xyzquat[k], rule))
         return _message_of(lambda: solve(rows[k], None))
 
-    solver = hexa._solver(hexa._held_inverse)
-    if not solver.compiled_loop:
-        return _per_row(hexa, solve, rows, guess, warm, retry, False)
+    one_call = engine.solver(engine.held_inverse).one_call
+    if one_call is None:
+        return _per_row(engine, solve, rows, guess, warm, retry, False)
     from .newton.batch_kernels import inverse_rows  # numba: only for a compiled solver
 
     announce(inverse_rows)
 
-    out = loop_outputs(len(rows), hexa.nq)
+    out = loop_outputs(len(rows), engine.nq)
     settings = (tol, max_iter, POSE_TOLERANCE, MAX_POSITION)
-    inverse_rows(rows, hexa._start(guess), warm, settings, solver.arrays, out)
-    return batch_result(hexa, out, tol, retry, {}, False, max_iter)
+    inverse_rows(rows, engine.start(guess), warm, settings, one_call.arrays, out)
+    return batch_result(engine, out, tol, retry, {}, False, max_iter)

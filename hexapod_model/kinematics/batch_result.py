@@ -10,17 +10,16 @@ a flag). :func:`as_rows` and :func:`poses_of_xyzquat` check and convert the batc
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, SupportsIndex
+from typing import SupportsIndex
 
 import numpy as np
 
 from ..exceptions import InputError
-from .assembly import NEAR_SINGULAR_FACTOR
-from .checks import failure_status
+from .certificate import NEAR_SINGULAR_FACTOR
+from .engine import SolveEngine
+from .input_checks import failure_status
 from .newton.outcomes import INVALID_INPUT, OUT_OF_LIMITS, outcome
 from .newton.solver import Solution
-
-Hexapod = Any  # a hexapod.Hexapod (this module is below it)
 
 FALLBACK = -1  # code of a row solved by forward() itself
 _NEAR = "near a singularity: condition bound of the eliminated Jacobian {:.3g} times its home value (flag above {:g}); "
@@ -108,14 +107,14 @@ def loop_outputs(n: int, nq: int) -> tuple:
     return (np.empty((n, nq)), np.empty((n, 4, 4)), *ints, *floats, np.empty(n, dtype=np.int64))
 
 
-def _message(hexa: Hexapod, code: int, k: int, out: tuple, tol: float, retry) -> str:
+def _message(engine: SolveEngine, code: int, k: int, out: tuple, tol: float, retry) -> str:
     """The per-row API's message of row ``k`` solved in the compiled loop."""
     Q, _, _, iterations, residuals, ratios, kappas, _, bad = out
     if code == INVALID_INPUT:
         return retry(k)
     if code == OUT_OF_LIMITS:
-        return str(hexa._limit_error(int(bad[k]), Q[k, bad[k]]))
-    ratio = kappas[k] / hexa._solver(hexa._held_forward).home_kappa
+        return str(engine.limit_error(int(bad[k]), Q[k, bad[k]]))
+    ratio = kappas[k] / engine.solver(engine.held_forward).home_kappa
     if code == 0:
         return _NEAR.format(ratio, NEAR_SINGULAR_FACTOR) if ratio > NEAR_SINGULAR_FACTOR else ""
     return outcome(code, tol, int(iterations[k]), float(residuals[k]), float(ratios[k]))[1]
@@ -144,15 +143,15 @@ class _Statuses:
 
 
 def batch_result(
-    hexa: Hexapod, out: tuple, tol: float, retry, fallback: dict[int, Solution], forward: bool, max_iter: int = 0
+    engine: SolveEngine, out: tuple, tol: float, retry, fallback: dict[int, Solution], forward: bool, max_iter: int = 0
 ) -> BatchResult:
     """The :class:`BatchResult` of the compiled loops' outputs and the rows solved one by one.
 
     A row that used its ``max_iter`` steps is named as :meth:`.hexapod.Hexapod.forward` names it
-    (:func:`.checks.failure_status`).
+    (:func:`.input_checks.failure_status`).
     """
     Q, poses, codes, iterations, residuals, _, kappas, signs, _ = out
-    home_kappa = hexa._solver(hexa._held_forward).home_kappa
+    home_kappa = engine.solver(engine.held_forward).home_kappa
     near = ~(kappas <= NEAR_SINGULAR_FACTOR * home_kappa) & ((codes == 0) | (codes == OUT_OF_LIMITS)) & forward
     status = _Statuses(codes)
     flags: list[tuple[str, ...]] = [()] * len(Q)
@@ -160,17 +159,17 @@ def batch_result(
         flags[k] = _NEAR_FLAG
     messages = [""] * len(Q)
     for k in np.flatnonzero((codes != 0) | near):
-        messages[k] = "" if codes[k] == FALLBACK else _message(hexa, int(codes[k]), int(k), out, tol, retry)
+        messages[k] = "" if codes[k] == FALLBACK else _message(engine, int(codes[k]), int(k), out, tol, retry)
         if status[k] == "max_iterations":
-            outside = hexa._outside(Q[k])
-            stalled = failure_status("max_iterations", messages[k], residuals[k], max_iter, outside, hexa.scale)
+            outside = engine.outside(Q[k])
+            stalled = failure_status("max_iterations", messages[k], residuals[k], max_iter, outside, engine.scale)
             status[k], messages[k] = stalled
             flags[k] = ("not_closed",) if status[k] == "out_of_limits" else flags[k]
     for j, sol in fallback.items():
         Q[j], poses[j], iterations[j], residuals[j] = sol.q, sol.pose, sol.iterations, sol.residual
         status[j], messages[j], flags[j], signs[j] = sol.status, sol.message, sol.flags, sol.det_sign
     failed = status.index != 0
-    lengths = hexa.readings_of(Q[:, hexa.closed_loop.prismatic_q])  # row by row as readings_of(Q[ok][:, pq])
+    lengths = engine.readings_of(Q[:, engine.closed_loop.prismatic_q])  # row by row as readings_of(Q[ok][:, pq])
     if failed.any():  # a boolean assignment costs tens of microseconds even when it selects nothing
         poses[failed] = np.nan
         lengths[failed] = np.nan

@@ -207,12 +207,6 @@ class BranchResolver:
         dv[self.ff] = y
         return pin.integrate(self.model, q0, dv)
 
-    def rejected(self, value: float, dof: int) -> bool:
-        """Whether ``chi^2 = value`` rejects a candidate at significance ``alpha``."""
-        from scipy.stats import chi2
-
-        return not value <= float(chi2.isf(self.alpha, dof))
-
     def decide(self, at) -> str | None:
         """``"main"`` or ``"alt"`` when the readings single out that candidate, else ``None``.
 

@@ -2,7 +2,7 @@
 
 A reading is the encoder count ``round((l + e) / resolution) * resolution`` of the true leg
 value ``l`` plus Gaussian noise ``e`` of standard deviation ``noise`` (``resolution = 0``: no
-counts). Two consequences for the checks of :mod:`.checks`:
+counts). Two consequences for the checks of :mod:`.reading_tests`:
 
 * **innovation spread.** The count adds a rounding error of standard deviation
   ``resolution / sqrt(12)`` (uniform over a count): the reading's standard deviation is

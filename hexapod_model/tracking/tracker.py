@@ -6,7 +6,7 @@ solutions ``P0`` (newest), ``P1``, ``P2``: ``none`` (``P0``), ``eq22`` (``2 P0 -
 X = 2.5 T1 - 1.5 T2``), applied to the whole Pinocchio configuration in the tangent space at
 ``P0`` (``X = P0 (+) sum_k a_k (P_k (-) P0)``), so a constant-twist motion is predicted exactly.
 
-Every sample is then checked (statistics in :mod:`~hexapod_model.tracking.checks`):
+Every sample is then checked (statistics in :mod:`~hexapod_model.tracking.reading_tests`):
 its readings against the motion model (``jump``, ``stuck``), its pose against the motion
 model's pose plus the reading innovation mapped through the inverse of the eliminated 6x6
 Jacobian (``branch_uncertain``), and its configuration (``near_singular``, ``out_of_limits``,
@@ -35,7 +35,7 @@ from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
 from ..kinematics.rotations import pose_distance
-from .checks import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
+from .input_checks import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
 from .kernels import branch_residual, reading_checks
 from .passage import PassageMixin
 from .types import (
@@ -113,7 +113,7 @@ class Tracker(PassageMixin):
         self.settings = s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
         self.length = characteristic_length(hexa) if length is None else float(length)
         self._motion = MotionModel()
-        if sensitivity is not None and (sensitivity._hexa is not hexa or sensitivity.length != self.length):
+        if sensitivity is not None and (sensitivity.hexa is not hexa or sensitivity.length != self.length):
             raise InputError("sensitivity", sensitivity, "expected an evaluator of this hexapod with this length")
         self._sens = SensitivityEvaluator(hexa, self.length) if sensitivity is None else sensitivity
         clm = hexa.closed_loop

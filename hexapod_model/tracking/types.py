@@ -6,7 +6,6 @@ fixture service) read.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -124,10 +123,6 @@ class TrackResult:
     def iterations(self) -> int:
         """Newton steps of the sample's solve."""
         return self.solution.iterations
-
-    def sigma_mm_deg(self) -> tuple[float, float]:
-        """``(translation mm, rotation deg)``: the 1-sigma figures as the fixture service publishes them."""
-        return self.sigma_translation * 1e3, math.degrees(self.sigma_rotation)
 
 
 def track_result(

@@ -7,7 +7,6 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.analysis.jacobian import kinematic_evaluation
-from hexapod_model.analysis.three_six import ACCEPT, MAX_ASSEMBLIES, ThreeSixFK
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.kinematics.rotations import (
     EULER_ORDERS,
@@ -20,6 +19,7 @@ from hexapod_model.kinematics.rotations import (
     rpy_to_matrix,
     ypr_to_matrix,
 )
+from hexapod_model.kinematics.three_six import ACCEPT, MAX_ASSEMBLIES, ThreeSixFK
 
 
 @pytest.fixture(scope="module")

@@ -145,7 +145,7 @@ def _tracker_end(hexa, lengths, steps: int = 256):
     each sample warm-started at the last, through folds and determinant sign changes alike)."""
     from hexapod_model.kinematics.newton.solver import NewtonSolver
 
-    fk = NewtonSolver(hexa.closed_loop, hexa._held_forward)
+    fk = NewtonSolver(hexa.closed_loop, hexa.engine.held_forward)
     pq = hexa.closed_loop.prismatic_q
     q = hexa.q_home.copy()
     l0, l1 = q[pq].copy(), hexa.joints_of(lengths)

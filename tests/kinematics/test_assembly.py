@@ -22,7 +22,7 @@ from ..conftest import PRESET_NAMES, hexapod
 @functools.cache
 def _fk(hexa: hm.Hexapod) -> NewtonSolver:
     """A direct-kinematics solver of its own (the plain Newton iteration, no certificate)."""
-    return NewtonSolver(hexa.closed_loop, hexa._held_forward)
+    return NewtonSolver(hexa.closed_loop, hexa.engine.held_forward)
 
 
 def _sign(hexa: hm.Hexapod, q: np.ndarray) -> float:
@@ -84,7 +84,7 @@ def test_cold_readings_whose_path_from_home_is_blocked_are_ambiguous():
     (checked by a dense reference continuation). The plain solve returned the pose as converged.
     (The path's own verdict: without the resultant's every assembly, tests/kinematics/test_assemblies.py.)"""
     hexa = hm.Hexapod.from_preset("3-6")
-    hexa._finder.exact = None  # Newton's readings path alone
+    hexa.engine.finder.exact = None  # Newton's readings path alone
     poses = box_poses(hexa.home_pose, 400, seed=1, translation=0.15, angle_deg=60)
     for i in (83, 244, 250, 335):
         lengths = hexa.inverse(poses[i]).lengths

@@ -7,7 +7,7 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses
-from hexapod_model.kinematics import assembly
+from hexapod_model.kinematics import certificate as assembly
 
 from ..conftest import PRESET_NAMES, assert_same_message, hexapod
 

@@ -71,7 +71,7 @@ def test_the_hot_path_gives_the_first_solves_solution(name):
         assert _same(hot, first), (x, hot.status, first.status)
         statuses.add(hot.status)
     assert "converged" in statuses and len(statuses) > 1  # the hot path's shortcut and its way out both ran
-    assert hexa._local.staged is hexa._solver(hexa._held_forward)  # the hot path ran
+    assert hexa.engine.local.staged is hexa.engine.solver(hexa.engine.held_forward)  # the hot path ran
     with pytest.raises(hm.LimitError) as hot_error:
         hexa.forward(hi + 0.01, near)
     with pytest.raises(hm.InputError, match="lengths"):

@@ -11,7 +11,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.description.urdf import geometry_to_urdf
-from hexapod_model.kinematics.assembly import Outcome
+from hexapod_model.kinematics.certificate import Outcome
 from hexapod_model.kinematics.newton.compiled import CompiledSolver, solver_for
 from hexapod_model.kinematics.newton.solver import NewtonSolver
 
@@ -67,14 +67,14 @@ def test_compiled_path_equals_the_general_path(name):
     # far beyond the seed 000 box: converged, out-of-limits and flipped or unconverged starts
     hexa = hexapod(name)
     clm = hexa.closed_loop
-    fk_fast, fk_general = solvers(hexa, hexa._held_forward)
-    ik_fast, ik_general = solvers(hexa, hexa._held_inverse)
+    fk_fast, fk_general = solvers(hexa, hexa.engine.held_forward)
+    ik_fast, ik_general = solvers(hexa, hexa.engine.held_inverse)
     assert isinstance(fk_fast, CompiledSolver) and isinstance(ik_fast, CompiledSolver)
     assert (fk_fast.home_sign, fk_fast.home_kappa) == pytest.approx((fk_general.home_sign, fk_general.home_kappa))
     statuses = set()
     for T in box_poses(hexa.home_pose, 150, seed=31, translation=0.1, angle_deg=45):
         q = hexa.q_home
-        hexa._set_pose(q, T)
+        hexa.engine.set_pose(q, T)
         ik = ik_fast.run(q, 1e-12, 20)
         assert_same_run(ik, ik_general.run(q, 1e-12, 20))
         q = hexa.q_home
@@ -120,7 +120,7 @@ def test_hybrid_held_sets():
     # one joint held per leg, the platform free: the Schur structure, so the compiled path
     hexa = hexapod("reference")
     truth = hexa.inverse(box_poses(hexa.home_pose, 1, seed=33)[0])
-    one_per_leg = tuple(sorted([*hexa._held_forward[:5], hexa.model.getJointId("leg6_cardan_base_1")]))
+    one_per_leg = tuple(sorted([*hexa.engine.held_forward[:5], hexa.model.getJointId("leg6_cardan_base_1")]))
     fast, general = solvers(hexa, one_per_leg)
     assert isinstance(fast, CompiledSolver)
     start = hexa.q_home
@@ -132,15 +132,15 @@ def test_hybrid_held_sets():
     assert_same_run(result, general.run(start, 1e-12, 20))
     np.testing.assert_allclose(hexa.pose_of(result[0]), truth.pose, rtol=0, atol=1e-9)
     # two joints held in leg 5, none in leg 6; every joint free: the general path
-    two_in_leg5 = tuple(sorted([*hexa._held_forward[:5], hexa.model.getJointId("leg5_cardan_base_1")]))
+    two_in_leg5 = tuple(sorted([*hexa.engine.held_forward[:5], hexa.model.getJointId("leg5_cardan_base_1")]))
     assert not isinstance(solver_for(hexa.closed_loop, two_in_leg5), CompiledSolver)
     assert not isinstance(solver_for(hexa.closed_loop, ()), CompiledSolver)
 
 
 def test_legs_of_different_joint_counts_solve_through_the_general_path():
     hexa, plain = idle_roll_hexapod(), hexapod("spherical")
-    assert not isinstance(hexa._solver(hexa._held_forward), CompiledSolver)
-    assert not isinstance(hexa._solver(hexa._held_inverse), CompiledSolver)
+    assert not isinstance(hexa.engine.solver(hexa.engine.held_forward), CompiledSolver)
+    assert not isinstance(hexa.engine.solver(hexa.engine.held_inverse), CompiledSolver)
     for T in box_poses(plain.home_pose, 20, seed=32):
         back = hexa.inverse(T)
         np.testing.assert_allclose(back.lengths, plain.inverse(T).lengths, rtol=0, atol=1e-10)
@@ -163,7 +163,7 @@ def assert_same_iterate(fast: NewtonSolver, general: NewtonSolver, args: tuple, 
 def test_certified_iterations_equal_the_general_path(name):
     hexa = hexapod(name)
     clm = hexa.closed_loop
-    fast, general = solvers(hexa, hexa._held_forward)
+    fast, general = solvers(hexa, hexa.engine.held_forward)
     statuses = set()
     for T in box_poses(hexa.home_pose, 60, seed=34, translation=0.1, angle_deg=40):
         q = hexa.q_home
@@ -181,7 +181,8 @@ def test_certified_iterations_equal_the_general_path(name):
 def test_forward_solutions_equal_the_general_path():
     # the assembly certificate (substeps, candidates) over the compiled iterations
     fast, general = hexapod("3-6"), hm.Hexapod.from_preset("3-6")
-    general._local.solvers = {general._held_forward: NewtonSolver(general.closed_loop, general._held_forward)}
+    held = general.engine.held_forward
+    general.engine.local.solvers = {held: NewtonSolver(general.closed_loop, held)}
     poses = box_poses(fast.home_pose, 80, seed=35, translation=0.1, angle_deg=40)
     statuses = set()
     for T in poses:
@@ -208,18 +209,18 @@ def test_one_call_forward_equals_the_python_path(name):
     # Hexapod.forward tries CompiledSolver.certified_forward (one compiled call) first; the
     # Python path (assembly.solve_forward, then _solution) must give the same Solution, to rounding
     hexa = hexapod(name)
-    solver = hexa._solver(hexa._held_forward)
-    assert solver.compiled_loop
+    solver = hexa.engine.solver(hexa.engine.held_forward)
+    assert solver.one_call is not None
     rng = np.random.default_rng(37)
     seen, flags, previous = set(), set(), None
 
     def check(readings: np.ndarray, guess: hm.Solution | None) -> hm.Solution:
         sign = solver.home_sign if guess is None else guess.det_sign
         joints = hexa.joints_of(readings)
-        attempt = solver.certified_forward(hexa._start(guess), joints, 1e-10, 50, sign)
+        attempt = solver.certified_forward(hexa.engine.start(guess), joints, 1e-10, 50, sign)
         one_call = len(attempt) == 6  # converged certified: (q, pose, jacobian, iterations, residual, bad)
-        slow = hexa._finish(solver, hexa._start(guess), 1e-10, 50, False, (joints, sign, guess is not None))
-        slow = hexa._reviewed(slow, readings, guess, False)  # a 3-6 hexapod's every assembly (forward does it)
+        slow = hexa.engine.finish(solver, hexa.engine.start(guess), 1e-10, 50, False, (joints, sign, guess is not None))
+        slow = hexa.engine.reviewed(slow, readings, guess, False)  # a 3-6 hexapod's every assembly (forward does it)
         q_aug, state = solver.q_aug.copy(), (solver.sign, solver.det_sign, solver.certified)
         kappa = solver.kappa
         fast = hexa.forward(readings, guess, tol=1e-10, max_iter=50, check=False)
@@ -251,14 +252,14 @@ def test_one_call_inverse_equals_the_python_path(name):
     # Hexapod.inverse solves, checks limits and builds the pose in one call (CompiledSolver.run_checked);
     # NewtonSolver.run then _solution must give the same Solution and solver state, to rounding
     hexa = hexapod(name)
-    solver = hexa._solver(hexa._held_inverse)
-    assert solver.compiled_loop
+    solver = hexa.engine.solver(hexa.engine.held_inverse)
+    assert solver.one_call is not None
     statuses = set()
     for T in box_poses(hexa.home_pose, 60, seed=38, translation=0.15, angle_deg=50):
         for max_iter in (50, 1):
-            q0 = hexa._start(None)
-            hexa._set_pose(q0, T)
-            slow = hexa._solution(Outcome(*solver.run(q0, 1e-10, max_iter)), False, max_iter=max_iter)
+            q0 = hexa.engine.start(None)
+            hexa.engine.set_pose(q0, T)
+            slow = hexa.engine.solution(Outcome(*solver.run(q0, 1e-10, max_iter)), False, max_iter=max_iter)
             q_aug, theta, state = solver.q_aug.copy(), solver.theta, (solver.det_sign, solver.certified)
             fast = hexa.inverse(T, tol=1e-10, max_iter=max_iter, check=False)
             assert_same_solution(fast, slow)

@@ -29,7 +29,7 @@ def random_configuration(hexa: hm.Hexapod, rng: np.random.Generator) -> np.ndarr
 def test_step_kernels_match_the_compiled_ones(name: str, problem: str) -> None:
     """Residual, Jacobian and the step's solve, pivot ratio, sign and condition bound to rounding."""
     hexa = hexapod(name)
-    held = {"forward": hexa._held_forward, "inverse": hexa._held_inverse, "all free": ()}[problem]
+    held = {"forward": hexa.engine.held_forward, "inverse": hexa.engine.held_inverse, "all free": ()}[problem]
     fast = NewtonSolver(hexa.closed_loop, held, kernel_set(True))
     slow = NewtonSolver(hexa.closed_loop, held, kernel_set(False))
     rng = np.random.default_rng(7)
@@ -70,7 +70,7 @@ def test_pose_conversions_and_checks_match() -> None:
     """Free-flyer conversions, rigid-transform error and limit scans, NumPy vs numba."""
     hexa = hexapod("reference")
     fast, slow = kernel_set(True), kernel_set(False)
-    H = hexa._home_h
+    H = hexa.engine.home_h
     for T in box_poses(hexa.home_pose, 50, seed=3):
         a, b = np.empty(7), np.empty(7)
         fast.pose_to_xyzquat(T, H, a)

@@ -61,8 +61,8 @@ def on_path(name: str, factor: float, path: str) -> hm.Hexapod:
     geometry = hm.get_preset(name) if factor == 1.0 else scaled(hm.get_preset(name), factor)
     hexa = hm.Hexapod.from_geometry(geometry, compiled=path == "compiled")
     if path == "general":
-        held = (hexa._held_forward, hexa._held_inverse)
-        hexa._local.solvers = {h: NewtonSolver(hexa.closed_loop, h) for h in held}
+        held = (hexa.engine.held_forward, hexa.engine.held_inverse)
+        hexa.engine.local.solvers = {h: NewtonSolver(hexa.closed_loop, h) for h in held}
     return hexa
 
 
@@ -155,7 +155,7 @@ def test_condition_figures_are_scale_free(name, factor, path):
     # the home conditioning check and the near_singular flag's condition bound (relative to home's)
     unit, big, _ = pair(name, factor, path)
     assert big.home_condition_number == pytest.approx(unit.home_condition_number, rel=1e-9)
-    su, sb = unit._solver(unit._held_forward), big._solver(big._held_forward)
+    su, sb = unit.engine.solver(unit.engine.held_forward), big.engine.solver(big.engine.held_forward)
     assert sb.home_kappa == pytest.approx(su.home_kappa, rel=1e-9)
     for T in box_poses(unit.home_pose, 10, seed=13, translation=0.1, angle_deg=40):
         S = T.copy()
@@ -202,7 +202,7 @@ def held_values(hexa: hm.Hexapod, q: np.ndarray, passive: str, step: np.ndarray,
 def test_hybrid_solves_on_the_general_path_to_scale(name, factor):
     # five prismatic joints and a Cardan angle of leg 6 held: the general solver (no structured step)
     unit, big, slack = pair(name, factor, "compiled")
-    assert not unit._solver(held_ids(unit)).compiled_loop
+    assert unit.engine.solver(held_ids(unit)).one_call is None
     passive = "leg6_cardan_base_1"
     rng, statuses = np.random.default_rng(6), []
     for T in box_poses(unit.home_pose, 10, seed=14, translation=0.1, angle_deg=40):

@@ -52,7 +52,7 @@ def test_jacobian_matches_finite_differences(name):
 def test_round_trip_pose_lengths_pose_on_1000_box_poses(name):
     hexa = hexapod(name)
     poses = box_poses(hexa.home_pose, 1000, seed=7)
-    plain = hexa._solver(hexa._held_forward)
+    plain = hexa.engine.solver(hexa.engine.held_forward)
     worst_p = worst_r = worst_l = 0.0
     steps = []
     for T in poses:
@@ -200,7 +200,7 @@ def test_structured_steps_equal_the_dense_step(name):
     # exactly the same linear system as a dense solve of the reduced Jacobian
     hexa = hexapod(name)
     rng = np.random.default_rng(4)
-    for held, attr in ((hexa._held_forward, "held_pos"), (hexa._held_inverse, "block_cols")):
+    for held, attr in ((hexa.engine.held_forward, "held_pos"), (hexa.engine.held_inverse, "block_cols")):
         solver = NewtonSolver(hexa.closed_loop, held)
         assert getattr(solver, attr) is not None
         q = random_configuration(hexa, rng)

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import hexapod_model as hm
-from hexapod_model.analysis.three_six import ThreeSixFK
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.exceptions import WorkspaceError
+from hexapod_model.kinematics.three_six import ThreeSixFK
 from hexapod_model.tracking.types import posed
 
 from ..conftest import hexapod
@@ -35,7 +35,7 @@ def test_readings_without_an_assembly_are_named_with_the_residual():
     no real root: these were max_iterations (a step budget), now not_found or out_of_limits from
     Newton alone, no_assembly with the resultant (forward's answer on a 3-6 hexapod)."""
     hexa = hm.Hexapod.from_preset("3-6")
-    hexa._finder.exact = None  # Newton alone
+    hexa.engine.finder.exact = None  # Newton alone
     exact = ThreeSixFK(hexa.geometry)
     rng = np.random.default_rng(0)
     seen = set()

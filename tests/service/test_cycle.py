@@ -13,7 +13,7 @@ import pytest
 
 from hexapod_model.service import RECORD_KEYS, FixtureCycle, LockEvent, geometry_hash
 from hexapod_model.service.cycle import _quaternion
-from hexapod_model.tracking.checks import TrackerSettings
+from hexapod_model.tracking.reading_tests import TrackerSettings
 
 from ..conftest import hexapod
 from .helpers import drive, fixture_table, pose_error, service_config, sim_config

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from hexapod_model.tracking.checks import TrackerSettings
 from hexapod_model.tracking.false_alarms import false_alarm_rates, repeat_probability, stuck_run
+from hexapod_model.tracking.reading_tests import TrackerSettings
 from hexapod_model.tracking.tracker import Tracker
 
 from ..conftest import hexapod

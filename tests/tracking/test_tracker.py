@@ -216,7 +216,7 @@ def test_compiled_sensitivity_matches_the_jacobian_module(name):
 
 
 def test_motion_model_weights_extrapolate_quadratics_exactly():
-    from hexapod_model.tracking.checks import MotionModel
+    from hexapod_model.tracking.reading_tests import MotionModel
 
     mm = MotionModel()
     for ages in [(1, 2, 3), (1, 2, 3, 4, 5, 6), (2, 3, 5, 6), (4, 5, 6, 7, 8, 9)]:

@@ -2,7 +2,7 @@
 
 Per row: the input checks, the Newton iteration (:func:`.newton.iterate`) and the joint-limit
 check of :meth:`.hexapod.Hexapod.forward` / :meth:`~.hexapod.Hexapod.inverse`. Direct kinematics
-runs :func:`.assembly.solve_forward`: the certified first attempt, then, for a row it does not
+runs :func:`.certificate.solve_forward`: the certified first attempt, then, for a row it does not
 settle, the readings path (:func:`.follow.follow`, :func:`_follow_row`). A row whose path is
 blocked (the candidates of an ambiguous assembly are looked for in Python) or whose warm plain
 result is uncertified near a singularity ends the loop, and the caller solves that row with
@@ -70,7 +70,7 @@ def _invalid_row(k, out):
 
 @njit(cache=True, inline="always")
 def _follow_row(q0, q, start, target, attempt, tol, max_iter, sign, guessed, near_kappa, packed):
-    """The rest of :func:`.assembly.solve_forward` after a failed certified attempt from ``q0``.
+    """The rest of :func:`.certificate.solve_forward` after a failed certified attempt from ``q0``.
 
     ``attempt = (iterations, theta)`` of that attempt, whose last iterate is in ``q``;
     ``start`` holds the start's own readings. From a guess (``guessed``), first the plain uncertified solve

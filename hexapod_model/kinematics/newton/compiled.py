@@ -23,7 +23,7 @@ from .kernels import first_outside, jacobian
 from .legs import ChainTables
 from .outcomes import CONVERGED, outcome
 from .packing import SETTINGS, Packed
-from .solver import _ONE_STEP, _THETA_FLOOR, MAX_STEP, SINGULAR_PIVOT_RATIO, THETA_MAX, NewtonSolver
+from .solver import MAX_STEP, ONE_STEP, SINGULAR_PIVOT_RATIO, THETA_FLOOR, THETA_MAX, Attempt, NewtonSolver
 
 
 @njit(cache=True)
@@ -49,11 +49,10 @@ class CompiledSolver(NewtonSolver):
     """A :class:`.solver.NewtonSolver` whose ``iterate`` and ``evaluate`` run compiled.
 
     Its buffers (``J``, ``r``, ``G``, ``x``, the Schur blocks, ...) are views on the packed
-    arrays, so everything that reads them after a solve (``run``, :mod:`.assembly`,
+    arrays, so everything that reads them after a solve (``run``, :mod:`.certificate`,
     ``_solve_step``) sees the compiled path's values; ``q_aug[:nq]`` holds the last iterate.
     """
 
-    compiled_loop = True
     #: :func:`stage_forward`, for :meth:`.hexapod.Hexapod.forward` to check its readings and fill
     #: :attr:`forward_settings` in one compiled call before :meth:`attempt`
     stage = staticmethod(stage_forward)
@@ -63,7 +62,8 @@ class CompiledSolver(NewtonSolver):
     ):
         self.packed: Packed | None = None  # NewtonSolver.__init__ iterates once, on the general path
         super().__init__(clm, held_joints)
-        constants = (MAX_STEP, SINGULAR_PIVOT_RATIO, THETA_MAX, _THETA_FLOOR, _ONE_STEP, self.length_scale)
+        self.one_call = self
+        constants = (MAX_STEP, SINGULAR_PIVOT_RATIO, THETA_MAX, THETA_FLOOR, ONE_STEP, self.length_scale)
         schur = self.held_pos is not None
         if not schur and self.block_cols is None:  # solver_for checks the layout first
             raise ValueError("no structured step for these held joints")
@@ -77,12 +77,12 @@ class CompiledSolver(NewtonSolver):
         )
         for name in _BUFFERS:
             setattr(self, name, packed.views[name])
-        self._state = packed.views["state"]
-        self._q = self.q_aug[: clm.nq]  # the compiled path writes its iterate here, in place
+        self.state = packed.views["state"]
+        self.last_q = self.q_aug[: clm.nq]  # the compiled path writes its iterate here, in place
         self._no_offset = np.zeros(self.r.size)
         #: ``(ints, floats, work, iwork)`` of the packed tables and buffers
         self.arrays = packed.arrays
-        self._jac_args = (self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
+        self.jac_args = (self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
         if schur:
             s = self
             a = [s.J, s.leg_cols, s.held_pos, s.ff_cols, s.colmap, s.rows, s.p, s.E, s.r, s.x, s.LB, s.PB]
@@ -97,8 +97,8 @@ class CompiledSolver(NewtonSolver):
         self.forward_settings[3:7] = (0.0, 1.0, 1.0, 1.0)  # no homotopy, certify, finish, joints given
         self._checked_settings = np.zeros(SETTINGS)
         self._checked_settings[2:7] = (0.0, 0.0, 0.0, 1.0, 0.0)  # no sign, no homotopy, finish
-        self._fixed = (*packed.arrays, self._q)  # then an entry's outputs q, pose, G
-        self._nq, self._g_shape = self._q.shape[0], self.G.shape
+        self._fixed = (*packed.arrays, self.last_q)  # then an entry's outputs q, pose, G
+        self._nq, self._g_shape = self.last_q.shape[0], self.G.shape
         self._forward_joints = self.forward_settings[7:]  # the held joints' entries, a view
         self._scratch = self._outputs()
         if schur:  # home's sign and condition bound, now from the compiled path
@@ -113,7 +113,7 @@ class CompiledSolver(NewtonSolver):
         code, it, norm, ratio, self.theta, self.det_sign, self.certified, bad = self._kernel(
             start, offset, settings, arrays
         )
-        self.sign, self.kappa = self._state.tolist()
+        self.sign, self.kappa = self.state.tolist()
         status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
         return status, it, norm, message, bad
 
@@ -133,7 +133,7 @@ class CompiledSolver(NewtonSolver):
 
     def certified_forward(
         self, start: np.ndarray, joints: np.ndarray, tol: float, max_iter: int, sign: float
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, float, int] | tuple[str, int, float, str]:
+    ) -> Attempt:
         """The certified first attempt of direct kinematics in one compiled call (:func:`solve_schur`).
 
         Args:
@@ -146,7 +146,7 @@ class CompiledSolver(NewtonSolver):
         Returns:
             When the attempt converged certified, ``(q, pose, jacobian, iterations, residual,
             first joint outside the packed limits or -1)``; otherwise what :meth:`iterate` returns,
-            ``(status, iterations, residual, message)``, for :func:`.assembly.solve_forward` to
+            ``(status, iterations, residual, message)``, for :func:`.certificate.solve_forward` to
             go on from (its ``attempt``). The solver's state is :meth:`iterate`'s either way.
         """
         settings = self.forward_settings
@@ -156,9 +156,7 @@ class CompiledSolver(NewtonSolver):
         self._forward_joints[:] = joints  # any float dtype or stride: the entry's one signature
         return self.attempt(start, tol)
 
-    def attempt(
-        self, start: np.ndarray, tol: float
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, float, int] | tuple[str, int, float, str]:
+    def attempt(self, start: np.ndarray, tol: float) -> Attempt:
         """:meth:`certified_forward` with the settings in :attr:`forward_settings` already (see :meth:`stage`)."""
         # the hot path of a warm solve: :meth:`_call` and :meth:`_outputs` written out
         q, pose, G = np.empty(self._nq), np.empty((4, 4)), np.empty(self._g_shape)
@@ -169,7 +167,7 @@ class CompiledSolver(NewtonSolver):
             start, self._no_offset, self.forward_settings, (*self._fixed, q, pose, G)
         )
         self.certified = certified
-        self.sign, self.kappa = self._state.tolist()
+        self.sign, self.kappa = self.state.tolist()
         if code == CONVERGED and certified:
             return q, pose, G, it, norm, bad
         status, message = outcome(code, tol, it, norm, ratio)
@@ -195,7 +193,7 @@ class CompiledSolver(NewtonSolver):
         settings[:7] = (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         # frames and residual at q; the solver's state untouched
         self._kernel(_contiguous(q), self._no_offset, settings, self._scratch)
-        jacobian(*self._jac_args)
+        jacobian(*self.jac_args)
         return self.r.copy(), self.G.copy()
 
 

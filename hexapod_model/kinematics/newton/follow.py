@@ -1,6 +1,6 @@
-"""The readings path of :mod:`.assembly`, followed in compiled code.
+"""The readings path of :mod:`.certificate`, followed in compiled code.
 
-:func:`follow` is :func:`.assembly._follow` on the compiled path (:mod:`.newton`): the path of
+:func:`follow` is :func:`.certificate._follow` on the compiled path (:mod:`.newton`): the path of
 solutions for the readings ``l(t) = l0 + t (l - l0)`` from the start, in substeps, each accepted
 only when its certified Newton corrector (:func:`.newton.iterate_schur` with ``certify``)
 converges: no shortened step (``MAX_STEP``), every contraction at most ``THETA_MAX``, the
@@ -16,7 +16,7 @@ determinant sign kept. Same rules as the Python follower:
 
 What the path's end leaves is the caller's: a certified end (``t == 1``, the solver's buffers
 hold the last Schur step) or the last certified point ``x`` at ``t < 1``, where
-:func:`.assembly._ambiguous` looks for candidates (rare rows, in Python).
+:func:`.certificate._ambiguous` looks for candidates (rare rows, in Python).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from numba import njit
 
 from . import path_rules
 from .chains import evaluate_chains
-from .iteration import CONVERGED, _integrate, iterate_schur
+from .iteration import CONVERGED, integrate_configuration, iterate_schur
 from .kernels import closure_residual, copy_into
 from .lie import difference_free_flyer
 from .packing import LENGTH_SCALE, unpack_constants, unpack_floats, unpack_ints, unpack_work
@@ -56,7 +56,7 @@ def _predict(x, a, b, u, q0, dv, ints, work, scratch):
     for i in range(dv.shape[0]):
         dv[i] *= u
     copy_into(q0, x)
-    _integrate(q0, dv, leg_q, leg_v, ints[3], platform_v, Rs, ps, quat)
+    integrate_configuration(q0, dv, leg_q, leg_v, ints[3], platform_v, Rs, ps, quat)
 
 
 @njit(cache=True)

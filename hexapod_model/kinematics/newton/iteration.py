@@ -17,7 +17,7 @@ for ball joints) and the two structured problems: one joint held per leg, the pl
    condition bound (``state``);
 4. with ``certify``: the step's determinant sign equals the start's, it is not shortened and
    the contraction ``|dx_k+1| / |dx_k|`` stays below ``theta_max`` (the certificate of
-   :mod:`.assembly`); otherwise the solve stops, ``UNCERTIFIED``;
+   :mod:`.certificate`); otherwise the solve stops, ``UNCERTIFIED``;
 5. the step limited to ``max_step`` along its direction (:func:`.kernels.scatter_step`; its size,
    like ``one_step``'s and ``theta_floor``'s, weighted scale-free: the packed step weights) and
    applied on the manifold: ``q_j += dq_j`` for the leg joints, ``M_p <- M_p exp6(v_p)`` for the
@@ -55,7 +55,7 @@ from .structured import blocks_solve, schur_solve
 
 
 @njit(cache=True, inline="always")
-def _integrate(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat):
+def integrate_configuration(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat):
     """``q <- q (+) dv``: leg joints add their velocity, the platform's free flyer integrates on SE(3)."""
     for i in range(leg_q.shape[0]):
         for k in range(leg_q.shape[1]):
@@ -132,7 +132,7 @@ def _newton(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
             if not (certified and biggest <= max_step and theta <= theta_max):
                 code, certified = UNCERTIFIED, False
                 break
-        _integrate(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat)
+        integrate_configuration(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat)
         it += 1
     return code, it, norm, ratio, theta, sign, certified
 

@@ -54,7 +54,7 @@ def closure_residual(R, p, rows, E, r, length):
 
 
 @njit(cache=True, inline="always")  # inlined into its callers: a call per column cost more than the column
-def _column(J, c, rows, point, H, sign, out, row, col):
+def jacobian_column(J, c, rows, point, H, sign, out, row, col):
     """Add one column of the closure Jacobian.
 
     Write ``sign`` times the residual derivative along velocity ``c`` into ``out[row:row+rows, col]``:
@@ -73,11 +73,11 @@ def _column(J, c, rows, point, H, sign, out, row, col):
 def _add_columns(J, G, o, rows, cols, colmap, point, H, sign):
     for c in cols:
         if c >= 0 and colmap[c] >= 0:
-            _column(J, c, rows, point, H, sign, G, o, colmap[c])
+            jacobian_column(J, c, rows, point, H, sign, G, o, colmap[c])
 
 
 @njit(cache=True, inline="always")
-def _rotation_weights(E, i, Ht, Ha):
+def rotation_weights(E, i, Ht, Ha):
     """``H_tip = (tr(E) I - E)/2`` and ``H_anchor = (tr(E) I - E^T)/2`` of closure ``i``."""
     tr = E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2]
     for a in range(3):
@@ -100,7 +100,7 @@ def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
     for i in range(6):
         o = i * rows
         if rows == 6:
-            _rotation_weights(E, i, Ht, Ha)
+            rotation_weights(E, i, Ht, Ha)
         _add_columns(J, G, o, rows, leg_cols[i], colmap, p[i], Ht, 1.0)
         _add_columns(J, G, o, rows, ff_cols, colmap, p[6 + i], Ha, -1.0)
 

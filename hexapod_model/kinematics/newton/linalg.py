@@ -14,13 +14,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .kernels import _column
+from .kernels import jacobian_column
 
 
 # The factorisation and the solves work in place on the leading n x n block; they are inlined
 # into the structured solves below (a call per 6x6 block cost as much as the arithmetic).
 @njit(cache=True, inline="always")
-def _factor(LU, piv, n):
+def lu_factor_in_place(LU, piv, n):
     """LU factorisation with partial pivoting of ``LU[:n, :n]`` in place; returns the pivot ratio."""
     pmax = 0.0
     pmin = np.inf
@@ -50,8 +50,8 @@ def _factor(LU, piv, n):
 
 
 @njit(cache=True, inline="always")
-def _solve(LU, piv, x, n):
-    """``x <- A^-1 x`` with the factors of :func:`_factor` (``P A = L U``)."""
+def lu_solve_in_place(LU, piv, x, n):
+    """``x <- A^-1 x`` with the factors of :func:`lu_factor_in_place` (``P A = L U``)."""
     for k in range(n):
         p = piv[k]
         if p != k:
@@ -69,8 +69,8 @@ def _solve(LU, piv, x, n):
 
 
 @njit(cache=True, inline="always")
-def _solve_transposed(LU, piv, x, n):
-    """``x <- A^-T x`` with the factors of :func:`_factor`."""
+def lu_solve_transposed_in_place(LU, piv, x, n):
+    """``x <- A^-T x`` with the factors of :func:`lu_factor_in_place`."""
     for i in range(n):  # U^T y = x
         s = x[i]
         for j in range(i):
@@ -98,7 +98,7 @@ def lu_factor(A, LU, piv):
     for i in range(n):
         for j in range(n):
             LU[i, j] = A[i, j]
-    return _factor(LU, piv, n)
+    return lu_factor_in_place(LU, piv, n)
 
 
 @njit(cache=True)
@@ -107,7 +107,7 @@ def lu_apply(LU, piv, b, x):
     n = LU.shape[0]
     for k in range(n):
         x[k] = b[k]
-    _solve(LU, piv, x, n)
+    lu_solve_in_place(LU, piv, x, n)
 
 
 @njit(cache=True)
@@ -116,12 +116,12 @@ def lu_apply_transposed(LU, piv, b, x):
     n = LU.shape[0]
     for k in range(n):
         x[k] = b[k]
-    _solve_transposed(LU, piv, x, n)
+    lu_solve_transposed_in_place(LU, piv, x, n)
 
 
 @njit(cache=True, inline="always")
-def _det_sign(LU, piv, n):
-    """Sign (+1.0 / -1.0) of ``det A`` from the factors of :func:`_factor` (``n`` x ``n``)."""
+def lu_det_sign(LU, piv, n):
+    """Sign (+1.0 / -1.0) of ``det A`` from the factors of :func:`lu_factor_in_place` (``n`` x ``n``)."""
     s = 1.0
     for k in range(n):
         if piv[k] != k:
@@ -129,12 +129,6 @@ def _det_sign(LU, piv, n):
         if LU[k, k] < 0.0:
             s = -s
     return s
-
-
-@njit(cache=True)
-def lu_det_sign(LU, piv, n):
-    """Sign (+1.0 / -1.0) of ``det A`` from the factors of :func:`lu_factor` (``n`` x ``n``)."""
-    return _det_sign(LU, piv, n)
 
 
 @njit(cache=True)
@@ -152,27 +146,27 @@ def block_solve(G, r, rows, block_cols, LUb, piv, rb, xb, x):
             rb[a] = r[o + a]
             for b in range(rows):
                 LUb[a, b] = G[o + a, block_cols[i, b]]
-        ratio = _factor(LUb, piv, rows)
+        ratio = lu_factor_in_place(LUb, piv, rows)
         if ratio == 0.0:
             return 0.0
         worst = min(worst, ratio)
         for a in range(rows):
             xb[a] = rb[a]
-        _solve(LUb, piv, xb, rows)
+        lu_solve_in_place(LUb, piv, xb, rows)
         for b in range(rows):
             x[block_cols[i, b]] = xb[b]
     return worst
 
 
 @njit(cache=True, inline="always")
-def _block(J, cols, rows, point, H, sign, B, ncols):
+def closure_block(J, cols, rows, point, H, sign, B, ncols):
     """Fill ``B[:rows, :ncols]`` with the closure Jacobian's columns ``cols``.
 
     The columns of :func:`.kernels.jacobian` for the closure at ``point`` with rotation
     weights ``H``, times ``sign``.
     """
-    for a in range(rows):  # _column adds into a zeroed block
+    for a in range(rows):  # jacobian_column adds into a zeroed block
         for k in range(ncols):
             B[a, k] = 0.0
     for k in range(ncols):
-        _column(J, cols[k], rows, point, H, sign, B, 0, k)
+        jacobian_column(J, cols[k], rows, point, H, sign, B, 0, k)

@@ -1,6 +1,6 @@
-"""The step rules of the readings path (:mod:`.assembly`), shared by its Python and compiled followers.
+"""The step rules of the readings path (:mod:`.certificate`), shared by its Python and compiled followers.
 
-Plain Python, so that :mod:`.assembly` imports no numba for a hexapod solved with the NumPy
+Plain Python, so that :mod:`.certificate` imports no numba for a hexapod solved with the NumPy
 kernels; :mod:`.follow` compiles :func:`rescale` for the compiled follower.
 """
 

@@ -13,17 +13,19 @@ otherwise overshoot into a spurious 180-degree-flipped closure.
 The step's size is measured scale-free (:func:`velocity_weights`): its entries in radians as
 they are, those in metres (prismatic joints, the platform's translation) divided by the
 geometry's length scale (:func:`size_of`: the base radius over ``REFERENCE_RADIUS``, to the
-nearest power of two, 1 on the presets). So ``MAX_STEP``, ``_ONE_STEP`` and ``_THETA_FLOOR``
+nearest power of two, 1 on the presets). So ``MAX_STEP``, ``ONE_STEP`` and ``THETA_FLOOR``
 mean the same on a 1 cm and on a 2 m hexapod. Likewise the residual's norm counts a 6-D
 closure's rotation rows (rad) times the length scale, so that it and the tolerance (scaled by
 the caller, :attr:`.hexapod.Hexapod.default_tol`) are metres at that scale.
-:meth:`NewtonSolver.iterate` also records what :mod:`~hexapod_model.kinematics.assembly` certifies.
+:meth:`NewtonSolver.iterate` also records what :mod:`~hexapod_model.kinematics.certificate` certifies.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -48,7 +50,7 @@ REFERENCE_RADIUS = 0.25
 # The step sizes below are of the weighted step (rad, and m per length scale: velocity_weights)
 MAX_STEP = 0.5  # rad or m at the reference radius: largest entry of one Newton step (cold starts far away)
 THETA_MAX = 0.25  # largest Newton contraction |dx_k+1| / |dx_k| of a checked solve (an estimate, not a bound)
-_THETA_FLOOR, _ONE_STEP = 1e-9, 1e-6  # rounding-level step (no contraction); largest step a solve may end on
+THETA_FLOOR, ONE_STEP = 1e-9, 1e-6  # rounding-level step (no contraction); largest step a solve may end on
 
 
 def size_of(clm: ClosedLoopModel) -> tuple[float, float]:
@@ -164,6 +166,44 @@ class Solution:
         return pin.SE3(self.pose)
 
 
+#: a compiled certified attempt's result: ``(q, pose, jacobian, iterations, residual, first joint outside
+#: its limits or -1)`` when it converged certified, else ``(status, iterations, residual, message)``
+Attempt = tuple[np.ndarray, np.ndarray, np.ndarray, int, float, int] | tuple[str, int, float, str]
+
+
+class OneCallSolver(Protocol):
+    """The one-call solves of a solver whose whole iteration runs compiled (:class:`.compiled.CompiledSolver`).
+
+    :attr:`NewtonSolver.one_call` is one of these, or ``None`` on the general path: the typed
+    choice between the two paths.
+    """
+
+    #: checks the readings (m) against the stroke and fills :attr:`forward_settings`; the first reading outside or -1
+    stage: Callable[..., int]
+    #: the settings of the next certified attempt (:data:`.packing.SETTINGS`)
+    forward_settings: np.ndarray
+    #: ``(ints, floats, work, iwork)``: the packed tables and buffers the compiled loops take
+    arrays: tuple
+    home_sign: float
+    home_kappa: float
+    sign: float
+    kappa: float
+
+    def certified_forward(
+        self, start: np.ndarray, joints: np.ndarray, tol: float, max_iter: int, sign: float
+    ) -> Attempt:
+        """The certified first attempt of direct kinematics from ``start`` holding ``joints`` (m)."""
+        ...
+
+    def attempt(self, start: np.ndarray, tol: float) -> Attempt:
+        """:meth:`certified_forward` with its settings staged already."""
+        ...
+
+    def run_checked(self, q0: np.ndarray, tol: float, max_iter: int) -> tuple[tuple, np.ndarray, int] | None:
+        """A plain solve, the pose and the limit check in one call; ``None`` where it has none."""
+        ...
+
+
 class NewtonSolver:
     """Newton iteration for one choice of held joints on a :class:`ClosedLoopModel`.
 
@@ -179,8 +219,9 @@ class NewtonSolver:
     velocities' ``weights``; ``residual_weights`` weigh the residual's rows in its norm.
     """
 
-    #: whether :meth:`iterate` runs as one compiled call (:class:`.compiled_solver.CompiledSolver`)
-    compiled_loop = False
+    #: the one-call solves of a solver whose iteration runs compiled (:class:`.compiled.CompiledSolver`
+    #: sets itself here), ``None`` for the general solver
+    one_call: OneCallSolver | None = None
 
     def __init__(self, clm: ClosedLoopModel, held_joints: tuple[int, ...], kernels: KernelSet | None = None):
         self.clm = clm
@@ -237,7 +278,7 @@ class NewtonSolver:
             self.rb, self.xb = np.zeros(self.rows), np.zeros(self.rows)
         self.dv = np.zeros(self.model.nv)
         self.q_aug = pin.neutral(self.model)
-        self._jac_args = (self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
+        self.jac_args = (self.J, self.leg_cols, self.ff_cols, self.colmap, self.rows, self.p, self.E, self.G)
         self.sign, self.kappa, self.det_sign, self.theta, self.certified = 0.0, np.inf, 0.0, 0.0, False  # last step
         self.home_sign, self.home_kappa = 0.0, np.inf
         if self.held_pos is not None:  # Schur path: arguments bound once (17 attribute loads cost 1 us)
@@ -294,7 +335,7 @@ class NewtonSolver:
             ratio, self.kappa = kernels.schur_solve(*self._schur_args)
             self.sign = 1.0 if ratio > 0.0 else -1.0
             return abs(ratio)
-        kernels.jacobian(*self._jac_args)
+        kernels.jacobian(*self.jac_args)
         if not self.square:
             self.x[:] = np.linalg.lstsq(self.G, self.r, rcond=None)[0]
             return 1.0
@@ -327,7 +368,7 @@ class NewtonSolver:
         pin.computeJointJacobians(self.model, self.data, self.q_aug)
         self._frames()
         self.kernels.closure_residual(self.R, self.p, self.rows, self.E, self.r, self.length_scale)
-        self.kernels.jacobian(*self._jac_args)
+        self.kernels.jacobian(*self.jac_args)
         return self.r.copy(), self.G.copy()
 
     def iterate(
@@ -344,7 +385,7 @@ class NewtonSolver:
 
         Leaves the result in ``self.q_aug``. With ``certify``, ``self.certified``: no shortened,
         singular or flipped step, every ``|dx_k+1| / |dx_k| <= THETA_MAX`` (``self.theta``; one step
-        above ``_ONE_STEP`` is followed by a second), the sign ``sign`` (or the first's) at every
+        above ``ONE_STEP`` is followed by a second), the sign ``sign`` (or the first's) at every
         Schur step; the solve stops (status ``uncertified``) once that fails.
         """
         model, data = self.model, self.data
@@ -362,7 +403,7 @@ class NewtonSolver:
             norm, min_trace = kernels.closure_residual(R, p, rows, E, r, length)  # rotations times length
             if scale != 0.0:
                 norm = kernels.shift_residual(r, offset, scale, rows, length)
-            if norm <= tol and (it != 1 or previous <= _ONE_STEP):  # one large step: measure a contraction
+            if norm <= tol and (it != 1 or previous <= ONE_STEP):  # one large step: measure a contraction
                 status = "converged"
                 if min_trace < 1.0:
                     status, message = "max_iterations", "converged to a spurious closure flipped by 180 deg"
@@ -384,7 +425,7 @@ class NewtonSolver:
             if certify:
                 certified = sign == 0.0 or self.sign == sign  # the sign is only known on the Schur path
                 sign = sign or self.sign
-                if previous > _THETA_FLOOR and biggest > theta * previous:
+                if previous > THETA_FLOOR and biggest > theta * previous:
                     theta = biggest / previous
                 previous = biggest
                 if not (certified and biggest <= MAX_STEP and theta <= THETA_MAX):
@@ -402,5 +443,5 @@ class NewtonSolver:
         Returns ``(q, status, iterations, residual, jacobian, message)``.
         """
         status, it, norm, message = self.iterate(q0, tol, max_iter)
-        self.kernels.jacobian(*self._jac_args)
+        self.kernels.jacobian(*self.jac_args)
         return self.q_aug[: self.clm.nq].copy(), status, it, norm, self.G.copy(), message

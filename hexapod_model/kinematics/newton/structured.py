@@ -4,7 +4,7 @@
   block is eliminated and only a 6x6 system in the platform step remains; it also gives the
   sign of the constraint Jacobian's determinant and a bound on the condition number of the
   eliminated 6x6 system (the assembly certificate and near-singularity flag of
-  :mod:`hexapod_model.kinematics.assembly`).
+  :mod:`hexapod_model.kinematics.certificate`).
 * :func:`blocks_solve`: inverse kinematics (the platform held): six independent leg blocks.
 
 Both build their blocks from the joint Jacobians ``J`` (:mod:`.kernels` layout) and factor them
@@ -16,14 +16,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .linalg import _det_sign, _factor, _solve, _solve_transposed
+from .linalg import lu_det_sign, lu_factor_in_place, lu_solve_in_place, lu_solve_transposed_in_place
 
 
 @njit(cache=True, inline="always")
 def _leg_block(J, cols, rows, point, h, B):
     """``B[:rows, :rows]``: the closure Jacobian's columns of the leg joints ``cols`` (written, not added).
 
-    :func:`_block` with sign +1 and the rotation weights ``h = H_tip`` as a 9-tuple, row by row.
+    :func:`closure_block` with sign +1 and the rotation weights ``h = H_tip`` as a 9-tuple, row by row.
     """
     px, py, pz = point[0], point[1], point[2]
     for k in range(rows):
@@ -42,7 +42,7 @@ def _leg_block(J, cols, rows, point, h, B):
 def _platform_block(J, cols, rows, point, h, B):
     """``B[:rows, :6] = -``(the closure Jacobian's columns of the platform velocity ``cols``).
 
-    :func:`_block` with sign -1 and ``h = H_anchor``: the three linear columns have no angular
+    :func:`closure_block` with sign -1 and ``h = H_anchor``: the three linear columns have no angular
     part (``oMp.act(e_k) = [R e_k; 0]``), so their rotation rows are zero.
     """
     px, py, pz = point[0], point[1], point[2]
@@ -67,7 +67,7 @@ def _platform_block(J, cols, rows, point, h, B):
 def _tip_weights(E, i):
     """``H_tip = (tr(E) I - E)/2`` of closure ``i`` as a 9-tuple, row by row (``H_anchor`` is its transpose).
 
-    The same operations as :func:`.kernels._rotation_weights` (``-E/2``, then ``tr/2`` on the diagonal).
+    The same operations as :func:`.kernels.rotation_weights` (``-E/2``, then ``tr/2`` on the diagonal).
     """
     t = 0.5 * (E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2])
     return (
@@ -104,14 +104,14 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
         ha = (ht[0], ht[3], ht[6], ht[1], ht[4], ht[7], ht[2], ht[5], ht[8])
         _leg_block(J, leg_cols[i], rows, p[i], ht, LB[i])  # L_i: the leg's joints
         _platform_block(J, ff_cols, rows, p[6 + i], ha, A[i])  # A_i: the platform's velocity
-        ratio = _factor(LB[i], PB[i], rows)
+        ratio = lu_factor_in_place(LB[i], PB[i], rows)
         if ratio == 0.0:
             return 0.0, np.inf
         worst = min(worst, ratio)
-        sign *= _det_sign(LB[i], PB[i], rows)
+        sign *= lu_det_sign(LB[i], PB[i], rows)
         for a in range(rows):
             n[a] = 1.0 if a == held_pos[i] else 0.0
-        _solve_transposed(LB[i], PB[i], n, rows)
+        lu_solve_transposed_in_place(LB[i], PB[i], n, rows)
         s = 0.0
         for a in range(rows):
             s += n[a] * r[o + a]
@@ -126,17 +126,17 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
         for k in range(6):
             v = M[i, k] / length if k >= 3 else M[i, k]  # rotation columns: scale-free
             fro2 += v * v
-    ratio = _factor(M, pm, 6)
+    ratio = lu_factor_in_place(M, pm, 6)
     if ratio == 0.0:
         return 0.0, np.inf
     worst = min(worst, ratio)
-    sign *= _det_sign(M, pm, 6)
+    sign *= lu_det_sign(M, pm, 6)
     det = 1.0
     for k in range(6):
         det *= M[k, k]
     kappa = 2.0 * (fro2 / 6.0) ** 3 / abs(det) * (length * length * length)  # det of the weighted M
     v = rhs
-    _solve(M, pm, v, 6)
+    lu_solve_in_place(M, pm, v, 6)
     for k in range(6):
         x[colmap[ff_cols[k]]] = -v[k]
     for i in range(leg_cols.shape[0]):
@@ -146,7 +146,7 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
             for k in range(6):
                 s += A[i, a, k] * v[k]
             w[a] = -s
-        _solve(LB[i], PB[i], w, rows)
+        lu_solve_in_place(LB[i], PB[i], w, rows)
         for k in range(rows):
             c = colmap[leg_cols[i, k]]
             if c >= 0:
@@ -167,13 +167,13 @@ def blocks_solve(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w):
         o = i * rows
         ht = _tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         _leg_block(J, leg_cols[i], rows, p[i], ht, LB[i])
-        ratio = _factor(LB[i], PB[i], rows)
+        ratio = lu_factor_in_place(LB[i], PB[i], rows)
         if ratio == 0.0:
             return 0.0
         worst = min(worst, ratio)
         for a in range(rows):
             w[a] = r[o + a]
-        _solve(LB[i], PB[i], w, rows)
+        lu_solve_in_place(LB[i], PB[i], w, rows)
         for k in range(rows):
             x[colmap[leg_cols[i, k]]] = w[k]
     return worst

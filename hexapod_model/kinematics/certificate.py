@@ -18,13 +18,13 @@ Newton corrector
 **What this is not.** The contraction ratio is measured at the iterates only: it estimates the
 Kantorovich quantity from below, where a proof needs a bound from above (a Lipschitz bound of
 the closure Jacobian over a ball); a solve that closes in one step measures no contraction (a
-first step above ``_ONE_STEP`` is followed by a second); the determinant's sign is sampled at
+first step above ``ONE_STEP`` is followed by a second); the determinant's sign is sampled at
 the iterates, not between them. So "certified" here names these checks passing, not a proof
 that the result is the connected assembly: what they achieve is measured by
 ``benchmarks/robustness.py`` (converged results that are not the generating pose, per preset)
 and their cost and refusals by ``benchmarks/certificate.py``; docs/solver.md states what
 ``converged`` guarantees. On a 3-6 hexapod every assembly is known
-(:mod:`.assemblies`), which is what makes its ``converged`` exact up to its stated rule.
+(:mod:`.all_assemblies`), which is what makes its ``converged`` exact up to its stated rule.
 
 The first attempt is the whole path in one substep, i.e. the plain Newton solve: warm starts
 and most cold starts pass at no extra cost. Otherwise the path is followed in substeps (a
@@ -121,7 +121,7 @@ def solve_forward(
     if status == "converged" and solver.certified:
         return _certified(solver, it, res)
     if status == "max_iterations" and solver.certified:  # contracting, but max_iter too small
-        solver.kernels.jacobian(*solver._jac_args)
+        solver.kernels.jacobian(*solver.jac_args)
         return Outcome(solver.q_aug[: solver.clm.nq].copy(), status, it, res, solver.G.copy(), msg)
     plain = start.copy()  # for the candidates, should the path be blocked
     first = solver.q_aug[: solver.clm.nq].copy() if it == 1 else None  # after the first Newton step
@@ -132,7 +132,7 @@ def solve_forward(
             return _uncertified(solver, it, res)
     start[pq] = l0
     h = rescale(solver.theta, False, 1)
-    if solver.compiled_loop:  # a compiled_solver.CompiledSolver
+    if solver.one_call is not None:  # a compiled.CompiledSolver
         return _follow_compiled(
             cast("CompiledSolver", solver), start, l0, lengths, tol, max_iter, sign, (plain, first), it, h
         )
@@ -204,9 +204,9 @@ def _follow_compiled(
 
     first = tried[1] if tried[1] is not None else start
     x = np.empty_like(start)
-    args = (float(tol), int(max_iter), float(sign), int(total), float(h), solver.arrays, x, solver._q)
+    args = (float(tol), int(max_iter), float(sign), int(total), float(h), solver.arrays, x, solver.last_q)
     t, total, res = follow(start, lengths, first, tried[1] is not None, *args)
-    solver.sign, solver.kappa = solver._state.tolist()  # the last Schur step's, as iterate() leaves them
+    solver.sign, solver.kappa = solver.state.tolist()  # the last Schur step's, as iterate() leaves them
     if t == 1.0:
         return _certified(solver, total, res)
     return _ambiguous(solver, x, t, lengths, tol, max_iter, tried[0], total)
@@ -234,7 +234,7 @@ def certified_outcome(
 
 def _certified(solver: NewtonSolver, total: int, res: float, note: str = "") -> Outcome:
     """The result in the solver's buffers with its determinant sign and flag (certified unless ``note``)."""
-    solver.kernels.jacobian(*solver._jac_args)
+    solver.kernels.jacobian(*solver.jac_args)
     q = solver.q_aug[: solver.clm.nq].copy()  # the last Schur step (iterate() takes one even at once)
     return certified_outcome(solver, q, solver.kernels.copied(solver.G), total, res, note)
 

@@ -31,18 +31,17 @@ pose (the leg joints of an offset-Cardan leg follow from the pose); those outsid
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
 
 from ..description.geometry import HexapodGeometry, LegGeometry
+from ..description.model import ClosedLoopModel
 from ..exceptions import GeometryError, WorkspaceError
-from .newton.solver import Solution
+from .newton.solver import NewtonSolver, Solution
 from .rotations import pose_distance, rpy_to_matrix
 from .three_six import ThreeSixFK
-
-Hexapod = Any  # a hexapod.Hexapod (this module is below it)
 
 SAME = 5e-7  # times the base radius (1e-7 m on the presets): two poses closer than this are one assembly
 SAMPLE_ANGLE = np.radians(40.0)  # rad: roll, pitch, yaw range of the multi-start search's poses
@@ -75,7 +74,52 @@ class Assemblies:
         return tuple(s.pose for s in self.solutions)
 
 
-def three_six_geometry(hexa: Hexapod) -> HexapodGeometry | None:
+class PoseSolver(Protocol):
+    """What the global direct kinematics asks of the solve engine (:class:`.engine.SolveEngine`).
+
+    Lengths in metres, poses 4x4 base -> platform transforms.
+    """
+
+    closed_loop: ClosedLoopModel
+    geometry: HexapodGeometry | None
+    #: (6, 2) reading limits (m)
+    stroke: np.ndarray
+    #: m: rotations count times this in pose distances
+    base_radius: float
+    #: the closure residual a solve stops at by default (m, rad)
+    default_tol: float
+    #: joint ids held by direct kinematics
+    held_forward: tuple[int, ...]
+
+    @property
+    def home_pose(self) -> np.ndarray:
+        """Platform pose at home."""
+        ...
+
+    def pose_of(self, q: np.ndarray) -> np.ndarray:
+        """Platform pose of configuration ``q``."""
+        ...
+
+    def lengths_of(self, q: np.ndarray) -> np.ndarray:
+        """Leg readings of configuration ``q``."""
+        ...
+
+    def joints_of(self, readings: np.ndarray) -> np.ndarray:
+        """Prismatic joint values of leg readings."""
+        ...
+
+    def solver(self, held: tuple[int, ...]) -> NewtonSolver:
+        """The calling thread's solver for these held joint ids."""
+        ...
+
+    def inverse(
+        self, pose: object, guess: object = None, tol: float | None = None, max_iter: int = 20, check: bool = True
+    ) -> Solution:
+        """Inverse kinematics of ``pose``."""
+        ...
+
+
+def three_six_geometry(hexa: PoseSolver) -> HexapodGeometry | None:
     """The 3-6 layout of a hexapod loaded without its geometry (a URDF or MJCF file), or None.
 
     A 3-6 hexapod here has point (``3d``) closures whose platform anchors coincide for legs
@@ -88,12 +132,12 @@ def three_six_geometry(hexa: Hexapod) -> HexapodGeometry | None:
     clm = hexa.closed_loop
     if any(c.kind != "3d" for c in clm.closures):
         return None
-    m = hexa.model
+    m = clm.model
     R, t = clm.home.rotation, clm.home.translation
     if not np.allclose(R, np.eye(3), atol=1e-12) or np.hypot(t[0], t[1]) > 1e-12 * hexa.base_radius:
         return None
     data = m.createData()
-    pin.forwardKinematics(m, data, hexa.q0)
+    pin.forwardKinematics(m, data, clm.q_home)
     legs = []
     for i, leg in enumerate(clm.legs):
         base = data.oMi[leg.joints[0]].translation
@@ -117,7 +161,7 @@ def three_six_geometry(hexa: Hexapod) -> HexapodGeometry | None:
 class AssemblyFinder:
     """The global direct kinematics of one hexapod (see the module doc)."""
 
-    def __init__(self, hexa: Hexapod):
+    def __init__(self, hexa: PoseSolver):
         self.hexa = hexa
         self.exact: ThreeSixFK | None = None
         geometry = hexa.geometry if hexa.geometry is not None else three_six_geometry(hexa)
@@ -153,12 +197,12 @@ class AssemblyFinder:
     def _search(self, readings: np.ndarray, starts: int, seed: int) -> list[np.ndarray]:
         """Poses of the distinct closed configurations plain Newton reaches from home and ``starts`` random poses."""
         hexa = self.hexa
-        solver = hexa._solver(hexa._held_forward)
+        solver = hexa.solver(hexa.held_forward)
         pq = hexa.closed_loop.prismatic_q
         joints = hexa.joints_of(readings)
         rng = np.random.default_rng(seed)
         span = float(np.max(np.abs(hexa.stroke)))
-        configurations = [hexa.q_home]
+        configurations = [hexa.closed_loop.q_home.copy()]
         for _ in range(starts):
             T = hexa.home_pose.copy()
             T[:3, 3] += rng.uniform(-span, span, 3)
@@ -179,7 +223,7 @@ class AssemblyFinder:
         return found
 
 
-def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: Any) -> Solution:
+def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: object) -> Solution:
     """A 3-6 hexapod's direct-kinematics result checked against every assembly (see the module doc)."""
     if finder.exact is None or sol.status == "invalid_input":
         return sol

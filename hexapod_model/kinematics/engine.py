@@ -1,0 +1,365 @@
+"""The solve engine under :class:`~hexapod_model.kinematics.hexapod.Hexapod`: solvers, limits, answers.
+
+:class:`SolveEngine` holds what a solve needs besides its inputs: the loaded model, the
+encoder model, the stroke and joint limits and their messages, one Newton solver per held set
+and per thread (compiled where :func:`.newton.compiled.solver_for` allows, else general), the
+global direct kinematics of :mod:`.all_assemblies`, and how a solve's outcome becomes a
+:class:`Solution` or an error. ``Hexapod`` is the facade users call; :mod:`.batch`,
+:mod:`.hybrid`, :mod:`.all_assemblies` and the analyses call this engine (``hexa.engine``).
+"""
+
+from __future__ import annotations
+
+import functools
+import threading
+
+import numpy as np
+
+from ..description.geometry import HexapodGeometry
+from ..description.model import ClosedLoopModel
+from ..exceptions import AssemblyError, ConvergenceError, LimitError, SingularityError, WorkspaceError
+from . import certificate
+from .all_assemblies import AssemblyFinder, review
+from .certificate import Outcome
+from .input_checks import (
+    LIMIT_SLACK,
+    MAX_TOL,
+    check_guess,
+    check_home_conditioning,
+    check_max_iter,
+    check_pose,
+    check_tolerance,
+    check_vector,
+    failure_status,
+)
+from .newton.kernel_sets import KernelSet, kernel_set
+from .newton.outcomes import new_solution
+from .newton.solver import NewtonSolver, OneCallSolver, Solution, size_of
+
+DEFAULT_TOL = 1e-12  # closure residual (m, rad) at a 0.25 m base radius: pose errors below 1e-9 on every preset
+DEFAULT_MAX_ITER = 20
+#: largest 2-norm condition number of the direct-kinematics constraint Jacobian at home
+#: (metres and radians; the presets have 9-67, a 20x smaller hexapod about 700, a singular
+#: layout with parallel, coplanar or coincident legs 1e13 and more)
+HOME_CONDITION_LIMIT = 1e6
+#: the error each failed status raises with ``check`` (``ConvergenceError`` for the others)
+ERRORS = {
+    "singular": SingularityError,
+    "out_of_limits": WorkspaceError,
+    "ambiguous_assembly": AssemblyError,
+    "uncertified": AssemblyError,
+    "no_assembly": WorkspaceError,
+}
+
+
+class SolveEngine:
+    """The state and the solves of one loaded hexapod (see the module doc).
+
+    Args:
+        model: the loaded closed-loop model.
+        geometry: the geometry it was generated from, if any (the 3-6 resultant uses it).
+        compiled: solve with the numba-compiled kernels (else the NumPy ones).
+
+    One engine may be shared by threads: :meth:`solver` gives each thread solvers of its own.
+    Lengths are metres, angles radians, poses 4x4 base -> platform transforms.
+    """
+
+    def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None, *, compiled: bool = True):
+        self.closed_loop = model
+        #: whether the solves run the numba-compiled kernels
+        self.compiled = bool(compiled)
+        self.geometry = geometry
+        self.nq = model.model.nq
+        #: the URDF's joint names (Pinocchio order, the universe excluded)
+        self.joint_names: tuple[str, ...] = tuple(model.model.names[1:])
+        #: each leg's encoder model ``(zero, gain)`` (reading = zero + gain * prismatic value), None when the identity
+        self.encoder: tuple[np.ndarray, np.ndarray] | None = (
+            None
+            if not (np.any(model.encoder_zero) or np.any(model.encoder_scale))
+            else (model.encoder_zero.copy(), 1.0 + model.encoder_scale)
+        )
+        #: (6, 2) reading limits (m): the prismatic joint limits, through the encoder model if any
+        self.stroke = self.readings_of(np.array([[model.lower[i], model.upper[i]] for i in model.prismatic_q]).T).T
+        self.prismatic_names = tuple(model.model.names[leg.prismatic] for leg in model.legs)
+        #: the calling thread's state: ``.solvers`` {held joints: solver}, ``.staged`` the warm forward's solver
+        self.local = threading.local()
+        self.home_h = model.home.homogeneous
+        self.q_shape = (self.nq,)
+        self.prismatic_q = model.prismatic_q
+        #: (6,) lower and upper reading limits (m), contiguous, for the compiled stroke check
+        self.stroke_lo = np.ascontiguousarray(self.stroke[:, 0])
+        self.stroke_hi = np.ascontiguousarray(self.stroke[:, 1])
+        #: configuration indices with limits, and their lower and upper limits (m or rad)
+        self.limited = model.limited_q()
+        self.limited_lo = model.lower[self.limited].copy()
+        self.limited_hi = model.upper[self.limited].copy()
+        #: the joint-limit check's arguments (limited q indices, lower, upper, slack)
+        self.limits = (self.limited, self.limited_lo, self.limited_hi, LIMIT_SLACK)
+        #: joint ids held by direct kinematics (the prismatic joints) and by inverse kinematics (the platform)
+        self.held_forward = tuple(leg.prismatic for leg in model.legs)
+        self.held_inverse = (model.platform_joint,)
+        #: held set -> (free directions, rank) of the closure system (:func:`.hybrid.free_directions_of`)
+        self.free_directions: dict[tuple[int, ...], tuple[int, int]] = {}
+        #: 2-norm condition number of the direct-kinematics constraint Jacobian at home (scale-free)
+        self.home_condition_number = self._home_conditioning()
+        #: largest horizontal distance of a leg's first joint from the base origin (m), and the length scale
+        self.base_radius, self.scale = size_of(model)
+        #: the closure residual a solve stops at by default (m, rad): ``DEFAULT_TOL * scale``
+        self.default_tol = min(DEFAULT_TOL * self.scale, MAX_TOL)
+
+    @functools.cached_property
+    def kernels(self) -> KernelSet:
+        """The kernels of :attr:`compiled`: numba is imported at the first solve, not on loading."""
+        return kernel_set(self.compiled)
+
+    @functools.cached_property
+    def finder(self) -> AssemblyFinder:
+        """The global direct kinematics (:mod:`.all_assemblies`)."""
+        return AssemblyFinder(self)
+
+    def _home_conditioning(self) -> float:
+        """Condition number of the direct-kinematics Jacobian at home; GeometryError above the limit.
+
+        Scale-free: rotation rows times the length scale, metre columns divided by it (the
+        solver's weights), so a hexapod scaled by a power of two has its preset's figure.
+        Evaluated with the NumPy kernels: loading a hexapod compiles nothing.
+        """
+        solver = NewtonSolver(self.closed_loop, self.held_forward, kernel_set(False))
+        _, G = solver.evaluate(self.closed_loop.q_home)
+        G = solver.residual_weights[:, None] * G / solver.step_weights  # scale-free rows and columns
+        return check_home_conditioning(G, self.closed_loop.source, HOME_CONDITION_LIMIT)
+
+    # ----- conversions -----
+    @property
+    def home_pose(self) -> np.ndarray:
+        """Platform pose at home (4x4, base frame, metres)."""
+        return self.closed_loop.home.homogeneous
+
+    def pose_of(self, q: np.ndarray) -> np.ndarray:
+        """Platform pose (4x4, base frame, metres) of configuration ``q``."""
+        i = self.closed_loop.platform_q
+        T = np.empty((4, 4))
+        self.kernels.xyzquat_to_pose(q[i : i + 7], self.home_h, T)
+        return T
+
+    def lengths_of(self, q: np.ndarray) -> np.ndarray:
+        """Leg readings (m) of configuration ``q``, leg order."""
+        joints = q[self.prismatic_q]  # a new array already
+        return joints if self.encoder is None and joints.dtype == np.float64 else self.readings_of(joints)
+
+    def readings_of(self, joints: np.ndarray) -> np.ndarray:
+        """Leg readings (m) of prismatic joint values (m, leg order, last axis): the encoder model."""
+        if self.encoder is None:
+            return np.array(joints, dtype=float)
+        return self.encoder[0] + self.encoder[1] * np.asarray(joints, dtype=float)
+
+    def joints_of(self, readings: np.ndarray) -> np.ndarray:
+        """Prismatic joint values (m) of leg readings (m, leg order): the inverse of :meth:`readings_of`."""
+        if self.encoder is None:
+            return np.array(readings, dtype=float)
+        return (np.asarray(readings, dtype=float) - self.encoder[0]) / self.encoder[1]
+
+    def set_pose(self, q: np.ndarray, pose: object) -> None:
+        """Write the checked platform pose ``pose`` (4x4, base frame, m) into configuration ``q``."""
+        T = check_pose(pose, self.kernels.rigid_error)
+        i = self.closed_loop.platform_q
+        self.kernels.pose_to_xyzquat(T, self.home_h, q[i : i + 7])
+
+    def start(self, guess: object, copy: bool = True) -> np.ndarray:
+        """The configuration to start from: home, a :class:`Solution`'s ``q`` or a checked guess.
+
+        With ``copy=False`` home's or the Solution's own array, for a caller that does not write it.
+        """
+        if guess is None:
+            q = self.closed_loop.q_home
+        elif isinstance(guess, Solution) and isinstance(guess.q, np.ndarray) and guess.q.shape == (self.nq,):
+            q = guess.q
+        else:
+            return check_guess(guess, self.nq, self.closed_loop.platform_q)  # a new array
+        return q.copy() if copy else q
+
+    # ----- solvers -----
+    def solver(self, held: tuple[int, ...]) -> NewtonSolver:
+        """The calling thread's solver for this set of held joint ids (buffers are not shared)."""
+        solvers = getattr(self.local, "solvers", None)
+        if solvers is None:
+            solvers = self.local.solvers = {}
+        solver = solvers.get(held)
+        if solver is None and self.compiled:
+            from .newton.compiled import solver_for  # numba: imported by the first compiled solve
+
+            solver = solvers[held] = solver_for(self.closed_loop, held, self.limits)
+        elif solver is None:
+            solver = solvers[held] = NewtonSolver(self.closed_loop, held, self.kernels)
+        return solver
+
+    def staged(self) -> OneCallSolver | None:
+        """The calling thread's direct-kinematics solver of the warm path, once a solve has set it."""
+        solver: OneCallSolver | None = getattr(self.local, "staged", None)
+        return solver
+
+    # ----- limits and their messages -----
+    def stroke_error(self, lengths: np.ndarray, k: int) -> LimitError:
+        """The error for reading ``k`` (m) outside its stroke (an :class:`InputError` first for NaN / inf)."""
+        check_vector("lengths", lengths, 6)  # names NaN / inf first
+        return LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
+
+    def limit_error(self, iq: int, value: float) -> LimitError:
+        """The error for configuration entry ``iq`` at ``value`` (m or rad) outside its limits."""
+        clm = self.closed_loop
+        if iq in clm.prismatic_q and self.encoder is not None:  # in readings, as the user gives them
+            k = int(np.flatnonzero(clm.prismatic_q == iq)[0])
+            zero, gain = self.encoder[0][k], self.encoder[1][k]
+            value, lo, hi = zero + gain * value, zero + gain * clm.lower[iq], zero + gain * clm.upper[iq]
+            return LimitError(clm.joint_name_of_q(iq), value, lo, hi, "stroke")
+        what = "stroke" if iq in clm.prismatic_q else "joint"
+        return LimitError(clm.joint_name_of_q(iq), value, clm.lower[iq], clm.upper[iq], what)
+
+    def outside(self, q: np.ndarray) -> str | None:
+        """The limit error of configuration ``q`` (one line), ``None`` when within the limits (or not finite)."""
+        bad = self.kernels.first_outside_at(q, self.limited, self.limited_lo, self.limited_hi, LIMIT_SLACK)
+        if bad < 0 or not np.all(np.isfinite(q)):
+            return None
+        k = int(self.limited[bad])
+        return str(self.limit_error(k, q[k]))
+
+    # ----- answers -----
+    def solution(
+        self,
+        out: Outcome,
+        check: bool,
+        pose: np.ndarray | None = None,
+        bad: int | None = None,
+        max_iter: int = DEFAULT_MAX_ITER,
+    ) -> Solution:
+        """The :class:`Solution` of a solve's outcome: the joint-limit check, the pose, the readings.
+
+        ``pose`` and ``bad`` (the first joint outside its limits, -1 if none) when the caller
+        has them already (the compiled first attempt of direct kinematics); ``max_iter`` the
+        caller's step limit (:func:`.input_checks.failure_status` names a stalled solve).
+        Raises the status's error when ``check`` and the status is not ``converged``.
+        """
+        q, status, it, res, jac, msg = out[:6]
+        flags = out.flags
+        if status == "converged":
+            if bad is None:
+                bad = self.kernels.first_outside_at(q, self.limited, self.limited_lo, self.limited_hi, LIMIT_SLACK)
+            if bad >= 0:
+                k = int(self.limited[bad])
+                status, msg = "out_of_limits", str(self.limit_error(k, q[k]))
+        elif status == "max_iterations":
+            status, msg = failure_status(status, msg, res, max_iter, self.outside(q), self.scale)
+            flags = ("not_closed",) if status == "out_of_limits" else flags
+        poses = tuple(self.pose_of(c) for c in out.candidates) if out.candidates else ()
+        sol = new_solution(
+            self.pose_of(q) if pose is None else pose,
+            q,
+            self.lengths_of(q),
+            status,
+            it,
+            res,
+            jac,
+            msg,
+            flags,
+            poses,
+            out.det_sign,
+        )
+        if check and status != "converged":
+            raise ERRORS.get(status, ConvergenceError)(sol, f"{status}: {msg}")
+        return sol
+
+    def finish(
+        self, solver: NewtonSolver, q0: np.ndarray, tol: object, max_iter: object, check: bool, forward: tuple = ()
+    ) -> Solution:
+        """Solve from ``q0``: plain, or certified FK with ``forward = (joints, sign, warm[, attempt])``."""
+        if type(tol) is not float or not 0.0 < tol <= MAX_TOL:  # one comparison on the hot path
+            tol = check_tolerance(tol)
+        if type(max_iter) is not int or max_iter < 0:
+            max_iter = check_max_iter(max_iter)
+        if forward:
+            out = certificate.solve_forward(solver, q0, forward[0], tol, max_iter, *forward[1:])
+            return self.solution(out, check, max_iter=max_iter)
+        one_call = solver.one_call
+        if one_call is not None:  # inverse kinematics: the solve, pose and limit check in one compiled call
+            done = one_call.run_checked(q0, tol, max_iter)
+            if done is not None:
+                return self.solution(Outcome(*done[0]), check, done[1], done[2], max_iter)
+        return self.solution(Outcome(*solver.run(q0, tol, max_iter)), check, max_iter=max_iter)
+
+    def reviewed(self, sol: Solution, lengths: np.ndarray, guess: object, check: bool) -> Solution:
+        """A 3-6 hexapod's result checked against every assembly (:func:`.all_assemblies.review`).
+
+        Raised when ``check`` and the reviewed status is not ``converged``.
+        """
+        sol = review(self.finder, sol, lengths, guess)
+        if check and sol.status != "converged":
+            raise ERRORS.get(sol.status, ConvergenceError)(sol, f"{sol.status}: {sol.message}")
+        return sol
+
+    # ----- solves -----
+    def forward(
+        self, lengths: np.ndarray, guess: object, tol: float, max_iter: int, check: bool, fast: bool
+    ) -> Solution:
+        """Direct kinematics of checked readings ``lengths`` (m) but for their stroke, off the warm path.
+
+        ``fast``: ``tol`` and ``max_iter`` are valid already. Sets this thread's warm-path solver
+        (:meth:`staged`) when the hexapod allows it. See :meth:`.hexapod.Hexapod.forward`.
+        """
+        k = self.kernels.first_outside(lengths, self.stroke_lo, self.stroke_hi, LIMIT_SLACK)
+        if k >= 0:
+            raise self.stroke_error(lengths, k)
+        solver = self.solver(self.held_forward)
+        sign = solver.home_sign if guess is None else getattr(guess, "det_sign", 0)
+        joints = lengths if self.encoder is None else self.joints_of(lengths)
+        start = self.start(guess, copy=False)  # solve_forward writes its own copy
+        review = self.finder.exact is not None  # a 3-6 hexapod: every assembly is accounted for
+        one_call = solver.one_call
+        if fast and one_call is not None:
+            if self.encoder is None and not review:  # the next solves on this thread take the warm path
+                self.local.staged = one_call
+            # the certified first attempt in one compiled call; solve_forward goes on from it
+            done = one_call.certified_forward(start, joints, tol, max_iter, sign)
+            return self.attempted(solver, done, lengths, joints, start, tol, max_iter, sign, guess, check, review)
+        sol = self.finish(solver, start.copy(), tol, max_iter, check and not review, (joints, sign, guess is not None))
+        return self.reviewed(sol, lengths, guess, check) if review else sol
+
+    def attempted(
+        self,
+        solver: NewtonSolver,
+        done: tuple,
+        lengths: np.ndarray,
+        joints: np.ndarray,
+        start: np.ndarray,
+        tol: float,
+        max_iter: int,
+        sign: float,
+        guess: object,
+        check: bool,
+        review: bool,
+    ) -> Solution:
+        """The :class:`Solution` of direct kinematics after the compiled certified attempt ``done``.
+
+        Its result when it converged certified (:meth:`.newton.compiled.CompiledSolver.certified_forward`),
+        else :func:`.certificate.solve_forward` goes on from it.
+        """
+        if len(done) == 6:
+            q, pose, jac, it, res, bad = done
+            sol = self.solution(certificate.certified_outcome(solver, q, jac, it, res), check and not review, pose, bad)
+        else:
+            forward = (joints, sign, guess is not None, done)
+            sol = self.finish(solver, start.copy(), tol, max_iter, check and not review, forward)
+        return self.reviewed(sol, lengths, guess, check) if review else sol
+
+    def inverse(
+        self,
+        pose: object,
+        guess: object = None,
+        tol: float | None = None,
+        max_iter: int = DEFAULT_MAX_ITER,
+        check: bool = True,
+    ) -> Solution:
+        """Inverse kinematics of ``pose`` (4x4, base -> platform, m): :meth:`.hexapod.Hexapod.inverse`."""
+        q = self.start(guess)
+        self.set_pose(q, pose)
+        tol = self.default_tol if tol is None else tol
+        return self.finish(self.solver(self.held_inverse), q, tol, max_iter, check)
