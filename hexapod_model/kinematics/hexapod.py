@@ -53,6 +53,9 @@ class Hexapod:
     ``compiled=False`` (every constructor takes it) solves with the NumPy kernels instead of the
     numba-compiled ones (:mod:`~hexapod_model.kinematics.newton.kernel_sets`): the same answers, several
     times slower per solve, but no numba import (~1 s, 130 MB) nor first compilation (~20 s).
+
+    The solves run on :attr:`engine` (:class:`~hexapod_model.kinematics.engine.SolveEngine`):
+    the per-thread solvers, the limits and the encoder model, for code that builds on them.
     """
 
     def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None, *, compiled: bool = True):

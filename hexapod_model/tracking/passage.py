@@ -26,7 +26,7 @@ from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
 from ..kinematics.rotations import pose_distance
 from .branches import BranchResolver, mirror_guess
-from .input_checks import TrackerSettings
+from .reading_tests import TrackerSettings
 from .types import posed
 
 _MIN_BEFORE = 12  # certified samples before a passage: fewer cannot anchor the smooth motion

@@ -35,9 +35,9 @@ from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
 from ..kinematics.rotations import pose_distance
-from .input_checks import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
 from .kernels import branch_residual, reading_checks
 from .passage import PassageMixin
+from .reading_tests import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
 from .types import (
     FAILED_STATUSES,
     FLAGS,
