@@ -1,7 +1,8 @@
 """The solve engine under :class:`~hexapod_model.kinematics.hexapod.Hexapod`: solvers, limits, answers.
 
-:class:`SolveEngine` holds what a solve needs besides its inputs: the loaded model, the
-encoder model, the stroke and joint limits and their messages, one Newton solver per held set
+:class:`SolveEngine` holds what a solve needs besides its inputs: the joint space of
+:mod:`.joint_space` (the encoder model, the stroke and joint limits and their messages, the
+conversions between readings, configurations and poses), one Newton solver per held set
 and per thread (compiled where :func:`.newton.compiled.solver_for` allows, else general), the
 global direct kinematics of :mod:`.all_assemblies`, and how a solve's outcome becomes a
 :class:`Solution` or an error. ``Hexapod`` is the facade users call; :mod:`.batch`,
@@ -17,26 +18,16 @@ import numpy as np
 
 from ..description.geometry import HexapodGeometry
 from ..description.model import ClosedLoopModel
-from ..exceptions import AssemblyError, ConvergenceError, LimitError, SingularityError, WorkspaceError
+from ..exceptions import AssemblyError, ConvergenceError, SingularityError, WorkspaceError
 from . import certificate
 from .all_assemblies import AssemblyFinder, review
 from .certificate import Outcome
-from .input_checks import (
-    LIMIT_SLACK,
-    MAX_TOL,
-    check_guess,
-    check_home_conditioning,
-    check_max_iter,
-    check_pose,
-    check_tolerance,
-    check_vector,
-    failure_status,
-)
-from .newton.kernel_sets import KernelSet, kernel_set
+from .input_checks import LIMIT_SLACK, MAX_TOL, check_home_conditioning, check_max_iter, check_tolerance, failure_status
+from .joint_space import JointSpace
+from .newton.kernel_sets import kernel_set
 from .newton.outcomes import new_solution
-from .newton.solver import NewtonSolver, OneCallSolver, Solution, size_of
+from .newton.solver import NewtonSolver, Solution
 
-DEFAULT_TOL = 1e-12  # closure residual (m, rad) at a 0.25 m base radius: pose errors below 1e-9 on every preset
 DEFAULT_MAX_ITER = 20
 #: largest 2-norm condition number of the direct-kinematics constraint Jacobian at home
 #: (metres and radians; the presets have 9-67, a 20x smaller hexapod about 700, a singular
@@ -52,7 +43,7 @@ ERRORS = {
 }
 
 
-class SolveEngine:
+class SolveEngine(JointSpace):
     """The state and the solves of one loaded hexapod (see the module doc).
 
     Args:
@@ -65,36 +56,9 @@ class SolveEngine:
     """
 
     def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None, *, compiled: bool = True):
-        self.closed_loop = model
-        #: whether the solves run the numba-compiled kernels
-        self.compiled = bool(compiled)
-        self.geometry = geometry
-        self.nq = model.model.nq
-        #: the URDF's joint names (Pinocchio order, the universe excluded)
-        self.joint_names: tuple[str, ...] = tuple(model.model.names[1:])
-        #: each leg's encoder model ``(zero, gain)`` (reading = zero + gain * prismatic value), None when the identity
-        self.encoder: tuple[np.ndarray, np.ndarray] | None = (
-            None
-            if not (np.any(model.encoder_zero) or np.any(model.encoder_scale))
-            else (model.encoder_zero.copy(), 1.0 + model.encoder_scale)
-        )
-        #: (6, 2) reading limits (m): the prismatic joint limits, through the encoder model if any
-        self.stroke = self.readings_of(np.array([[model.lower[i], model.upper[i]] for i in model.prismatic_q]).T).T
-        self.prismatic_names = tuple(model.model.names[leg.prismatic] for leg in model.legs)
+        super().__init__(model, geometry, compiled=compiled)
         #: the calling thread's state: ``.solvers`` {held joints: solver}, ``.staged`` the warm forward's solver
         self.local = threading.local()
-        self.home_h = model.home.homogeneous
-        self.q_shape = (self.nq,)
-        self.prismatic_q = model.prismatic_q
-        #: (6,) lower and upper reading limits (m), contiguous, for the compiled stroke check
-        self.stroke_lo = np.ascontiguousarray(self.stroke[:, 0])
-        self.stroke_hi = np.ascontiguousarray(self.stroke[:, 1])
-        #: configuration indices with limits, and their lower and upper limits (m or rad)
-        self.limited = model.limited_q()
-        self.limited_lo = model.lower[self.limited].copy()
-        self.limited_hi = model.upper[self.limited].copy()
-        #: the joint-limit check's arguments (limited q indices, lower, upper, slack)
-        self.limits = (self.limited, self.limited_lo, self.limited_hi, LIMIT_SLACK)
         #: joint ids held by direct kinematics (the prismatic joints) and by inverse kinematics (the platform)
         self.held_forward = tuple(leg.prismatic for leg in model.legs)
         self.held_inverse = (model.platform_joint,)
@@ -102,15 +66,6 @@ class SolveEngine:
         self.free_directions: dict[tuple[int, ...], tuple[int, int]] = {}
         #: 2-norm condition number of the direct-kinematics constraint Jacobian at home (scale-free)
         self.home_condition_number = self._home_conditioning()
-        #: largest horizontal distance of a leg's first joint from the base origin (m), and the length scale
-        self.base_radius, self.scale = size_of(model)
-        #: the closure residual a solve stops at by default (m, rad): ``DEFAULT_TOL * scale``
-        self.default_tol = min(DEFAULT_TOL * self.scale, MAX_TOL)
-
-    @functools.cached_property
-    def kernels(self) -> KernelSet:
-        """The kernels of :attr:`compiled`: numba is imported at the first solve, not on loading."""
-        return kernel_set(self.compiled)
 
     @functools.cached_property
     def finder(self) -> AssemblyFinder:
@@ -129,55 +84,6 @@ class SolveEngine:
         G = solver.residual_weights[:, None] * G / solver.step_weights  # scale-free rows and columns
         return check_home_conditioning(G, self.closed_loop.source, HOME_CONDITION_LIMIT)
 
-    # ----- conversions -----
-    @property
-    def home_pose(self) -> np.ndarray:
-        """Platform pose at home (4x4, base frame, metres)."""
-        return self.closed_loop.home.homogeneous
-
-    def pose_of(self, q: np.ndarray) -> np.ndarray:
-        """Platform pose (4x4, base frame, metres) of configuration ``q``."""
-        i = self.closed_loop.platform_q
-        T = np.empty((4, 4))
-        self.kernels.xyzquat_to_pose(q[i : i + 7], self.home_h, T)
-        return T
-
-    def lengths_of(self, q: np.ndarray) -> np.ndarray:
-        """Leg readings (m) of configuration ``q``, leg order."""
-        joints = q[self.prismatic_q]  # a new array already
-        return joints if self.encoder is None and joints.dtype == np.float64 else self.readings_of(joints)
-
-    def readings_of(self, joints: np.ndarray) -> np.ndarray:
-        """Leg readings (m) of prismatic joint values (m, leg order, last axis): the encoder model."""
-        if self.encoder is None:
-            return np.array(joints, dtype=float)
-        return self.encoder[0] + self.encoder[1] * np.asarray(joints, dtype=float)
-
-    def joints_of(self, readings: np.ndarray) -> np.ndarray:
-        """Prismatic joint values (m) of leg readings (m, leg order): the inverse of :meth:`readings_of`."""
-        if self.encoder is None:
-            return np.array(readings, dtype=float)
-        return (np.asarray(readings, dtype=float) - self.encoder[0]) / self.encoder[1]
-
-    def set_pose(self, q: np.ndarray, pose: object) -> None:
-        """Write the checked platform pose ``pose`` (4x4, base frame, m) into configuration ``q``."""
-        T = check_pose(pose, self.kernels.rigid_error)
-        i = self.closed_loop.platform_q
-        self.kernels.pose_to_xyzquat(T, self.home_h, q[i : i + 7])
-
-    def start(self, guess: object, copy: bool = True) -> np.ndarray:
-        """The configuration to start from: home, a :class:`Solution`'s ``q`` or a checked guess.
-
-        With ``copy=False`` home's or the Solution's own array, for a caller that does not write it.
-        """
-        if guess is None:
-            q = self.closed_loop.q_home
-        elif isinstance(guess, Solution) and isinstance(guess.q, np.ndarray) and guess.q.shape == (self.nq,):
-            q = guess.q
-        else:
-            return check_guess(guess, self.nq, self.closed_loop.platform_q)  # a new array
-        return q.copy() if copy else q
-
     # ----- solvers -----
     def solver(self, held: tuple[int, ...]) -> NewtonSolver:
         """The calling thread's solver for this set of held joint ids (buffers are not shared)."""
@@ -192,36 +98,6 @@ class SolveEngine:
         elif solver is None:
             solver = solvers[held] = NewtonSolver(self.closed_loop, held, self.kernels)
         return solver
-
-    def staged(self) -> OneCallSolver | None:
-        """The calling thread's direct-kinematics solver of the warm path, once a solve has set it."""
-        solver: OneCallSolver | None = getattr(self.local, "staged", None)
-        return solver
-
-    # ----- limits and their messages -----
-    def stroke_error(self, lengths: np.ndarray, k: int) -> LimitError:
-        """The error for reading ``k`` (m) outside its stroke (an :class:`InputError` first for NaN / inf)."""
-        check_vector("lengths", lengths, 6)  # names NaN / inf first
-        return LimitError(self.prismatic_names[k], lengths[k], self.stroke[k, 0], self.stroke[k, 1], what="stroke")
-
-    def limit_error(self, iq: int, value: float) -> LimitError:
-        """The error for configuration entry ``iq`` at ``value`` (m or rad) outside its limits."""
-        clm = self.closed_loop
-        if iq in clm.prismatic_q and self.encoder is not None:  # in readings, as the user gives them
-            k = int(np.flatnonzero(clm.prismatic_q == iq)[0])
-            zero, gain = self.encoder[0][k], self.encoder[1][k]
-            value, lo, hi = zero + gain * value, zero + gain * clm.lower[iq], zero + gain * clm.upper[iq]
-            return LimitError(clm.joint_name_of_q(iq), value, lo, hi, "stroke")
-        what = "stroke" if iq in clm.prismatic_q else "joint"
-        return LimitError(clm.joint_name_of_q(iq), value, clm.lower[iq], clm.upper[iq], what)
-
-    def outside(self, q: np.ndarray) -> str | None:
-        """The limit error of configuration ``q`` (one line), ``None`` when within the limits (or not finite)."""
-        bad = self.kernels.first_outside_at(q, self.limited, self.limited_lo, self.limited_hi, LIMIT_SLACK)
-        if bad < 0 or not np.all(np.isfinite(q)):
-            return None
-        k = int(self.limited[bad])
-        return str(self.limit_error(k, q[k]))
 
     # ----- answers -----
     def solution(
@@ -303,7 +179,8 @@ class SolveEngine:
         """Direct kinematics of checked readings ``lengths`` (m) but for their stroke, off the warm path.
 
         ``fast``: ``tol`` and ``max_iter`` are valid already. Sets this thread's warm-path solver
-        (:meth:`staged`) when the hexapod allows it. See :meth:`.hexapod.Hexapod.forward`.
+        (``local.staged``, a :class:`.newton.solver.OneCallSolver`) when the hexapod allows it.
+        See :meth:`.hexapod.Hexapod.forward`.
         """
         k = self.kernels.first_outside(lengths, self.stroke_lo, self.stroke_hi, LIMIT_SLACK)
         if k >= 0:

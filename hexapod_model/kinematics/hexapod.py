@@ -25,8 +25,9 @@ from . import batch, hybrid
 from .all_assemblies import DEFAULT_STARTS, Assemblies
 from .batch import BatchResult
 from .certificate import NEAR_SINGULAR_FACTOR
-from .engine import DEFAULT_MAX_ITER, DEFAULT_TOL, HOME_CONDITION_LIMIT, SolveEngine
+from .engine import DEFAULT_MAX_ITER, HOME_CONDITION_LIMIT, SolveEngine
 from .input_checks import LIMIT_SLACK, MAX_TOL, POSE_TOLERANCE, check_pose, check_vector
+from .joint_space import DEFAULT_TOL
 from .newton.outcomes import new_solution
 from .newton.solver import Solution
 
