@@ -138,3 +138,21 @@ def test_no_any_alias_and_no_private_reach():
         rel = path.relative_to(PACKAGE).as_posix()
         offenders += _reaches(ast.parse(path.read_text()), rel)
     assert not offenders, "\n".join(offenders)
+
+
+def test_the_private_reach_rules_flag_what_they_say():
+    source = """
+from typing import Any
+from .other import _helper, public
+Engine = Any
+lower = Any
+class Own:
+    def __init__(self, other):
+        self._mine = 1
+        other._theirs()
+        self._mine.bit
+        other._mine
+        cls_free = type(self)._mine
+"""
+    found = [line.split(": ", 1)[1] for line in _reaches(ast.parse(source), "m.py")]
+    assert found == ["Engine = Any", "from .other import _helper", "other._theirs"]

@@ -29,7 +29,7 @@ from .engine import DEFAULT_MAX_ITER, HOME_CONDITION_LIMIT, SolveEngine
 from .input_checks import LIMIT_SLACK, MAX_TOL, POSE_TOLERANCE, check_pose, check_vector
 from .joint_space import DEFAULT_TOL
 from .newton.outcomes import new_solution
-from .newton.solver import Solution
+from .newton.solver import OneCallSolver, Solution
 
 __all__ = [
     "DEFAULT_MAX_ITER",
@@ -190,7 +190,7 @@ class Hexapod:
             lengths = check_vector("lengths", lengths, 6)
         fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
         engine = self.engine
-        solver = getattr(engine.local, "staged", None)  # the warm path's solver, once this thread has it
+        solver: OneCallSolver | None = getattr(engine.local, "staged", None)  # the warm path's, once this thread has it
         fits = (
             guess is None or type(guess) is Solution and type(guess.q) is np.ndarray and guess.q.shape == engine.q_shape
         )

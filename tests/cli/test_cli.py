@@ -132,7 +132,7 @@ def test_fk_status_column_says_uncertified_and_ambiguous_assembly(tmp_path, caps
     assert [r["status"] for r in rows] == ["ok", "ok", "uncertified"]
     assert rows[2]["yaw"] == ""  # not certified: no pose presented
     assert "row 3 (line 4): uncertified: the assembly connected to the start could not" in capsys.readouterr().err
-    # 3-6 preset: another assembly within the limits fits about as near home (tests/kinematics/test_assemblies.py)
+    # 3-6 preset: another assembly within the limits fits about as near home (tests/kinematics/test_all_assemblies.py)
     six = hexapod("3-6")
     T = box_poses(six.home_pose, 600, seed=0, translation=0.1, angle_deg=40)[13]
     (tmp_path / "a.csv").write_text(

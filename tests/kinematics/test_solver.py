@@ -68,7 +68,7 @@ def test_round_trip_pose_lengths_pose_on_1000_box_poses(name):
         q0 = hexa.q_home
         q0[hexa.closed_loop.prismatic_q] = back.lengths
         assert plain.run(q0, 1e-12, 20)[2] <= 8  # the plain Newton solve
-        steps.append(sol.iterations)  # with the substeps the certificate needs (kinematics/assembly.py)
+        steps.append(sol.iterations)  # with the substeps the certificate needs (kinematics/certificate.py)
     assert worst_p < 1e-9 and worst_r < 1e-9 and worst_l < 1e-9
     assert max(steps) <= 16 and np.mean(steps) <= 6
 

@@ -1,4 +1,4 @@
-"""The assembly certificate (kinematics/assembly.py): a cold result is the assembly connected to
+"""The assembly certificate (kinematics/certificate.py): a cold result is the assembly connected to
 home, what cannot be certified is ``ambiguous_assembly``, a result near a singularity says so.
 """
 
@@ -82,7 +82,7 @@ def test_warm_starts_along_a_trajectory_are_certified_at_no_extra_step():
 def test_cold_readings_whose_path_from_home_is_blocked_are_ambiguous():
     """+-150 mm / +-60 deg on the 3-6 preset: the straight readings path from home meets a fold
     (checked by a dense reference continuation). The plain solve returned the pose as converged.
-    (The path's own verdict: without the resultant's every assembly, tests/kinematics/test_assemblies.py.)"""
+    (The path's own verdict: without the resultant's every assembly, tests/kinematics/test_all_assemblies.py.)"""
     hexa = hm.Hexapod.from_preset("3-6")
     hexa.engine.finder.exact = None  # Newton's readings path alone
     poses = box_poses(hexa.home_pose, 400, seed=1, translation=0.15, angle_deg=60)
