@@ -74,7 +74,7 @@ def dead_links(path: Path, text: str) -> list[str]:
 
 
 def missing_files(text: str) -> list[str]:
-    """Source files named in backquotes (``kinematics/assembly.py``) that are not in the repository."""
+    """Source files named in backquotes (``kinematics/certificate.py``) that are not in the repository."""
     named = re.findall(r"`([\w./-]+/[\w.-]+\.py)\b", text)
     return [p for p in named if not (ROOT / p).exists() and not (ROOT / "hexapod_model" / p).exists()]
 
@@ -138,7 +138,7 @@ def test_links_and_named_source_files_exist(path):
 
 
 def test_link_and_file_checks_find_missing_targets():
-    text = "[ok](docs/geometry.md) [gone](docs/nowhere.md) `kinematics/assembly.py` `analysis/tracker_kernels.py`"
+    text = "[ok](docs/geometry.md) [gone](docs/nowhere.md) `kinematics/certificate.py` `analysis/tracker_kernels.py`"
     assert dead_links(README, text) == ["docs/nowhere.md"]
     assert missing_files(text) == ["analysis/tracker_kernels.py"]
 
