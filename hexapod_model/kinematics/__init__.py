@@ -1,5 +1,5 @@
 """Leg readings <-> pose.
 
 Leg readings <-> pose: the user-facing :class:`~hexapod_model.kinematics.hexapod.Hexapod`, the
-Newton solver, its compiled kernels, and rotation conversions.
+Newton solver and its compiled kernels (rotations and rigid motions: :mod:`hexapod_model.lie`).
 """

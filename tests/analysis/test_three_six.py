@@ -9,7 +9,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.jacobian import kinematic_evaluation
 from hexapod_model.analysis.three_six import ACCEPT, MAX_ASSEMBLIES, ThreeSixFK
 from hexapod_model.analysis.trajectories import box_poses
-from hexapod_model.kinematics.rotations import (
+from hexapod_model.lie import (
     EULER_ORDERS,
     axis_rotation,
     euler_solutions,

@@ -1,5 +1,10 @@
-"""Compiled SE(3) pieces of the fast Newton path, written as Pinocchio computes them.
+"""Compiled (numba) SO(3) / SE(3) maps on rotation matrices, written as Pinocchio computes them.
 
+They are inlined into the compiled Newton kernels (``inline="always"``) and the standard
+model's steps; their NumPy twins are :mod:`hexapod_model.lie.so3`, :mod:`.se3` and
+:mod:`.quaternion`, the quaternion-based twins of the tracker :mod:`.compiled_quaternion`.
+
+* :func:`exp3`: Rodrigues' ``exp([w])`` (the standard model's rotation update);
 * :func:`quat_to_matrix`: rotation of a unit quaternion ``(x, y, z, w)`` (Eigen's
   ``toRotationMatrix``: ``R = I + 2 w [u] + 2 [u]^2`` with ``u = (x, y, z)``, no normalisation);
 * :func:`matrix_to_quat`: Eigen's branch on the trace (Shepperd's method);
@@ -18,8 +23,9 @@
   Taylor-expanded for small ``t``;
 * :func:`difference_free_flyer`: Pinocchio's ``difference``, ``log6(M0^-1 M1)``.
 
-Tests: ``tests/kinematics/test_chains.py`` against ``pin.exp6``, ``pin.integrate``, ``pin.log6``
-and ``pin.difference``.
+Tests: ``tests/lie/test_lie.py`` against ``pin.exp3``, ``pin.exp6``, ``pin.log6`` and
+``pin.Quaternion``, ``tests/kinematics/test_chains.py`` against ``pin.integrate`` and
+``pin.difference``.
 """
 
 from __future__ import annotations
@@ -29,6 +35,22 @@ from numba import njit
 
 _EPS = np.finfo(np.float64).eps
 _TAYLOR_T = _EPS ** (1.0 / 3.0)  # Pinocchio's TaylorSeriesExpansion<double>::precision<3>()
+
+
+@njit(cache=True, inline="always")
+def exp3(wx, wy, wz, E):
+    """Write ``E`` (3x3) ``= exp([w])`` of the rotation vector ``w = (wx, wy, wz)`` (rad; Rodrigues)."""
+    a = np.sqrt(wx * wx + wy * wy + wz * wz)
+    if a < 1e-8:
+        s, c = 1.0 - a * a / 6.0, 0.5 - a * a / 24.0
+    else:
+        s, c = np.sin(a) / a, (1.0 - np.cos(a)) / (a * a)
+    E[0, 0] = 1.0 - c * (wy * wy + wz * wz)
+    E[1, 1] = 1.0 - c * (wx * wx + wz * wz)
+    E[2, 2] = 1.0 - c * (wx * wx + wy * wy)
+    E[0, 1], E[1, 0] = -s * wz + c * wx * wy, s * wz + c * wx * wy
+    E[0, 2], E[2, 0] = s * wy + c * wx * wz, -s * wy + c * wx * wz
+    E[1, 2], E[2, 1] = -s * wx + c * wy * wz, s * wx + c * wy * wz
 
 
 @njit(cache=True, inline="always")
