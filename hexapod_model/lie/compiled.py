@@ -21,7 +21,10 @@ model's steps; their NumPy twins are :mod:`hexapod_model.lie.so3`, :mod:`.se3` a
   ``v = alpha p - [w] p / 2 + beta (w . p) w`` with ``alpha = t sin t / (2 (1 - cos t))``
   written ``(t/2) cot(t/2)`` (no cancellation) and ``beta = (1 - alpha) / t^2``,
   Taylor-expanded for small ``t``;
-* :func:`difference_free_flyer`: Pinocchio's ``difference``, ``log6(M0^-1 M1)``.
+* :func:`difference_free_flyer`: Pinocchio's ``difference``, ``log6(M0^-1 M1)``;
+* :func:`pose_to_xyzquat` / :func:`xyzquat_to_pose`: a 4x4 pose <-> its free-flyer configuration
+  ``(x, y, z, qx, qy, qz, qw)`` relative to the home placement (the solver's pose in and out;
+  their NumPy twins are in :mod:`hexapod_model.lie.se3`).
 
 Tests: ``tests/lie/test_lie.py`` against ``pin.exp3``, ``pin.exp6``, ``pin.log6`` and
 ``pin.Quaternion``, ``tests/kinematics/test_chains.py`` against ``pin.integrate`` and
@@ -183,3 +186,50 @@ def difference_free_flyer(x0, x1, out, R0, R1, Rd, pd):
         for b in range(3):
             Rd[a, b] = R0[0, a] * R1[0, b] + R0[1, a] * R1[1, b] + R0[2, a] * R1[2, b]
     log6(Rd, pd, out)
+
+
+@njit(cache=True)
+def pose_to_xyzquat(T, H, out):
+    """Free-flyer configuration of a pose relative to home.
+
+    Free-flyer configuration ``(x, y, z, qx, qy, qz, qw)`` of pose ``T`` relative to the
+    home placement ``H`` (both 4x4): ``H^-1 T``.
+    """
+    M = np.empty((3, 3))
+    for a in range(3):
+        out[a] = H[0, a] * (T[0, 3] - H[0, 3]) + H[1, a] * (T[1, 3] - H[1, 3]) + H[2, a] * (T[2, 3] - H[2, 3])
+        for b in range(3):
+            M[a, b] = H[0, a] * T[0, b] + H[1, a] * T[1, b] + H[2, a] * T[2, b]
+    tr = M[0, 0] + M[1, 1] + M[2, 2]
+    if tr > 0.0:
+        s = 2.0 * np.sqrt(1.0 + tr)
+        qw, qx, qy, qz = 0.25 * s, (M[2, 1] - M[1, 2]) / s, (M[0, 2] - M[2, 0]) / s, (M[1, 0] - M[0, 1]) / s
+    elif M[0, 0] > M[1, 1] and M[0, 0] > M[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + M[0, 0] - M[1, 1] - M[2, 2])
+        qw, qx, qy, qz = (M[2, 1] - M[1, 2]) / s, 0.25 * s, (M[0, 1] + M[1, 0]) / s, (M[0, 2] + M[2, 0]) / s
+    elif M[1, 1] > M[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + M[1, 1] - M[0, 0] - M[2, 2])
+        qw, qx, qy, qz = (M[0, 2] - M[2, 0]) / s, (M[0, 1] + M[1, 0]) / s, 0.25 * s, (M[1, 2] + M[2, 1]) / s
+    else:
+        s = 2.0 * np.sqrt(1.0 + M[2, 2] - M[0, 0] - M[1, 1])
+        qw, qx, qy, qz = (M[1, 0] - M[0, 1]) / s, (M[0, 2] + M[2, 0]) / s, (M[1, 2] + M[2, 1]) / s, 0.25 * s
+    n = np.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+    out[3], out[4], out[5], out[6] = qx / n, qy / n, qz / n, qw / n
+
+
+@njit(cache=True)
+def xyzquat_to_pose(x, H, T):
+    """Pose ``T = H * X`` (4x4) of the free-flyer configuration ``x`` relative to ``H``."""
+    qx, qy, qz, qw = x[3], x[4], x[5], x[6]
+    n = np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+    qx, qy, qz, qw = qx / n, qy / n, qz / n, qw / n
+    X = np.empty((3, 3))
+    X[0, 0], X[0, 1], X[0, 2] = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)
+    X[1, 0], X[1, 1], X[1, 2] = 2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)
+    X[2, 0], X[2, 1], X[2, 2] = 2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)
+    for a in range(3):
+        for b in range(3):
+            T[a, b] = H[a, 0] * X[0, b] + H[a, 1] * X[1, b] + H[a, 2] * X[2, b]
+        T[a, 3] = H[a, 0] * x[0] + H[a, 1] * x[1] + H[a, 2] * x[2] + H[a, 3]
+        T[3, a] = 0.0
+    T[3, 3] = 1.0

@@ -5,6 +5,8 @@ Twists are ``(v, w)``: linear part first (m), angular part second (rad), as Pino
 ``V = I + (1 - cos t)/t^2 [w] + (t - sin t)/t^3 [w]^2`` (Murray-Li-Sastry eq. 2.36) and
 ``log6`` its inverse, ``V^-1 p = alpha p - [w] p / 2 + beta (w . p) w`` with
 ``alpha = (t/2) cot(t/2)`` and ``beta = (1 - alpha) / t^2`` (Pinocchio's ``exp6`` / ``log6``).
+:func:`pose_to_xyzquat` and :func:`xyzquat_to_pose` write a pose's free-flyer configuration
+relative to home into a buffer and back, as their compiled twins do (the solver's NumPy kernels).
 The compiled twins are in :mod:`hexapod_model.lie.compiled`.
 """
 
@@ -78,3 +80,41 @@ def pose_distance(Ta: np.ndarray, Tb: np.ndarray, length: float) -> float:
     M = pin.SE3(Ta[:3, :3], Ta[:3, 3]).inverse() * pin.SE3(Tb[:3, :3], Tb[:3, 3])
     xi = pin.log6(M).vector
     return float(np.hypot(np.linalg.norm(Ta[:3, :3] @ xi[:3]), length * np.linalg.norm(xi[3:])))
+
+
+def pose_to_xyzquat(T, H, out):
+    """Free-flyer configuration ``(x, y, z, qx, qy, qz, qw)`` of pose ``T`` relative to home ``H``: ``H^-1 T``."""
+    Hr = H[:3, :3]
+    out[:3] = Hr.T @ (T[:3, 3] - H[:3, 3])
+    M = Hr.T @ T[:3, :3]
+    tr = M[0, 0] + M[1, 1] + M[2, 2]
+    if tr > 0.0:
+        s = 2.0 * np.sqrt(1.0 + tr)
+        q = (0.25 * s, (M[2, 1] - M[1, 2]) / s, (M[0, 2] - M[2, 0]) / s, (M[1, 0] - M[0, 1]) / s)
+    elif M[0, 0] > M[1, 1] and M[0, 0] > M[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + M[0, 0] - M[1, 1] - M[2, 2])
+        q = ((M[2, 1] - M[1, 2]) / s, 0.25 * s, (M[0, 1] + M[1, 0]) / s, (M[0, 2] + M[2, 0]) / s)
+    elif M[1, 1] > M[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + M[1, 1] - M[0, 0] - M[2, 2])
+        q = ((M[0, 2] - M[2, 0]) / s, (M[0, 1] + M[1, 0]) / s, 0.25 * s, (M[1, 2] + M[2, 1]) / s)
+    else:
+        s = 2.0 * np.sqrt(1.0 + M[2, 2] - M[0, 0] - M[1, 1])
+        q = ((M[1, 0] - M[0, 1]) / s, (M[0, 2] + M[2, 0]) / s, (M[1, 2] + M[2, 1]) / s, 0.25 * s)
+    qw, qx, qy, qz = q
+    nrm = np.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+    out[3], out[4], out[5], out[6] = qx / nrm, qy / nrm, qz / nrm, qw / nrm
+
+
+def xyzquat_to_pose(x, H, T):
+    """Pose ``T = H * X`` (4x4) of the free-flyer configuration ``x`` relative to ``H``."""
+    qx, qy, qz, qw = x[3:7] / np.sqrt(np.sum(x[3:7] * x[3:7]))
+    X = np.array(
+        [
+            [1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
+            [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
+            [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)],
+        ]
+    )
+    T[:3, :3] = H[:3, :3] @ X
+    T[:3, 3] = H[:3, :3] @ x[:3] + H[:3, 3]
+    T[3] = (0.0, 0.0, 0.0, 1.0)

@@ -303,3 +303,25 @@ def test_log3_matches_scipys_rotation_vectors():
     short = np.pi - np.linalg.norm(w, axis=-1) > 1e-6
     np.testing.assert_allclose(log3(R)[short], ref[short], rtol=0, atol=1e-12)
     np.testing.assert_allclose(np.linalg.norm(log3(R), axis=-1), np.linalg.norm(ref, axis=-1), rtol=0, atol=1e-12)
+
+
+def test_free_flyer_pose_conversions_match_pinocchio():
+    """``pose_to_xyzquat(T, H) = XYZQUAT(H^-1 T)`` (quaternion up to sign) and back, NumPy and compiled."""
+    from hexapod_model.lie.se3 import pose_to_xyzquat, xyzquat_to_pose
+
+    pin.seed(37)
+    H = pin.SE3.Random().homogeneous
+    x, y, T, U = np.empty(7), np.empty(7), np.empty((4, 4)), np.empty((4, 4))
+    for k in range(200):
+        M = pin.SE3.Random() if k % 2 else pin.SE3(pin.exp3(np.pi * np.eye(3)[k % 3]), np.zeros(3))  # half turns too
+        Tk = H @ M.homogeneous
+        pose_to_xyzquat(Tk, H, x)
+        lc.pose_to_xyzquat(Tk, H, y)
+        ref = pin.SE3ToXYZQUAT(M)
+        np.testing.assert_allclose(x[:3], ref[:3], rtol=0, atol=1e-14)
+        assert min(np.abs(x[3:] - ref[3:]).max(), np.abs(x[3:] + ref[3:]).max()) < 1e-15
+        np.testing.assert_allclose(y, x, rtol=0, atol=1e-15)
+        xyzquat_to_pose(x, H, T)
+        lc.xyzquat_to_pose(x, H, U)
+        np.testing.assert_allclose(T, Tk, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(U, T, rtol=0, atol=1e-15)

@@ -38,7 +38,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...lie.compiled import integrate_free_flyer
+from ...lie.compiled import integrate_free_flyer, xyzquat_to_pose
 from .chains import evaluate_chains
 from .kernels import (
     closure_residual,
@@ -47,7 +47,6 @@ from .kernels import (
     jacobian,
     scatter_step,
     shift_residual,
-    xyzquat_to_pose,
 )
 from .outcomes import CONVERGED, FLIPPED, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED
 from .packing import FHEADER, LENGTH_SCALE, unpack_floats, unpack_ints, unpack_iwork, unpack_work
