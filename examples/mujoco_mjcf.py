@@ -17,7 +17,7 @@ import numpy as np
 
 import hexapod_model as hm
 from hexapod_model.description.mjcf_loader import q_of_mujoco_qpos
-from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.lie import rpy_to_matrix
 
 ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 ap.add_argument("hexapod", nargs="?", default="reference", help="preset name, URDF or geometry file")

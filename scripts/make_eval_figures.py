@@ -23,8 +23,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import hexapod_model as hm  # noqa: E402
-from hexapod_model.kinematics.rotations import rpy_to_matrix  # noqa: E402
 from hexapod_model.kinematics.three_six import ThreeSixFK  # noqa: E402
+from hexapod_model.lie import rpy_to_matrix  # noqa: E402
 from hexapod_model.plots.evaluate import plot_sections  # noqa: E402
 from hexapod_model.plots.track import plot_run  # noqa: E402
 from hexapod_model.studies.evaluate import Settings, run_evaluation  # noqa: E402

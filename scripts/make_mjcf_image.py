@@ -45,7 +45,7 @@ def main(argv=None) -> int:
     from hexapod_model import Hexapod, get_preset
     from hexapod_model.description.mjcf import geometry_to_mjcf
     from hexapod_model.description.mjcf_loader import q_of_mujoco_qpos
-    from hexapod_model.kinematics.rotations import rpy_to_matrix
+    from hexapod_model.lie import rpy_to_matrix
 
     hexa = Hexapod.from_preset("reference")
     T = np.eye(4)

@@ -34,24 +34,7 @@ from numba import njit
 from ..description.geometry import HexapodGeometry
 from ..exceptions import GeometryError, InputError, UrdfError
 from ..kinematics.newton.linalg import lu_apply, lu_factor
-
-
-def skew_exp(theta: np.ndarray) -> np.ndarray:
-    """(N, 3, 3) rotation matrices ``exp([theta])`` of (N, 3) rotation vectors (Rodrigues)."""
-    a = np.linalg.norm(theta, axis=-1)
-    small = a < 1e-8
-    a_safe = np.where(small, 1.0, a)
-    s = np.where(small, 1.0 - a * a / 6.0, np.sin(a) / a_safe)
-    c = np.where(small, 0.5 - a * a / 24.0, (1.0 - np.cos(a)) / (a_safe * a_safe))
-    x, y, z = theta[..., 0], theta[..., 1], theta[..., 2]
-    K = np.zeros(theta.shape[:-1] + (3, 3))
-    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -z, y, -x
-    K[..., 1, 0], K[..., 2, 0], K[..., 2, 1] = z, -y, x
-    out = s[..., None, None] * K + c[..., None, None] * (K @ K)
-    out[..., 0, 0] += 1.0
-    out[..., 1, 1] += 1.0
-    out[..., 2, 2] += 1.0
-    return out
+from ..lie.compiled import exp3 as exp3_compiled
 
 
 @dataclass(frozen=True)
@@ -296,18 +279,7 @@ def _newton_steps(Rp, v, dist, f, step, R, t):
         else:
             lu_apply(J, piv, rhs, x[0])
         step[n, :] = x[0]
-        wx, wy, wz = x[0, 3], x[0, 4], x[0, 5]
-        a = np.sqrt(wx * wx + wy * wy + wz * wz)
-        if a < 1e-8:
-            s, c = 1.0 - a * a / 6.0, 0.5 - a * a / 24.0
-        else:
-            s, c = np.sin(a) / a, (1.0 - np.cos(a)) / (a * a)
-        E[0, 0] = 1.0 - c * (wy * wy + wz * wz)
-        E[1, 1] = 1.0 - c * (wx * wx + wz * wz)
-        E[2, 2] = 1.0 - c * (wx * wx + wy * wy)
-        E[0, 1], E[1, 0] = -s * wz + c * wx * wy, s * wz + c * wx * wy
-        E[0, 2], E[2, 0] = s * wy + c * wx * wz, -s * wy + c * wx * wz
-        E[1, 2], E[2, 1] = -s * wx + c * wy * wz, s * wx + c * wy * wz
+        exp3_compiled(x[0, 3], x[0, 4], x[0, 5], E)
         for r in range(3):
             t[n, r] += x[0, r]
             for q in range(3):

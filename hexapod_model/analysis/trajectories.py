@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..exceptions import InputError
-from ..kinematics.rotations import rpy_to_matrix
+from ..lie import rpy_to_matrix
 
 DURATION_S = 4.0
 

@@ -22,10 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-from scipy.spatial.transform import Rotation
 
 from ..exceptions import InputError
-from ..kinematics.rotations import rotation_angle
+from ..lie import log3, rotation_angle
 
 ERROR_KEYS = (
     "translation_mean_mm",
@@ -122,8 +121,8 @@ def initial_frames(P: np.ndarray, measured: np.ndarray) -> tuple[np.ndarray, np.
     translations by linear least squares. Needs poses that rotate about different axes.
     """
     RP, RM = P[:, :3, :3], measured[:, :3, :3]
-    a = Rotation.from_matrix(np.swapaxes(RP[:-1], 1, 2) @ RP[1:]).as_rotvec()
-    b = Rotation.from_matrix(np.swapaxes(RM[:-1], 1, 2) @ RM[1:]).as_rotvec()
+    a = log3(np.swapaxes(RP[:-1], 1, 2) @ RP[1:])
+    b = log3(np.swapaxes(RM[:-1], 1, 2) @ RM[1:])
     R_pm = np.eye(3)
     if len(a) >= 2 and np.linalg.matrix_rank(a, tol=1e-3) >= 2:
         U, _, Vt = np.linalg.svd(a.T @ b)  # b = R_pm^T a

@@ -18,6 +18,7 @@ import numpy as np
 from ..analysis.trajectories import box_poses
 from ..description.geometry import HexapodGeometry
 from ..exceptions import InputError
+from ..lie import log3
 from .derivatives import CalibrationModel
 from .frames import Noise, frame_jacobian, twist_jacobian
 from .identifiability import frame_free, free_basis
@@ -127,9 +128,7 @@ def plan_poses(
 
 def _visiting_order(poses: np.ndarray) -> list[int]:
     """Nearest-neighbour tour from the pose closest to home (position in m plus 0.1 m per rad)."""
-    from scipy.spatial.transform import Rotation
-
-    x = np.hstack([poses[:, :3, 3], 0.1 * Rotation.from_matrix(poses[:, :3, :3]).as_rotvec()])
+    x = np.hstack([poses[:, :3, 3], 0.1 * log3(poses[:, :3, :3])])
     left = list(range(len(x)))
     order = [left.pop(int(np.argmin(np.linalg.norm(x[:, :3] - np.mean(x[:, :3], axis=0), axis=1))))]
     while left:

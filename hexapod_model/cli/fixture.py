@@ -70,7 +70,7 @@ def _open(args: argparse.Namespace):
 
 
 def _rpy_deg(quaternion) -> np.ndarray:
-    from ..kinematics.rotations import matrix_to_rpy, quaternion_to_matrix
+    from ..lie import matrix_to_rpy, quaternion_to_matrix
 
     return np.degrees(matrix_to_rpy(quaternion_to_matrix(np.asarray(quaternion))))
 

@@ -16,7 +16,7 @@ import numpy as np
 from ..exceptions import HexapodError
 from ..extras import require_extra
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.rotations import quaternion_to_matrix
+from ..lie import quaternion_to_matrix
 from ._common import note
 
 FRAME_S = 0.05  # the view's refresh period

@@ -11,7 +11,7 @@ from ..analysis.statics import FRAMES, LegLoads, loads_at, stiffness_of
 from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
 from ..kinematics.input_checks import check_vector
-from ..kinematics.rotations import xyz_rpy_to_pose
+from ..lie import xyz_rpy_to_pose
 from ._common import add_hexapod_argument, hexapod_of
 
 DESCRIPTION = """\

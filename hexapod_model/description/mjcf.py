@@ -30,6 +30,7 @@ import math
 import xml.etree.ElementTree as ET
 
 from ..exceptions import UrdfError
+from ..lie import rpy_to_quaternion
 from .geometry import HexapodGeometry
 from .urdf import format_number, geometry_to_urdf, read_closures
 
@@ -67,20 +68,6 @@ def _vec(values) -> str:
     return " ".join(_f(v) for v in values)
 
 
-def rpy_to_quat(rpy: tuple[float, ...]) -> tuple[float, float, float, float]:
-    """Quaternion ``(w, x, y, z)`` of the URDF rotation ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (rad), ``w >= 0``."""
-    cr, sr = math.cos(rpy[0] / 2), math.sin(rpy[0] / 2)
-    cp, sp = math.cos(rpy[1] / 2), math.sin(rpy[1] / 2)
-    cy, sy = math.cos(rpy[2] / 2), math.sin(rpy[2] / 2)
-    q = (
-        cr * cp * cy + sr * sp * sy,
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-    )
-    return q if q[0] >= 0 else (-q[0], -q[1], -q[2], -q[3])
-
-
 def _place(body: ET.Element, origin: ET.Element | None, what: str, source: str) -> None:
     """``pos`` and ``quat`` attributes of an MJCF element from a URDF ``<origin>`` (left out at zero)."""
     xyz = _numbers(origin.get("xyz") if origin is not None else None, (0.0, 0.0, 0.0), f"{what} xyz", source)
@@ -88,7 +75,8 @@ def _place(body: ET.Element, origin: ET.Element | None, what: str, source: str) 
     if any(_f(v) != "0" for v in xyz):
         body.set("pos", _vec(xyz))
     if any(_f(v) != "0" for v in rpy):
-        body.set("quat", _vec(rpy_to_quat(rpy)))
+        x, y, z, w = rpy_to_quaternion(*rpy)
+        body.set("quat", _vec((w, x, y, z)))
 
 
 class _Converter:

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..exceptions import UrdfError
 from ..files import atomic_write_text
+from ..lie import matrix_to_rpy
 from .geometry import HexapodGeometry, LegGeometry
 from .legs import axes_of
 
@@ -78,10 +79,7 @@ def _xyz(v) -> str:
 
 def _rpy(R: np.ndarray) -> str:
     """URDF rpy (R = Rz(y) Ry(p) Rx(r)) of a rotation matrix."""
-    pitch = np.arctan2(-R[2, 0], np.hypot(R[0, 0], R[1, 0]))
-    roll = np.arctan2(R[2, 1], R[2, 2])
-    yaw = np.arctan2(R[1, 0], R[0, 0])
-    return _xyz((roll, pitch, yaw))
+    return _xyz(matrix_to_rpy(R))
 
 
 def _guideway(leg: LegGeometry) -> tuple[float, float, float]:

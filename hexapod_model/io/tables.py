@@ -21,7 +21,7 @@ import numpy as np
 
 from ..exceptions import InputError
 from ..files import atomic_writer
-from ..kinematics.rotations import (
+from ..lie import (
     matrix_to_quaternion,
     matrix_to_rpy,
     quaternion_to_matrix,

@@ -10,7 +10,7 @@ answers it globally:
   (:func:`review`): a result (cold, or warm with a reading more than ``WARM_CHECK`` base radii from the
   guess's) stays ``converged`` only when no other assembly within the stroke and joint limits
   lies within ``MARGIN`` times its distance from the start (home or the guess; poses compared
-  by :func:`.rotations.pose_distance`, rotations times the base radius); otherwise it is
+  by :func:`hexapod_model.lie.pose_distance`, rotations times the base radius); otherwise it is
   ``ambiguous_assembly`` with all of them as candidates, the connected one first. Readings the
   polynomial has no real root for are ``no_assembly``; when Newton found nothing or could not
   follow the path from home, the one assembly within the limits is returned as ``converged``
@@ -39,8 +39,8 @@ import pinocchio as pin
 from ..description.geometry import HexapodGeometry, LegGeometry
 from ..description.model import ClosedLoopModel
 from ..exceptions import GeometryError, WorkspaceError
+from ..lie import pose_distance, rpy_to_matrix
 from .newton.solver import NewtonSolver, Solution
-from .rotations import pose_distance, rpy_to_matrix
 from .three_six import ThreeSixFK
 
 SAME = 5e-7  # times the base radius (1e-7 m on the presets): two poses closer than this are one assembly

@@ -15,6 +15,7 @@ from typing import SupportsIndex
 import numpy as np
 
 from ..exceptions import InputError
+from ..lie import quaternion_to_matrix
 from .certificate import NEAR_SINGULAR_FACTOR
 from .engine import SolveEngine
 from .input_checks import failure_status
@@ -87,14 +88,11 @@ def poses_of_xyzquat(x: np.ndarray, tolerance: float) -> np.ndarray:
 
     NaN where the quaternion's norm is not 1 within ``tolerance`` (or an entry is not finite).
     """
-    T = np.tile(np.eye(4), (len(x), 1, 1))
     with np.errstate(invalid="ignore"):
         norm = np.linalg.norm(x[:, 3:], axis=1)
         ok = np.abs(norm - 1.0) <= tolerance
-    qx, qy, qz, qw = (x[:, 3 + a] / np.where(ok, norm, 1.0) for a in range(4))
-    T[:, 0, 0], T[:, 0, 1], T[:, 0, 2] = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)
-    T[:, 1, 0], T[:, 1, 1], T[:, 1, 2] = 2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)
-    T[:, 2, 0], T[:, 2, 1], T[:, 2, 2] = 2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)
+    T = np.tile(np.eye(4), (len(x), 1, 1))
+    T[:, :3, :3] = quaternion_to_matrix(x[:, 3:])
     T[:, :3, 3] = x[:, :3]
     T[~ok] = np.nan
     return T

@@ -43,8 +43,8 @@ import numpy as np
 
 from ..description.geometry import HexapodGeometry
 from ..exceptions import GeometryError, InputError, WorkspaceError
+from ..lie import pose_distance
 from .newton.solver import length_scale
-from .rotations import pose_distance
 
 MAX_ASSEMBLIES = 16  # roots of the order-8 trigonometric polynomial in psi_0
 ACCEPT = 1e-12  # m^2 at length scale 1: largest eq. 9 error of a returned assembly (about 1e-11 m in distance)

@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from ..kinematics.rotations import matrix_to_quaternion
+from ..lie import matrix_to_quaternion
 from .messages import (  # cyclonedds: the ros extra
     DiagnosticStatus,
     Header,
@@ -157,7 +157,7 @@ def placement(base_in_robot: object, robot_frame: str, names: FixtureNames, t: f
 
 
 def _homogeneous(value: object) -> np.ndarray:
-    from ..kinematics.rotations import xyz_rpy_to_pose
+    from ..lie import xyz_rpy_to_pose
 
     a = np.asarray(getattr(value, "homogeneous", value), dtype=float)
     if a.shape == (4, 4):

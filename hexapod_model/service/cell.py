@@ -27,7 +27,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import InputError
-from ..kinematics.rotations import matrix_to_rpy, xyz_rpy_to_pose
+from ..lie import matrix_to_rpy, xyz_rpy_to_pose
 from .errors import Table
 from .pose import pose_record
 

@@ -34,12 +34,13 @@ import pinocchio as pin
 
 from ..analysis.sensitivity import SensitivityEvaluator
 from ..kinematics.hexapod import Hexapod
+from ..lie import quaternion_of_matrix
 from .alarms import UNACKNOWLEDGED, Acknowledgement, FaultLatch, LatchedFault
 from .cell import InRobot
 from .config import FixtureConfig
 from .guidance import deviation, within
 from .load import lock_load
-from .pose import pose_record, quaternion
+from .pose import pose_record
 from .solve import PoseSolver, SolveOutcome
 from .state import MOTION_LEGS, LockDetector, StepDetector, StuckDetector
 from .store import LockEvent
@@ -424,4 +425,4 @@ class FixtureCycle:
 
 def _quaternion(R: np.ndarray) -> np.ndarray:
     """``qx, qy, qz, qw`` of ``R`` with ``qw >= 0``."""
-    return np.array(quaternion(R))
+    return np.array(quaternion_of_matrix(R))

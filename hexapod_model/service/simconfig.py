@@ -16,7 +16,7 @@ import numpy as np
 from ..analysis.trajectories import DURATION_S, trajectory_coordinates
 from ..exceptions import HexapodError
 from ..io.tables import poses_from_table, read_table
-from ..kinematics.rotations import rpy_to_matrix, xyz_rpy_to_pose
+from ..lie import rpy_to_matrix, xyz_rpy_to_pose
 from .config import ServiceConfig, read_toml
 from .errors import ConfigError, Table
 from .sim_changeover import ChangeoverScript

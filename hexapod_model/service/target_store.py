@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from ..kinematics.rotations import matrix_to_quaternion, quaternion_to_matrix
+from ..lie import matrix_to_quaternion, quaternion_to_matrix
 from .errors import ServiceError
 from .targets import Recipe, Target, Tolerance
 

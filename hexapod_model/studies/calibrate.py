@@ -23,7 +23,6 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..analysis.standard import skew_exp
 from ..analysis.trajectories import box_poses
 from ..calibration.frames import Noise, pose_errors, predict
 from ..calibration.gauge import regauge
@@ -37,6 +36,7 @@ from ..exceptions import InputError
 from ..files import atomic_write_text
 from ..io.tables import open_table
 from ..kinematics.hexapod import Hexapod, load_hexapod
+from ..lie import exp3
 from .reproduce import DATA_COLUMNS, StudyInput, load_measured, save_measured
 
 Progress = Callable[[Iterable, int, str], Iterable]
@@ -118,7 +118,7 @@ def simulate(
     P = np.array(poses)
     measured = predict(T_mb, P, T_pm)
     measured[:, :3, 3] += rng.normal(0.0, noise.position_m, (n, 3))
-    measured[:, :3, :3] = skew_exp(rng.normal(0.0, noise.rotation_rad, (n, 3))) @ measured[:, :3, :3]
+    measured[:, :3, :3] = exp3(rng.normal(0.0, noise.rotation_rad, (n, 3))) @ measured[:, :3, :3]
     noisy = np.array(readings) + rng.normal(0.0, encoder_noise, (n, 6))
     data = MeasuredPoses(noisy, measured, f"simulation (seed {seed}, {n} poses)")
     return Simulation(nominal, true_geometry, T_mb, T_pm, data, P)

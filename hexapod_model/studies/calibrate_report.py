@@ -19,6 +19,7 @@ import numpy as np
 
 from ..calibration.frames import ERROR_KEYS, Noise, error_stats
 from ..calibration.validation import IMPROVEMENT_SIGMAS, verdict
+from ..lie import log3
 from .calibrate import CalibrationResult
 
 SIGMA_LIMIT = 3.0  # the simulated study's check: identified parameters within this many sigma of the truth
@@ -128,7 +129,7 @@ def format_report(result: CalibrationResult, noise: Noise, details: bool = False
             f"parameters within 3 sigma (worst {worst['name']}: {worst['error_over_sigma']:+.2f} sigma)"
         )
     for label, T in (("measuring frame (base in device)", ident.measuring_frame), ("marker frame", ident.marker_frame)):
-        rot = np.degrees(_rotvec(T[:3, :3]))
+        rot = np.degrees(log3(T[:3, :3]))
         xyz = np.round(T[:3, 3], 5).tolist()
         lines.append(f"{label}: xyz {xyz} m, rotation vector {np.round(rot, 4).tolist()} deg")
     if details:
@@ -141,9 +142,3 @@ def format_report(result: CalibrationResult, noise: Noise, details: bool = False
     if result.seconds:
         lines.append(f"identification and {val.folds}-fold validation: {result.seconds:.1f} s")
     return "\n".join(lines)
-
-
-def _rotvec(R: np.ndarray) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.from_matrix(R).as_rotvec()

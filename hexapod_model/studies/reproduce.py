@@ -27,12 +27,12 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis.full_formulation import ForwardComparison
-from ..analysis.standard import StandardModel, skew_exp
+from ..analysis.standard import StandardModel
 from ..analysis.trajectories import box_poses
 from ..exceptions import HexapodError, InputError
 from ..io.tables import LENGTH_COLUMNS, open_table, poses_from_table, write_table
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.rotations import matrix_to_quaternion, rotation_angle
+from ..lie import exp3, matrix_to_quaternion, rotation_angle
 from .paper_table import summarise
 
 DEFAULT_ENCODER_NOISE = 10e-6  # m, Gaussian sigma on each reading
@@ -93,7 +93,7 @@ def simulate(
         sm = StandardModel.from_hexapod(hexa)
         radius = float(np.sqrt(np.mean(np.sum(sm.platform_points[:, :2] ** 2, axis=1))))
         reference[:, :3, 3] += rng.normal(0.0, reference_noise, (n, 3))
-        reference[:, :3, :3] = skew_exp(rng.normal(0.0, reference_noise / radius, (n, 3))) @ reference[:, :3, :3]
+        reference[:, :3, :3] = exp3(rng.normal(0.0, reference_noise / radius, (n, 3))) @ reference[:, :3, :3]
     return StudyInput(readings, reference, f"simulation ({drawn - n} of {drawn} drawn poses rejected)")
 
 

@@ -21,7 +21,7 @@ from ..analysis.trajectories import trajectory_poses
 from ..exceptions import InputError
 from ..io.tables import POSE_COLUMNS, pose_row
 from ..kinematics.hexapod import Hexapod
-from ..kinematics.rotations import matrix_to_rpy
+from ..lie import matrix_to_rpy
 from ..tracking.tracker import PREDICTORS, Tracker, characteristic_length, pose_distance
 
 SPEEDS = (1, 2, 4, 8)

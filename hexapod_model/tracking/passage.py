@@ -24,7 +24,7 @@ import pinocchio as pin
 from ..analysis.sensitivity import SensitivityEvaluator
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
-from ..kinematics.rotations import pose_distance
+from ..lie import pose_distance
 from .branches import BranchResolver, mirror_guess
 from .reading_tests import TrackerSettings
 from .types import posed

@@ -34,7 +34,7 @@ from ..analysis.sensitivity import SensitivityEvaluator
 from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
-from ..kinematics.rotations import pose_distance
+from ..lie import pose_distance
 from .kernels import branch_residual, reading_checks
 from .passage import PassageMixin
 from .reading_tests import MotionModel, TrackerSettings, motion_sigmas, stuck_legs

@@ -130,7 +130,7 @@ def solve_view_configuration(hexa: Hexapod, lengths=None, pose_xyz_rpy=None) -> 
     ``(x, y, z, roll, pitch, yaw)`` in metres and degrees as ``hexapod fk`` writes it
     (``R = Rz(yaw) Ry(pitch) Rx(roll)``), or home when both are None.
     """
-    from ..kinematics.rotations import xyz_rpy_to_pose
+    from ..lie import xyz_rpy_to_pose
 
     if lengths is not None and pose_xyz_rpy is not None:
         raise ViewError("give either leg lengths or a pose, not both")

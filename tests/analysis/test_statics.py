@@ -18,7 +18,7 @@ from hexapod_model.cli.main import main
 from hexapod_model.description.mjcf import geometry_to_mjcf
 from hexapod_model.description.mjcf_loader import mujoco_qpos
 from hexapod_model.exceptions import InputError
-from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.lie import rpy_to_matrix
 
 from ..conftest import PRESET_NAMES, hexapod
 

@@ -8,7 +8,8 @@ import pytest
 import hexapod_model as hm
 from hexapod_model.analysis.jacobian import kinematic_evaluation
 from hexapod_model.analysis.trajectories import box_poses
-from hexapod_model.kinematics.rotations import (
+from hexapod_model.kinematics.three_six import ACCEPT, MAX_ASSEMBLIES, ThreeSixFK
+from hexapod_model.lie import (
     EULER_ORDERS,
     axis_rotation,
     euler_solutions,
@@ -19,7 +20,6 @@ from hexapod_model.kinematics.rotations import (
     rpy_to_matrix,
     ypr_to_matrix,
 )
-from hexapod_model.kinematics.three_six import ACCEPT, MAX_ASSEMBLIES, ThreeSixFK
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from hexapod_model.cli.main import main
-from hexapod_model.kinematics.rotations import xyz_rpy_to_pose as placement
+from hexapod_model.lie import xyz_rpy_to_pose as placement
 from hexapod_model.service.guidance import record_pose
 
 from ..conftest import hexapod

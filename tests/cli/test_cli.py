@@ -12,7 +12,7 @@ import pytest
 import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.cli.main import main
-from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.lie import rpy_to_matrix
 
 from ..conftest import PRESET_NAMES, hexapod
 

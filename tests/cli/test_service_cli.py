@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 from hexapod_model.cli.main import main
-from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.lie import rpy_to_matrix
 from hexapod_model.service import RECORD_KEYS, FixtureService, Simulator, decode, load_config, load_simulation
 
 from ..service.helpers import stored_locks

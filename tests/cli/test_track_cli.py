@@ -9,7 +9,7 @@ import pytest
 
 from hexapod_model.analysis.trajectories import trajectory_poses
 from hexapod_model.cli.main import main
-from hexapod_model.kinematics.rotations import quaternion_to_matrix
+from hexapod_model.lie import quaternion_to_matrix
 from hexapod_model.studies.track import TRACK_LOG_COLUMNS, true_readings
 
 from ..conftest import hexapod

@@ -14,7 +14,7 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses
-from hexapod_model.description.mjcf import geometry_to_mjcf, rpy_to_quat, urdf_to_mjcf
+from hexapod_model.description.mjcf import geometry_to_mjcf, urdf_to_mjcf
 from hexapod_model.description.mjcf_loader import load_mjcf, load_mjcf_text, read_equalities
 from hexapod_model.description.model import ClosedLoopModel, same_placement
 from hexapod_model.description.urdf import DECIMALS, leg_frame
@@ -197,10 +197,6 @@ def test_numbers_are_written_with_fixed_precision():
             for value in " ".join(re.findall(rf' {attr}="([^"]*)"', text)).split():
                 assert "e" not in value and value != "-0", (attr, value)
                 assert len(value.partition(".")[2]) <= DECIMALS, (attr, value)
-    w, x, y, z = rpy_to_quat((0.3, -0.2, 1.1))
-    R = pin.Quaternion(w, x, y, z).toRotationMatrix()
-    np.testing.assert_allclose(R, pin.rpy.rpyToMatrix(0.3, -0.2, 1.1), atol=1e-15)
-    assert rpy_to_quat((0.0, 0.0, 3.0))[0] >= 0 and rpy_to_quat((0.0, 0.0, -3.5))[0] >= 0
 
 
 def test_visuals_that_cannot_be_translated_are_named_in_the_file():

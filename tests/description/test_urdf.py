@@ -150,3 +150,17 @@ def test_validate_urdf_names_the_problem_yourdfpy_finds():
         validate_urdf(bad, "bad.urdf")
     with pytest.raises(hm.UrdfError, match="not a valid URDF"):
         ClosedLoopModel(bad, "bad.urdf")  # Pinocchio's rejection is explained by yourdfpy's finding
+
+
+def test_written_rpy_reproduces_the_rotation_at_and_near_gimbal_lock():
+    """An ``<origin>``'s ``rpy`` gives back its rotation to the written precision (1e-13 rad), at pitch +-90 deg too."""
+    from hexapod_model.description.urdf import _rpy
+    from hexapod_model.lie import rpy_to_matrix
+
+    rng = np.random.default_rng(41)
+    R = [pin.exp3(rng.normal(size=3)) for _ in range(50)]
+    for pitch in (np.pi / 2, -np.pi / 2, np.pi / 2 - 1e-9, -np.pi / 2 + 1e-6):
+        R += [pin.rpy.rpyToMatrix(roll, pitch, yaw) for roll, yaw in ((0.3, -1.2), (-2.9, 0.0), (1.0, 2.0))]
+    for Rk in R:
+        rpy = [float(v) for v in _rpy(Rk).split()]
+        np.testing.assert_allclose(rpy_to_matrix(*rpy), Rk, rtol=0, atol=1e-12)

@@ -19,7 +19,7 @@ from hexapod_model.io.tables import (
     read_table,
     write_table,
 )
-from hexapod_model.kinematics.rotations import rotation_angle, rpy_to_matrix
+from hexapod_model.lie import rotation_angle, rpy_to_matrix
 
 HEADER = "l1,l2,l3,l4,l5,l6\n"
 

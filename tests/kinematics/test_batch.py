@@ -10,7 +10,7 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
-from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.lie import rpy_to_matrix
 
 from ..conftest import PATH_TOL, PRESET_NAMES, assert_same_message, hexapod
 from .test_newton import idle_roll_hexapod

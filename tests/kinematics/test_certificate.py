@@ -13,7 +13,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.jacobian import leg_jacobian_local
 from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
 from hexapod_model.kinematics.newton.solver import NewtonSolver
-from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.lie import rpy_to_matrix
 from hexapod_model.tracking.tracker import characteristic_length, pose_distance
 
 from ..conftest import PRESET_NAMES, hexapod

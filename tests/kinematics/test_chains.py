@@ -1,4 +1,4 @@
-"""The compiled chain evaluation and SE(3) kernels against Pinocchio's own kinematics."""
+"""The compiled chain evaluation and free-flyer kernels against Pinocchio's own kinematics."""
 
 from __future__ import annotations
 
@@ -8,13 +8,7 @@ import pytest
 
 from hexapod_model.kinematics.newton.chains import evaluate_chains
 from hexapod_model.kinematics.newton.legs import GENERAL, IDENTITY, SHIFT, ChainTables
-from hexapod_model.kinematics.newton.lie import (
-    difference_free_flyer,
-    exp6,
-    integrate_free_flyer,
-    matrix_to_quat,
-    quat_to_matrix,
-)
+from hexapod_model.lie.compiled import difference_free_flyer, integrate_free_flyer
 
 from ..conftest import PRESET_NAMES, hexapod
 from .test_newton import idle_roll_hexapod
@@ -88,36 +82,6 @@ def test_placement_kinds_skip_only_exact_ones_and_zeros(name):
 
 def test_tables_refuse_legs_of_different_joint_counts():
     assert ChainTables.of(idle_roll_hexapod().closed_loop) is None
-
-
-def test_exp6_matches_pinocchio():
-    rng = np.random.default_rng(21)
-    R, p = np.empty((3, 3)), np.empty(3)
-    for scale in (1e-9, 1e-6, 1e-3, 0.3, 2.0):  # both sides of the Taylor threshold
-        for _ in range(50):
-            v = rng.normal(0.0, scale, 6)
-            exp6(v, R, p)
-            M = pin.exp6(pin.Motion(v))
-            np.testing.assert_allclose(R, M.rotation, rtol=0, atol=1e-15)
-            np.testing.assert_allclose(p, M.translation, rtol=0, atol=1e-15)
-
-
-def test_quaternions_match_pinocchio():
-    pin.seed(22)
-    R, quat = np.empty((3, 3)), np.empty(4)
-    for _ in range(200):
-        M = pin.SE3.Random()
-        x = pin.SE3ToXYZQUAT(M)
-        quat_to_matrix(x[3], x[4], x[5], x[6], R)
-        np.testing.assert_allclose(R, M.rotation, rtol=0, atol=1e-15)
-        matrix_to_quat(M.rotation, quat)
-        assert min(np.abs(quat - x[3:]).max(), np.abs(quat + x[3:]).max()) < 1e-15
-    for angle in (np.pi, np.pi - 1e-9):  # negative traces take the other branches
-        for axis in np.eye(3):
-            M = pin.exp3(angle * axis)
-            matrix_to_quat(M, quat)
-            quat_to_matrix(quat[0], quat[1], quat[2], quat[3], R)
-            np.testing.assert_allclose(R, M, rtol=0, atol=1e-15)
 
 
 def test_free_flyer_integration_matches_pinocchio():

@@ -9,7 +9,7 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses
-from hexapod_model.kinematics.rotations import rotation_angle
+from hexapod_model.lie import rotation_angle
 
 from ..conftest import PRESET_NAMES, hexapod
 

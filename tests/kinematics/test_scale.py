@@ -28,7 +28,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.description.geometry import geometry_from_dict
 from hexapod_model.kinematics.newton.solver import NewtonSolver, Solution
-from hexapod_model.kinematics.rotations import pose_distance
+from hexapod_model.lie import pose_distance
 
 PATHS = ("compiled", "numpy", "general")
 POSE_TOL = 1e-10  # m per unscaled metre, rad: a scaled result, unscaled, against the preset's

@@ -12,7 +12,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
 from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.kinematics.newton.solver import NewtonSolver
-from hexapod_model.kinematics.rotations import pose_distance, rotation_angle
+from hexapod_model.lie import pose_distance, rotation_angle
 
 from ..conftest import PRESET_NAMES, hexapod
 

@@ -91,7 +91,7 @@ def test_the_cell_placement_is_on_tf_static_for_a_late_joiner(tmp_path):
     from cyclonedds.topic import Topic
     from cyclonedds.util import duration
 
-    from hexapod_model.kinematics.rotations import rpy_to_matrix
+    from hexapod_model.lie import rpy_to_matrix
     from hexapod_model.ros.messages import TFMessage
     from hexapod_model.service.cell import Cell
 

@@ -132,7 +132,7 @@ def test_stamp_is_the_nearest_nanosecond_and_carries(ros):
 
 def test_placement_on_tf_static(ros):
     convert, names, _, store = ros
-    from hexapod_model.kinematics.rotations import rpy_to_matrix
+    from hexapod_model.lie import rpy_to_matrix
     from hexapod_model.ros.messages import TFMessage
 
     T = np.eye(4)

@@ -171,7 +171,7 @@ def test_rclpy_node_receives_the_served_poses_joint_states_and_diagnostics(confi
         assert max(abs(a - b) for a, b in zip(legs, rec["readings"])) <= TOL
         assert all(math.isfinite(v) for v in j["position"])
     # the passive joints are the pose's: the inverse kinematics of the record's pose gives them (1e-7 rad or m)
-    from hexapod_model.kinematics.rotations import quaternion_to_matrix
+    from hexapod_model.lie import quaternion_to_matrix
 
     for j in joints[:: max(1, len(joints) // 6)]:
         p = by_key[(j["fixture"], (j["sec"], j["nanosec"]))]["pose"]

@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 from hexapod_model.exceptions import InputError
-from hexapod_model.kinematics.rotations import xyz_rpy_to_pose as placement
+from hexapod_model.lie import xyz_rpy_to_pose as placement
 from hexapod_model.service import ConfigError
 from hexapod_model.service.cell import Cell, locate
 from hexapod_model.service.guidance import guidance, record_pose

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hexapod_model.analysis.statics import leg_forces
-from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.lie import rpy_to_matrix
 from hexapod_model.service import ConfigError
 
 from ..conftest import hexapod

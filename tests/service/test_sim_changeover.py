@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from hexapod_model.kinematics.rotations import xyz_rpy_to_pose as placement
+from hexapod_model.lie import xyz_rpy_to_pose as placement
 from hexapod_model.service import ConfigError, Simulator
 from hexapod_model.service.sim_changeover import ChangeoverScript
 

@@ -13,7 +13,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.jacobian import evaluate_jacobian, kinematic_evaluation, leg_jacobian, textbook_jacobian
 from hexapod_model.analysis.workspace import compute_slice, cone_rotations
 from hexapod_model.cli.main import main
-from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.lie import rpy_to_matrix
 from hexapod_model.studies.evaluate import Settings, run_evaluation
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -11,12 +11,13 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.analysis.full_formulation import ForwardComparison, FullFormulation, pinv_step
-from hexapod_model.analysis.standard import StandardModel, skew_exp
+from hexapod_model.analysis.standard import StandardModel
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.cli.main import main
 from hexapod_model.description.model import ClosedLoopModel
 from hexapod_model.description.urdf import geometry_to_urdf
 from hexapod_model.exceptions import InputError
+from hexapod_model.lie import exp3
 from hexapod_model.studies.paper_table import ttest_rel
 from hexapod_model.studies.reproduce import load_measured, pose_errors, simulate
 
@@ -86,7 +87,7 @@ def test_standard_jacobian_matches_finite_differences(reference):
         plus, minus = poses.copy(), poses.copy()
         for T, s in ((plus, 1), (minus, -1)):
             T[:, :3, 3] += s * d[:, :3]
-            T[:, :3, :3] = skew_exp(s * d[:, 3:]) @ T[:, :3, :3]
+            T[:, :3, :3] = exp3(s * d[:, 3:]) @ T[:, :3, :3]
         fd = (sm.centre_distances(plus) - sm.centre_distances(minus)) / (2 * eps)
         np.testing.assert_allclose(J[:, :, k], fd, atol=1e-8)
 

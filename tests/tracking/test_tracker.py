@@ -10,7 +10,7 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.cli.main import main
-from hexapod_model.kinematics.rotations import rpy_to_matrix
+from hexapod_model.lie import rpy_to_matrix
 from hexapod_model.studies.track import run_table, simulate
 from hexapod_model.tracking.tracker import PREDICTORS, Tracker, pose_distance, predict
 

@@ -24,9 +24,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...lie.compiled import pose_to_xyzquat, xyzquat_to_pose
 from .follow import follow, rescale
 from .iteration import iterate_blocks, iterate_schur
-from .kernels import copy_into, first_outside, first_outside_at, pose_to_xyzquat, rigid_error, xyzquat_to_pose
+from .kernels import copy_into, first_outside, first_outside_at, rigid_error
 from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
 from .packing import unpack_constants, unpack_work
 

@@ -10,7 +10,7 @@ determinant sign kept. Same rules as the Python follower:
   (``t + 1.2 h >= 1`` goes to 1), down to ``MIN_STEP`` and at most ``MAX_SUBSTEPS``;
 * predictor: the secant of the last two path points, or the plain attempt's first Newton step
   before the first accepted substep (``pin.interpolate`` / ``pin.integrate`` on the manifold:
-  leg joints add, the platform's free flyer moves by ``exp6`` of ``log6``, :mod:`.lie`);
+  leg joints add, the platform's free flyer moves by ``exp6`` of ``log6``, :mod:`hexapod_model.lie.compiled`);
 * closure residual ``INTERMEDIATE_TOL`` (times the geometry's length scale, packed) before the
   last substep; a start that does not close at its own readings follows ``r - (1 - t) r_start``.
 
@@ -24,11 +24,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...lie.compiled import difference_free_flyer
 from . import path_rules
 from .chains import evaluate_chains
 from .iteration import CONVERGED, integrate_configuration, iterate_schur
 from .kernels import closure_residual, copy_into
-from .lie import difference_free_flyer
 from .packing import LENGTH_SCALE, unpack_constants, unpack_floats, unpack_ints, unpack_work
 from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP
 

@@ -21,7 +21,7 @@ for ball joints) and the two structured problems: one joint held per leg, the pl
 5. the step limited to ``max_step`` along its direction (:func:`.kernels.scatter_step`; its size,
    like ``one_step``'s and ``theta_floor``'s, weighted scale-free: the packed step weights) and
    applied on the manifold: ``q_j += dq_j`` for the leg joints, ``M_p <- M_p exp6(v_p)`` for the
-   platform (:func:`.lie.integrate_free_flyer`).
+   platform (:func:`hexapod_model.lie.compiled.integrate_free_flyer`).
 
 The entries called from Python are :func:`solve_schur` and :func:`solve_blocks` (the iteration,
 and with ``finish`` the Jacobian, pose and limit check a ``Solution`` needs), four arguments
@@ -38,6 +38,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...lie.compiled import integrate_free_flyer, xyzquat_to_pose
 from .chains import evaluate_chains
 from .kernels import (
     closure_residual,
@@ -46,9 +47,7 @@ from .kernels import (
     jacobian,
     scatter_step,
     shift_residual,
-    xyzquat_to_pose,
 )
-from .lie import integrate_free_flyer
 from .outcomes import CONVERGED, FLIPPED, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED
 from .packing import FHEADER, LENGTH_SCALE, unpack_floats, unpack_ints, unpack_iwork, unpack_work
 from .structured import blocks_solve, schur_solve

@@ -49,5 +49,6 @@ def kernel_set(compiled: bool = True) -> KernelSet:
     k = importlib.import_module(".kernels" if compiled else ".numpy_kernels", __package__)
     la = importlib.import_module(".linalg" if compiled else ".numpy_kernels", __package__)
     st = importlib.import_module(".structured" if compiled else ".numpy_kernels", __package__)
-    home = {f: la for f in _LINALG} | {"schur_solve": st}
+    lie = importlib.import_module("hexapod_model.lie.compiled" if compiled else "hexapod_model.lie.se3")
+    home = {f: la for f in _LINALG} | {"schur_solve": st, "pose_to_xyzquat": lie, "xyzquat_to_pose": lie}
     return KernelSet(compiled, *(getattr(home.get(f, k), f) for f in KernelSet._fields[1:]))

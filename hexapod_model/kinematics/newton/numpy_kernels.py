@@ -219,44 +219,6 @@ def rigid_error(T):
     return max(err, float(np.max(np.abs(T[3] - (0.0, 0.0, 0.0, 1.0)))))
 
 
-def pose_to_xyzquat(T, H, out):
-    """Free-flyer configuration ``(x, y, z, qx, qy, qz, qw)`` of pose ``T`` relative to home ``H``: ``H^-1 T``."""
-    Hr = H[:3, :3]
-    out[:3] = Hr.T @ (T[:3, 3] - H[:3, 3])
-    M = Hr.T @ T[:3, :3]
-    tr = M[0, 0] + M[1, 1] + M[2, 2]
-    if tr > 0.0:
-        s = 2.0 * np.sqrt(1.0 + tr)
-        q = (0.25 * s, (M[2, 1] - M[1, 2]) / s, (M[0, 2] - M[2, 0]) / s, (M[1, 0] - M[0, 1]) / s)
-    elif M[0, 0] > M[1, 1] and M[0, 0] > M[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + M[0, 0] - M[1, 1] - M[2, 2])
-        q = ((M[2, 1] - M[1, 2]) / s, 0.25 * s, (M[0, 1] + M[1, 0]) / s, (M[0, 2] + M[2, 0]) / s)
-    elif M[1, 1] > M[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + M[1, 1] - M[0, 0] - M[2, 2])
-        q = ((M[0, 2] - M[2, 0]) / s, (M[0, 1] + M[1, 0]) / s, 0.25 * s, (M[1, 2] + M[2, 1]) / s)
-    else:
-        s = 2.0 * np.sqrt(1.0 + M[2, 2] - M[0, 0] - M[1, 1])
-        q = ((M[1, 0] - M[0, 1]) / s, (M[0, 2] + M[2, 0]) / s, (M[1, 2] + M[2, 1]) / s, 0.25 * s)
-    qw, qx, qy, qz = q
-    nrm = np.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
-    out[3], out[4], out[5], out[6] = qx / nrm, qy / nrm, qz / nrm, qw / nrm
-
-
-def xyzquat_to_pose(x, H, T):
-    """Pose ``T = H * X`` (4x4) of the free-flyer configuration ``x`` relative to ``H``."""
-    qx, qy, qz, qw = x[3:7] / np.sqrt(np.sum(x[3:7] * x[3:7]))
-    X = np.array(
-        [
-            [1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
-            [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
-            [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)],
-        ]
-    )
-    T[:3, :3] = H[:3, :3] @ X
-    T[:3, 3] = H[:3, :3] @ x[:3] + H[:3, 3]
-    T[3] = (0.0, 0.0, 0.0, 1.0)
-
-
 def copied(a):
     """A copy of ``a`` (the compiled kernel's twin, which keeps the GIL; here numpy's copy)."""
     return a.copy()

@@ -1,5 +1,10 @@
-"""Compiled SE(3) pieces of the fast Newton path, written as Pinocchio computes them.
+"""Compiled (numba) SO(3) / SE(3) maps on rotation matrices, written as Pinocchio computes them.
 
+They are inlined into the compiled Newton kernels (``inline="always"``) and the standard
+model's steps; their NumPy twins are :mod:`hexapod_model.lie.so3`, :mod:`.se3` and
+:mod:`.quaternion`, the quaternion-based twins of the tracker :mod:`.compiled_quaternion`.
+
+* :func:`exp3`: Rodrigues' ``exp([w])`` (the standard model's rotation update);
 * :func:`quat_to_matrix`: rotation of a unit quaternion ``(x, y, z, w)`` (Eigen's
   ``toRotationMatrix``: ``R = I + 2 w [u] + 2 [u]^2`` with ``u = (x, y, z)``, no normalisation);
 * :func:`matrix_to_quat`: Eigen's branch on the trace (Shepperd's method);
@@ -16,10 +21,14 @@
   ``v = alpha p - [w] p / 2 + beta (w . p) w`` with ``alpha = t sin t / (2 (1 - cos t))``
   written ``(t/2) cot(t/2)`` (no cancellation) and ``beta = (1 - alpha) / t^2``,
   Taylor-expanded for small ``t``;
-* :func:`difference_free_flyer`: Pinocchio's ``difference``, ``log6(M0^-1 M1)``.
+* :func:`difference_free_flyer`: Pinocchio's ``difference``, ``log6(M0^-1 M1)``;
+* :func:`pose_to_xyzquat` / :func:`xyzquat_to_pose`: a 4x4 pose <-> its free-flyer configuration
+  ``(x, y, z, qx, qy, qz, qw)`` relative to the home placement (the solver's pose in and out;
+  their NumPy twins are in :mod:`hexapod_model.lie.se3`).
 
-Tests: ``tests/kinematics/test_chains.py`` against ``pin.exp6``, ``pin.integrate``, ``pin.log6``
-and ``pin.difference``.
+Tests: ``tests/lie/test_lie.py`` against ``pin.exp3``, ``pin.exp6``, ``pin.log6`` and
+``pin.Quaternion``, ``tests/kinematics/test_chains.py`` against ``pin.integrate`` and
+``pin.difference``.
 """
 
 from __future__ import annotations
@@ -29,6 +38,22 @@ from numba import njit
 
 _EPS = np.finfo(np.float64).eps
 _TAYLOR_T = _EPS ** (1.0 / 3.0)  # Pinocchio's TaylorSeriesExpansion<double>::precision<3>()
+
+
+@njit(cache=True, inline="always")
+def exp3(wx, wy, wz, E):
+    """Write ``E`` (3x3) ``= exp([w])`` of the rotation vector ``w = (wx, wy, wz)`` (rad; Rodrigues)."""
+    a = np.sqrt(wx * wx + wy * wy + wz * wz)
+    if a < 1e-8:
+        s, c = 1.0 - a * a / 6.0, 0.5 - a * a / 24.0
+    else:
+        s, c = np.sin(a) / a, (1.0 - np.cos(a)) / (a * a)
+    E[0, 0] = 1.0 - c * (wy * wy + wz * wz)
+    E[1, 1] = 1.0 - c * (wx * wx + wz * wz)
+    E[2, 2] = 1.0 - c * (wx * wx + wy * wy)
+    E[0, 1], E[1, 0] = -s * wz + c * wx * wy, s * wz + c * wx * wy
+    E[0, 2], E[2, 0] = s * wy + c * wx * wz, -s * wy + c * wx * wz
+    E[1, 2], E[2, 1] = -s * wx + c * wy * wz, s * wx + c * wy * wz
 
 
 @njit(cache=True, inline="always")
@@ -161,3 +186,50 @@ def difference_free_flyer(x0, x1, out, R0, R1, Rd, pd):
         for b in range(3):
             Rd[a, b] = R0[0, a] * R1[0, b] + R0[1, a] * R1[1, b] + R0[2, a] * R1[2, b]
     log6(Rd, pd, out)
+
+
+@njit(cache=True)
+def pose_to_xyzquat(T, H, out):
+    """Free-flyer configuration of a pose relative to home.
+
+    Free-flyer configuration ``(x, y, z, qx, qy, qz, qw)`` of pose ``T`` relative to the
+    home placement ``H`` (both 4x4): ``H^-1 T``.
+    """
+    M = np.empty((3, 3))
+    for a in range(3):
+        out[a] = H[0, a] * (T[0, 3] - H[0, 3]) + H[1, a] * (T[1, 3] - H[1, 3]) + H[2, a] * (T[2, 3] - H[2, 3])
+        for b in range(3):
+            M[a, b] = H[0, a] * T[0, b] + H[1, a] * T[1, b] + H[2, a] * T[2, b]
+    tr = M[0, 0] + M[1, 1] + M[2, 2]
+    if tr > 0.0:
+        s = 2.0 * np.sqrt(1.0 + tr)
+        qw, qx, qy, qz = 0.25 * s, (M[2, 1] - M[1, 2]) / s, (M[0, 2] - M[2, 0]) / s, (M[1, 0] - M[0, 1]) / s
+    elif M[0, 0] > M[1, 1] and M[0, 0] > M[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + M[0, 0] - M[1, 1] - M[2, 2])
+        qw, qx, qy, qz = (M[2, 1] - M[1, 2]) / s, 0.25 * s, (M[0, 1] + M[1, 0]) / s, (M[0, 2] + M[2, 0]) / s
+    elif M[1, 1] > M[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + M[1, 1] - M[0, 0] - M[2, 2])
+        qw, qx, qy, qz = (M[0, 2] - M[2, 0]) / s, (M[0, 1] + M[1, 0]) / s, 0.25 * s, (M[1, 2] + M[2, 1]) / s
+    else:
+        s = 2.0 * np.sqrt(1.0 + M[2, 2] - M[0, 0] - M[1, 1])
+        qw, qx, qy, qz = (M[1, 0] - M[0, 1]) / s, (M[0, 2] + M[2, 0]) / s, (M[1, 2] + M[2, 1]) / s, 0.25 * s
+    n = np.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+    out[3], out[4], out[5], out[6] = qx / n, qy / n, qz / n, qw / n
+
+
+@njit(cache=True)
+def xyzquat_to_pose(x, H, T):
+    """Pose ``T = H * X`` (4x4) of the free-flyer configuration ``x`` relative to ``H``."""
+    qx, qy, qz, qw = x[3], x[4], x[5], x[6]
+    n = np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+    qx, qy, qz, qw = qx / n, qy / n, qz / n, qw / n
+    X = np.empty((3, 3))
+    X[0, 0], X[0, 1], X[0, 2] = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)
+    X[1, 0], X[1, 1], X[1, 2] = 2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)
+    X[2, 0], X[2, 1], X[2, 2] = 2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)
+    for a in range(3):
+        for b in range(3):
+            T[a, b] = H[a, 0] * X[0, b] + H[a, 1] * X[1, b] + H[a, 2] * X[2, b]
+        T[a, 3] = H[a, 0] * x[0] + H[a, 1] * x[1] + H[a, 2] * x[2] + H[a, 3]
+        T[3, a] = 0.0
+    T[3, 3] = 1.0
