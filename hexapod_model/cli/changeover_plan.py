@@ -22,18 +22,24 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Plans approach, couple, release_brakes, carry, lock_brakes, decouple, retract per fixture "
         "(docs/planning.md). Exit 1 with one line when no valid path exists.",
     )
-    a.add_argument("config", metavar="FIXTURE.toml", help="the service's configuration, with [fixtures.cell] per fixture")
+    a.add_argument(
+        "config", metavar="FIXTURE.toml", help="the service's configuration, with [fixtures.cell] per fixture"
+    )
     src = a.add_mutually_exclusive_group()
     src.add_argument("--recipe", metavar="NAME", help="a recipe stored in the service's store")
     src.add_argument("--recipe-file", metavar="FILE", help="a recipe file's targets (TOML or JSON), not stored")
-    a.add_argument("--fixture", action="append", metavar="NAME", help="only these fixtures (repeat; default all with a target)")
+    a.add_argument(
+        "--fixture", action="append", metavar="NAME", help="only these fixtures (repeat; default all with a target)"
+    )
     start = a.add_mutually_exclusive_group()
     start.add_argument("--live", action="store_true", help="start from the poses the running service reports")
     start.add_argument("--from-home", action="store_true", help="start from each hexapod's home pose")
     a.add_argument("-o", "--out", required=True, metavar="PLAN.json", help="the plan (JSON)")
     a.add_argument("--csv", metavar="FILE", help="also the points as CSV")
     a.add_argument("--mcap", metavar="FILE", help="also a trajectory_msgs/JointTrajectory in an MCAP file (ros extra)")
-    a.add_argument("--carry-speed", type=float, default=50.0, metavar="MM_S", help="plate speed while carried (default 50)")
+    a.add_argument(
+        "--carry-speed", type=float, default=50.0, metavar="MM_S", help="plate speed while carried (default 50)"
+    )
     a.add_argument("--carry-rate", type=float, default=10.0, metavar="DEG_S", help="plate rotation rate (default 10)")
     a.add_argument("--min-singularity-margin", type=float, default=0.2, help="the hexapod's, 1 at home (default 0.2)")
     a.add_argument("--min-clearance", type=float, default=20.0, metavar="MM", help="arm to hexapods (default 20)")
@@ -60,7 +66,9 @@ def _targets(args: argparse.Namespace, config, hexapods: dict) -> dict:
         if args.recipe:
             recipes = store.targets.recipes()
             if args.recipe not in recipes:
-                raise InputError("--recipe", args.recipe, f"no such recipe in {config.store.path} ({', '.join(recipes) or 'none'})")
+                raise InputError(
+                    "--recipe", args.recipe, f"no such recipe in {config.store.path} ({', '.join(recipes) or 'none'})"
+                )
             recipe = recipe_from_json(recipes[args.recipe][0], args.recipe, hexapods, "plan", time.time())
             return {k: t.pose for k, t in recipe.targets.items()}
         return {k: t.pose for k, t in store.targets.current_targets().items()}
@@ -82,10 +90,15 @@ def _starts(args: argparse.Namespace, config, names: list[str], hexapods: dict) 
         for n in names:
             g = client.guidance(n)
             if g["pose"] is None or g["status"] != "ok":
-                raise InputError("--live", n, f"the service reports no good pose for fixture '{n}' (status {g['status']})")
+                raise InputError(
+                    "--live", n, f"the service reports no good pose for fixture '{n}' (status {g['status']})"
+                )
             p = g["pose"]
             T = np.eye(4)
-            T[:3, 3], T[:3, :3] = (p["x"], p["y"], p["z"]), quaternion_to_matrix(np.array([p[k] for k in ("qx", "qy", "qz", "qw")]))
+            T[:3, 3], T[:3, :3] = (
+                (p["x"], p["y"], p["z"]),
+                quaternion_to_matrix(np.array([p[k] for k in ("qx", "qy", "qz", "qw")])),
+            )
             out[n] = T
         return out
     from ..service.store import Store
@@ -94,7 +107,9 @@ def _starts(args: argparse.Namespace, config, names: list[str], hexapods: dict) 
         for n in names:
             lock = store.last_lock(n)
             if lock is None:
-                raise InputError("fixture", n, "has no stored lock pose: lock it under `hexapod serve`, or use --live or --from-home")
+                raise InputError(
+                    "fixture", n, "has no stored lock pose: lock it under `hexapod serve`, or use --live or --from-home"
+                )
             T = np.eye(4)
             T[:3, 3], T[:3, :3] = lock.position, quaternion_to_matrix(lock.quaternion)
             out[n] = T
@@ -146,13 +161,18 @@ def run_plan(args: argparse.Namespace) -> int:
     if args.csv:
         write_plan_csv(plan, args.csv)
     if args.mcap:
+        from ..extras import MissingExtraError
         from ..ros.trajectory import write_trajectory_mcap
 
-        write_trajectory_mcap(plan, args.mcap)
+        try:
+            write_trajectory_mcap(plan, args.mcap)
+        except MissingExtraError as exc:
+            note("changeover", f"no MCAP written: {exc}")
     m = plan.margins
     print(
         f"{' -> '.join(plan.order)} ({plan.order_method} order): {plan.total_time:.2f} s, {len(plan.t)} points; "
-        f"margins: stroke {m.stroke * 1e3:.1f} mm, joint {math.degrees(m.joint):.1f} deg, singularity {m.singularity:.2f}, "
+        f"margins: stroke {m.stroke * 1e3:.1f} mm, joint {math.degrees(m.joint):.1f} deg, "
+        f"singularity {m.singularity:.2f}, "
         f"arm joint {math.degrees(m.arm_joint):.1f} deg, clearance {m.clearance * 1e3:.0f} mm"
     )
     note("changeover", f"wrote {args.out}")

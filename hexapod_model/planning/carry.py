@@ -66,7 +66,7 @@ def geodesic(start: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, int]:
     return xi, n
 
 
-def _bound(values: np.ndarray, s: np.ndarray) -> np.ndarray:
+def lower_bound(values: np.ndarray, s: np.ndarray) -> np.ndarray:
     """Per interval and column, the Lipschitz lower bound of ``values`` ((n, k) at ``s``)."""
     h = np.diff(s)[:, None]
     rate = SAFETY * np.max(np.abs(np.diff(values, axis=0)) / h, axis=0, initial=0.0)
@@ -107,14 +107,16 @@ def carry_path(
         sing[k] = home_cond / cond if math.isfinite(cond) else 0.0
     for values, limit, kind in ((margins, 0.0, "limit"), (sing, min_singularity_margin, "singularity")):
         low = values.min(axis=1) < limit
-        bound = _bound(values, s) if n >= 1 else values
+        bound = lower_bound(values, s) if n >= 1 else values
         bad = np.flatnonzero(low[:-1] | low[1:] | (bound.min(axis=1) < limit))
         if bad.size:
             k = int(bad[0])
             at = k if low[k] else k + 1 if low[k + 1] else k
             if kind == "singularity":
                 raise Blocked(
-                    fixture, float(s[at]), f"singularity margin {float(values[at, 0]):.3f} below {min_singularity_margin}"
+                    fixture,
+                    float(s[at]),
+                    f"singularity margin {float(values[at, 0]):.3f} below {min_singularity_margin}",
                 )
             j = int(np.argmin(bound[k]))
             iq = int(limited[j])
@@ -125,7 +127,7 @@ def carry_path(
                 f"{what} limit: {clm.joint_name_of_q(iq)} = {qs[at, iq]:.4f} "
                 f"leaves [{clm.lower[iq]:.4f}, {clm.upper[iq]:.4f}]",
             )
-    mb, sb = _bound(margins, s), _bound(sing, s)
+    mb, sb = lower_bound(margins, s), lower_bound(sing, s)
     prism = np.isin(limited, clm.prismatic_q)
     return CarryPath(
         s,
@@ -136,4 +138,3 @@ def carry_path(
         float(mb[:, ~prism].min()),
         float(sb.min()),
     )
-

@@ -172,7 +172,9 @@ class Plan:
             InputError: not a plan of this format.
         """
         if not isinstance(doc, dict) or doc.get("format") != FORMAT:
-            raise InputError("plan", str(doc.get("format") if isinstance(doc, dict) else type(doc)), f"expected format {FORMAT}")
+            raise InputError(
+                "plan", str(doc.get("format") if isinstance(doc, dict) else type(doc)), f"expected format {FORMAT}"
+            )
         pts = doc["points"]
 
         def col(key: str, width: int) -> np.ndarray:
@@ -193,7 +195,9 @@ class Plan:
         )
         fixtures = tuple(
             FixtureCell(
-                f["name"], f["hexapod"], *(np.array(f[k], dtype=float) for k in ("base_in_robot", "coupling", "start", "target"))
+                f["name"],
+                f["hexapod"],
+                *(np.array(f[k], dtype=float) for k in ("base_in_robot", "coupling", "start", "target")),
             )
             for f in doc["fixtures"]
         )

@@ -74,7 +74,9 @@ class Arm:
         model, _ = ur10_models()
         acc = ACCELERATION_LIMITS if acceleration is None else np.asarray(acceleration, dtype=float)
         names = tuple(model.names[1:])
-        return Arm(names, model.lowerPositionLimit.copy(), model.upperPositionLimit.copy(), model.velocityLimit.copy(), acc)
+        return Arm(
+            names, model.lowerPositionLimit.copy(), model.upperPositionLimit.copy(), model.velocityLimit.copy(), acc
+        )
 
     def fk(self, q: np.ndarray) -> np.ndarray:
         """The flange ``tool0`` (4x4, m) in the robot's base frame at joints ``q`` (rad)."""

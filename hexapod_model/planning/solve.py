@@ -129,7 +129,9 @@ def _visit(arm: Arm, move: Move, settings: Settings, home: np.ndarray) -> _Visit
         k, j = bad[0]
         what = ("wrist (|sin q5|", "elbow (|sin q3|", "shoulder (wrist centre from axis 1, m")[j]
         raise Blocked(name, float(path.s[k]), f"UR10 {what} = {sm[k, j]:.3f}) below {limits[j]}: near its singularity")
-    pre_target = _reach(arm, name, 1.0, "the stand-off above the coupling at the target", _shift(flanges[-1], -APPROACH_HEIGHT), qs[-1])
+    pre_target = _reach(
+        arm, name, 1.0, "the stand-off above the coupling at the target", _shift(flanges[-1], -APPROACH_HEIGHT), qs[-1]
+    )
     xi = path.twist
     plate_time = max(np.linalg.norm(xi[:3]) / move.carry_speed, np.linalg.norm(xi[3:]) / move.carry_rate)
     carry = carry_timing(qs, float(plate_time), arm.velocity, arm.acceleration)
@@ -189,7 +191,9 @@ def _free(clear: Clearance, arm: Arm, qa, qb, home, required: float, name: str, 
         return [(qa, home), (home, qb)], min(d1, d2)
     d, where, link, fixture = first
     raise Blocked(
-        name, where, f"{phase}: the UR10's {link} comes {d * 1e3:.1f} mm from fixture '{fixture}' (at least {required * 1e3:g} mm)"
+        name,
+        where,
+        f"{phase}: the UR10's {link} comes {d * 1e3:.1f} mm from fixture '{fixture}' (at least {required * 1e3:g} mm)",
     )
 
 
@@ -211,14 +215,18 @@ def plan_changeover(moves: list[Move], settings: Settings | None = None) -> Plan
     visits = [_visit(arm, m, settings, home) for m in moves]
     clear = Clearance(
         [
-            bounding_cylinder(m.cell.name, m.hexapod, m.cell.base_in_robot, max(m.cell.start[2, 3], m.cell.target[2, 3]))
+            bounding_cylinder(
+                m.cell.name, m.hexapod, m.cell.base_in_robot, max(m.cell.start[2, 3], m.cell.target[2, 3])
+            )
             for m in moves
         ]
     )
     v, a, req = arm.velocity, arm.acceleration, settings.min_clearance
     d0, link, fixture = clear.distance(home)
     if d0 < req:
-        raise Blocked(moves[0].cell.name, 0.0, f"the arm's start: its {link} is {d0 * 1e3:.1f} mm from fixture '{fixture}'")
+        raise Blocked(
+            moves[0].cell.name, 0.0, f"the arm's start: its {link} is {d0 * 1e3:.1f} mm from fixture '{fixture}'"
+        )
     order, method = best_order(
         np.array([line_duration(home, x.pre_start, v, a)[0] for x in visits]),
         np.array([[line_duration(x.pre_target, y.pre_start, v, a)[0] for y in visits] for x in visits]),
@@ -240,7 +248,9 @@ def plan_changeover(moves: list[Move], settings: Settings | None = None) -> Plan
         tl.dwell(q_couple, settings.dwell, "release_brakes", name)
         ok, d, where, link, other = clear.walk_path(x.carry.q, req, own)
         if not ok:
-            raise Blocked(name, float(x.path.s[where]), f"carry: the UR10's {link} comes {d * 1e3:.1f} mm from fixture '{other}'")
+            raise Blocked(
+                name, float(x.path.s[where]), f"carry: the UR10's {link} comes {d * 1e3:.1f} mm from fixture '{other}'"
+            )
         clearance = min(clearance, d)
         tl.add(x.carry, "carry", name, x.path)
         q_end = x.carry.q[-1]
