@@ -37,6 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     a.add_argument("-o", "--out", required=True, metavar="PLAN.json", help="the plan (JSON)")
     a.add_argument("--csv", metavar="FILE", help="also the points as CSV")
     a.add_argument("--mcap", metavar="FILE", help="also a trajectory_msgs/JointTrajectory in an MCAP file (ros extra)")
+    a.add_argument("--plot", metavar="FILE.png", help="also a figure of the joints and the carried legs (plots extra)")
     a.add_argument(
         "--carry-speed", type=float, default=50.0, metavar="MM_S", help="plate speed while carried (default 50)"
     )
@@ -131,7 +132,9 @@ def run_plan(args: argparse.Namespace) -> int:
         min_singularity_margin=_positive("--min-singularity-margin", args.min_singularity_margin),
         min_clearance=_positive("--min-clearance", args.min_clearance) * 1e-3,
     )
-    outs = [check_output_path(p, args.config) for p in (args.out, args.csv, args.mcap) if p]
+    if args.plot:
+        require_extra("plots")
+    outs = [check_output_path(p, args.config) for p in (args.out, args.csv, args.mcap, args.plot) if p]
     config = load_config(args.config)
     known = [f.name for f in config.fixtures]
     for n in args.fixture or ():
@@ -168,6 +171,11 @@ def run_plan(args: argparse.Namespace) -> int:
             write_trajectory_mcap(plan, args.mcap)
         except MissingExtraError as exc:
             note("changeover", f"no MCAP written: {exc}")
+    if args.plot:
+        from ..planning.robot import Arm
+        from ..plots.changeover_plan import plot_plan
+
+        plot_plan(plan, args.plot, Arm.load().velocity)
     m = plan.margins
     print(
         f"{' -> '.join(plan.order)} ({plan.order_method} order): {plan.total_time:.2f} s, {len(plan.t)} points; "
