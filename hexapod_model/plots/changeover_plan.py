@@ -12,8 +12,11 @@ from ..planning.model import Plan
 
 
 def plan_figure(plan: Plan, velocity_limits: np.ndarray | None = None) -> Figure:
-    """Three panels against time (s): the UR10's joints (deg), their speeds (rad/s, or the share of
-    ``velocity_limits`` when given) and the carried hexapods' leg readings (mm); carries shaded."""
+    """The plan's figure: three panels against time (s), the carries shaded.
+
+    The UR10's joints (deg), their speeds (rad/s, or the share of ``velocity_limits`` when
+    given) and the carried hexapods' leg readings (mm).
+    """
     fig = Figure(figsize=(8.0, 7.2))
     ax_q, ax_v, ax_l = fig.subplots(3, 1, sharex=True)
     short = [n.replace("_joint", "") for n in plan.joint_names]
