@@ -23,6 +23,8 @@ FLANGE_FRAME = "tool0"
 WRIST_FRAME = "wrist_2_link"
 #: a start configuration of the IK: elbow up, wrist down (rad)
 Q_READY = np.array([0.0, -1.9, 1.9, -1.57, -1.57, 0.0])
+REACH = 1.30  # m, from the shoulder (the UR10's datasheet)
+SHOULDER = np.array([0.0, 0.0, 0.1273])  # m, the shoulder in the robot's base frame
 #: stated joint acceleration limits (rad/s^2): the URDF gives none
 ACCELERATION_LIMITS = np.array([2.0, 2.0, 3.0, 3.0, 3.0, 3.0])
 
@@ -106,9 +108,14 @@ class Arm:
         A damped least-squares Newton iteration: from a nearby ``q_start`` it stays on that branch.
 
         Raises:
-            UnreachableError: no convergence to ``tol`` (m and rad), or a joint outside its limits.
+            UnreachableError: beyond :data:`REACH` from the shoulder, no convergence to ``tol`` (m
+                and rad), or a joint outside its limits.
         """
         import pinocchio as pin
+
+        distance = float(np.linalg.norm(target[:3, 3] - SHOULDER))
+        if distance > REACH:
+            raise UnreachableError(target, distance - REACH, f"{distance:.3f} m from the shoulder, reach {REACH} m")
 
         model, _ = ur10_models()
         data = model.createData()

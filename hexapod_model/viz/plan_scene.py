@@ -17,7 +17,7 @@ from ..planning.model import Plan
 from .meshcat_scene import style_scene
 from .robot_cell import CellPose, add_ur10
 
-PLAN_CAMERA = (2.4, 1.8, 1.6)  # m, three.js axes (y up): behind the robot, looking at the cell
+PLAN_CAMERA = (1.5, 1.1, 1.0)  # m, three.js axes (y up): behind the robot, looking at the cell
 
 
 class PlanScene:
