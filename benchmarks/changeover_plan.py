@@ -62,13 +62,10 @@ def main() -> None:
         t0 = time.process_time()
         plan_changeover(work)
         best = min(best, time.process_time() - t0)
-    print(
-        f"changeover of {len(work)} fixtures ({' -> '.join(plan.order)}, {plan.total_time:.2f} s, {len(plan.t)} points)"
-    )
-    print(
-        f"planning CPU: first call {first:.2f} s (loads the UR10), then best of {args.repeat}: {best:.2f} s (target < 10 s)"
-    )
-
+    order = " -> ".join(plan.order)
+    print(f"changeover of {len(work)} fixtures ({order}, {plan.total_time:.2f} s, {len(plan.t)} points)")
+    print(f"planning CPU: first call {first:.2f} s (loads the UR10), then best of {args.repeat}: {best:.2f} s")
+    print("target: under 10 s")
 
 if __name__ == "__main__":
     main()
