@@ -67,5 +67,6 @@ def main() -> None:
     print(f"planning CPU: first call {first:.2f} s (loads the UR10), then best of {args.repeat}: {best:.2f} s")
     print("target: under 10 s")
 
+
 if __name__ == "__main__":
     main()
