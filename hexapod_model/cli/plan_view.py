@@ -49,16 +49,14 @@ def frame_paths(output: str, label: str, k: int, suffix: str) -> Path:
     return out.with_name(f"{out.stem}_{k:02d}_{label}{suffix}")
 
 
-def run_snapshot_plan(args: argparse.Namespace) -> int:
-    """Write the plan's key frames (its start, each carry's start and end, its end) as HTML and PNG."""
+def run_snapshot_plan(args: argparse.Namespace, size: tuple[int, int]) -> int:
+    """Write the plan's key frames (its start, each carry's start and end, its end) as HTML and PNG (``size`` px)."""
     require_extra("view")
     from ..planning.writers import read_plan
     from ..viz.meshcat_scene import start_visualizer, stop_visualizer
     from ..viz.plan_scene import PlanScene, key_frames
     from ..viz.render import find_chromium, render_pngs, write_html
-    from .view import parse_size
 
-    size = parse_size(args.size)
     check_output_path(args.output, args.plan)
     if args.png:
         check_output_path(args.png, args.plan)

@@ -162,14 +162,14 @@ def parse_size(text: str) -> tuple[int, int]:
 def run_snapshot(args: argparse.Namespace) -> int:
     """``hexapod snapshot``."""
     require_extra("view")
+    size = parse_size(args.size)
     if args.plan:
         from .plan_view import run_snapshot_plan
 
-        return run_snapshot_plan(args)
+        return run_snapshot_plan(args, size)
     from ..viz.meshcat_scene import start_visualizer, stop_visualizer
     from ..viz.render import find_chromium, render_pngs, write_html
 
-    size = parse_size(args.size)
     check_output_path(args.output, args.hexapod)
     if args.png:
         check_output_path(args.png, args.hexapod, args.output)
