@@ -10,9 +10,9 @@ the platform's origin and 0.05 deg). On each interval its rate is bounded by
 and a Lipschitz function with constant ``L`` cannot drop below
 ``(f(a) + f(b) - L h) / 2`` on ``[a, b]``. That lower bound, not the sampled values, is what
 must stay above zero (above the threshold for the singularity margin), and it is the margin the
-plan reports. The bound holds when the sampled rates are within a factor ``SAFETY`` of the true
-ones: the samples are a thousand times denser than the curvature of the legs' lengths in the
-pose, so they are.
+plan reports. The bound holds when the true rates stay within a factor ``SAFETY`` of the
+largest sampled one: they do not double between samples 0.5 mm apart away from singularities,
+which the singularity threshold keeps the path from (checked against ten times denser samples).
 
 The singularity margin is ``cond(J_home) / cond(J(s))`` of the 6x6 leg Jacobian
 (:func:`hexapod_model.analysis.jacobian.leg_jacobian_local`), lengths in the base's
@@ -67,7 +67,11 @@ def geodesic(start: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, int]:
 
 
 def lower_bound(values: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Per interval and column, the Lipschitz lower bound of ``values`` ((n, k) at ``s``)."""
+    """Per interval and column, the Lipschitz lower bound of ``values`` ((n, k) sampled at ``s``).
+
+    Returns:
+        (n - 1, k): ``(f(a) + f(b) - L h) / 2`` with ``L`` ``SAFETY`` times the largest sampled rate.
+    """
     h = np.diff(s)[:, None]
     rate = SAFETY * np.max(np.abs(np.diff(values, axis=0)) / h, axis=0, initial=0.0)
     return (values[:-1] + values[1:] - rate * h) / 2.0

@@ -90,3 +90,18 @@ def test_without_example_robot_data_the_planner_names_the_extra(monkeypatch):
     finally:
         monkeypatch.undo()
         robot.ur10_models.cache_clear()
+
+
+def test_the_sampled_rates_bound_the_rates_between_samples(monkeypatch):
+    """Ten times denser samples find no leg rate above SAFETY times the one the planner's samples give."""
+    hexa = hexapod("reference")
+    target = xyz_rpy_to_pose([0.01, -0.02, 0.412, 5.0, -3.0, 10.0])
+    coarse = carry.carry_path(hexa, hexa.home_pose, target, "f", 0.2)
+    monkeypatch.setattr(carry, "STEP", (carry.STEP[0] / 10, carry.STEP[1] / 10))
+    fine = carry.carry_path(hexa, hexa.home_pose, target, "f", 0.2)
+
+    def rate(path):
+        return np.max(np.abs(np.diff(path.readings, axis=0)) / np.diff(path.s)[:, None], axis=0)
+
+    assert np.all(rate(fine) <= carry.SAFETY * rate(coarse))
+    assert fine.stroke_margin >= coarse.stroke_margin - 1e-12  # the coarse bound is below the finer one
