@@ -6,6 +6,7 @@
 * :mod:`.timing`: the time parametrisation (trapezoids and toppra);
 * :mod:`.order`: the visiting order;
 * :mod:`.model`: the :class:`Plan` and ``plan.json``; :mod:`.writers`: CSV and JSON files;
+* :mod:`.visit`: one fixture's part (:class:`Move`, :class:`Settings`);
 * :mod:`.solve`: :func:`plan_changeover`.
 
 Needs the ``plan`` extra (example-robot-data, toppra, coal).
@@ -13,6 +14,7 @@ Needs the ``plan`` extra (example-robot-data, toppra, coal).
 
 from .blocked import Blocked
 from .model import PHASES, FixtureCell, Margins, Plan
-from .solve import Move, Settings, plan_changeover
+from .solve import plan_changeover
+from .visit import Move, Settings
 
 __all__ = ["PHASES", "Blocked", "FixtureCell", "Margins", "Move", "Plan", "Settings", "plan_changeover"]

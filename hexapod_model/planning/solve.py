@@ -1,7 +1,7 @@
 """Planning a changeover: the arm couples to each plate, carries it to its target, lets go (``plan_changeover``).
 
 Per fixture, in the visiting order (:mod:`.order`): **approach** (a joint-space line from where
-the arm is to ``APPROACH_HEIGHT`` above the coupling, then down onto it), **couple**,
+the arm is to the stand-off above the coupling, :mod:`.visit`, then down onto it), **couple**,
 **release_brakes**, **carry** (the flange on ``base_in_robot * pose * coupling`` of the checked
 geodesic, :mod:`.carry`; the arm's joints continued from sample to sample, on one IK branch),
 **lock_brakes**, **decouple**, **retract** (up, and after the last fixture back to the arm's
@@ -13,129 +13,17 @@ A free move blocked on its straight line is tried once through the arm's start c
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..exceptions import UnreachableError
-from ..kinematics.hexapod import Hexapod
 from .blocked import Blocked
-from .carry import CarryPath, carry_path
+from .carry import CarryPath
 from .clearance import Clearance, bounding_cylinder
-from .model import FixtureCell, Margins, Plan
+from .model import Margins, Plan
 from .order import best_order
-from .robot import Q_READY, Arm, branch, singularity_margins
-from .timing import Timed, carry_timing, line, line_duration
-
-APPROACH_HEIGHT = 0.15  # m: the flange's stand-off above the coupling, along its -z
-MAX_JOINT_STEP = 0.05  # rad: an arm joint moving more between two carry samples is a branch change
-
-
-@dataclass(frozen=True)
-class Move:
-    """One fixture's changeover, as plain data.
-
-    Attributes:
-        cell: the fixture, its placement, start and target.
-        hexapod: its kinematics.
-        carry_speed: largest speed (m/s) of the platform's origin while carried.
-        carry_rate: largest angular speed (rad/s) of the platform while carried.
-    """
-
-    cell: FixtureCell
-    hexapod: Hexapod
-    carry_speed: float = 0.05
-    carry_rate: float = math.radians(10.0)
-
-
-@dataclass(frozen=True)
-class Settings:
-    """The planner's limits and thresholds.
-
-    Attributes:
-        min_singularity_margin: the hexapod's singularity margin kept along a carry (1 at home).
-        min_clearance: m kept between the arm and each hexapod's bounding cylinder.
-        min_wrist: ``|sin q5|`` kept while carrying (the wrist singularity).
-        min_elbow: ``|sin q3|`` kept while carrying (the stretched elbow).
-        min_shoulder: m kept between the wrist centre and the axis of joint 1.
-        dwell: s spent in each of couple, release_brakes, lock_brakes, decouple.
-        arm_start: the arm's joints (rad) at the start and the end of the changeover.
-        acceleration: the arm's joint acceleration limits (rad/s^2); default
-            :data:`hexapod_model.planning.robot.ACCELERATION_LIMITS`.
-    """
-
-    min_singularity_margin: float = 0.2
-    min_clearance: float = 0.02
-    min_wrist: float = 0.1
-    min_elbow: float = 0.1
-    min_shoulder: float = 0.1
-    dwell: float = 0.5
-    arm_start: tuple[float, ...] = tuple(Q_READY)
-    acceleration: tuple[float, ...] | None = field(default=None)
-
-
-@dataclass(frozen=True)
-class _Visit:
-    move: Move
-    path: CarryPath
-    carry: Timed
-    pre_start: np.ndarray
-    pre_target: np.ndarray
-    arm_margins: np.ndarray  # wrist, elbow, shoulder minima over the carry
-
-
-def _shift(T: np.ndarray, dz: float) -> np.ndarray:
-    D = np.eye(4)
-    D[2, 3] = dz
-    return T @ D
-
-
-def _reach(arm: Arm, name: str, fraction: float, what: str, target: np.ndarray, seed: np.ndarray) -> np.ndarray:
-    try:
-        return arm.reach(target, seed)
-    except UnreachableError as exc:
-        reason = str(exc).split(": ", 1)[-1]
-        raise Blocked(name, fraction, f"the UR10 cannot reach {what}: {reason}") from None
-
-
-def _seed(arm: Arm, flange: np.ndarray, start: np.ndarray) -> np.ndarray:
-    """``start`` turned about joint 1 to face ``flange``'s position."""
-    p0 = arm.fk(start)[:3, 3]
-    q = np.array(start, dtype=float)
-    q[0] += math.atan2(flange[1, 3], flange[0, 3]) - math.atan2(p0[1], p0[0])
-    q[0] = math.remainder(q[0], 2.0 * math.pi)
-    return q
-
-
-def _visit(arm: Arm, move: Move, settings: Settings, home: np.ndarray) -> _Visit:
-    c, name = move.cell, move.cell.name
-    path = carry_path(move.hexapod, c.start, c.target, name, settings.min_singularity_margin)
-    flanges = c.base_in_robot @ path.poses @ c.coupling
-    pre = _shift(flanges[0], -APPROACH_HEIGHT)
-    pre_start = _reach(arm, name, 0.0, "the stand-off above the coupling at the start pose", pre, _seed(arm, pre, home))
-    q = _reach(arm, name, 0.0, "the coupling at the start pose", flanges[0], pre_start)
-    qs = np.empty((len(flanges), 6))
-    first = branch(q)
-    for k, F in enumerate(flanges):
-        q_new = _reach(arm, name, float(path.s[k]), "the coupling while carrying", F, q)
-        step = float(np.abs(q_new - q).max())
-        if step > MAX_JOINT_STEP or branch(q_new) != first:
-            raise Blocked(name, float(path.s[k]), f"the UR10 changes its IK branch (joint step {step:.3f} rad)")
-        qs[k] = q = q_new
-    sm = np.array([singularity_margins(q) for q in qs])
-    limits = np.array([settings.min_wrist, settings.min_elbow, settings.min_shoulder])
-    bad = np.argwhere(sm < limits)
-    if bad.size:
-        k, j = bad[0]
-        what = ("wrist (|sin q5|", "elbow (|sin q3|", "shoulder (wrist centre from axis 1, m")[j]
-        raise Blocked(name, float(path.s[k]), f"UR10 {what} = {sm[k, j]:.3f}) below {limits[j]}: near its singularity")
-    pre_target = _reach(
-        arm, name, 1.0, "the stand-off above the coupling at the target", _shift(flanges[-1], -APPROACH_HEIGHT), qs[-1]
-    )
-    xi = path.twist
-    plate_time = max(np.linalg.norm(xi[:3]) / move.carry_speed, np.linalg.norm(xi[3:]) / move.carry_rate)
-    carry = carry_timing(qs, float(plate_time), arm.velocity, arm.acceleration)
-    return _Visit(move, path, carry, pre_start, pre_target, sm.min(axis=0))
+from .robot import Arm
+from .timing import Timed, line, line_duration
+from .visit import Move, Settings, visit
 
 
 class _Timeline:
@@ -212,7 +100,7 @@ def plan_changeover(moves: list[Move], settings: Settings | None = None) -> Plan
         raise InputError("fixtures", 0, "no fixture with a target to move")
     arm = Arm.load(None if settings.acceleration is None else np.array(settings.acceleration))
     home = np.array(settings.arm_start, dtype=float)
-    visits = [_visit(arm, m, settings, home) for m in moves]
+    visits = [visit(arm, m, settings, home) for m in moves]
     clear = Clearance(
         [
             bounding_cylinder(
