@@ -9,6 +9,7 @@ what needs them:
 * ``plots``: matplotlib, the figures of ``reproduce``, ``evaluate``, ``calibrate`` and ``track``;
 * ``service``: python-can (and the web server's packages), ``hexapod serve``, ``fixture``, ``live``;
 * ``sweep``: Dask ``distributed``, ``hexapod sweep`` and ``hexapod evaluate``'s tasks;
+* ``plan``: example-robot-data, toppra and coal, ``hexapod changeover plan`` and :mod:`hexapod_model.planning`;
 * ``all``: every one of them.
 
 A command whose extra is missing stops with one line naming the ``pip install`` that brings it
@@ -30,6 +31,7 @@ EXTRAS = {
     "plots": "the figures",
     "service": "the fixture pose service",
     "sweep": "design sweeps and evaluate on Dask",
+    "plan": "changeover planning",
 }
 
 #: extra -> the modules of it the package imports (``cell`` is a data-only distribution)
@@ -39,6 +41,7 @@ MODULES = {
     "plots": ("matplotlib",),
     "service": ("can", "starlette", "uvicorn"),
     "sweep": ("distributed",),
+    "plan": ("toppra", "coal"),
 }
 
 

@@ -52,6 +52,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--live", action="store_true", help="HEXAPOD is a fixture.toml: show the poses its running service serves"
     )
     p.add_argument("--fixture", help="with --live: the fixture to show (default: the first)")
+    p.add_argument("--plan", metavar="PLAN.json", help="animate a changeover plan: the UR10 and the hexapods")
     p.set_defaults(func=run_view)
 
     p = sub.add_parser("snapshot", help="write the scene as self-contained HTML and, with --png, a PNG")
@@ -59,6 +60,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, metavar="SCENE.html", help="static HTML (opens with no server)")
     p.add_argument("--png", metavar="SCENE.png", help="also render a PNG with headless Chromium")
     p.add_argument("--size", default="1280x960", help="PNG size WIDTHxHEIGHT in pixels (>= 1024x768)")
+    p.add_argument(
+        "--plan", metavar="PLAN.json", help="a changeover plan's key frames: one file per frame, OUTPUT_NN_LABEL.html"
+    )
     p.set_defaults(func=run_snapshot)
 
 
@@ -113,6 +117,10 @@ def run_view(args: argparse.Namespace) -> int:
         from .live import run_live
 
         return run_live(args)
+    if args.plan:
+        from .plan_view import run_view_plan
+
+        return run_view_plan(args)
     require_extra("view")
     from ..viz.meshcat_scene import start_visualizer, stop_visualizer
 
@@ -154,10 +162,14 @@ def parse_size(text: str) -> tuple[int, int]:
 def run_snapshot(args: argparse.Namespace) -> int:
     """``hexapod snapshot``."""
     require_extra("view")
+    size = parse_size(args.size)
+    if args.plan:
+        from .plan_view import run_snapshot_plan
+
+        return run_snapshot_plan(args, size)
     from ..viz.meshcat_scene import start_visualizer, stop_visualizer
     from ..viz.render import find_chromium, render_pngs, write_html
 
-    size = parse_size(args.size)
     check_output_path(args.output, args.hexapod)
     if args.png:
         check_output_path(args.png, args.hexapod, args.output)
