@@ -33,12 +33,14 @@ MODULES = (
     "fixture",
     "statics",
     "sweep",
+    "clearance",
 )
 #: the module registering each sub-command: ``hexapod fk`` imports ``core`` only, not the studies'
 #: scipy, matplotlib or meshcat (tests/cli check this table against the modules)
 OWNER = {"urdf": "core", "fk": "core", "ik": "core", "bench": "core", "mjcf": "mjcf", "reproduce": "reproduce"}
 OWNER |= {"calibrate": "calibrate", "evaluate": "evaluate", "track": "track", "view": "view", "snapshot": "view"}
 OWNER |= {"serve": "serve", "simulate-encoders": "serve", "fixture": "fixture", "statics": "statics", "sweep": "sweep"}
+OWNER |= {"clearance": "clearance"}
 
 DESCRIPTION = """\
 Leg readings <-> platform pose for Stewart-Gough hexapods with offset-axis Cardan joints.

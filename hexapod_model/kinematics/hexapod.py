@@ -23,7 +23,7 @@ from ..description.model import ClosedLoopModel
 from ..description.presets import PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf
 from ..exceptions import AssemblyError, ConvergenceError, InputError, LimitError, SingularityError, WorkspaceError
-from . import assembly, batch, hybrid
+from . import assembly, batch, clearance, hybrid
 from .assemblies import DEFAULT_STARTS, Assemblies, AssemblyFinder, review
 from .assembly import NEAR_SINGULAR_FACTOR, Outcome
 from .batch import BatchResult
@@ -557,6 +557,13 @@ class Hexapod:
         """
         tol = self.default_tol if tol is None else tol
         return batch.inverse_batch(self, poses, guess, warm, tol, max_iter)
+
+    def clearance(self, q_or_pose: ArrayLike) -> clearance.Clearance:
+        """Smallest distance between two collision bodies, their names and nearest points (docs/solver.md).
+
+        ``q_or_pose``: a configuration (``nq`` values) or a 4x4 platform pose (base frame, m).
+        """
+        return clearance.clearance(self, q_or_pose)
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:
         """Per-leg closure error at ``q`` computed by Pinocchio's constraint models."""
