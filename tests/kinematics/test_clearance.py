@@ -48,11 +48,11 @@ def test_twisted_thick_legs_collide_naming_two_legs(thick):
 def test_rod_distance_agrees_with_the_leg_axes(thick):
     """The rods' capsule distance is the distance of their axis segments minus the two radii."""
     sol = thick.inverse(TWIST)
-    c = thick.clearance(sol.q)
+    query = hm.kinematics.clearance.query_of(thick)
+    distances = query.all_pairs(sol.q)
     m, data = thick.model, thick.model.createData()
     pin.forwardKinematics(m, data, sol.q)
-    geom = c  # names of the checked pairs
-    k = geom.pairs.index(("leg2_rod", "leg3_rod"))
+    k = query.pairs.index(("leg2_rod", "leg3_rod"))
     rest = []
     for leg in (2, 3):
         j = m.getJointId(f"leg{leg}_prismatic")
@@ -63,7 +63,7 @@ def test_rod_distance_agrees_with_the_leg_axes(thick):
         top = M.translation + z * float(axes.rest)
         rest.append((top - z * short, top))
     expected = _segment_distance(*rest[0], *rest[1]) - 2 * thick.geometry.leg_radius
-    assert abs(c.distances[k] - expected) < 1e-8
+    assert abs(distances[k] - expected) < 1e-8
 
 
 @pytest.mark.parametrize("name", ["reference", "3-6", "guideway"])
@@ -74,7 +74,8 @@ def test_clearance_is_pinocchio_distance_on_the_urdf_bodies(name):
     pose = hexa.home_pose.copy()
     pose[:3, 3] += rng.uniform(-0.02, 0.02, 3)
     sol = hexa.inverse(pose, check=False)
-    c = hexa.clearance(sol.q)
+    query = hm.kinematics.clearance.query_of(hexa)
+    distances = query.all_pairs(sol.q)
     text = (ROOT / "urdf" / f"{name}.urdf").read_text()
     model = pin.buildModelFromXML(text)
     geom = pin.buildGeomFromUrdfString(model, text, pin.GeometryType.COLLISION)
@@ -82,10 +83,30 @@ def test_clearance_is_pinocchio_distance_on_the_urdf_bodies(name):
     gdata = pin.GeometryData(geom)
     pin.computeDistances(model, model.createData(), geom, gdata, sol.q)
     by_index = {(p.first, p.second): r.min_distance for p, r in zip(geom.collisionPairs, gdata.distanceResults)}
-    mine = hm.kinematics.clearance.query_of(hexa).collision.geometry
-    for p, d in zip(mine.collisionPairs, c.distances):
+    for p, d in zip(query.collision.geometry.collisionPairs, distances):
         assert abs(by_index[(p.first, p.second)] - d) <= 1e-9
-    assert c.distance == pytest.approx(min(c.distances), abs=0)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+@pytest.mark.parametrize("spec", ["reference", "spherical", "3-6", "guideway", str(THICK)])
+def test_fast_query_is_coal_on_every_pair(spec, compiled):
+    """The kernel's smallest distance and pair are coal's on all pairs, to 1e-9 m, over poses up to a collision."""
+    hexa = hm.Hexapod.load(spec, compiled=compiled)
+    query = hm.kinematics.clearance.query_of(hexa)
+    rng = np.random.default_rng(3)
+    for _ in range(12):
+        offset = np.concatenate([rng.uniform(-0.06, 0.06, 3), rng.uniform(-30.0, 30.0, 2), rng.uniform(-85, 85, 1)])
+        pose = xyz_rpy_to_pose(offset + [0.0, 0.0, hexa.home_pose[2, 3], 0.0, 0.0, 0.0])
+        sol = hexa.inverse(pose, check=False)
+        if sol.status not in ("converged", "out_of_limits"):
+            continue
+        c = hexa.clearance(sol.q)
+        distances = query.all_pairs(sol.q)
+        k = int(np.argmin(distances))
+        assert abs(c.distance - distances[k]) <= 1e-9
+        assert c.pair == query.pairs[k] or abs(distances[query.pairs.index(c.pair)] - distances[k]) <= 1e-9
+        if c.distance > 0:
+            assert abs(np.linalg.norm(c.points[1] - c.points[0]) - c.distance) <= 1e-9
 
 
 @pytest.mark.parametrize("name", ["reference", "spherical", "3-6", "guideway"])
