@@ -121,7 +121,7 @@ class ClearanceQuery:
         return Clearance(float(best), self.pairs[k], points, self.min_clearance)
 
     def all_pairs(self, q: np.ndarray) -> np.ndarray:
-        """Every checked pair's distance (m) at ``q``, in the order of :attr:`pairs`, by coal (Pinocchio's ``computeDistances``)."""
+        """Every checked pair's distance (m) at ``q``, in the order of :attr:`pairs`, by coal on every pair."""
         data, gdata = self._buffers()
         pin.computeDistances(self.model, data, self.collision.geometry, gdata, q)
         return np.fromiter((r.min_distance for r in gdata.distanceResults), float, len(gdata.distanceResults))
