@@ -213,3 +213,40 @@ def test_every_pair_once():
     pairs = hm.kinematics.clearance.query_of(hexa).pairs
     assert len(set(pairs)) == len(pairs)
     assert all(a != b for a, b in itertools.chain(pairs))
+
+
+@pytest.mark.parametrize("name", ["reference", "3-6", "guideway"])
+def test_mjcf_carries_the_urdf_collision_bodies(name):
+    import xml.etree.ElementTree as ET
+
+    from hexapod_model.description.mjcf import COLLISION_GROUP, geometry_to_mjcf
+    from hexapod_model.description.urdf import geometry_to_urdf
+
+    geom = hm.get_preset(name)
+    urdf = ET.fromstring(geometry_to_urdf(geom))
+    capsules = {c.get("name") for c in urdf.iter("capsule")}
+    bodies = {c.get("name"): c.find("geometry")[0] for c in urdf.iter("collision")}
+    mjcf = ET.fromstring(geometry_to_mjcf(geom))
+    geoms = {g.get("name"): g for g in mjcf.iter("geom") if g.get("group") == str(COLLISION_GROUP)}
+    assert set(geoms) == set(bodies)
+    for name_, shape in bodies.items():
+        g = geoms[name_]
+        assert g.get("contype") == g.get("conaffinity") == "0"
+        assert g.get("type") == ("capsule" if name_ in capsules else shape.tag)
+        assert float(g.get("size").split()[0]) == pytest.approx(float(shape.get("radius")), abs=1e-13)
+
+
+def test_a_urdf_without_collision_bodies_is_named():
+    import re
+
+    from hexapod_model.description.model import ClosedLoopModel
+
+    text = (ROOT / "urdf" / "reference.urdf").read_text()
+    bare = re.sub(
+        r"\s*<collision .*?</collision>|\s*<collision_checking>.*?</collision_checking>", "", text, flags=re.S
+    )
+    assert "<collision" not in bare
+    hexa = hm.Hexapod(ClosedLoopModel(bare, "bare.urdf"), compiled=False)
+    with pytest.raises(hm.UrdfError, match="no collision bodies") as err:
+        hexa.clearance(hexa.q_home)
+    assert "bare.urdf" in str(err.value) and "\n" not in str(err.value)
