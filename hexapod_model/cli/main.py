@@ -34,6 +34,7 @@ MODULES = (
     "statics",
     "sweep",
     "changeover_plan",
+    "clearance",
 )
 #: the module registering each sub-command: ``hexapod fk`` imports ``core`` only, not the studies'
 #: scipy, matplotlib or meshcat (tests/cli check this table against the modules)
@@ -41,6 +42,7 @@ OWNER = {"urdf": "core", "fk": "core", "ik": "core", "bench": "core", "mjcf": "m
 OWNER |= {"calibrate": "calibrate", "evaluate": "evaluate", "track": "track", "view": "view", "snapshot": "view"}
 OWNER |= {"serve": "serve", "simulate-encoders": "serve", "fixture": "fixture", "statics": "statics", "sweep": "sweep"}
 OWNER |= {"changeover": "changeover_plan"}
+OWNER |= {"clearance": "clearance"}
 
 DESCRIPTION = """\
 Leg readings <-> platform pose for Stewart-Gough hexapods with offset-axis Cardan joints.

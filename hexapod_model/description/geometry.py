@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import GeometryError
+from . import body
 
 JOINT_TYPES = ("cardan", "spherical", "guideway")
 Vec3 = tuple[float, float, float]
@@ -93,6 +94,10 @@ class LegGeometry:
         encoder_zero: the reading at home (m), 0 by default.
         encoder_scale: relative scale error of the reading (dimensionless, 0 by default):
             reading = ``encoder_zero + (1 + encoder_scale) * extension``.
+        leg_radius: this leg's collision radius (m); ``None`` uses the hexapod's
+            (:mod:`~hexapod_model.description.body`).
+        base_cone: half-angle of this leg's base joint cone (rad); ``None`` uses the hexapod's.
+        platform_cone: same at the platform joint (rad).
     """
 
     base_anchor: Vec3
@@ -105,6 +110,9 @@ class LegGeometry:
     platform_offset: float | None = None
     encoder_zero: float = 0.0
     encoder_scale: float = 0.0
+    leg_radius: float | None = None
+    base_cone: float | None = None
+    platform_cone: float | None = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -126,6 +134,8 @@ class LegGeometry:
         set_(self, "encoder_zero", _number("encoder_zero", self.encoder_zero, -10.0, 10.0))
         lim = ENCODER_SCALE_LIMIT
         set_(self, "encoder_scale", _number("encoder_scale", self.encoder_scale, -lim, lim))
+        for name, value in body.check_leg_body(self).items():
+            set_(self, name, value)
 
 
 @dataclass(frozen=True)
@@ -144,6 +154,16 @@ class HexapodGeometry:
         brake_capacity: axial force each leg's brake holds (N, tension or compression); ``None``: not given.
             ``hexapod statics`` states the load margin against it (docs/statics.md).
         description: one line for ``hexapod urdf --list-presets``.
+        leg_radius: collision radius of every leg (m); the body fields below are described in
+            :mod:`~hexapod_model.description.body`.
+        housing_radius: radius of the sphere around each joint centre (m).
+        plate_thickness: thickness of the base and platform discs (m).
+        base_plate_radius: radius of the base disc (m); ``None``: largest anchor radius + housing.
+        platform_plate_radius: same for the platform disc (m).
+        base_cone: half-angle of every base joint's cone about its home axis (rad); ``None``: no cone.
+        platform_cone: same at the platform joints (rad).
+        min_clearance: smallest allowed distance between two bodies (m); below it a pose is in collision.
+        envelope: operating box about home, half-widths ``(x, y, z [m], roll, pitch, yaw [rad])``, or ``None``.
     """
 
     name: str
@@ -156,6 +176,15 @@ class HexapodGeometry:
     roll_limit: float = math.pi
     description: str = ""
     brake_capacity: float | None = None
+    leg_radius: float = body.BODY_DEFAULTS["leg_radius"]
+    housing_radius: float = body.BODY_DEFAULTS["housing_radius"]
+    plate_thickness: float = body.BODY_DEFAULTS["plate_thickness"]
+    base_plate_radius: float | None = None
+    platform_plate_radius: float | None = None
+    base_cone: float | None = None
+    platform_cone: float | None = None
+    min_clearance: float = body.BODY_DEFAULTS["min_clearance"]
+    envelope: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name.replace("-", "_").replace("_", "a").isalnum():
@@ -181,6 +210,21 @@ class HexapodGeometry:
             )
         for i, leg in enumerate(legs):
             self._check_leg(i, leg)
+        for name, value in body.check_body(self).items():
+            object.__setattr__(self, name, value)
+
+    def leg_radius_of(self, i: int) -> float:
+        """Collision radius (m) of leg ``i``: its own or the hexapod's."""
+        r = self.legs[i].leg_radius
+        return self.leg_radius if r is None else r
+
+    def cones_of(self, i: int) -> tuple[float | None, float | None]:
+        """Base and platform cone half-angles (rad, ``None``: no cone) of leg ``i``: its own or the hexapod's."""
+        leg = self.legs[i]
+        return (
+            self.base_cone if leg.base_cone is None else leg.base_cone,
+            self.platform_cone if leg.platform_cone is None else leg.platform_cone,
+        )
 
     def offsets(self, i: int) -> tuple[float, float]:
         """Base and platform Cardan axis offsets (m) of leg ``i``: its own or the hexapod's."""
@@ -250,7 +294,8 @@ class HexapodGeometry:
     def to_dict(self) -> dict:
         """Plain dict (the file format of :func:`geometry_from_dict`).
 
-        Leg fields left at their default (``None``, a zero encoder model) are omitted.
+        Leg fields left at their default (``None``, a zero encoder model) are omitted, and so
+        are the body fields at their defaults.
         """
         out: dict[str, Any] = {}
         defaults = {f.name: f.default for f in fields(LegGeometry)}
@@ -265,8 +310,10 @@ class HexapodGeometry:
                     }
                     for leg in v
                 ]
+            if f.name in body.BODY_DEFAULTS and v == body.BODY_DEFAULTS[f.name]:
+                continue
             if v is not None:
-                out[f.name] = v
+                out[f.name] = list(v) if isinstance(v, tuple) and f.name != "legs" else v
         return out
 
 
@@ -275,14 +322,11 @@ def geometry_from_dict(data: dict, source: str = "<dict>") -> HexapodGeometry:
 
     Keys are the fields of :class:`HexapodGeometry`; ``legs`` is a list of six tables with
     the fields of :class:`LegGeometry`. Angles may be given in degrees with a ``_deg``
-    suffix (``cardan_limit_deg = 40``).
+    suffix (``cardan_limit_deg = 40``, ``platform_cone_deg = 45``), in the legs too.
     """
     if not isinstance(data, dict):
         raise GeometryError(source, type(data).__name__, "top level must be a table")
-    data = dict(data)
-    for key in ("cardan_limit", "roll_limit"):
-        if f"{key}_deg" in data:
-            data[key] = math.radians(_number(f"{key}_deg", data.pop(f"{key}_deg"), -1e9, 1e9))
+    data = body.degrees_to_radians(data, source)
     known = {f.name for f in fields(HexapodGeometry)}
     unknown = sorted(set(data) - known)
     if unknown:
@@ -298,6 +342,10 @@ def geometry_from_dict(data: dict, source: str = "<dict>") -> HexapodGeometry:
     for i, raw in enumerate(legs_raw):
         if not isinstance(raw, dict):
             raise GeometryError(f"legs[{i}]", raw, "expected a table")
+        try:
+            raw = body.degrees_to_radians(raw, source)
+        except GeometryError as exc:
+            raise GeometryError(f"legs[{i}].{exc.field}", exc.value, exc.reason) from None
         bad = sorted(set(raw) - leg_fields)
         if bad:
             raise GeometryError(f"legs[{i}].{bad[0]}", raw[bad[0]], f"unknown leg field (known: {sorted(leg_fields)})")

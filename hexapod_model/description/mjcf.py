@@ -16,6 +16,10 @@ and Pinocchio's MJCF parser both read. The writer translates a URDF that follows
   (``6d``: the site frames coincide) or ``connect`` (``3d``: their origins coincide) joins the
   two sites, named after the closure, with :data:`EQUALITY_SOLREF` / :data:`EQUALITY_SOLIMP`
   and a comment naming the leg;
+* every ``<collision>`` body is a geom named after it, in group :data:`COLLISION_GROUP`, a
+  ``capsule`` where the URDF's ``<collision_checking>`` names one; with ``contype`` and
+  ``conaffinity`` 0, as the visuals: MuJoCo computes no contacts between the parts of a
+  mechanism whose loops it closes softly (the clearance is measured, not simulated);
 * with ``actuated``, one ``position`` actuator per measured (prismatic) joint, its control
   range the stroke (m).
 
@@ -42,6 +46,7 @@ ACTUATOR_KP = 3.0e4  # N/m: position actuator stiffness on a leg reading
 ACTUATOR_KV = 600.0  # N s/m: its damping
 JOINT_DAMPING = 0.2  # N m s/rad (hinge) or N s/m (slide) on every joint, so that a simulation comes to rest
 TIMESTEP = 0.001  # s, with the implicitfast integrator
+COLLISION_GROUP = 3  # MuJoCo geom group of the collision bodies (the visuals are group 1)
 
 _JOINT_TYPES = {"revolute": "hinge", "prismatic": "slide"}
 _f = format_number
@@ -141,6 +146,7 @@ class _Converter:
         self.inertial(body, self.links[link])
         for k, vis in enumerate(self.links[link].findall("visual")):
             self.geom(body, vis, f"{link}_visual{k}")
+        self.collisions(body, self.links[link])
         if link in self.sites:
             ET.SubElement(body, "site", name=site_name(link))
         for j in sorted(self.children.get(link, []), key=lambda j: str(j.get("name"))):
@@ -188,6 +194,30 @@ class _Converter:
         geom.set("contype", "0")  # visual only: no contacts between the parts of the mechanism
         geom.set("conaffinity", "0")
         geom.set("group", "1")
+
+    def collisions(self, body: ET.Element, link: ET.Element) -> None:
+        """The link's ``<collision>`` bodies as inert geoms of :data:`COLLISION_GROUP` (capsules stay capsules)."""
+        block = link.find("collision_checking")
+        capsules = {c.get("name") for c in block.findall("capsule")} if block is not None else set()
+        for k, col in enumerate(link.findall("collision")):
+            name = col.get("name") or f"{link.get('name')}_collision{k}"
+            shape = col.find("geometry")
+            kids = list(shape) if shape is not None else []
+            if not kids or kids[0].tag not in ("cylinder", "sphere"):
+                self.skipped.append(f"{name} ({kids[0].tag if kids else 'no geometry'})")
+                continue
+            g = kids[0]
+            r = _numbers(g.get("radius"), (0.0,), f"{name} radius", self.source)[0]
+            if g.tag == "sphere":
+                kind, size = "sphere", _f(r)
+            else:
+                length = _numbers(g.get("length"), (0.0,), f"{name} length", self.source)[0]
+                kind, size = ("capsule" if name in capsules else "cylinder"), f"{_f(r)} {_f(length / 2)}"
+            geom = ET.SubElement(body, "geom", name=name, type=kind, size=size)
+            _place(geom, col.find("origin"), name, self.source)
+            geom.set("contype", "0")  # MuJoCo's contacts would fight the closures: measured, not simulated
+            geom.set("conaffinity", "0")
+            geom.set("group", str(COLLISION_GROUP))
 
     def measured_joint(self, tip: str) -> str:
         """The prismatic joint on the chain from the root to link ``tip``."""

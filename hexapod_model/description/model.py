@@ -22,6 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import UrdfError
+from .mjcf import COLLISION_GROUP
 from .presets import PRESETS
 from .urdf import Closure, read_closures, validate_urdf
 
@@ -275,7 +276,11 @@ class ClosedLoopModel:
         with tempfile.TemporaryDirectory() as tmp:  # Pinocchio reads MJCF from files only
             path = Path(tmp) / "hexapod.xml"
             path.write_text(self.mjcf_xml)
-            return pin.buildGeomFromMJCF(self.model, str(path), pin.GeometryType.VISUAL)
+            visual = pin.buildGeomFromMJCF(self.model, str(path), pin.GeometryType.VISUAL)
+        for el in ET.fromstring(self.mjcf_xml).iter("geom"):  # the collision bodies are not drawn
+            if el.get("group") == str(COLLISION_GROUP) and visual.existGeometryName(str(el.get("name"))):
+                visual.removeGeometryObject(str(el.get("name")))
+        return visual
 
     def limited_q(self) -> np.ndarray:
         """Indices of q that carry finite joint limits (all leg joints)."""

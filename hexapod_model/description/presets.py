@@ -7,6 +7,13 @@ offsets (the order of the patented preloaded hub), 70 deg Cardan limits, +-90 de
 -0.16 / +0.20 m leg stroke, so that the whole +-50 mm / +-25 deg test box of Bem et al. (2026), corners
 included, lies inside the stroke and joint limits (the corners need up to 67 deg on the
 platform Cardan joints and -0.147 / +0.185 m of stroke).
+
+Joint cones (:mod:`~hexapod_model.description.body`): the Cardan presets take 75 deg at both
+ends (their 70 deg per-axis limits combine to 69 deg at most in the test box); the ball joints
+of the 3-6 sensor and the guideway model take 45 deg, the tilt that high-angle ball joints sold
+for parallel mechanisms reach (standard rod-end and ball-socket joints allow 15-30 deg); the
+``spherical`` preset keeps the textbook's ideal ball joint (no cone: its test box needs 68 deg).
+Collision bodies take the defaults: 20 mm leg radius, 25 mm joint housings, 20 mm plates.
 """
 
 from __future__ import annotations
@@ -66,6 +73,8 @@ def reference() -> HexapodGeometry:
         platform_offset=0.012,
         cardan_limit=70 * DEG,
         roll_limit=math.pi / 2,
+        base_cone=75 * DEG,
+        platform_cone=75 * DEG,
         description="Bem et al. (2026) design: offset-axis Cardan joints (12 mm) at both ends, cylindrical joint",
     )
 
@@ -89,6 +98,7 @@ def spherical() -> HexapodGeometry:
         joint_type="spherical",
         base_offset=0.0,
         platform_offset=0.0,
+        platform_cone=None,
         description="reference anchors, universal joint at the base, ball joint at the platform",
     )
 
@@ -113,6 +123,7 @@ def three_six() -> HexapodGeometry:
         legs=tuple(legs),
         home_height=0.22,
         cardan_limit=60 * DEG,
+        platform_cone=45 * DEG,
         description="Shi, She and Duan (2016) 3-6 sensor: ball joints, legs meet in pairs at three platform points",
     )
 
@@ -149,6 +160,7 @@ def guideway() -> HexapodGeometry:
         legs=tuple(legs),
         home_height=0.50,
         cardan_limit=60 * DEG,
+        platform_cone=45 * DEG,
         description="Jakobović and Jelenković's model 2: fixed struts on sliding guideways (slider = measured joint)",
     )
 

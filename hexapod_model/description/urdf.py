@@ -28,6 +28,7 @@ from ..files import atomic_write_text
 from ..lie import matrix_to_rpy
 from .geometry import HexapodGeometry, LegGeometry
 from .legs import axes_of
+from .urdf_collision import add_collisions
 
 COLOURS = {
     "base": (0.25, 0.27, 0.30, 1.0),
@@ -155,6 +156,7 @@ def geometry_to_urdf(geom: HexapodGeometry) -> str:
     closures = []
     for i in range(6):
         closures.append(_write_leg(w_, geom, i, lim))
+    add_collisions(w_.robot, geom, _f)
     for c in closures:
         ET.SubElement(w_.robot, "loop_closure", name=c.name, type=c.kind, link1=c.link1, link2=c.link2)
     for i, leg in enumerate(geom.legs):

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -30,6 +31,9 @@ from .input_checks import LIMIT_SLACK, MAX_TOL, POSE_TOLERANCE, check_pose, chec
 from .joint_space import DEFAULT_TOL
 from .newton.outcomes import new_solution
 from .newton.solver import OneCallSolver, Solution
+
+if TYPE_CHECKING:
+    from .clearance import Clearance
 
 __all__ = [
     "DEFAULT_MAX_ITER",
@@ -341,6 +345,15 @@ class Hexapod:
         """
         tol = self.default_tol if tol is None else tol
         return batch.inverse_batch(self.engine, poses, guess, warm, tol, max_iter)
+
+    def clearance(self, q_or_pose: ArrayLike) -> Clearance:
+        """Smallest distance between two collision bodies, their names and nearest points (docs/solver.md).
+
+        ``q_or_pose``: a configuration (``nq`` values) or a 4x4 platform pose (base frame, m).
+        """
+        from . import clearance  # coal and the collision bodies load at the first query, not with the package
+
+        return clearance.clearance(self, q_or_pose)
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:
         """Per-leg closure error at ``q`` computed by Pinocchio's constraint models."""

@@ -1,0 +1,123 @@
+"""The collision bodies of a loaded hexapod as a Pinocchio ``GeometryModel``, with the pairs to check.
+
+:func:`collision_model` reads the ``<collision>`` elements of the URDF a
+:class:`~hexapod_model.description.model.ClosedLoopModel` was made from (Pinocchio's
+``buildGeomFromUrdfString``; capsules through the ``<collision_checking>`` convention) and names
+each body after its ``<collision name=...>``. The pairs whose distance is checked are all
+pairs of bodies except those that touch by construction, found from the model, not from a list
+of names:
+
+* two bodies of the same leg (a leg and its own joint housings, its cylinder and its rod);
+* a plate and the body of a leg nearest to it along the leg's chain (the joint housing that
+  sits on the plate): the first link with a body from the base, the last one towards the
+  closure;
+* two legs whose closures meet the platform at the same point (a shared joint, as in the 3-6
+  sensor): all pairs between their bodies.
+"""
+
+from __future__ import annotations
+
+import itertools
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import UrdfError
+from .model import ClosedLoopModel
+
+SHARED_JOINT = 1e-9  # m: closure anchors closer than this at home are one joint
+
+
+@dataclass(frozen=True)
+class CollisionModel:
+    """The collision bodies of a hexapod and the pairs checked.
+
+    Attributes:
+        geometry: Pinocchio's ``GeometryModel``; its collision pairs are the pairs checked.
+        owners: per body, the leg index (0..5), ``-1`` for the base, ``-2`` for the platform.
+        names: per body, its name (the URDF ``<collision name>``).
+    """
+
+    geometry: pin.GeometryModel
+    owners: tuple[int, ...]
+    names: tuple[str, ...]
+
+
+def _collision_names(urdf_xml: str) -> dict[str, list[str]]:
+    """Link name -> the ``name`` of its ``<collision>`` elements, in file order (``""`` when unnamed)."""
+    root = ET.fromstring(urdf_xml)
+    return {str(el.get("name")): [c.get("name") or "" for c in el.findall("collision")] for el in root.findall("link")}
+
+
+def _owner(clm: ClosedLoopModel, joint: int) -> int:
+    if joint == 0:
+        return -1
+    if joint == clm.platform_joint:
+        return -2
+    for k, leg in enumerate(clm.legs):
+        if joint in leg.joints:
+            return k
+    raise UrdfError(clm.source, clm.model.names[joint], "a collision body on a joint outside the legs")
+
+
+def _shared_anchors(clm: ClosedLoopModel) -> set[tuple[int, int]]:
+    """Pairs of legs whose closure anchors coincide at home (one joint shared by two legs)."""
+    m = clm.model
+    data = m.createData()
+    pin.framesForwardKinematics(m, data, clm.q_home)
+    points = [data.oMf[leg.anchor_frame].translation.copy() for leg in clm.legs]
+    return {
+        (a, b)
+        for a, b in itertools.combinations(range(len(points)), 2)
+        if np.linalg.norm(points[a] - points[b]) < SHARED_JOINT
+    }
+
+
+def collision_model(clm: ClosedLoopModel) -> CollisionModel:
+    """The collision bodies of ``clm``'s URDF and the pairs to check (see the module doc).
+
+    Raises:
+        UrdfError: the hexapod was not loaded from a URDF, or its URDF has no ``<collision>``
+            element (regenerate it with ``hexapod urdf``).
+    """
+    if clm.urdf_xml is None:
+        raise UrdfError(clm.source, "<collision>", "clearance needs a URDF with collision bodies (hexapod urdf)")
+    m = clm.model
+    geometry = pin.buildGeomFromUrdfString(m, clm.urdf_xml, pin.GeometryType.COLLISION)
+    if geometry.ngeoms == 0:
+        raise UrdfError(clm.source, "<collision>", "the URDF has no collision bodies; regenerate it with hexapod urdf")
+    declared = _collision_names(clm.urdf_xml)
+    names: list[str] = []
+    owners: list[int] = []
+    seen: dict[str, int] = {}
+    for go in geometry.geometryObjects:
+        link = m.frames[go.parentFrame].name
+        k = seen.get(link, 0)
+        seen[link] = k + 1
+        given = declared.get(link, [])
+        go.name = given[k] if k < len(given) and given[k] else go.name
+        names.append(go.name)
+        owners.append(_owner(clm, go.parentJoint))
+    # per leg: the bodies nearest to the base and to the platform along its chain
+    ends: dict[int, tuple[int, int]] = {}
+    for k, leg in enumerate(clm.legs):
+        mine = [g for g, o in enumerate(owners) if o == k]
+        if mine:
+            order = sorted(
+                {(leg.joints.index(geometry.geometryObjects[g].parentJoint), geometry.geometryObjects[g].parentFrame)
+                 for g in mine}
+            )  # fmt: skip
+            ends[k] = (order[0][1], order[-1][1])
+    shared = _shared_anchors(clm)
+    for a, b in itertools.combinations(range(geometry.ngeoms), 2):
+        oa, ob = owners[a], owners[b]
+        if oa == ob or (min(oa, ob), max(oa, ob)) in shared:
+            continue
+        if min(oa, ob) < 0 <= max(oa, ob):  # a plate and a leg body
+            plate, g = (oa, b) if oa < 0 else (ob, a)
+            if geometry.geometryObjects[g].parentFrame == ends[max(oa, ob)][0 if plate == -1 else 1]:
+                continue
+        geometry.addCollisionPair(pin.CollisionPair(a, b))
+    return CollisionModel(geometry, tuple(owners), tuple(names))

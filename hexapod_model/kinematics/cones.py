@@ -1,0 +1,119 @@
+"""Joint cones: how far each joint is deflected from its home axis, against its cone half-angle.
+
+A catalogue ball joint or Cardan joint bounds the *angle* its two sides make, not each revolute
+separately. The cone angle of a joint in a configuration ``q``:
+
+* a **Cardan joint** (two revolutes, the first two of a leg's chain at the base, the last two at
+  the platform end when the leg ends in one): the combined deflection
+  ``arccos(cos a1 cos a2)`` of its angles ``a1``, ``a2`` (rad): the angle between its common
+  normal at home and now, which is what the yoke sees;
+* a **ball joint** (a leg whose chain does not end in two revolutes): the angle between the leg
+  axis (from the second base Cardan axis to the ball centre) and its home direction, both seen
+  from the platform.
+
+The half-angles come from the geometry (``base_cone``, ``platform_cone``, per leg or for all;
+``None``: no cone, an infinite limit here). A joint beyond its cone is a ``cone_limit``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..description.geometry import HexapodGeometry
+from ..description.model import ClosedLoopModel
+
+ENDS = ("base", "platform")
+
+
+@dataclass(frozen=True)
+class ConeAngles:
+    """Each joint's cone angle and limit in one configuration.
+
+    Attributes:
+        angles: (6, 2) deflection of each leg's base and platform joint from its home axis (rad).
+        limits: (6, 2) their cone half-angles (rad; ``inf``: no cone).
+    """
+
+    angles: np.ndarray
+    limits: np.ndarray
+
+    @property
+    def margins(self) -> np.ndarray:
+        """(6, 2) ``limits - angles`` (rad): negative beyond the cone."""
+        return self.limits - self.angles
+
+    @property
+    def within(self) -> bool:
+        """Whether every joint lies inside its cone."""
+        return bool(np.all(self.angles <= self.limits))
+
+    def worst(self) -> tuple[int, str, float]:
+        """The joint with the smallest margin: leg index (0..5), ``"base"`` or ``"platform"``, margin (rad)."""
+        k = int(np.argmin(self.margins))
+        return k // 2, ENDS[k % 2], float(self.margins.flat[k])
+
+    def message(self) -> str:
+        """One line naming the joint nearest (or beyond) its cone, in degrees."""
+        leg, end, _ = self.worst()
+        angle, limit = np.degrees(self.angles[leg, ENDS.index(end)]), np.degrees(self.limits[leg, ENDS.index(end)])
+        verb = "cone_limit" if angle > limit else "cone"
+        return f"{verb}: leg{leg + 1} {end} joint deflected {angle:.3f} deg, cone half-angle {limit:.6g} deg"
+
+
+def _revolutes(clm: ClosedLoopModel, joints: tuple[int, ...]) -> list[int]:
+    return [j for j in joints if clm.model.joints[j].shortname().startswith("JointModelR")]
+
+
+def cone_angles(clm: ClosedLoopModel, q: np.ndarray) -> np.ndarray:
+    """(6, 2) the base and platform joint deflections (rad) of configuration ``q`` (see the module doc)."""
+    m = clm.model
+    out = np.empty((6, 2))
+    ball: list[int] = []
+    for k, leg in enumerate(clm.legs):
+        rev = _revolutes(clm, leg.joints)
+        a1, a2 = (q[m.joints[j].idx_q] for j in rev[:2])
+        out[k, 0] = np.arccos(min(1.0, np.cos(a1) * np.cos(a2)))
+        if len(leg.joints) >= 2 and leg.joints[-1] in rev and leg.joints[-2] in rev and len(rev) >= 4:
+            b1, b2 = (q[m.joints[j].idx_q] for j in leg.joints[-2:])
+            out[k, 1] = np.arccos(min(1.0, np.cos(b1) * np.cos(b2)))
+        else:
+            ball.append(k)
+    if ball:
+        now, home = _leg_directions(clm, q), _leg_directions(clm, clm.q_home)
+        for k in ball:
+            out[k, 1] = np.arctan2(np.linalg.norm(np.cross(now[k], home[k])), float(now[k] @ home[k]))
+    return out
+
+
+def _leg_directions(clm: ClosedLoopModel, q: np.ndarray) -> list[np.ndarray]:
+    """Unit leg axes in the platform frame: from the second base revolute's frame to the leg tip."""
+    m = clm.model
+    data = m.createData()
+    pin.forwardKinematics(m, data, q)
+    pin.updateFramePlacements(m, data)
+    R = data.oMi[clm.platform_joint].rotation
+    out = []
+    for leg in clm.legs:
+        second = _revolutes(clm, leg.joints)[1]
+        d = data.oMf[leg.tip_frame].translation - data.oMi[second].translation
+        out.append(R.T @ (d / np.linalg.norm(d)))
+    return out
+
+
+def cone_limits(geometry: HexapodGeometry | None) -> np.ndarray:
+    """(6, 2) the cone half-angles (rad) of ``geometry``'s joints; ``inf`` where none (or no geometry)."""
+    out = np.full((6, 2), np.inf)
+    if geometry is not None:
+        for k in range(6):
+            for end, limit in enumerate(geometry.cones_of(k)):
+                if limit is not None:
+                    out[k, end] = limit
+    return out
+
+
+def check_cones(clm: ClosedLoopModel, geometry: HexapodGeometry | None, q: np.ndarray) -> ConeAngles:
+    """:class:`ConeAngles` of configuration ``q``: the check a pose-returning path calls."""
+    return ConeAngles(cone_angles(clm, np.asarray(q, dtype=float)), cone_limits(geometry))
