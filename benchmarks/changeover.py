@@ -20,11 +20,11 @@ import time
 from types import SimpleNamespace
 
 from hexapod_model import Hexapod
-from hexapod_model.service.cell import Cell, InRobot, placement
-from hexapod_model.service.guidance import guidance
-from hexapod_model.service.pose import pose_record
-from hexapod_model.service.solve import PoseSolver
-from hexapod_model.service.targets import target_from_json
+from hexapod_model.service.config.cell import Cell, InRobot, placement
+from hexapod_model.service.cycle.solver import PoseSolver
+from hexapod_model.service.record.pose import pose_record
+from hexapod_model.service.targets.guidance import guidance
+from hexapod_model.service.targets.target import target_from_json
 
 HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]
 BODY = {

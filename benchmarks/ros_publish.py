@@ -21,7 +21,7 @@ from types import SimpleNamespace
 from hexapod_model import Hexapod
 from hexapod_model.ros.dds import QUEUE_LENGTH, RosBridge
 from hexapod_model.service import FixtureService, config_from_dict
-from hexapod_model.service.pose import pose_record
+from hexapod_model.service.record.pose import pose_record
 
 
 def main(argv=None) -> int:

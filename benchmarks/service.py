@@ -40,7 +40,7 @@ import numpy as np
 
 from hexapod_model import Hexapod
 from hexapod_model.service import FixtureService, PoseSolver, config_from_dict
-from hexapod_model.service.simconfig import trajectory_sequence
+from hexapod_model.service.sim.config import trajectory_sequence
 
 SETS = 2000  # one there-and-back of trajectory A, whatever the rate
 

@@ -46,7 +46,7 @@ def live_view(
 
     Until ``stop`` is set, the monotonic clock passes ``deadline``, or ``count`` poses were shown.
     Poses are shown through inverse kinematics (warm started); returns the number shown. With
-    ``cell`` (the fixture's :class:`~hexapod_model.service.cell.Cell`) the UR10 stands where
+    ``cell`` (the fixture's :class:`~hexapod_model.service.config.cell.Cell`) the UR10 stands where
     ``base_in_robot`` puts it and its flange follows the record's ``pose_in_robot``.
     """
     from ..viz.meshcat_scene import HexapodScene, start_visualizer, stop_visualizer

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from ..files import atomic_write_bytes
-from ..service.store import SAMPLE_COLUMNS, LockEvent
+from ..service.store.fixture_store import SAMPLE_COLUMNS, LockEvent
 from .names import FixtureNames
 
 PROFILE = "ros2"

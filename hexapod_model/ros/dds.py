@@ -22,7 +22,7 @@ import time
 from typing import Any
 
 from ..extras import install_hint
-from ..service.rosconfig import RosConfig
+from ..service.config.ros import RosConfig
 from ..service.service import FixtureService
 from .names import FixtureNames
 

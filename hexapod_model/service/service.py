@@ -6,7 +6,7 @@
 ...     svc.record("left")            # the latest one; also GET /fixtures/left/pose
 
 Threads: one reads the bus and runs every fixture's cycle (so a record is published within the
-frame's own iteration), one writes the store (:class:`~hexapod_model.service.writer.StoreWriter`),
+frame's own iteration), one writes the store (:class:`~hexapod_model.service.store.writer.StoreWriter`),
 and the HTTP server's. Subscribers run on the bus thread: keep them short.
 """
 
@@ -25,20 +25,20 @@ import can
 
 from ..analysis.sensitivity import SensitivityEvaluator
 from ..tracking.tracker import characteristic_length
-from .alarms import Acknowledgement
-from .bus import open_bus, receiver
-from .changeover import Changeover
-from .config import ServiceConfig, geometry_hash
-from .cycle import FixtureCycle
+from .changeover.changeover import Changeover
+from .config.settings import ServiceConfig, geometry_hash
+from .cycle.alarms import Acknowledgement
+from .cycle.bus import open_bus, receiver
+from .cycle.fixture_cycle import FixtureCycle
+from .cycle.solver import warm_up
 from .errors import ServiceError
-from .health import health
-from .pose import sample_row
-from .solve import warm_up
-from .store import Store
-from .writer import StoreWriter
+from .http.health import health
+from .record.pose import sample_row
+from .store.fixture_store import Store
+from .store.writer import StoreWriter
 
 if TYPE_CHECKING:
-    from .server import HttpServer
+    from .http.server import HttpServer
 
 log = logging.getLogger(__name__)
 Record = dict
@@ -48,7 +48,7 @@ class FixtureService:
     """Run the pose service of every fixture of ``config``.
 
     Args:
-        config: the validated configuration (:func:`~hexapod_model.service.config.load_config`).
+        config: the validated configuration (:func:`~hexapod_model.service.config.settings.load_config`).
         bus: an open python-can bus to read instead of the configured one (it is not closed here).
         http: serve ``GET /fixtures``, ``/fixtures/NAME/pose`` and ``/health`` on ``config.http``.
         hexapods: already loaded hexapods by fixture name (else loaded from the configuration).
@@ -86,7 +86,7 @@ class FixtureService:
         self.cycles: dict[str, FixtureCycle] = {}
         self.endpoint: HttpServer | None = None
         self.store: Store | None = None
-        #: targets, recipes and guidance (:class:`~hexapod_model.service.changeover.Changeover`), once started
+        #: targets, recipes and guidance (:class:`~hexapod_model.service.changeover.changeover.Changeover`), once started
         self.changeover: Changeover | None = None
         self.writer: StoreWriter | None = None
         self.frames = self.unknown_frames = 0
@@ -106,15 +106,15 @@ class FixtureService:
         self._stop.clear()
         try:  # what can fail fails first, before anything is logged or written
             if self._http:
-                from .server import HttpServer
+                from .http.server import HttpServer
 
                 try:
-                    from .http import build_app
+                    from .http.app import build_app
                 except ImportError:
-                    from .server import INSTALL_HINT
+                    from .http.server import INSTALL_HINT
 
                     raise ServiceError(INSTALL_HINT) from None
-                from .changeover_http import changeover_routes
+                from .http.changeover_routes import changeover_routes
 
                 self.endpoint = HttpServer(build_app(self, [*changeover_routes(), *self._extra_routes]), cfg.http)
             if self._bus is None:
@@ -320,7 +320,7 @@ class FixtureService:
     def acknowledge(self, name: str, by: str, client: str = "local", note: str = "") -> Acknowledgement | None:
         """Acknowledge the fault latched on fixture ``name`` (None when none waits; ``KeyError``: no such fixture).
 
-        The cycle clears it at its next set (see :mod:`~hexapod_model.service.alarms`); logged
+        The cycle clears it at its next set (see :mod:`~hexapod_model.service.cycle.alarms`); logged
         with who, from where and when.
         """
         ack = self.cycles[name].acknowledge(by, client, note)
@@ -330,7 +330,7 @@ class FixtureService:
         return ack
 
     def health(self) -> dict:
-        """Service state: ``ok`` or ``degraded``, each problem one line (:mod:`~hexapod_model.service.health`)."""
+        """Service state: ``ok`` or ``degraded``, each problem one line (:mod:`~hexapod_model.service.http.health`)."""
         return health(self)
 
     # ----- the cycle thread -----

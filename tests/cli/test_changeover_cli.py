@@ -20,7 +20,7 @@ import pytest
 
 from hexapod_model.cli.main import main
 from hexapod_model.kinematics.rotations import xyz_rpy_to_pose as placement
-from hexapod_model.service.guidance import record_pose
+from hexapod_model.service.targets.guidance import record_pose
 
 from ..conftest import hexapod
 from .test_service_cli import ROOT, Served

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from hexapod_model.service import FixtureService, Simulator
-from hexapod_model.service.rosconfig import RosConfig
+from hexapod_model.service.config.ros import RosConfig
 
 from ..conftest import hexapod
 from ..service.helpers import fixture_table, service_config, sim_config
@@ -93,7 +93,7 @@ def test_the_cell_placement_is_on_tf_static_for_a_late_joiner(tmp_path):
 
     from hexapod_model.kinematics.rotations import rpy_to_matrix
     from hexapod_model.ros.messages import TFMessage
-    from hexapod_model.service.cell import Cell
+    from hexapod_model.service.config.cell import Cell
 
     config = service_config(
         tmp_path, [fixture_table("right")], ros={"robot_frame": "ur10e/base_link", "domain_id": run_domain()}

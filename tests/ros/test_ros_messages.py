@@ -153,7 +153,7 @@ def test_placement_on_tf_static(ros):
 
 def test_cyclone_configuration_stays_on_this_machine_unless_peers_are_given():
     from hexapod_model.ros.dds import cyclone_xml
-    from hexapod_model.service.rosconfig import RosConfig
+    from hexapod_model.service.config.ros import RosConfig
 
     local = cyclone_xml(RosConfig())
     assert '<NetworkInterface address="127.0.0.1"/>' in local and "<AllowMulticast>false</AllowMulticast>" in local

@@ -6,7 +6,7 @@ import uuid
 
 import can
 
-from hexapod_model.service.bus import receiver
+from hexapod_model.service.cycle.bus import receiver
 
 
 def test_receiver_reads_what_recv_reads_and_keeps_software_filters():

@@ -9,9 +9,9 @@ import pytest
 from hexapod_model.exceptions import InputError
 from hexapod_model.kinematics.rotations import xyz_rpy_to_pose as placement
 from hexapod_model.service import ConfigError
-from hexapod_model.service.cell import Cell, locate
-from hexapod_model.service.guidance import guidance, record_pose
-from hexapod_model.service.solve import PoseSolver
+from hexapod_model.service.config.cell import Cell, locate
+from hexapod_model.service.cycle.solver import PoseSolver
+from hexapod_model.service.targets.guidance import guidance, record_pose
 
 from ..conftest import hexapod
 from .helpers import drive, fixture_table, service_config, sim_config

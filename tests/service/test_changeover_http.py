@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from hexapod_model.service import FixtureService, Simulator
-from hexapod_model.service.guidance import record_pose
+from hexapod_model.service.targets.guidance import record_pose
 
 from ..conftest import hexapod
 from .helpers import fixture_table, service_config, sim_config

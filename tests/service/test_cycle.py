@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from hexapod_model.service import RECORD_KEYS, FixtureCycle, LockEvent, geometry_hash
-from hexapod_model.service.cycle import _quaternion
+from hexapod_model.service.cycle.fixture_cycle import _quaternion
 from hexapod_model.tracking.checks import TrackerSettings
 
 from ..conftest import hexapod

@@ -11,9 +11,9 @@ import pytest
 
 from hexapod_model.analysis.jacobian import leg_jacobian_local
 from hexapod_model.service import FixtureCycle, geometry_hash
-from hexapod_model.service.guidance import MARGIN_SIGMAS, deviation, guidance, record_pose
-from hexapod_model.service.pose import pose_record
-from hexapod_model.service.targets import target_from_json
+from hexapod_model.service.record.pose import pose_record
+from hexapod_model.service.targets.guidance import MARGIN_SIGMAS, deviation, guidance, record_pose
+from hexapod_model.service.targets.target import target_from_json
 
 from ..conftest import hexapod
 from .helpers import drive, fixture_table, service_config, sim_config

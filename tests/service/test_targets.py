@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from hexapod_model.service import Changeover, Store, UnknownError
-from hexapod_model.service.target_store import SCHEMA_VERSION
-from hexapod_model.service.targets import TargetError, parse_pose, recipe_from_json, target_from_json
+from hexapod_model.service.store.target_tables import SCHEMA_VERSION
+from hexapod_model.service.targets.target import TargetError, parse_pose, recipe_from_json, target_from_json
 
 from ..conftest import hexapod
 

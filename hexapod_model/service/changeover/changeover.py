@@ -10,7 +10,7 @@
 
 Every write is committed to the store before it returns (targets survive a restart or a
 ``kill -9``) and names who made it and when. Bad input raises
-:class:`~hexapod_model.service.targets.TargetError` (one line naming the field); an unknown
+:class:`~hexapod_model.service.targets.target.TargetError` (one line naming the field); an unknown
 fixture or recipe raises :class:`UnknownError`.
 """
 
@@ -25,13 +25,13 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import HexapodError
-from ..kinematics.hexapod import Hexapod
-from .config import NAME_PATTERN
-from .cycle import FixtureCycle
-from .guidance import guidance
-from .store import Store
-from .targets import Recipe, Target, TargetError, reachable, recipe_from_json, target_from_json
+from ...exceptions import HexapodError
+from ...kinematics.hexapod import Hexapod
+from ..config.settings import NAME_PATTERN
+from ..cycle.fixture_cycle import FixtureCycle
+from ..store.fixture_store import Store
+from ..targets.guidance import guidance
+from ..targets.target import Recipe, Target, TargetError, reachable, recipe_from_json, target_from_json
 
 log = logging.getLogger(__name__)
 
@@ -161,7 +161,7 @@ class Changeover:
 
     # ----- guidance -----
     def guidance(self, name: str) -> dict[str, Any]:
-        """The fixture's guidance (:func:`hexapod_model.service.guidance.guidance`) and the active recipe."""
+        """The fixture's guidance (:func:`hexapod_model.service.targets.guidance`) and the active recipe."""
         self._fixture(name)
         active = self._active
         extra: dict[str, Any] = {"active_recipe": None if active is None else active[0]}

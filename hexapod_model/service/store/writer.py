@@ -10,7 +10,7 @@ from collections import deque
 from collections.abc import Callable
 from functools import partial
 
-from .store import LockEvent, Store
+from .fixture_store import LockEvent, Store
 
 log = logging.getLogger(__name__)
 

@@ -13,7 +13,7 @@ Every answer is JSON, errors too (``{"error": ...}``): 404 for an unknown path, 
 Starlette routes to :func:`build_app` (or ``FixtureService(..., routes=[...])``)::
 
     from starlette.routing import Route
-    from hexapod_model.service.http import json_response, read_json, requires_token, service_of
+    from hexapod_model.service.http.app import json_response, read_json, requires_token, service_of
 
     @requires_token                              # a write: the bearer token, always
     async def set_target(request):
@@ -43,7 +43,7 @@ from starlette.responses import Response
 from starlette.routing import BaseRoute, Route
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from .token import bearer_matches
+from ..config.token import bearer_matches
 
 log = logging.getLogger(__name__)
 Endpoint = Callable[[Request], Awaitable[Response]]

@@ -23,9 +23,9 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import HexapodError, brief_repr
-from ..kinematics.hexapod import Hexapod
-from ..kinematics.rotations import matrix_to_quaternion, matrix_to_rpy, quaternion_to_matrix, rpy_to_matrix
+from ...exceptions import HexapodError, brief_repr
+from ...kinematics.hexapod import Hexapod
+from ...kinematics.rotations import matrix_to_quaternion, matrix_to_rpy, quaternion_to_matrix, rpy_to_matrix
 
 RPY_KEYS = ("x", "y", "z", "roll", "pitch", "yaw")
 QUATERNION_KEYS = ("x", "y", "z", "qx", "qy", "qz", "qw")

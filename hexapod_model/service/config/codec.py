@@ -22,7 +22,8 @@ from typing import NamedTuple
 
 import can
 
-from .errors import ConfigError, FrameError, Table
+from ..errors import ConfigError, FrameError
+from .table import Table
 
 MAX_PAYLOAD = 8  # classic CAN
 

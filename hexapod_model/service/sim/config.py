@@ -13,13 +13,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis.trajectories import DURATION_S, trajectory_coordinates
-from ..exceptions import HexapodError
-from ..io.tables import poses_from_table, read_table
-from ..kinematics.rotations import rpy_to_matrix, xyz_rpy_to_pose
-from .config import ServiceConfig, read_toml
-from .errors import ConfigError, Table
-from .sim_changeover import ChangeoverScript
+from ...analysis.trajectories import DURATION_S, trajectory_coordinates
+from ...exceptions import HexapodError
+from ...io.tables import poses_from_table, read_table
+from ...kinematics.rotations import rpy_to_matrix, xyz_rpy_to_pose
+from ..config.settings import ServiceConfig, read_toml
+from ..config.table import Table
+from ..errors import ConfigError
+from .changeover import ChangeoverScript
 
 FAULTS = (
     "dropped_frames",

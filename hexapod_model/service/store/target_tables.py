@@ -26,9 +26,9 @@ from typing import Any
 
 import numpy as np
 
-from ..kinematics.rotations import matrix_to_quaternion, quaternion_to_matrix
-from .errors import ServiceError
-from .targets import Recipe, Target, Tolerance
+from ...kinematics.rotations import matrix_to_quaternion, quaternion_to_matrix
+from ..errors import ServiceError
+from ..targets.target import Recipe, Target, Tolerance
 
 SCHEMA_VERSION = 2
 _POSE = ("x", "y", "z", "qx", "qy", "qz", "qw")
@@ -71,7 +71,7 @@ def migrate(db: sqlite3.Connection, path: Path) -> None:
 
 @dataclass(frozen=True)
 class StoredTarget:
-    """A target row as stored (no inverse kinematics yet): see :class:`~hexapod_model.service.targets.Target`."""
+    """A target row as stored (no inverse kinematics yet): see :class:`~hexapod_model.service.targets.target.Target`."""
 
     id: int
     fixture: str
@@ -86,10 +86,10 @@ class TargetStore:
     """Targets, recipes and activations in an open store.
 
     Writes go through the store's transactions (committed durably to the file at its path, see
-    :class:`~hexapod_model.service.store.Store`); reads hold its lock.
+    :class:`~hexapod_model.service.store.fixture_store.Store`); reads hold its lock.
 
     Args:
-        store: the open :class:`~hexapod_model.service.store.Store`.
+        store: the open :class:`~hexapod_model.service.store.fixture_store.Store`.
     """
 
     def __init__(self, store: Any):

@@ -1,6 +1,6 @@
 """Simulated encoders: poses -> inverse kinematics -> noisy readings -> the fixture's own frames.
 
-Each simulated fixture plays its pose sequence (:mod:`hexapod_model.service.simconfig`) at a
+Each simulated fixture plays its pose sequence (:mod:`hexapod_model.service.sim.config`) at a
 playback speed that slows to 0 in lock phases; a pose between two samples of the sequence is
 interpolated on SE(3). Its leg readings come from the hexapod's inverse kinematics (warm
 started), get Gaussian noise, then the faults act, and every leg's reading is encoded with the
@@ -21,13 +21,13 @@ import can
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import HexapodError
-from ..kinematics.hexapod import Hexapod
-from ..kinematics.newton.solver import Solution
-from .config import FixtureConfig, ServiceConfig
-from .errors import FrameError
-from .sim_changeover import Follower
-from .simconfig import SimConfig, SimFixture
+from ...exceptions import HexapodError
+from ...kinematics.hexapod import Hexapod
+from ...kinematics.newton.solver import Solution
+from ..config.settings import FixtureConfig, ServiceConfig
+from ..errors import FrameError
+from .changeover import Follower
+from .config import SimConfig, SimFixture
 
 log = logging.getLogger(__name__)
 FRAME_TIME = 130e-6  # s: one 8-byte frame on a 1 Mbit/s bus, the spacing of a set's stamps

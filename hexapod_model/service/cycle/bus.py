@@ -7,8 +7,8 @@ from typing import Any
 
 import can
 
-from .config import ServiceConfig
-from .errors import ServiceError
+from ..config.settings import ServiceConfig
+from ..errors import ServiceError
 
 
 def open_bus(config: ServiceConfig, receive: bool = True) -> can.BusABC:

@@ -26,10 +26,10 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import InputError
-from ..kinematics.rotations import matrix_to_rpy, xyz_rpy_to_pose
-from .errors import Table
-from .pose import pose_record
+from ...exceptions import InputError
+from ...kinematics.rotations import matrix_to_rpy, xyz_rpy_to_pose
+from ..record.pose import pose_record
+from .table import Table
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ import hmac
 import stat
 from pathlib import Path
 
-from .errors import ConfigError
+from ..errors import ConfigError
 
 MIN_LENGTH = 16  # characters
 

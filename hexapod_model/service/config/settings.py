@@ -18,14 +18,15 @@ from pathlib import Path
 
 import can
 
-from ..description.presets import PRESETS
-from ..exceptions import HexapodError
-from ..kinematics.hexapod import Hexapod
-from ..tracking.tracker import PREDICTORS
+from ...description.presets import PRESETS
+from ...exceptions import HexapodError
+from ...kinematics.hexapod import Hexapod
+from ...tracking.tracker import PREDICTORS
+from ..errors import ConfigError
 from .cell import Cell, cell_from_table
 from .codec import FrameLayout, LegCodec
-from .errors import ConfigError, Table
-from .rosconfig import RosConfig, ros_config
+from .ros import RosConfig, ros_config
+from .table import Table
 from .token import read_token
 
 INTERFACES = tuple(sorted(can.interfaces.VALID_INTERFACES))

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from .targets import Target, Tolerance
+from .target import Target, Tolerance
 
 MARGIN_SIGMAS = 2.0  # the deviation plus this many sigma must fit the tolerance
 

@@ -28,9 +28,9 @@ from starlette.requests import Request
 from starlette.responses import Response, StreamingResponse
 from starlette.routing import BaseRoute, Route
 
-from .changeover import UnknownError
-from .http import error_response, json_response, read_json, requires_token, service_of
-from .targets import Target, TargetError
+from ..changeover.changeover import UnknownError
+from ..targets.target import Target, TargetError
+from .app import error_response, json_response, read_json, requires_token, service_of
 
 EVENT_INTERVAL = 0.25  # s between two dashboard events
 ASSETS = {"dashboard.js": "text/javascript", "dashboard.css": "text/css", "index.html": "text/html"}

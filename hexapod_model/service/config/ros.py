@@ -14,7 +14,7 @@ import ipaddress
 import re
 from dataclasses import dataclass
 
-from .errors import Table
+from .table import Table
 
 NAMESPACE_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*$")  # a ROS 2 name, no leading /
 FRAME_PATTERN = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_/.-]*$")

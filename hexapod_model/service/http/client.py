@@ -17,8 +17,8 @@ import urllib.request
 from typing import Any
 from urllib.parse import quote
 
-from .config import ServiceConfig
-from .errors import ServiceError
+from ..config.settings import ServiceConfig
+from ..errors import ServiceError
 
 
 class RequestError(ServiceError):

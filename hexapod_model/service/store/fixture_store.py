@@ -11,12 +11,12 @@ Schema (version 2; the tables ``docs/service.md`` documents):
 * ``samples``: published records (``fixture``, ``t``, ``status``, ``flags`` as JSON, ``state``,
   ``l1..l6``, pose columns; NULL when there is none), the newest ``samples`` rows kept.
 * ``meta``: ``schema_version``.
-* ``targets``, ``recipes``, ``activations``: the changeover's (:mod:`~hexapod_model.service.target_store`,
+* ``targets``, ``recipes``, ``activations``: the changeover's (:mod:`~hexapod_model.service.store.target_tables`,
   which also migrates a version-1 file when it is opened).
 
 ``synchronous=FULL``: a commit is on disk (the WAL file fsync'ed) when :meth:`Store.add_lock`
 returns, so a lock published as stored survives a crash or a power loss. Writes happen on one
-writer thread (:class:`~hexapod_model.service.writer.StoreWriter`), off the cycle's path.
+writer thread (:class:`~hexapod_model.service.store.writer.StoreWriter`), off the cycle's path.
 """
 
 from __future__ import annotations
@@ -34,8 +34,8 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ServiceError
-from .target_store import TargetStore, migrate
+from ..errors import ServiceError
+from .target_tables import TargetStore, migrate
 
 log = logging.getLogger(__name__)
 LEGS = ", ".join(f"l{i}" for i in range(1, 7))
@@ -68,7 +68,7 @@ class LockEvent:
         quaternion: (4,) ``qx, qy, qz, qw`` of the platform orientation in the base frame.
         readings: (6,) mean readings of the steady run (m).
         status: ``ok`` (only good poses are stored as locks).
-        geometry_hash: :func:`hexapod_model.service.config.geometry_hash` of the hexapod used.
+        geometry_hash: :func:`hexapod_model.service.config.settings.geometry_hash` of the hexapod used.
         q: the solution's Pinocchio configuration.
         id: row id once stored.
         target_id: the stored target the lock pose met (within its tolerance), or None.

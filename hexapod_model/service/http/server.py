@@ -16,9 +16,9 @@ import threading
 import time
 from typing import Any
 
-from ..extras import install_hint
-from .config import HttpConfig
-from .errors import ServiceError
+from ...extras import install_hint
+from ..config.settings import HttpConfig
+from ..errors import ServiceError
 
 log = logging.getLogger(__name__)
 INSTALL_HINT = f"the HTTP endpoint needs starlette and uvicorn: {install_hint('service')}"
@@ -70,7 +70,7 @@ class HttpServer:
     """Serve an ASGI ``app`` on ``config``'s address, in a background thread.
 
     Args:
-        app: the application (:func:`hexapod_model.service.http.build_app`).
+        app: the application (:func:`hexapod_model.service.http.app.build_app`).
         config: address, TLS files and limits.
 
     Raises:

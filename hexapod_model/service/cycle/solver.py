@@ -1,6 +1,6 @@
 """The service's one adapter to the stream tracker.
 
-The cycle (:mod:`hexapod_model.service.cycle`) never calls the tracker directly: it calls
+The cycle (:mod:`hexapod_model.service.cycle.fixture_cycle`) never calls the tracker directly: it calls
 :class:`PoseSolver` — ``step(readings, instant)`` per reading set it solves (``instant``: the
 sampling instant's number, so instants without a solved set are known), ``solve_once(readings, q)``
 for a lock pose — and gets a :class:`SolveOutcome`. Only this module knows the tracker's API
@@ -25,10 +25,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..analysis.sensitivity import SensitivityEvaluator
-from ..kinematics.hexapod import Hexapod
-from ..kinematics.newton.solver import Solution
-from ..tracking.tracker import Tracker, characteristic_length
+from ...analysis.sensitivity import SensitivityEvaluator
+from ...kinematics.hexapod import Hexapod
+from ...kinematics.newton.solver import Solution
+from ...tracking.tracker import Tracker, characteristic_length
 
 _UNREADABLE = np.full(6, np.nan)
 

@@ -9,9 +9,9 @@ newer instant closes an unfinished set, published as ``incomplete`` (``missing:l
 missing leg's newest frame is older than ``staleness``, ``silent_leg``. So every instant ends in
 a record, and a set never mixes two instants. A set with a bad frame, an error bit, a reading
 outside the stroke or a stuck leg is published with that status and **no pose**; a solved set
-is ``ok`` only when the tracker (through :class:`~hexapod_model.service.solve.PoseSolver`)
+is ``ok`` only when the tracker (through :class:`~hexapod_model.service.cycle.solver.PoseSolver`)
 raised no flag, no leg of a locked fixture moved and no fault waits for an acknowledgement
-(:mod:`~hexapod_model.service.alarms`).
+(:mod:`~hexapod_model.service.cycle.alarms`).
 
 Status values: ``ok``, ``no_data`` (nothing received yet), ``incomplete``, ``duplicate_frame``,
 ``silent_leg``, ``bad_frame``, ``encoder_error``, ``out_of_stroke``, ``stuck_leg``,
@@ -32,18 +32,20 @@ from dataclasses import replace
 import numpy as np
 import pinocchio as pin
 
-from ..analysis.sensitivity import SensitivityEvaluator
-from ..kinematics.hexapod import Hexapod
+from ...analysis.sensitivity import SensitivityEvaluator
+from ...kinematics.hexapod import Hexapod
+from ..config.cell import InRobot
+from ..config.settings import FixtureConfig
+from ..record.pose import pose_record, quaternion
+from ..store.fixture_store import LockEvent
+from ..targets.guidance import deviation, within
+from ..targets.target import Target
 from .alarms import UNACKNOWLEDGED, Acknowledgement, FaultLatch, LatchedFault
-from .cell import InRobot
-from .config import FixtureConfig
-from .guidance import deviation, within
-from .load import lock_load
-from .pose import pose_record, quaternion
-from .solve import PoseSolver, SolveOutcome
-from .state import MOTION_LEGS, LockDetector, StepDetector, StuckDetector
-from .store import LockEvent
-from .targets import Target
+from .lock import MOTION_LEGS, LockDetector
+from .lock_load import lock_load
+from .solver import PoseSolver, SolveOutcome
+from .steps import StepDetector
+from .stuck import StuckDetector
 
 log = logging.getLogger(__name__)
 RECORD_KEYS = (
@@ -76,7 +78,7 @@ class FixtureCycle:
         recovered: the last stored lock event of this fixture, or None.
         t0: start time (s, Unix), the ``t`` of the first ``no_data`` record.
         sensitivity: an evaluator of ``hexa`` shared with the other cycles run on the same thread
-            (default: one of its own; see :class:`~hexapod_model.service.solve.PoseSolver`).
+            (default: one of its own; see :class:`~hexapod_model.service.cycle.solver.PoseSolver`).
     """
 
     def __init__(
@@ -133,7 +135,7 @@ class FixtureCycle:
         self._check_moved = self.recovered is not None
         initial = None if self.recovered is None else self.recovered.q
         self.solver = PoseSolver(hexa, cfg.noise, cfg.predictor, initial, cfg.confirm_samples, sensitivity)
-        #: the changeover target (set by :class:`~hexapod_model.service.changeover.Changeover`): a lock
+        #: the changeover target (set by :class:`~hexapod_model.service.changeover.changeover.Changeover`): a lock
         #: pose within its tolerance is stored naming it
         self.target: Target | None = None
         #: the lock to commit: the service takes it, stores it and calls :meth:`lock_stored`
@@ -251,7 +253,7 @@ class FixtureCycle:
 
     @property
     def fault(self) -> LatchedFault | None:
-        """The fault waiting for an acknowledgement (:mod:`~hexapod_model.service.alarms`)."""
+        """The fault waiting for an acknowledgement (:mod:`~hexapod_model.service.cycle.alarms`)."""
         return self.alarm.fault
 
     @property

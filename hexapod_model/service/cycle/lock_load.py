@@ -11,10 +11,10 @@ import logging
 
 import numpy as np
 
-from ..analysis.statics import loads_at
-from ..exceptions import SingularityError
-from ..kinematics.hexapod import Hexapod
-from .config import FixtureConfig
+from ...analysis.statics import loads_at
+from ...exceptions import SingularityError
+from ...kinematics.hexapod import Hexapod
+from ..config.settings import FixtureConfig
 
 log = logging.getLogger(__name__)
 

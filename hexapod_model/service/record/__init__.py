@@ -1,0 +1,1 @@
+"""The record a fixture's cycle publishes for each reading set, and its pose values."""
