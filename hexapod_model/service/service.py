@@ -28,7 +28,7 @@ from ..tracking.tracker import characteristic_length
 from .changeover.changeover import Changeover
 from .config.settings import ServiceConfig, geometry_hash
 from .cycle.alarms import Acknowledgement
-from .cycle.bus import open_bus, receiver
+from .cycle.bus import open_bus
 from .cycle.fixture_cycle import FixtureCycle
 from .cycle.solver import warm_up
 from .errors import ServiceError
@@ -86,7 +86,7 @@ class FixtureService:
         self.cycles: dict[str, FixtureCycle] = {}
         self.endpoint: HttpServer | None = None
         self.store: Store | None = None
-        #: targets, recipes and guidance (:class:`~hexapod_model.service.changeover.changeover.Changeover`), once started
+        #: targets, recipes and guidance (:class:`~hexapod_model.service.changeover.Changeover`), once started
         self.changeover: Changeover | None = None
         self.writer: StoreWriter | None = None
         self.frames = self.unknown_frames = 0
@@ -337,7 +337,7 @@ class FixtureService:
     def _loop(self) -> None:
         assert self._bus is not None
         tick = min(0.05, max(0.002, min(f.staleness for f in self.config.fixtures) / 2))
-        routes, recv, last_check = self._routes, receiver(self._bus), time.time()
+        routes, recv, last_check = self._routes, self._bus.recv, time.time()
         while not self._stop.is_set():
             try:
                 msg = recv(tick)

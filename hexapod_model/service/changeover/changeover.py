@@ -16,6 +16,7 @@ fixture or recipe raises :class:`UnknownError`.
 
 from __future__ import annotations
 
+import json
 import logging
 import threading
 import time
@@ -63,6 +64,8 @@ class Changeover:
         self.store, self.hexapods, self.cycles, self.clock = store.targets, hexapods, cycles, clock
         self._write = threading.Lock()  # one write at a time: store row and cycle target change together
         self._targets: dict[str, Target] = {}
+        #: ``GET /recipes``' entry of each recipe, with the stored row it was made from
+        self._recipe_json: dict[str, tuple[tuple[str, str, float], dict[str, Any]]] = {}
         self.problems: dict[str, str] = {}  # stored targets that no longer solve (geometry changed)
         self._active = self.store.active()  # (name, set_by, set_at) of the active recipe, kept here
         for name, row in self.store.current_targets().items():
@@ -136,14 +139,23 @@ class Changeover:
         active = self._active
         recipes = {}
         for name, (body, who, at) in self.store.recipes().items():
-            try:
-                recipes[name] = recipe_from_json(body, name, self.hexapods, who, at).to_json()
-            except TargetError as exc:  # a fixture gone from the configuration, or out of its workspace now
-                recipes[name] = {**body, "set_by": who, "set_at": at, "problem": str(exc)}
+            key = (json.dumps(body, sort_keys=True), who, at)  # a name's newest row: its text, author and time
+            hit = self._recipe_json.get(name)
+            if hit is None or hit[0] != key:  # solved once per stored row: the hexapods do not change
+                hit = (key, self._recipe_entry(name, body, who, at))
+                self._recipe_json[name] = hit
+            recipes[name] = hit[1]
         return {
             "active": None if active is None else dict(zip(("name", "set_by", "set_at"), active)),
             "recipes": recipes,
         }
+
+    def _recipe_entry(self, name: str, body: dict, who: str, at: float) -> dict[str, Any]:
+        """A stored recipe's JSON as ``GET /recipes`` lists it (its targets solved), or with its ``problem``."""
+        try:
+            return recipe_from_json(body, name, self.hexapods, who, at).to_json()
+        except TargetError as exc:  # a fixture gone from the configuration, or out of its workspace now
+            return {**body, "set_by": who, "set_at": at, "problem": str(exc)}
 
     def activate(self, name: str, by: str) -> Recipe:
         """Make recipe ``name`` active: its targets become its fixtures' targets (one transaction)."""

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 import can
@@ -31,21 +30,3 @@ def open_bus(config: ServiceConfig, receive: bool = True) -> can.BusABC:
         return can.Bus(interface=b.interface, channel=b.channel, can_filters=filters, **kwargs)
     except (can.CanError, OSError, ImportError, ValueError) as exc:
         raise ServiceError(f"bus {b.interface}/{b.channel}: cannot open: {exc}") from None
-
-
-def receiver(bus: can.BusABC) -> Callable[[float], can.Message | None]:
-    """``recv(timeout)`` of ``bus``: its interface's own receive when python-can's wrapper adds nothing.
-
-    ``BusABC.recv`` wraps the interface's ``_recv_internal`` with a software filter test and a
-    debug log call per frame (0.4 us a frame, 2.4 us a reading set); a bus without software
-    filters (kernel filters on SocketCAN, none elsewhere) that keeps that wrapper reads the
-    same frames through ``_recv_internal`` directly. Any other bus: its ``recv``.
-    """
-    internal = getattr(bus, "_recv_internal", None)
-    if type(bus).recv is not can.BusABC.recv or internal is None or getattr(bus, "_filters", None) is not None:
-        return bus.recv
-
-    def recv(timeout: float) -> can.Message | None:
-        return internal(timeout=timeout)[0]
-
-    return recv

@@ -198,7 +198,7 @@ class Simulator:
             hexa = hexapods.get(s.name) or cfg.load_hexapod()
             self._encoders.append(_Encoders(s, cfg, hexa, np.random.default_rng(rng.integers(2**63)), targets))
         self.truth: deque[SentSet] = deque(maxlen=truth)
-        self.frames_sent = self.sets_skipped = 0
+        self.frames_sent = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -264,7 +264,6 @@ class Simulator:
             period = 1.0 / self._encoders[i].sim.rate
             if -wait > period:  # late by more than a period (busy machine): encoders sample on their
                 self._encoders[i].skip(t_sim)  # own clock, so this set is lost, not sent in a burst
-                self.sets_skipped += 1
             else:
                 try:
                     self.send_set(i, t_sim, wall + t_sim)

@@ -28,14 +28,15 @@ import sqlite3
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import TypeVar
 
 import numpy as np
 
 from ..errors import ServiceError
 from .target_tables import TargetStore, migrate
+
+T = TypeVar("T")
 
 log = logging.getLogger(__name__)
 LEGS = ", ".join(f"l{i}" for i in range(1, 7))
@@ -113,7 +114,7 @@ class Store:
         self._file = _identity(self.path)
         self._lock = threading.Lock()
         #: the changeover's targets, recipes and activations
-        self.targets = TargetStore(self)
+        self.targets = TargetStore(self.transaction, self.read)
 
     def _connect(self) -> sqlite3.Connection:
         db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None, timeout=self.timeout)
@@ -147,8 +148,8 @@ class Store:
         self.db.close()
         self.db, self._file = fresh, _identity(self.path)
 
-    def _transaction(self, work: Callable[[], Any]) -> Any:
-        """Run ``work`` in one immediate transaction, committed durably to the file at :attr:`path`.
+    def transaction(self, work: Callable[[sqlite3.Connection], T]) -> T:
+        """Run ``work(connection)`` in one immediate transaction, committed durably to the file at :attr:`path`.
 
         A failed statement's own error is raised (SQLite may have rolled back already: the
         rollback's error never hides it).
@@ -157,7 +158,7 @@ class Store:
             self._same_file()
             self.db.execute("BEGIN IMMEDIATE")
             try:
-                result = work()
+                result = work(self.db)
                 self.db.execute("COMMIT")
             except BaseException:
                 if self.db.in_transaction:
@@ -168,6 +169,11 @@ class Store:
                 raise
             self._same_file()  # deleted between the check and the commit: the backup holds the commit
         return result
+
+    def read(self, sql: str, args: tuple = ()) -> list[tuple]:
+        """The rows of one query (``sql`` with ``args``), under the store's lock."""
+        with self._lock:
+            return self.db.execute(sql, args).fetchall()
 
     def close(self) -> None:
         """Close the connection (the WAL is checkpointed by SQLite)."""
@@ -188,16 +194,16 @@ class Store:
         sql = f"INSERT INTO lock_events (fixture, t, {POSE}, {LEGS}, {_LOCK_TAIL}) VALUES "
         sql += f"({', '.join('?' * len(row))})"
 
-        def work() -> int | None:
+        def work(_: sqlite3.Connection) -> int | None:
             row_id = self.db.execute(sql, row).lastrowid
             self._insert_samples(samples)
             return row_id
 
-        return replace(event, id=self._transaction(work))
+        return replace(event, id=self.transaction(work))
 
     def add_samples(self, samples: Sequence[tuple]) -> None:
         """Append sample rows (``SAMPLE_COLUMNS`` order) and drop the oldest beyond the bound."""
-        self._transaction(partial(self._insert_samples, samples))
+        self.transaction(lambda _: self._insert_samples(samples))
 
     def _insert_samples(self, samples: Sequence[tuple]) -> None:
         if not samples:

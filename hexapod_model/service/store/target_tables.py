@@ -19,10 +19,10 @@ from __future__ import annotations
 
 import json
 import sqlite3
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Protocol, TypeVar
 
 import numpy as np
 
@@ -31,6 +31,14 @@ from ..errors import ServiceError
 from ..targets.target import Recipe, Target, Tolerance
 
 SCHEMA_VERSION = 2
+_T = TypeVar("_T")
+
+
+class Transaction(Protocol):
+    """Runs ``work(connection)`` in one committed transaction and returns what it returns."""
+
+    def __call__(self, work: Callable[[sqlite3.Connection], _T]) -> _T: ...  # noqa: D102
+
 _POSE = ("x", "y", "z", "qx", "qy", "qz", "qw")
 _TABLES = f"""
 CREATE TABLE IF NOT EXISTS targets (
@@ -89,24 +97,25 @@ class TargetStore:
     :class:`~hexapod_model.service.store.fixture_store.Store`); reads hold its lock.
 
     Args:
-        store: the open :class:`~hexapod_model.service.store.fixture_store.Store`.
+        transaction: runs ``work(connection)`` in one committed transaction and returns its result
+            (:meth:`Store.transaction <hexapod_model.service.store.fixture_store.Store.transaction>`).
+        read: the rows of a query ``(sql, args)`` under the store's lock
+            (:meth:`Store.read <hexapod_model.service.store.fixture_store.Store.read>`).
     """
 
-    def __init__(self, store: Any):
-        self._store = store
+    def __init__(self, transaction: Transaction, read: Callable[[str, tuple], list[tuple]]):
+        self._transaction, self._read_rows = transaction, read
 
     def _write(self, statements: Iterable[tuple[str, tuple]]) -> list[int]:
         """Run ``statements`` in one committed transaction; returns each one's ``lastrowid``."""
-        db = self._store
 
-        def work() -> list[int]:
-            return [db.db.execute(sql, args).lastrowid or 0 for sql, args in statements]
+        def work(db: sqlite3.Connection) -> list[int]:
+            return [db.execute(sql, args).lastrowid or 0 for sql, args in statements]
 
-        return db._transaction(work)
+        return self._transaction(work)
 
     def _read(self, sql: str, args: tuple = ()) -> list[tuple]:
-        with self._store._lock:
-            return self._store.db.execute(sql, args).fetchall()
+        return self._read_rows(sql, args)
 
     @staticmethod
     def _target_row(t: Target) -> tuple[str, tuple]:
@@ -127,8 +136,7 @@ class TargetStore:
             "UPDATE targets SET cleared_by = ?, cleared_at = ? WHERE id = "
             "(SELECT MAX(id) FROM targets WHERE fixture = ?) AND cleared_at IS NULL"
         )
-        db = self._store
-        return db._transaction(lambda: db.db.execute(sql, (by, float(at), fixture)).rowcount) > 0
+        return self._transaction(lambda db: db.execute(sql, (by, float(at), fixture)).rowcount) > 0
 
     def current_targets(self) -> dict[str, StoredTarget]:
         """Each fixture's current target (its newest row, when not cleared)."""
