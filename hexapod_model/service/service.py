@@ -19,7 +19,7 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from functools import partial
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import can
 
@@ -38,6 +38,9 @@ from .store.fixture_store import Store
 from .store.writer import StoreWriter
 
 if TYPE_CHECKING:
+    from starlette.routing import BaseRoute
+
+    from ..kinematics.hexapod import Hexapod
     from .http.server import HttpServer
 
 log = logging.getLogger(__name__)
@@ -62,8 +65,8 @@ class FixtureService:
         config: ServiceConfig,
         bus: can.BusABC | None = None,
         http: bool = True,
-        hexapods: dict | None = None,
-        routes: Sequence[Any] = (),
+        hexapods: dict[str, Hexapod] | None = None,
+        routes: Sequence[BaseRoute] = (),
     ):
         self.config = config
         #: the fixtures' hexapods, by name: those given, the others loaded by :meth:`start`
@@ -143,7 +146,7 @@ class FixtureService:
         """Hexapods, store, recovered locks, kernels; then the store writer and the cycle thread."""
         cfg = self.config
         self.phase = "loading the hexapods"
-        loaded: dict[str, Any] = {}  # fixtures naming one file share its hexapod (a model is ~6 MB)
+        loaded: dict[str, Hexapod] = {}  # fixtures naming one file share its hexapod (a model is ~6 MB)
         for f in cfg.fixtures:
             if f.name not in self.hexapods:
                 if f.hexapod not in loaded:

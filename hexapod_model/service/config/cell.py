@@ -21,7 +21,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -78,18 +77,21 @@ class InRobot:
         self.cell, self.noise, self.propagation = cell, noise, propagation
         self._cached: tuple[np.ndarray, float] | None = None  # (pose, coupling translation sigma m)
 
-    def record(self, outcome: Any, sigma: dict | None) -> dict:
-        """``{"pose", "sigma"}`` for a solved ``outcome`` (``pose``, ``q``) with the record's ``sigma``."""
+    def record(self, pose: np.ndarray, q: np.ndarray | None, sigma: dict | None) -> dict:
+        """``{"pose", "sigma"}`` for a solved ``pose`` (4x4 base -> platform, m) at configuration ``q``.
+
+        ``sigma`` is the record's (``translation_mm``, ``rotation_deg``; None without one).
+        """
         cell = self.cell
-        out: dict = {"pose": pose_record(cell.pose_in_robot(outcome.pose)), "sigma": None}
-        if sigma is None or outcome.q is None:
+        out: dict = {"pose": pose_record(cell.pose_in_robot(pose)), "sigma": None}
+        if sigma is None or q is None:
             return out
         translation = sigma["translation_mm"] * 1e-3
         if np.any(cell.offset != 0.0):  # the coupling's origin moves with the platform's rotation error too
             cached = self._cached
-            if cached is None or not _near(cached[0], outcome.pose):
-                X = self.propagation(outcome.q)
-                self._cached = cached = (outcome.pose.copy(), cell.translation_sigma(X, self.noise))
+            if cached is None or not _near(cached[0], pose):
+                X = self.propagation(q)
+                self._cached = cached = (pose.copy(), cell.translation_sigma(X, self.noise))
             translation = cached[1]
         out["sigma"] = {"translation_mm": translation * 1e3, "rotation_deg": sigma["rotation_deg"]}
         return out

@@ -387,7 +387,7 @@ class FixtureCycle:
             flags.extend(self.fault.flags())
             if status in _POSE_STATUSES:
                 status = UNACKNOWLEDGED
-        pose = sigma = margin = None
+        pose = sigma = margin = in_robot = None
         if outcome is not None and outcome.pose is not None and outcome.uncertainty is not None:
             u = outcome.uncertainty
             pose = pose_record(outcome.pose)
@@ -397,6 +397,8 @@ class FixtureCycle:
             elif status == "ok":
                 status = "flagged"
                 flags.append("near_singular")
+            if self._in_robot is not None:
+                in_robot = self._in_robot.record(outcome.pose, outcome.q, sigma)
         old, readings = t - self.cfg.staleness, self._readings
         total = sum(readings)  # NaN when a reading is (readings are finite otherwise)
         if total == total and min(self._t) >= old:  # every reading fresh: the common case
@@ -417,7 +419,7 @@ class FixtureCycle:
             "sigma": sigma,
             "singularity_margin": margin,
             "load": self._load if locked else None,
-            "pose_in_robot": None if pose is None or self._in_robot is None else self._in_robot.record(outcome, sigma),
+            "pose_in_robot": in_robot,
         }
         self.last_q = None if pose is None else outcome.q  # type: ignore[union-attr]
         self.last = record

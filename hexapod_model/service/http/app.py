@@ -44,6 +44,7 @@ from starlette.routing import BaseRoute, Route
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from ..config.token import bearer_matches
+from .view import ServiceView
 
 log = logging.getLogger(__name__)
 Endpoint = Callable[[Request], Awaitable[Response]]
@@ -63,7 +64,7 @@ def error_response(status: int, message: str, headers: Mapping[str, str] | None 
     return json_response({"error": message, **extra}, status, headers)
 
 
-def service_of(request: Request) -> Any:
+def service_of(request: Request) -> ServiceView:
     """The :class:`~hexapod_model.service.service.FixtureService` behind the application."""
     return request.app.state.service
 
@@ -170,7 +171,7 @@ def _static(path: str) -> bool:
 class _Gate:
     """ASGI middleware: ``503 starting`` before the service is ready, the read token, no traceback out."""
 
-    def __init__(self, app: ASGIApp, service: Any):
+    def __init__(self, app: ASGIApp, service: ServiceView):
         self.app, self.service = app, service
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
@@ -180,9 +181,11 @@ class _Gate:
         refusal = None
         if not self.service.ready:
             refusal = json_response(self.service.starting(), 503, {"Retry-After": "1"})
-        elif self.service.config.http.reads_need_token and not _static(scope.get("path", "")):
+        elif (token := self.service.config.http.token) is not None and self.service.config.http.reads_need_token:
             headers = dict(scope.get("headers") or [])
-            if not bearer_matches(headers.get(b"authorization", b"").decode("latin-1"), self.service.config.http.token):
+            if not _static(scope.get("path", "")) and not bearer_matches(
+                headers.get(b"authorization", b"").decode("latin-1"), token
+            ):
                 refusal = _unauthorized()
         if refusal is not None:
             if scope["type"] == "websocket":
@@ -214,7 +217,7 @@ async def _http_error(request: Request, exc: Exception) -> Response:
     return error_response(exc.status_code, str(exc.detail), exc.headers)
 
 
-def build_app(service: Any, routes: Sequence[BaseRoute] = ()) -> Starlette:
+def build_app(service: ServiceView, routes: Sequence[BaseRoute] = ()) -> Starlette:
     """The Starlette application of ``service``: its endpoints, then ``routes`` (yours).
 
     ``app.state.service`` is the service (:func:`service_of` in an endpoint).

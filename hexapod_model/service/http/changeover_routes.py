@@ -24,11 +24,12 @@ from importlib import resources
 from typing import Any
 
 from starlette.concurrency import run_in_threadpool
+from starlette.exceptions import HTTPException
 from starlette.requests import Request
 from starlette.responses import Response, StreamingResponse
 from starlette.routing import BaseRoute, Route
 
-from ..changeover.changeover import UnknownError
+from ..changeover.changeover import Changeover, UnknownError
 from ..targets.target import Target, TargetError
 from .app import error_response, json_response, read_json, requires_token, service_of
 
@@ -51,9 +52,17 @@ def _who(request: Request, body: dict | None = None) -> str:
     return f"{operator} ({client})" if operator and _OPERATOR.match(operator) else client
 
 
-async def _call(request: Request, work: Callable[[Any], Any]) -> Response:
-    """``work(changeover)`` off the event loop (store commits fsync), its JSON-ready result; errors as JSON."""
+def _changeover(request: Request) -> Changeover:
+    """The service's changeover (there once the service is ready, which the application checks first)."""
     changeover = service_of(request).changeover
+    if changeover is None:
+        raise HTTPException(503, "starting")
+    return changeover
+
+
+async def _call(request: Request, work: Callable[[Changeover], Any]) -> Response:
+    """``work(changeover)`` off the event loop (store commits fsync), its JSON-ready result; errors as JSON."""
+    changeover = _changeover(request)
     try:
         result = await run_in_threadpool(work, changeover)
     except TargetError as exc:
@@ -67,7 +76,7 @@ def _target_json(target: Target | None) -> dict[str, Any]:
     return {"target": None if target is None else target.to_json()}
 
 
-async def _write(request: Request, work: Callable[[Any, dict, str], Any]) -> Response:
+async def _write(request: Request, work: Callable[[Changeover, dict, str], Any]) -> Response:
     """A write with a JSON body: ``work(changeover, body, who)`` (``by`` taken out of the body)."""
     body = await read_json(request)
     try:
@@ -125,7 +134,7 @@ async def _recipes(request: Request) -> Response:
 
 
 async def _events(request: Request) -> StreamingResponse:
-    changeover = service_of(request).changeover
+    changeover = _changeover(request)
 
     async def stream():
         yield "retry: 1000\n\n"

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .view import ServiceView
 
 
-def health(service: Any) -> dict:
+def health(service: ServiceView) -> dict:
     """Service state: ``ok`` or ``degraded``, with every problem as one line in ``problems``.
 
     Degraded: a store error, the cycle stopped, a fixture whose latest record is not ``ok``

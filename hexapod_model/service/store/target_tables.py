@@ -39,6 +39,7 @@ class Transaction(Protocol):
 
     def __call__(self, work: Callable[[sqlite3.Connection], _T]) -> _T: ...  # noqa: D102
 
+
 _POSE = ("x", "y", "z", "qx", "qy", "qz", "qw")
 _TABLES = f"""
 CREATE TABLE IF NOT EXISTS targets (
