@@ -17,6 +17,7 @@ from ..exceptions import HexapodError
 from ..extras import require_extra
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.rotations import quaternion_to_matrix
+from ..service.record.pose_record import PoseRecord
 from ._common import note
 
 FRAME_S = 0.05  # the view's refresh period
@@ -36,7 +37,7 @@ def pose_of_record(record: dict | None) -> np.ndarray | None:
 
 def live_view(
     hexa: Hexapod,
-    latest: Callable[[], dict | None],
+    latest: Callable[[], dict | PoseRecord | None],
     stop: threading.Event,
     deadline: float | None = None,
     count: int | None = None,
@@ -59,6 +60,8 @@ def live_view(
         print(f"meshcat: {vis.url()}", flush=True)
         while not stop.is_set() and (deadline is None or time.monotonic() < deadline) and shown != count:
             rec = latest()
+            if isinstance(rec, PoseRecord):  # the service's own (else the JSON object of GET .../pose)
+                rec = rec.to_dict()
             T = pose_of_record(rec)
             if T is not None and rec is not None and rec["t"] != last_t:
                 last_t = rec["t"]

@@ -11,7 +11,7 @@ Public API::
 
     from hexapod_model.service import FixtureService, load_config
     svc = FixtureService(load_config("fixture.toml")).start()
-    svc.record("left")      # the latest record (dict), also GET /fixtures/left/pose
+    svc.record("left")      # the latest record (a PoseRecord), also GET /fixtures/left/pose
     svc.changeover.set_target("left", {"pose": {...}, "tolerance": {...}}, by="anna")
     svc.changeover.guidance("left")   # deviation, per-leg changes; docs/changeover.md
     svc.stop()
@@ -31,10 +31,11 @@ from .config.settings import (
     load_config,
 )
 from .cycle.bus import open_bus
-from .cycle.fixture_cycle import RECORD_KEYS, FixtureCycle
+from .cycle.fixture_cycle import FixtureCycle
 from .cycle.solver import PoseSolver, SolveOutcome, Uncertainty
 from .errors import ConfigError, FrameError, ServiceError
 from .http.client import RequestError, ServiceClient
+from .record.pose_record import RECORD_KEYS, PoseRecord
 from .service import FixtureService
 from .sim.config import Fault, SimConfig, SimFixture, load_simulation, simulation_from_dict
 from .sim.simulator import SentSet, Simulator
@@ -58,6 +59,7 @@ __all__ = [
     "LegCodec",
     "Located",
     "LockEvent",
+    "PoseRecord",
     "PoseSolver",
     "RECORD_KEYS",
     "Recipe",

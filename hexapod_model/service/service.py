@@ -2,7 +2,7 @@
 
 >>> from hexapod_model.service import FixtureService, load_config
 >>> with FixtureService(load_config("fixture.toml")) as svc:   # doctest: +SKIP
-...     svc.subscribe(print)          # every published record (a dict)
+...     svc.subscribe(print)          # every published record (a PoseRecord)
 ...     svc.record("left")            # the latest one; also GET /fixtures/left/pose
 
 Threads: one reads the bus and runs every fixture's cycle (so a record is published within the
@@ -13,7 +13,6 @@ and the HTTP server's. Subscribers run on the bus thread: keep them short.
 from __future__ import annotations
 
 import gc
-import json
 import logging
 import threading
 import time
@@ -33,8 +32,8 @@ from .cycle.fixture_cycle import FixtureCycle
 from .cycle.solver import warm_up
 from .errors import ServiceError
 from .http.health import health
-from .record.pose import sample_row
-from .store.fixture_store import Store
+from .record.pose_record import PoseRecord
+from .store.fixture_store import Store, sample_row
 from .store.writer import StoreWriter
 
 if TYPE_CHECKING:
@@ -44,7 +43,6 @@ if TYPE_CHECKING:
     from .http.server import HttpServer
 
 log = logging.getLogger(__name__)
-Record = dict
 
 
 class FixtureService:
@@ -80,10 +78,10 @@ class FixtureService:
         self.phase = "starting"
         #: the error that stopped a background start (``start(wait=False)``), else None
         self.failure: Exception | None = None
-        self._subscribers: list[Callable[[Record], None]] = []
+        self._subscribers: list[Callable[[PoseRecord], None]] = []
         #: more ``/health`` sections by name, each a dict (one whose ``error`` is not None: ``degraded``)
         self.health_sections: dict[str, Callable[[], dict]] = {}
-        self._json: dict[str, tuple[Record, str]] = {}
+        self._json: dict[str, tuple[PoseRecord, str]] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.cycles: dict[str, FixtureCycle] = {}
@@ -292,7 +290,7 @@ class FixtureService:
         return None if self.endpoint is None else self.endpoint.address
 
     # ----- outputs -----
-    def subscribe(self, callback: Callable[[Record], None]) -> None:
+    def subscribe(self, callback: Callable[[PoseRecord], None]) -> None:
         """Call ``callback(record)`` for every published record (on the cycle thread)."""
         self._subscribers.append(callback)
 
@@ -300,7 +298,7 @@ class FixtureService:
         """Fixture names, configuration order."""
         return [f.name for f in self.config.fixtures]
 
-    def record(self, name: str) -> Record | None:
+    def record(self, name: str) -> PoseRecord | None:
         """The latest record of fixture ``name`` (None for an unknown name)."""
         cycle = self.cycles.get(name)
         return None if cycle is None else cycle.last
@@ -310,13 +308,13 @@ class FixtureService:
         cycle = self.cycles.get(name)
         return None if cycle is None else self.json_of(cycle.last)
 
-    def json_of(self, rec: Record) -> str:
-        """``json.dumps(rec, allow_nan=False)``, made once per record (HTTP and JSON lines share it)."""
-        name = rec["fixture"]
+    def json_of(self, rec: PoseRecord) -> str:
+        """The record's JSON text (:meth:`PoseRecord.to_json`), made once per record (HTTP and JSON lines share it)."""
+        name = rec.fixture
         hit = self._json.get(name)
         if hit is not None and hit[0] is rec:  # the record itself is kept: its id cannot be reused
             return hit[1]
-        text = json.dumps(rec, allow_nan=False)
+        text = rec.to_json()
         self._json[name] = (rec, text)  # one entry per fixture; a race only serialises twice
         return text
 
@@ -368,16 +366,16 @@ class FixtureService:
                     if rec is not None:
                         self._publish(cycle, rec)
 
-    def _publish(self, cycle: FixtureCycle, rec: Record) -> None:
+    def _publish(self, cycle: FixtureCycle, rec: PoseRecord) -> None:
         writer = self.writer
         assert writer is not None
         if cycle.pending_lock is not None:
             episode, event = cycle.pending_lock
             cycle.pending_lock = None
             writer.lock(event, partial(cycle.lock_stored, episode))
-        name = rec["fixture"]
-        if rec["t"] - self._last_logged[name] >= self.config.store.sample_interval:
-            self._last_logged[name] = rec["t"]
+        name = rec.fixture
+        if rec.t - self._last_logged[name] >= self.config.store.sample_interval:
+            self._last_logged[name] = rec.t
             writer.sample(sample_row(rec))
         for callback in self._subscribers:
             try:

@@ -11,7 +11,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from hexapod_model.service import Changeover, Store, UnknownError
+from hexapod_model.service import Changeover, PoseRecord, Store, UnknownError
 from hexapod_model.service.store.target_tables import SCHEMA_VERSION
 from hexapod_model.service.targets.target import TargetError, parse_pose, recipe_from_json, target_from_json
 
@@ -179,9 +179,8 @@ def test_a_stored_target_that_no_longer_solves_is_not_used_and_guidance_says_why
     far = good.pose.copy()
     far[2, 3] = 0.6  # e.g. after a change to a shorter-stroke geometry: outside the workspace now
     store.targets.add_target(replace(good, fixture="left", pose=far))
-    record = {"fixture": "left", "t": 1.0, "readings": [0.0] * 6, "pose": None, "status": "no_data", "flags": []}
-    record |= {"state": "moving", "stored": False, "sigma": None}
-    cycles = {name: SimpleNamespace(target=None, last={**record, "fixture": name}) for name in ("left", "right")}
+    record = PoseRecord("left", 1.0, [0.0] * 6, None, "no_data", [], 0, "moving", False, None, None, None, None)
+    cycles = {name: SimpleNamespace(target=None, last=replace(record, fixture=name)) for name in ("left", "right")}
     changeover = Changeover(store, {"left": hexapod("reference"), "right": hexapod("reference")}, cycles)  # type: ignore[arg-type]
     assert changeover.target("left") is None and cycles["left"].target is None
     g = changeover.guidance("left")

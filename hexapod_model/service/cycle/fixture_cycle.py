@@ -37,6 +37,7 @@ from ...kinematics.hexapod import Hexapod
 from ..config.cell import InRobot
 from ..config.settings import FixtureConfig
 from ..record.pose import pose_record, quaternion
+from ..record.pose_record import PoseRecord
 from ..store.fixture_store import LockEvent
 from ..targets.guidance import deviation, within
 from ..targets.target import Target
@@ -48,21 +49,6 @@ from .steps import StepDetector
 from .stuck import StuckDetector
 
 log = logging.getLogger(__name__)
-RECORD_KEYS = (
-    "fixture",
-    "t",
-    "readings",
-    "pose",
-    "status",
-    "flags",
-    "iterations",
-    "state",
-    "stored",
-    "sigma",
-    "singularity_margin",
-    "load",
-    "pose_in_robot",
-)
 _POSE_STATUSES = ("ok", "flagged", "drift")
 CLOCK_BACK_FRAMES = 12  # late frames in a row (two sets, no frame on time): the bus's clock went back
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
@@ -121,8 +107,6 @@ class FixtureCycle:
         self._advisory: set[str] = set()
         self._episode = self._stored_episode = 0
         self._new_lock_stored = False
-        #: the configuration ``q`` of the latest record's pose (None without a pose): its passive joints
-        self.last_q: np.ndarray | None = None
         self._load: dict | None = None  # the process wrench's loads at the lock pose
         self.recovered: LockEvent | None = None
         self.recovery = "no stored lock pose"
@@ -141,10 +125,11 @@ class FixtureCycle:
         #: the lock to commit: the service takes it, stores it and calls :meth:`lock_stored`
         self.pending_lock: tuple[int, LockEvent] | None = None
         self._in_robot = None if cfg.cell is None else InRobot(cfg.cell, cfg.noise, self.solver.propagation)
-        self.last: dict = self._record(t0, "no_data", [], None)
+        #: the latest record
+        self.last: PoseRecord = self._record(t0, "no_data", [], None)
 
     # ----- input -----
-    def on_frame(self, leg: int, data: bytes | bytearray, t: float) -> dict | None:
+    def on_frame(self, leg: int, data: bytes | bytearray, t: float) -> PoseRecord | None:
         """A frame of leg ``leg`` (0-based) stamped ``t`` (s); returns a record when one is published.
 
         A set holds frames of one sampling instant: within ``max_skew`` of its first frame. A
@@ -212,7 +197,7 @@ class FixtureCycle:
         self._late.clear()
         self.lock.restart_clock(t)
 
-    def _close_incomplete(self) -> dict:
+    def _close_incomplete(self) -> PoseRecord:
         """Publish the unfinished set: ``silent_leg`` when a missing leg is stale, else what went wrong."""
         t = self._t_newest
         missing = [k for k in range(6) if not self._fresh[k]]
@@ -236,9 +221,9 @@ class FixtureCycle:
             self._late.clear()
         return flags
 
-    def check_silence(self, now: float) -> dict | None:
+    def check_silence(self, now: float) -> PoseRecord | None:
         """Publish ``silent_leg`` when nothing was published for ``staleness`` and a leg is silent."""
-        if now - self.last["t"] <= self.cfg.staleness:
+        if now - self.last.t <= self.cfg.staleness:
             return None
         silent = [k for k in range(6) if now - self._t[k] > self.cfg.staleness]
         if not silent:
@@ -270,7 +255,7 @@ class FixtureCycle:
         return self.alarm.request(by, client, note, now)
 
     # ----- one set -----
-    def _complete(self, t: float) -> dict:
+    def _complete(self, t: float) -> PoseRecord:
         steps, dt = 1 + self._lost, t - self._t_set  # instants since the last set: lost sets count
         if dt > 0.0 and self._period > 0.0:  # (False for NaN)
             steps = max(steps, round(dt / self._period))
@@ -372,10 +357,10 @@ class FixtureCycle:
         log.info("fixture %s: locked", self.cfg.name)
 
     # ----- records -----
-    def _failure(self, t: float, status: str, flags: list[str]) -> dict:
+    def _failure(self, t: float, status: str, flags: list[str]) -> PoseRecord:
         return self._record(t, status, flags, None)
 
-    def _record(self, t: float, status: str, flags: list[str], outcome: SolveOutcome | None) -> dict:
+    def _record(self, t: float, status: str, flags: list[str], outcome: SolveOutcome | None) -> PoseRecord:
         if self._new_lock_stored:
             self._new_lock_stored = False
             self._advisory -= {"moved_while_off", "stored_geometry_changed"}
@@ -406,22 +391,23 @@ class FixtureCycle:
         else:
             fresh = [None if v != v or self._t[k] < old else v for k, v in enumerate(readings)]  # v != v: NaN
         locked = self.lock.state == "locked"
-        record = {
-            "fixture": self.cfg.name,
-            "t": t,
-            "readings": fresh,
-            "pose": pose,
-            "status": status,
-            "flags": flags,
-            "iterations": 0 if outcome is None else outcome.iterations,
-            "state": self.lock.state,
-            "stored": locked and self._stored_episode == self._episode,
-            "sigma": sigma,
-            "singularity_margin": margin,
-            "load": self._load if locked else None,
-            "pose_in_robot": in_robot,
-        }
-        self.last_q = None if pose is None else outcome.q  # type: ignore[union-attr]
+        record = PoseRecord(
+            self.cfg.name,
+            t,
+            fresh,
+            pose,
+            status,
+            flags,
+            0 if outcome is None else outcome.iterations,
+            self.lock.state,
+            locked and self._stored_episode == self._episode,
+            sigma,
+            margin,
+            self._load if locked else None,
+            in_robot,
+            None if pose is None else outcome.pose,  # type: ignore[union-attr]
+            None if pose is None else outcome.q,  # type: ignore[union-attr]
+        )
         self.last = record
         return record
 

@@ -21,20 +21,20 @@ def health(service: ServiceView) -> dict:
     for name, c in service.cycles.items():
         rec = c.last
         fixtures[name] = {
-            "status": rec["status"],
-            "flags": rec["flags"],
-            "state": rec["state"],
-            "stored": rec["stored"],
-            "age_s": now - rec["t"],
+            "status": rec.status,
+            "flags": rec.flags,
+            "state": rec.state,
+            "stored": rec.stored,
+            "age_s": now - rec.t,
             "recovery": c.recovery,
             "recovered_t": None if c.recovered is None else c.recovered.t,
             "fault": None if c.fault is None else c.fault.describe(),
             "acknowledged": None if c.acknowledged is None else c.acknowledged.describe(),
             "counters": dict(c.counters),
         }
-        if rec["status"] != "ok":
-            problems.append(f"{name}: {rec['status']}" + (f" ({', '.join(rec['flags'])})" if rec["flags"] else ""))
-        if c.fault is not None and rec["status"] != "unacknowledged_fault":
+        if rec.status != "ok":
+            problems.append(f"{name}: {rec.status}" + (f" ({', '.join(rec.flags)})" if rec.flags else ""))
+        if c.fault is not None and rec.status != "unacknowledged_fault":
             problems.append(f"{name}: {', '.join(c.fault.flags())} waits for an acknowledgement")
     store_error = None if service.writer is None else service.writer.error
     if store_error is not None:

@@ -1,4 +1,4 @@
-"""A record's pose values from a 4x4 pose, in plain floats (the cycle's per-record conversion), and its store row.
+"""A record's pose values from a 4x4 pose, in plain floats (the cycle's per-record conversion).
 
 :func:`quaternion` is Eigen's rotation-matrix-to-quaternion conversion (the one
 ``pin.Quaternion(R)`` runs, the same operations in the same order, so the same bits) on
@@ -8,9 +8,7 @@ conversion.
 
 from __future__ import annotations
 
-import json
 import math
-from operator import itemgetter
 
 import numpy as np
 import pinocchio as pin
@@ -51,23 +49,3 @@ def pose_record(T: np.ndarray) -> dict[str, float]:
     rpy = [math.degrees(a) for a in pin.rpy.matrixToRpy(R).tolist()]  # np.degrees' product, without its dispatch
     values = T[:3, 3].tolist() + quaternion(R) + rpy
     return dict(zip(POSE_KEYS, values))
-
-
-def sample_row(rec: dict) -> tuple:
-    """A record as a row of the store's ``samples`` table."""
-    pose, flags = rec["pose"], rec["flags"]
-    pose_values = _NO_POSE if pose is None else _pose_columns(pose)
-    return (
-        rec["fixture"],
-        rec["t"],
-        rec["status"],
-        json.dumps(flags) if flags else "[]",  # json.dumps([]): most records carry no flag
-        rec["state"],
-        *rec["readings"],
-        *pose_values,
-    )
-
-
-_POSE_COLUMNS = ("x", "y", "z", "qx", "qy", "qz", "qw")
-_pose_columns = itemgetter(*_POSE_COLUMNS)
-_NO_POSE = (None,) * 7

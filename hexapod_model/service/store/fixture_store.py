@@ -28,12 +28,14 @@ import sqlite3
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from operator import itemgetter
 from pathlib import Path
 from typing import TypeVar
 
 import numpy as np
 
 from ..errors import ServiceError
+from ..record.pose_record import PoseRecord
 from .target_tables import TargetStore, migrate
 
 T = TypeVar("T")
@@ -43,6 +45,24 @@ LEGS = ", ".join(f"l{i}" for i in range(1, 7))
 POSE = "x, y, z, qx, qy, qz, qw"
 _LOCK_TAIL = "status, geometry_hash, q, target_id, recipe"
 SAMPLE_COLUMNS = ("fixture", "t", "status", "flags", "state", *LEGS.split(", "), *POSE.split(", "))
+_pose_columns = itemgetter(*POSE.split(", "))
+_NO_POSE = (None,) * 7
+
+
+def sample_row(rec: PoseRecord) -> tuple:
+    """A record as a row of the ``samples`` table (:data:`SAMPLE_COLUMNS` order)."""
+    pose, flags = rec.pose, rec.flags
+    return (
+        rec.fixture,
+        rec.t,
+        rec.status,
+        json.dumps(flags) if flags else "[]",  # json.dumps([]): most records carry no flag
+        rec.state,
+        *rec.readings,
+        *(_NO_POSE if pose is None else _pose_columns(pose)),
+    )
+
+
 _SCHEMA = f"""
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS lock_events (

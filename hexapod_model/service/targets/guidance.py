@@ -19,20 +19,10 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from ..record.pose_record import PoseRecord
 from .target import Target, Tolerance
 
 MARGIN_SIGMAS = 2.0  # the deviation plus this many sigma must fit the tolerance
-
-
-def record_pose(rec: dict) -> np.ndarray | None:
-    """The 4x4 pose of a record (``None`` when it has none)."""
-    p = rec.get("pose")
-    if p is None:
-        return None
-    T = np.eye(4)
-    T[:3, :3] = pin.Quaternion(p["qw"], p["qx"], p["qy"], p["qz"]).normalized().toRotationMatrix()
-    T[:3, 3] = [p["x"], p["y"], p["z"]]
-    return T
 
 
 def deviation(current: np.ndarray, target: np.ndarray) -> dict[str, float]:
@@ -76,24 +66,32 @@ def legs(readings: list[float | None], target: Target) -> list[dict[str, Any]]:
     return out
 
 
-def guidance(rec: dict, target: Target | None, extra: dict[str, Any] | None = None) -> dict[str, Any]:
+def guidance(rec: PoseRecord, target: Target | None, extra: dict[str, Any] | None = None) -> dict[str, Any]:
     """The guidance of one fixture from its latest record and its target (``None``: no target set).
 
     Keys: ``fixture``, ``t``, ``status``, ``state``, ``stored``, ``flags``, ``pose``, ``sigma``,
     ``pose_in_robot`` (the record's), ``target`` (as stored, or ``None``), ``deviation`` (``None`` without a pose or a
     target), ``legs`` (``[]`` without a target), ``in_tolerance``; ``extra`` is merged in.
     """
-    keys = ("fixture", "t", "status", "state", "stored", "flags", "pose", "sigma", "pose_in_robot")
-    out: dict[str, Any] = {k: rec.get(k) for k in keys}
+    out: dict[str, Any] = {
+        "fixture": rec.fixture,
+        "t": rec.t,
+        "status": rec.status,
+        "state": rec.state,
+        "stored": rec.stored,
+        "flags": rec.flags,
+        "pose": rec.pose,
+        "sigma": rec.sigma,
+        "pose_in_robot": rec.pose_in_robot,
+    }
     out.update({"target": None, "deviation": None, "legs": [], "in_tolerance": False})
     if target is not None:
         out["target"] = target.to_json()
-        out["legs"] = legs(rec["readings"] if len(rec["readings"]) == 6 else [None] * 6, target)
-        current = record_pose(rec)
-        if current is not None:
-            dev = deviation(current, target.pose)
+        out["legs"] = legs(rec.readings if len(rec.readings) == 6 else [None] * 6, target)
+        if rec.transform is not None:
+            dev = deviation(rec.transform, target.pose)
             out["deviation"] = dev
-            out["in_tolerance"] = rec["status"] == "ok" and within(dev, rec["sigma"], target.tolerance)
+            out["in_tolerance"] = rec.status == "ok" and within(dev, rec.sigma, target.tolerance)
     if extra:
         out.update(extra)
     return out
