@@ -189,3 +189,23 @@ def test_a_stored_target_that_no_longer_solves_is_not_used_and_guidance_says_why
     with pytest.raises(UnknownError, match="no fixture 'middle'"):
         changeover.guidance("middle")
     store.close()
+
+
+def test_listing_the_recipes_solves_each_stored_recipe_once(tmp_path, monkeypatch):
+    from hexapod_model.service.changeover import changeover as module
+
+    store = Store(tmp_path / "s.sqlite")
+    record = PoseRecord("right", 1.0, [0.0] * 6, None, "no_data", [], 0, "moving", False, None, None, None, None)
+    changeover = Changeover(
+        store, {"right": hexapod("reference")}, {"right": SimpleNamespace(target=None, last=record)}
+    )  # type: ignore[dict-item]
+    changeover.put_recipe("bracket", {"targets": {"right": body()}}, by="anna")
+    solved: list[str] = []
+    original = module.recipe_from_json
+    monkeypatch.setattr(module, "recipe_from_json", lambda *a, **k: solved.append(a[1]) or original(*a, **k))
+    first = changeover.recipes()
+    assert changeover.recipes() == first and solved == ["bracket"]  # the second listing solves nothing
+    changeover.put_recipe("bracket", {"targets": {"right": body(z=0.405)}}, by="bob")  # a new row: solved again
+    again = changeover.recipes()["recipes"]["bracket"]
+    assert solved[-1] == "bracket" and again["set_by"] == "bob" and again != first["recipes"]["bracket"]
+    store.close()
