@@ -70,7 +70,8 @@ class _Encoders:
         self._sol: Solution | None = None
         self._stuck: dict[int, float] = {}
         self._spiked: set[int] = set()
-        self._past: deque[list[can.Message | None]] = deque(maxlen=1001)  # sent sets, newest last (late_frame)
+        #: sent sets, newest last (for late_frame)
+        self.past: deque[list[can.Message | None]] = deque(maxlen=1001)
         self.late: dict[int, int] = {}
         self.duplicate: dict[int, float] = {}
 
@@ -220,7 +221,7 @@ class Simulator:
         for k, m in enumerate(msgs):
             if m is not None and stamp is not None:
                 m.timestamp = stamp + k * FRAME_TIME
-        enc._past.append(list(msgs))
+        enc.past.append(list(msgs))
         order: list[can.Message | None] = []
         for k, m in enumerate(msgs):
             if k in enc.duplicate and m is not None:
@@ -229,7 +230,7 @@ class Simulator:
                 order.append(second)
             order.append(None if k in enc.late else m)
         for k, sets in enc.late.items():  # the frame of `sets` sets ago, with its own stamp, last
-            old = enc._past[-1 - sets][k] if len(enc._past) > sets else None
+            old = enc.past[-1 - sets][k] if len(enc.past) > sets else None
             order.append(old)
             msgs[k] = old
         for m in order:
