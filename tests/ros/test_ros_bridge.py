@@ -7,7 +7,6 @@ import sys
 import time
 import urllib.error
 import urllib.request
-from dataclasses import replace
 
 import can
 import numpy as np
@@ -167,6 +166,6 @@ def test_a_failed_write_is_on_health_until_writing_works_again(tmp_path):
     h = bridge.health()
     assert h["error"] == "DDS write failed: DDS_RETCODE_TIMEOUT" and h["failed_writes"] == 4 and h["published"] == 0
     w.broken = False
-    bridge._publish(replace(rec, t=rec.t + 0.02), service.hexapods["right"].q_home)
+    bridge._publish(rec._replace(t=rec.t + 0.02), service.hexapods["right"].q_home)
     h = bridge.health()
     assert h["error"] is None and h["failed_writes"] == 4 and h["published"] == 3 and len(written) == 3

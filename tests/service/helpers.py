@@ -94,7 +94,8 @@ def pose_error(rec: dict, truth: np.ndarray) -> tuple[float, float]:
 def stored_locks(records, fixture: str = "left") -> set[float]:
     """``t`` of the first record of each lock of ``fixture`` that some record published as stored."""
     out, prev, first = set(), None, None
-    for r in [r for r in list(records) if r.fixture == fixture]:
+    records = [PoseRecord.from_dict(r) if isinstance(r, dict) else r for r in list(records)]  # JSON lines too
+    for r in [r for r in records if r.fixture == fixture]:
         if r.state == "locked" and prev != "locked":
             first = r.t
         if r.state == "locked" and r.stored:

@@ -101,7 +101,7 @@ def test_a_record_without_a_pose_gives_legs_but_no_deviation():
     hexa = hexapod("reference")
     target = target_from_json({"pose": POSE, "tolerance": TOL}, "right", hexa, "anna", 1.0)
     rec = record_at(np.eye(4), [None] * 6, "silent_leg")
-    rec = replace(rec, pose=None, sigma=None, transform=None)
+    rec = rec._replace(pose=None, sigma=None, transform=None)
     g = guidance(rec, target)
     assert g["deviation"] is None and not g["in_tolerance"] and g["legs"][0]["change_mm"] is None
     assert g["legs"][0]["target_mm"] == pytest.approx(target.readings[0] * 1e3)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import FrozenInstanceError, replace
 
 import numpy as np
 import pytest
@@ -55,24 +54,24 @@ def test_the_json_text_is_the_documented_one_key_for_key_and_byte_for_byte():
 
 def test_a_record_round_trips_through_its_json_object_and_text():
     back = PoseRecord.from_dict(json.loads(RECORD.to_json()))
-    assert back == RECORD  # the 4x4 pose and q are not in the JSON (nor compared)
-    assert back.transform is None and back.q is None and back.to_json() == JSON
+    assert back.to_dict() == RECORD.to_dict() and back.to_json() == JSON
+    assert back.transform is None and back.q is None  # the 4x4 pose and q are not in the JSON
 
 
 def test_a_nan_is_never_sent_as_json():
     with pytest.raises(ValueError):
-        replace(RECORD, singularity_margin=math.nan).to_json()
+        RECORD._replace(singularity_margin=math.nan).to_json()
 
 
 def test_the_record_is_frozen():
-    with pytest.raises(FrozenInstanceError):
+    with pytest.raises(AttributeError):
         RECORD.status = "flagged"  # type: ignore[misc]
 
 
 def test_the_store_row_round_trips_through_sqlite(tmp_path):
     row = sample_row(RECORD)
     assert row == ("left", RECORD.t, "ok", '["encoder_warning:leg2"]', "locked", *RECORD.readings, *POSE.values())
-    no_pose = sample_row(replace(RECORD, pose=None, flags=[]))
+    no_pose = sample_row(RECORD._replace(pose=None, flags=[]))
     assert no_pose[3] == "[]" and no_pose[-7:] == (None,) * 7
     with Store(tmp_path / "store.sqlite") as store:
         store.add_samples([row, no_pose])

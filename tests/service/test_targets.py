@@ -180,7 +180,7 @@ def test_a_stored_target_that_no_longer_solves_is_not_used_and_guidance_says_why
     far[2, 3] = 0.6  # e.g. after a change to a shorter-stroke geometry: outside the workspace now
     store.targets.add_target(replace(good, fixture="left", pose=far))
     record = PoseRecord("left", 1.0, [0.0] * 6, None, "no_data", [], 0, "moving", False, None, None, None, None)
-    cycles = {name: SimpleNamespace(target=None, last=replace(record, fixture=name)) for name in ("left", "right")}
+    cycles = {name: SimpleNamespace(target=None, last=record._replace(fixture=name)) for name in ("left", "right")}
     changeover = Changeover(store, {"left": hexapod("reference"), "right": hexapod("reference")}, cycles)  # type: ignore[arg-type]
     assert changeover.target("left") is None and cycles["left"].target is None
     g = changeover.guidance("left")
