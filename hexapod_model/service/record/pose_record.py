@@ -2,8 +2,8 @@
 
 Built once per reading set by the cycle and read by attribute everywhere in the package; turned
 into its JSON object (:meth:`PoseRecord.to_dict`, :meth:`PoseRecord.to_json`) only at the edges
-that send or keep text: HTTP, JSON lines, the MCAP bag. The store's row and the ROS messages are
-made from the attributes. The JSON object's keys, in order, are :data:`RECORD_KEYS`
+that send text: HTTP and JSON lines. The store's row, the ROS messages and the MCAP bag are made
+from the attributes. The JSON object's keys, in order, are :data:`RECORD_KEYS`
 (``docs/service.md`` documents each).
 """
 
