@@ -17,14 +17,14 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from types import SimpleNamespace
 
 from hexapod_model import Hexapod
-from hexapod_model.service.cell import Cell, InRobot, placement
-from hexapod_model.service.guidance import guidance
-from hexapod_model.service.pose import pose_record
-from hexapod_model.service.solve import PoseSolver
-from hexapod_model.service.targets import target_from_json
+from hexapod_model.service.config.cell import Cell, InRobot, placement
+from hexapod_model.service.cycle.solver import PoseSolver
+from hexapod_model.service.record.pose import pose_record
+from hexapod_model.service.record.pose_record import PoseRecord
+from hexapod_model.service.targets.guidance import guidance
+from hexapod_model.service.targets.target import target_from_json
 
 HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]
 BODY = {
@@ -55,14 +55,15 @@ def main() -> None:
     solver = PoseSolver(hexa, 10e-6)
     u = solver.uncertainty(sol.q)
     sigma = {"translation_mm": u.translation * 1e3, "rotation_deg": u.rotation * 57.29577951308232}
-    record = {"fixture": "right", "t": 1.0, "readings": sol.lengths.tolist(), "pose": pose_record(pose)}
-    record |= {"status": "ok", "flags": [], "state": "locked", "stored": True, "sigma": sigma, "pose_in_robot": None}
+    values = pose_record(pose)
+    record = PoseRecord(
+        "right", 1.0, sol.lengths.tolist(), values, "ok", [], 0, "locked", True, sigma, 1.0, None, None, pose
+    )
     target = target_from_json(BODY, "right", hexa, "bench", 0.0)
-    outcome = SimpleNamespace(pose=pose, q=sol.q)
     base = placement([0.8, 0.0, 0.0, 0.0, 0.0, 180.0])
     plain = InRobot(Cell(base, placement([0.0] * 6)), 10e-6, solver.propagation)
     coupled = InRobot(Cell(base, placement([0.0, 0.0, 0.07, 180.0, 0.0, 0.0])), 10e-6, solver.propagation)
-    coupled.record(outcome, sigma)
+    coupled.record(pose, sol.q, sigma)
     n = args.repeat
     rows = [
         (
@@ -70,8 +71,8 @@ def main() -> None:
             per_call(lambda: target_from_json(BODY, "right", hexa, "b", 0.0), n // 10),
         ),
         ("guidance of one fixture", per_call(lambda: guidance(record, target), n)),
-        ("pose_in_robot, coupling at the platform origin", per_call(lambda: plain.record(outcome, sigma), n)),
-        ("pose_in_robot, coupling 70 mm above (sigma reused)", per_call(lambda: coupled.record(outcome, sigma), n)),
+        ("pose_in_robot, coupling at the platform origin", per_call(lambda: plain.record(pose, sol.q, sigma), n)),
+        ("pose_in_robot, coupling 70 mm above (sigma reused)", per_call(lambda: coupled.record(pose, sol.q, sigma), n)),
         ("  its sigma recomputed (the plate moved > 0.5 mm)", per_call(lambda: solver.propagation(sol.q), n // 10)),
         (
             "dashboard event, two fixtures (guidance + JSON)",

@@ -16,12 +16,12 @@ import argparse
 import tempfile
 import time
 from pathlib import Path
-from types import SimpleNamespace
 
 from hexapod_model import Hexapod
 from hexapod_model.ros.dds import QUEUE_LENGTH, RosBridge
 from hexapod_model.service import FixtureService, config_from_dict
-from hexapod_model.service.pose import pose_record
+from hexapod_model.service.record.pose import pose_record
+from hexapod_model.service.record.pose_record import PoseRecord
 
 
 def main(argv=None) -> int:
@@ -48,18 +48,23 @@ def main(argv=None) -> int:
         sol = hexa.inverse(T)
         t0 = time.time()
         records = [
-            {
-                "fixture": "right",
-                "t": t0 + 0.01 * k,
-                "readings": sol.lengths.tolist(),
-                "pose": pose_record(T),
-                "status": "ok",
-                "flags": [],
-                "state": "moving",
-                "stored": False,
-                "sigma": {"translation_mm": 0.025, "rotation_deg": 0.006},
-                "singularity_margin": 0.95,
-            }
+            PoseRecord(
+                "right",
+                t0 + 0.01 * k,
+                sol.lengths.tolist(),
+                pose_record(T),
+                "ok",
+                [],
+                0,
+                "moving",
+                False,
+                {"translation_mm": 0.025, "rotation_deg": 0.006},
+                0.95,
+                None,
+                None,
+                T,
+                sol.q,
+            )
             for k in range(args.records)
         ]
         start = time.thread_time()
@@ -67,7 +72,6 @@ def main(argv=None) -> int:
             bridge._publish(rec, sol.q)
         publish_us = (time.thread_time() - start) / len(records) * 1e6
         # the cycle thread's part: the subscriber call, a burst shorter than the queue
-        service.cycles = {"right": SimpleNamespace(last_q=sol.q)}  # type: ignore[dict-item]
         burst = records[: QUEUE_LENGTH - 100]
         start = time.thread_time()
         for rec in burst:

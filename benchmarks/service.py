@@ -40,7 +40,7 @@ import numpy as np
 
 from hexapod_model import Hexapod
 from hexapod_model.service import FixtureService, PoseSolver, config_from_dict
-from hexapod_model.service.simconfig import trajectory_sequence
+from hexapod_model.service.sim.config import trajectory_sequence
 
 SETS = 2000  # one there-and-back of trajectory A, whatever the rate
 
@@ -105,7 +105,7 @@ def capacity(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, se
     bus = can.Bus(interface="virtual", channel=channel)
     service = FixtureService(config, bus=bus, hexapods={f.name: hexa for f in config.fixtures})
     count = [0]
-    service.subscribe(lambda rec: count.__setitem__(0, count[0] + (rec["status"] != "silent_leg")))
+    service.subscribe(lambda rec: count.__setitem__(0, count[0] + (rec.status != "silent_leg")))
     wall = time.time()
 
     def frames(k0: int, k1: int) -> queue.Queue:
@@ -169,10 +169,10 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
     arrived: dict[tuple[str, float], float] = {}  # (fixture, t of its last frame) -> when it was on the bus
 
     def on_record(rec: dict) -> None:  # runs in the cycle thread
-        sent_at = arrived.get((rec["fixture"], rec["t"]))
-        if rec["pose"] is not None and sent_at is not None:  # a solved set of the measured phase
+        sent_at = arrived.get((rec.fixture, rec.t))
+        if rec.pose is not None and sent_at is not None:  # a solved set of the measured phase
             latencies.append(time.time() - sent_at)
-        statuses[rec["status"]] = statuses.get(rec["status"], 0) + 1
+        statuses[rec.status] = statuses.get(rec.status, 0) + 1
 
     bus = can.Bus(interface="virtual", channel=channel)  # the service's receiving end
     service = FixtureService(config, bus=bus, hexapods={f.name: hexa for f in config.fixtures})

@@ -56,7 +56,7 @@ def _common(p: argparse.ArgumentParser) -> None:
 
 def _client(args: argparse.Namespace):
     from ..service import load_config
-    from ..service.client import ServiceClient
+    from ..service.http.client import ServiceClient
 
     operator = args.operator or getpass.getuser()
     return ServiceClient.for_config(load_config(args.config), operator=operator, url=args.url)
@@ -171,7 +171,7 @@ def run_locate(args: argparse.Namespace) -> int:
     """``hexapod fixture locate``."""
     import numpy as np
 
-    from ..service.cell import locate
+    from ..service.config.cell import locate
 
     try:
         with open(args.points, newline="", encoding="utf-8") as f:

@@ -56,7 +56,7 @@ def _positive(name: str, value: float) -> float:
 def _targets(args: argparse.Namespace, config, hexapods: dict) -> dict:
     """``fixture -> 4x4 target`` from the recipe, the recipe file or the stored current targets."""
     from ..service.store import Store
-    from ..service.targets import recipe_from_json
+    from ..service.targets.target import recipe_from_json
     from .changeover import read_recipe
 
     if args.recipe_file:
@@ -79,13 +79,13 @@ def _starts(args: argparse.Namespace, config, names: list[str], hexapods: dict) 
     """``fixture -> 4x4 start pose``: home, the running service's poses or the stored lock poses."""
     import numpy as np
 
-    from ..kinematics.rotations import quaternion_to_matrix
+    from ..lie import quaternion_to_matrix
 
     if args.from_home:
         return {n: hexapods[n].home_pose for n in names}
     out = {}
     if args.live:
-        from ..service.client import ServiceClient
+        from ..service.http.client import ServiceClient
 
         client = ServiceClient.for_config(config)
         for n in names:

@@ -122,7 +122,7 @@ def run_history(args: argparse.Namespace) -> int:
         if args.fixture is not None and args.fixture not in [f.name for f in config.fixtures]:
             raise InputError("--fixture", args.fixture, f"not a fixture of {args.config}")
         if args.samples:
-            from ..service.store import SAMPLE_COLUMNS
+            from ..service.store.fixture_store import SAMPLE_COLUMNS
 
             header = list(SAMPLE_COLUMNS)
             rows = [list(r) for r in store.samples(args.fixture, since)]

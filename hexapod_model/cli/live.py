@@ -17,6 +17,7 @@ from ..exceptions import HexapodError
 from ..extras import require_extra
 from ..kinematics.hexapod import Hexapod
 from ..lie import quaternion_to_matrix
+from ..service.record.pose_record import PoseRecord
 from ._common import note
 
 FRAME_S = 0.05  # the view's refresh period
@@ -36,7 +37,7 @@ def pose_of_record(record: dict | None) -> np.ndarray | None:
 
 def live_view(
     hexa: Hexapod,
-    latest: Callable[[], dict | None],
+    latest: Callable[[], dict | PoseRecord | None],
     stop: threading.Event,
     deadline: float | None = None,
     count: int | None = None,
@@ -46,7 +47,7 @@ def live_view(
 
     Until ``stop`` is set, the monotonic clock passes ``deadline``, or ``count`` poses were shown.
     Poses are shown through inverse kinematics (warm started); returns the number shown. With
-    ``cell`` (the fixture's :class:`~hexapod_model.service.cell.Cell`) the UR10 stands where
+    ``cell`` (the fixture's :class:`~hexapod_model.service.config.cell.Cell`) the UR10 stands where
     ``base_in_robot`` puts it and its flange follows the record's ``pose_in_robot``.
     """
     from ..viz.meshcat_scene import HexapodScene, start_visualizer, stop_visualizer
@@ -59,6 +60,8 @@ def live_view(
         print(f"meshcat: {vis.url()}", flush=True)
         while not stop.is_set() and (deadline is None or time.monotonic() < deadline) and shown != count:
             rec = latest()
+            if isinstance(rec, PoseRecord):  # the service's own (else the JSON object of GET .../pose)
+                rec = rec.to_dict()
             T = pose_of_record(rec)
             if T is not None and rec is not None and rec["t"] != last_t:
                 last_t = rec["t"]

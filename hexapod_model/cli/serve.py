@@ -86,7 +86,7 @@ def _stop_on_sigterm(stop: threading.Event) -> None:
 
 def simulated(config):
     """``config`` with its bus replaced by a virtual one (same channel name): frames stay in this process."""
-    from ..service.config import BusConfig
+    from ..service.config.settings import BusConfig
 
     return dataclasses.replace(config, bus=BusConfig("virtual", config.bus.channel))
 

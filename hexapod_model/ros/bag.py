@@ -23,47 +23,31 @@ from pathlib import Path
 from typing import Any
 
 from ..files import atomic_write_bytes
-from ..service.store import SAMPLE_COLUMNS, LockEvent
+from ..service.record.pose_record import PoseRecord
+from ..service.store.fixture_store import SAMPLE_COLUMNS, LockEvent
 from .names import FixtureNames
 
 PROFILE = "ros2"
 
 
-def sample_record(row: tuple) -> dict:
+def sample_record(row: tuple) -> PoseRecord:
     """A sample-log row (``SAMPLE_COLUMNS`` order) as a record (``sigma``, margin, ``stored`` unknown)."""
     r = dict(zip(SAMPLE_COLUMNS, row))
     pose_keys = ("x", "y", "z", "qx", "qy", "qz", "qw")
     pose = None if r["x"] is None else {k: r[k] for k in pose_keys}
-    return {
-        "fixture": r["fixture"],
-        "t": r["t"],
-        "readings": [r[f"l{i}"] for i in range(1, 7)],
-        "pose": pose,
-        "status": r["status"],
-        "flags": json.loads(r["flags"]),
-        "state": r["state"],
-        "stored": None,
-        "sigma": None,
-        "singularity_margin": None,
-    }
+    readings = [r[f"l{i}"] for i in range(1, 7)]
+    flags = json.loads(r["flags"])
+    return PoseRecord(
+        r["fixture"], r["t"], readings, pose, r["status"], flags, 0, r["state"], None, None, None, None, None
+    )
 
 
-def lock_record(e: LockEvent) -> dict:
+def lock_record(e: LockEvent) -> PoseRecord:
     """A lock event as an ``ok`` record of its pose."""
     keys = ("x", "y", "z", "qx", "qy", "qz", "qw")
-    values = [float(v) for v in (*e.position, *e.quaternion)]
-    return {
-        "fixture": e.fixture,
-        "t": e.t,
-        "readings": [float(v) for v in e.readings],
-        "pose": dict(zip(keys, values)),
-        "status": e.status,
-        "flags": [],
-        "state": "locked",
-        "stored": True,
-        "sigma": None,
-        "singularity_margin": None,
-    }
+    pose = dict(zip(keys, [float(v) for v in (*e.position, *e.quaternion)]))
+    readings: list[float | None] = [float(v) for v in e.readings]
+    return PoseRecord(e.fixture, e.t, readings, pose, e.status, [], 0, "locked", True, None, None, None, None)
 
 
 def messages(
@@ -76,10 +60,10 @@ def messages(
     out: list[tuple[float, str, Any]] = []
     for row in samples:
         rec = sample_record(row)
-        n = names.get(rec["fixture"])
+        n = names.get(rec.fixture)
         if n is None:
             continue
-        t = rec["t"]
+        t = rec.t
         for topic, msg in (
             (n.topic("pose"), pose_stamped(rec, n)),
             (n.topic("joint_states"), joint_state(rec, n, None)),

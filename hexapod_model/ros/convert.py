@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from ..lie import matrix_to_quaternion
+from ..service.record.pose_record import PoseRecord
 from .messages import (  # cyclonedds: the ros extra
     DiagnosticStatus,
     Header,
@@ -52,27 +53,27 @@ def seconds(time: Time) -> float:
     return time.sec + time.nanosec * 1e-9
 
 
-def _good_pose(rec: dict) -> dict | None:
-    return rec["pose"] if rec["status"] == "ok" and rec["pose"] is not None else None
+def _good_pose(rec: PoseRecord) -> dict | None:
+    return rec.pose if rec.status == "ok" and rec.pose is not None else None
 
 
-def pose_stamped(rec: dict, names: FixtureNames) -> PoseStamped | None:
+def pose_stamped(rec: PoseRecord, names: FixtureNames) -> PoseStamped | None:
     """The platform pose (m) in ``<fixture>/base`` of an ``ok`` record, else None."""
     p = _good_pose(rec)
     if p is None:
         return None
     position, orientation = _pose(p)
-    return PoseStamped(Header(stamp(rec["t"]), names.base), Pose(Point(*position), orientation))
+    return PoseStamped(Header(stamp(rec.t), names.base), Pose(Point(*position), orientation))
 
 
-def transform(rec: dict, names: FixtureNames) -> TransformStamped | None:
+def transform(rec: PoseRecord, names: FixtureNames) -> TransformStamped | None:
     """``<fixture>/base`` -> ``<fixture>/platform`` of an ``ok`` record, else None."""
     p = _good_pose(rec)
     if p is None:
         return None
     position, orientation = _pose(p)
     return TransformStamped(
-        Header(stamp(rec["t"]), names.base), names.platform, Transform(Vector3(*position), orientation)
+        Header(stamp(rec.t), names.base), names.platform, Transform(Vector3(*position), orientation)
     )
 
 
@@ -80,7 +81,7 @@ def _pose(p: dict) -> tuple[tuple[float, float, float], Quaternion]:
     return (p["x"], p["y"], p["z"]), Quaternion(p["qx"], p["qy"], p["qz"], p["qw"])
 
 
-def joint_state(rec: dict, names: FixtureNames, q: np.ndarray | None) -> JointState | None:
+def joint_state(rec: PoseRecord, names: FixtureNames, q: np.ndarray | None) -> JointState | None:
     """The one-dof joints of an ``ok`` record: all of them from its configuration ``q``, else None.
 
     Without ``q`` (a stored sample) the six prismatic joints only, from the record's readings.
@@ -89,41 +90,43 @@ def joint_state(rec: dict, names: FixtureNames, q: np.ndarray | None) -> JointSt
     """
     if _good_pose(rec) is None:
         return None
-    header = Header(stamp(rec["t"]), "")
+    header = Header(stamp(rec.t), "")
     if q is not None:
         return JointState(header, list(names.joints), [float(q[i]) for i in names.joint_q])
-    readings = rec["readings"]
-    if any(r is None for r in readings):
+    readings = [float(r) for r in rec.readings if r is not None]
+    if len(readings) < len(rec.readings):
         return None
-    return JointState(header, list(names.prismatic), [float(r) for r in readings])
+    return JointState(header, list(names.prismatic), readings)
 
 
-def level(rec: dict, store_error: str | None = None) -> int:
+def level(rec: PoseRecord, store_error: str | None = None) -> int:
     """The diagnostic level of a record (module docstring)."""
-    status = rec["status"]
+    status = rec.status
     if status == "ok":
-        return WARN if rec["flags"] or store_error else OK
+        return WARN if rec.flags or store_error else OK
     if status in ("flagged", "drift"):  # a pose the service doubts
         return WARN
     return STALE if status == "no_data" else ERROR
 
 
-def diagnostic(rec: dict, names: FixtureNames, hardware_id: str, store_error: str | None = None) -> DiagnosticStatus:
+def diagnostic(
+    rec: PoseRecord, names: FixtureNames, hardware_id: str, store_error: str | None = None
+) -> DiagnosticStatus:
     """One fixture's ``DiagnosticStatus``: its status, flags, state, sigma, singularity margin and store health."""
-    sigma = rec.get("sigma") or {}
+    sigma = rec.sigma or {}
     values = {
-        "status": rec["status"],
-        "flags": json.dumps(rec["flags"]),
-        "state": rec["state"],
-        "stored": json.dumps(rec["stored"]),
-        "t": repr(rec["t"]),
+        "status": rec.status,
+        "flags": json.dumps(rec.flags),
+        "state": rec.state,
+        "stored": json.dumps(rec.stored),
+        "t": repr(rec.t),
         "sigma_translation_mm": _text(sigma.get("translation_mm")),
         "sigma_rotation_deg": _text(sigma.get("rotation_deg")),
-        "singularity_margin": _text(rec.get("singularity_margin")),
+        "singularity_margin": _text(rec.singularity_margin),
         "store": "ok" if store_error is None else store_error,
     }
-    flags = ", ".join(rec["flags"])
-    message = rec["status"] + (f" ({flags})" if flags else "") + ("" if store_error is None else "; store error")
+    flags = ", ".join(rec.flags)
+    message = rec.status + (f" ({flags})" if flags else "") + ("" if store_error is None else "; store error")
     return DiagnosticStatus(
         level(rec, store_error),
         f"hexapod: {names.fixture}",

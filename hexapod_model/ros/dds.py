@@ -22,7 +22,8 @@ import time
 from typing import Any
 
 from ..extras import install_hint
-from ..service.rosconfig import RosConfig
+from ..service.config.ros import RosConfig
+from ..service.record.pose_record import PoseRecord
 from ..service.service import FixtureService
 from .names import FixtureNames
 
@@ -124,11 +125,10 @@ class RosBridge:
         service.health_sections["ros"] = self.health
 
     # ----- the cycle thread -----
-    def _on_record(self, rec: dict) -> None:
+    def _on_record(self, rec: PoseRecord) -> None:
         if self._thread is None:
             return  # not publishing (yet, or DDS failed)
-        cycle = self.service.cycles.get(rec["fixture"])
-        q = None if cycle is None or rec["pose"] is None else cycle.last_q  # the record's own (set with it)
+        q = rec.q
         if q is not None:
             q = q.copy()  # the publisher thread reads it later
         try:
@@ -220,13 +220,13 @@ class RosBridge:
             try:
                 self._publish(rec, q)
             except Exception as exc:  # noqa: BLE001 - a record that cannot be converted: on /health, go on
-                self._fail(f"record of {rec.get('fixture')!r} at t={rec.get('t')!r} not published: {exc}")
+                self._fail(f"record of {rec.fixture!r} at t={rec.t!r} not published: {exc}")
 
-    def _publish(self, rec: dict, q) -> None:
+    def _publish(self, rec: PoseRecord, q) -> None:
         from .convert import diagnostic, joint_state, pose_stamped, stamp, transform
         from .messages import DiagnosticArray, Header, TFMessage
 
-        names = self.names[rec["fixture"]]
+        names = self.names[rec.fixture]
         pose, tf, joints = pose_stamped(rec, names), transform(rec, names), joint_state(rec, names, q)
         if pose is not None:
             self._write(lambda w: w.pose[names.fixture].write(pose))
@@ -235,12 +235,12 @@ class RosBridge:
         if tf is not None:
             self._write(lambda w: w.tf.write(TFMessage([tf])))
         last = self._last_diag.get(names.fixture)
-        key = (rec["status"], tuple(rec["flags"]))
-        if last is None or last[1:] != key or rec["t"] - last[0] >= self.cfg.diagnostics_period:
-            self._last_diag[names.fixture] = (rec["t"], *key)
+        key = (rec.status, tuple(rec.flags))
+        if last is None or last[1:] != key or rec.t - last[0] >= self.cfg.diagnostics_period:
+            self._last_diag[names.fixture] = (rec.t, *key)
             store_error = None if self.service.writer is None else self.service.writer.error
             status = diagnostic(rec, names, f"{self.cfg.namespace}/{names.fixture}", store_error)
-            array = DiagnosticArray(Header(stamp(rec["t"]), ""), [status])
+            array = DiagnosticArray(Header(stamp(rec.t), ""), [status])
             self._write(lambda w: w.diagnostics.write(array))
 
     def _write(self, write) -> None:

@@ -11,18 +11,16 @@ Public API::
 
     from hexapod_model.service import FixtureService, load_config
     svc = FixtureService(load_config("fixture.toml")).start()
-    svc.record("left")      # the latest record (dict), also GET /fixtures/left/pose
+    svc.record("left")      # the latest record (a PoseRecord), also GET /fixtures/left/pose
     svc.changeover.set_target("left", {"pose": {...}, "tolerance": {...}}, by="anna")
     svc.changeover.guidance("left")   # deviation, per-leg changes; docs/changeover.md
     svc.stop()
 """
 
-from .bus import open_bus
-from .cell import Cell, Located, locate
-from .changeover import Changeover, UnknownError
-from .client import RequestError, ServiceClient
-from .codec import Decoded, FrameLayout, LegCodec, decode, encode
-from .config import (
+from .changeover.changeover import Changeover, UnknownError
+from .config.cell import Cell, Located, locate
+from .config.codec import Decoded, FrameLayout, LegCodec, decode, encode
+from .config.settings import (
     BusConfig,
     FixtureConfig,
     HttpConfig,
@@ -32,15 +30,18 @@ from .config import (
     geometry_hash,
     load_config,
 )
-from .cycle import RECORD_KEYS, FixtureCycle
+from .cycle.bus import open_bus
+from .cycle.fixture_cycle import FixtureCycle
+from .cycle.solver import PoseSolver, SolveOutcome, Uncertainty
 from .errors import ConfigError, FrameError, ServiceError
-from .guidance import guidance
+from .http.client import RequestError, ServiceClient
+from .record.pose_record import RECORD_KEYS, PoseRecord
 from .service import FixtureService
-from .simconfig import Fault, SimConfig, SimFixture, load_simulation, simulation_from_dict
-from .simulate import SentSet, Simulator
-from .solve import PoseSolver, SolveOutcome, Uncertainty
-from .store import LockEvent, Store
-from .targets import Recipe, Target, TargetError, Tolerance
+from .sim.config import Fault, SimConfig, SimFixture, load_simulation, simulation_from_dict
+from .sim.simulator import SentSet, Simulator
+from .store.fixture_store import LockEvent, Store
+from .targets.guidance import guidance
+from .targets.target import Recipe, Target, TargetError, Tolerance
 
 __all__ = [
     "BusConfig",
@@ -58,6 +59,7 @@ __all__ = [
     "LegCodec",
     "Located",
     "LockEvent",
+    "PoseRecord",
     "PoseSolver",
     "RECORD_KEYS",
     "Recipe",

@@ -2,53 +2,54 @@
 
 >>> from hexapod_model.service import FixtureService, load_config
 >>> with FixtureService(load_config("fixture.toml")) as svc:   # doctest: +SKIP
-...     svc.subscribe(print)          # every published record (a dict)
+...     svc.subscribe(print)          # every published record (a PoseRecord)
 ...     svc.record("left")            # the latest one; also GET /fixtures/left/pose
 
 Threads: one reads the bus and runs every fixture's cycle (so a record is published within the
-frame's own iteration), one writes the store (:class:`~hexapod_model.service.writer.StoreWriter`),
+frame's own iteration), one writes the store (:class:`~hexapod_model.service.store.writer.StoreWriter`),
 and the HTTP server's. Subscribers run on the bus thread: keep them short.
 """
 
 from __future__ import annotations
 
 import gc
-import json
 import logging
 import threading
 import time
 from collections.abc import Callable, Sequence
 from functools import partial
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import can
 
 from ..analysis.sensitivity import SensitivityEvaluator
 from ..tracking.tracker import characteristic_length
-from .alarms import Acknowledgement
-from .bus import open_bus, receiver
-from .changeover import Changeover
-from .config import ServiceConfig, geometry_hash
-from .cycle import FixtureCycle
+from .changeover.changeover import Changeover
+from .config.settings import ServiceConfig, geometry_hash
+from .cycle.alarms import Acknowledgement
+from .cycle.bus import open_bus
+from .cycle.fixture_cycle import FixtureCycle
+from .cycle.solver import warm_up
 from .errors import ServiceError
-from .health import health
-from .pose import sample_row
-from .solve import warm_up
-from .store import Store
-from .writer import StoreWriter
+from .http.health import health
+from .record.pose_record import PoseRecord
+from .store.fixture_store import Store, sample_row
+from .store.writer import StoreWriter
 
 if TYPE_CHECKING:
-    from .server import HttpServer
+    from starlette.routing import BaseRoute
+
+    from ..kinematics.hexapod import Hexapod
+    from .http.server import HttpServer
 
 log = logging.getLogger(__name__)
-Record = dict
 
 
 class FixtureService:
     """Run the pose service of every fixture of ``config``.
 
     Args:
-        config: the validated configuration (:func:`~hexapod_model.service.config.load_config`).
+        config: the validated configuration (:func:`~hexapod_model.service.config.settings.load_config`).
         bus: an open python-can bus to read instead of the configured one (it is not closed here).
         http: serve ``GET /fixtures``, ``/fixtures/NAME/pose`` and ``/health`` on ``config.http``.
         hexapods: already loaded hexapods by fixture name (else loaded from the configuration).
@@ -62,8 +63,8 @@ class FixtureService:
         config: ServiceConfig,
         bus: can.BusABC | None = None,
         http: bool = True,
-        hexapods: dict | None = None,
-        routes: Sequence[Any] = (),
+        hexapods: dict[str, Hexapod] | None = None,
+        routes: Sequence[BaseRoute] = (),
     ):
         self.config = config
         #: the fixtures' hexapods, by name: those given, the others loaded by :meth:`start`
@@ -77,10 +78,10 @@ class FixtureService:
         self.phase = "starting"
         #: the error that stopped a background start (``start(wait=False)``), else None
         self.failure: Exception | None = None
-        self._subscribers: list[Callable[[Record], None]] = []
+        self._subscribers: list[Callable[[PoseRecord], None]] = []
         #: more ``/health`` sections by name, each a dict (one whose ``error`` is not None: ``degraded``)
         self.health_sections: dict[str, Callable[[], dict]] = {}
-        self._json: dict[str, tuple[Record, str]] = {}
+        self._json: dict[str, tuple[PoseRecord, str]] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.cycles: dict[str, FixtureCycle] = {}
@@ -106,15 +107,15 @@ class FixtureService:
         self._stop.clear()
         try:  # what can fail fails first, before anything is logged or written
             if self._http:
-                from .server import HttpServer
+                from .http.server import HttpServer
 
                 try:
-                    from .http import build_app
+                    from .http.app import build_app
                 except ImportError:
-                    from .server import INSTALL_HINT
+                    from .http.server import INSTALL_HINT
 
                     raise ServiceError(INSTALL_HINT) from None
-                from .changeover_http import changeover_routes
+                from .http.changeover_routes import changeover_routes
 
                 self.endpoint = HttpServer(build_app(self, [*changeover_routes(), *self._extra_routes]), cfg.http)
             if self._bus is None:
@@ -143,7 +144,7 @@ class FixtureService:
         """Hexapods, store, recovered locks, kernels; then the store writer and the cycle thread."""
         cfg = self.config
         self.phase = "loading the hexapods"
-        loaded: dict[str, Any] = {}  # fixtures naming one file share its hexapod (a model is ~6 MB)
+        loaded: dict[str, Hexapod] = {}  # fixtures naming one file share its hexapod (a model is ~6 MB)
         for f in cfg.fixtures:
             if f.name not in self.hexapods:
                 if f.hexapod not in loaded:
@@ -289,7 +290,7 @@ class FixtureService:
         return None if self.endpoint is None else self.endpoint.address
 
     # ----- outputs -----
-    def subscribe(self, callback: Callable[[Record], None]) -> None:
+    def subscribe(self, callback: Callable[[PoseRecord], None]) -> None:
         """Call ``callback(record)`` for every published record (on the cycle thread)."""
         self._subscribers.append(callback)
 
@@ -297,7 +298,7 @@ class FixtureService:
         """Fixture names, configuration order."""
         return [f.name for f in self.config.fixtures]
 
-    def record(self, name: str) -> Record | None:
+    def record(self, name: str) -> PoseRecord | None:
         """The latest record of fixture ``name`` (None for an unknown name)."""
         cycle = self.cycles.get(name)
         return None if cycle is None else cycle.last
@@ -307,20 +308,20 @@ class FixtureService:
         cycle = self.cycles.get(name)
         return None if cycle is None else self.json_of(cycle.last)
 
-    def json_of(self, rec: Record) -> str:
-        """``json.dumps(rec, allow_nan=False)``, made once per record (HTTP and JSON lines share it)."""
-        name = rec["fixture"]
+    def json_of(self, rec: PoseRecord) -> str:
+        """The record's JSON text (:meth:`PoseRecord.to_json`), made once per record (HTTP and JSON lines share it)."""
+        name = rec.fixture
         hit = self._json.get(name)
         if hit is not None and hit[0] is rec:  # the record itself is kept: its id cannot be reused
             return hit[1]
-        text = json.dumps(rec, allow_nan=False)
+        text = rec.to_json()
         self._json[name] = (rec, text)  # one entry per fixture; a race only serialises twice
         return text
 
     def acknowledge(self, name: str, by: str, client: str = "local", note: str = "") -> Acknowledgement | None:
         """Acknowledge the fault latched on fixture ``name`` (None when none waits; ``KeyError``: no such fixture).
 
-        The cycle clears it at its next set (see :mod:`~hexapod_model.service.alarms`); logged
+        The cycle clears it at its next set (see :mod:`~hexapod_model.service.cycle.alarms`); logged
         with who, from where and when.
         """
         ack = self.cycles[name].acknowledge(by, client, note)
@@ -330,14 +331,14 @@ class FixtureService:
         return ack
 
     def health(self) -> dict:
-        """Service state: ``ok`` or ``degraded``, each problem one line (:mod:`~hexapod_model.service.health`)."""
+        """Service state: ``ok`` or ``degraded``, each problem one line (:mod:`~hexapod_model.service.http.health`)."""
         return health(self)
 
     # ----- the cycle thread -----
     def _loop(self) -> None:
         assert self._bus is not None
         tick = min(0.05, max(0.002, min(f.staleness for f in self.config.fixtures) / 2))
-        routes, recv, last_check = self._routes, receiver(self._bus), time.time()
+        routes, recv, last_check = self._routes, self._bus.recv, time.time()
         while not self._stop.is_set():
             try:
                 msg = recv(tick)
@@ -365,16 +366,16 @@ class FixtureService:
                     if rec is not None:
                         self._publish(cycle, rec)
 
-    def _publish(self, cycle: FixtureCycle, rec: Record) -> None:
+    def _publish(self, cycle: FixtureCycle, rec: PoseRecord) -> None:
         writer = self.writer
         assert writer is not None
         if cycle.pending_lock is not None:
             episode, event = cycle.pending_lock
             cycle.pending_lock = None
             writer.lock(event, partial(cycle.lock_stored, episode))
-        name = rec["fixture"]
-        if rec["t"] - self._last_logged[name] >= self.config.store.sample_interval:
-            self._last_logged[name] = rec["t"]
+        name = rec.fixture
+        if rec.t - self._last_logged[name] >= self.config.store.sample_interval:
+            self._last_logged[name] = rec.t
             writer.sample(sample_row(rec))
         for callback in self._subscribers:
             try:

@@ -20,9 +20,9 @@ import pytest
 
 from hexapod_model.cli.main import main
 from hexapod_model.lie import xyz_rpy_to_pose as placement
-from hexapod_model.service.guidance import record_pose
 
 from ..conftest import hexapod
+from ..service.helpers import record_pose
 from .test_service_cli import ROOT, Served
 
 TOKEN = "example-token-0123456789abcdef"

@@ -361,7 +361,7 @@ def test_view_live_shows_a_served_pose(tmp_path, capsys):
         with FixtureService(config) as service:
             sim.start()
             deadline = time.monotonic() + 30
-            while (service.record("left") or {}).get("status") != "ok" and time.monotonic() < deadline:
+            while getattr(service.record("left"), "status", None) != "ok" and time.monotonic() < deadline:
                 time.sleep(0.05)
             assert main(["view", str(cfg), "--live", "--once"]) == 0
     finally:

@@ -9,10 +9,10 @@ import pinocchio as pin
 
 from hexapod_model.cli import plan_view
 from hexapod_model.cli.main import main
-from hexapod_model.kinematics.rotations import matrix_to_quaternion, xyz_rpy_to_pose
+from hexapod_model.lie import matrix_to_quaternion, xyz_rpy_to_pose
 from hexapod_model.planning.writers import read_plan
 from hexapod_model.service.store import LockEvent, Store
-from hexapod_model.service.targets import recipe_from_json
+from hexapod_model.service.targets.target import recipe_from_json
 
 from ..conftest import hexapod
 from .test_plan import CONFIG, RECIPE, planned  # noqa: F401  (the module's plan)

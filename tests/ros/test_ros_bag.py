@@ -10,7 +10,8 @@ import pytest
 
 from hexapod_model.cli import main
 from hexapod_model.service import LockEvent, Store
-from hexapod_model.service.service import sample_row
+from hexapod_model.service.record.pose_record import PoseRecord
+from hexapod_model.service.store.fixture_store import sample_row
 
 from .conftest import need_extra
 
@@ -40,15 +41,9 @@ def rec(fixture, t, status, pose=True, flags=()):
     q = np.array([0.1, -0.2, 0.3, 0.0])
     q[3] = np.sqrt(1 - q @ q)
     values = [0.01 * (t - T0), -0.02, 0.41, *q]
-    return {
-        "fixture": fixture,
-        "t": t,
-        "status": status,
-        "flags": list(flags),
-        "state": "moving",
-        "readings": [0.001 * k + (t - T0) for k in range(6)],
-        "pose": dict(zip(POSE, values)) if pose else None,
-    }
+    readings: list[float | None] = [0.001 * k + (t - T0) for k in range(6)]
+    values_of = dict(zip(POSE, values)) if pose else None
+    return PoseRecord(fixture, t, readings, values_of, status, list(flags), 0, "moving", None, None, None, None, None)
 
 
 RECORDS = [
@@ -112,19 +107,19 @@ def test_history_as_a_ros2_bag_reads_back_with_another_implementation(config, ca
         "/diagnostics",
         "/tf",
     ]
-    ok = [r for r in RECORDS if r["status"] == "ok"]
+    ok = [r for r in RECORDS if r.status == "ok"]
     poses = by_topic["/cell/left/pose"] + by_topic["/cell/right/pose"]
     assert len(poses) == len(ok)  # not the flagged nor the failed record
     for schema, t_ns, m in poses:
         assert schema == "geometry_msgs/msg/PoseStamped"
-        r = next(r for r in ok if abs(r["t"] * 1e9 - t_ns) < 1e3)
-        assert m.header.frame_id == f"{r['fixture']}/base"
+        r = next(r for r in ok if abs(r.t * 1e9 - t_ns) < 1e3)
+        assert m.header.frame_id == f"{r.fixture}/base"
         assert m.header.stamp.sec * 10**9 + m.header.stamp.nanosec == t_ns
         p = m.pose
         got = [p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y, p.orientation.z]
-        assert got + [p.orientation.w] == [r["pose"][k] for k in POSE]
+        assert got + [p.orientation.w] == [r.pose[k] for k in POSE]
     (js,) = [m for _, _, m in by_topic["/cell/left/joint_states"]]
-    assert js.name == [f"leg{k}_prismatic" for k in range(1, 7)] and list(js.position) == RECORDS[0]["readings"]
+    assert js.name == [f"leg{k}_prismatic" for k in range(1, 7)] and list(js.position) == RECORDS[0].readings
     tfs = [m.transforms[0] for _, _, m in by_topic["/tf"]]
     assert [(t.header.frame_id, t.child_frame_id) for t in tfs] == [
         ("left/base", "left/platform"),

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from hexapod_model.service import FixtureService, Simulator
-from hexapod_model.service.rosconfig import RosConfig
+from hexapod_model.service.config.ros import RosConfig
+from hexapod_model.service.record.pose_record import PoseRecord
 
 from ..conftest import hexapod
 from ..service.helpers import fixture_table, service_config, sim_config
@@ -65,7 +66,7 @@ def test_a_participant_that_cannot_be_created_is_on_health_and_http_goes_on(tmp_
     config = service_config(tmp_path, [fixture_table("right")], ros={"interface": "192.0.2.1", "peers": ["192.0.2.1"]})
     assert config.ros == RosConfig(interface="192.0.2.1", peers=("192.0.2.1",))
     code, body, record = serve_with_bridge(config)
-    assert record is not None and record["status"] == "ok"  # the cycle went on
+    assert record is not None and record.status == "ok"  # the cycle went on
     assert body["status"] == "degraded", body
     assert "cannot create the DDS participant" in body["ros"]["error"] and body["ros"]["publishing"] is False
     assert body["fixtures"]["right"]["status"] == "ok"
@@ -93,7 +94,7 @@ def test_the_cell_placement_is_on_tf_static_for_a_late_joiner(tmp_path):
 
     from hexapod_model.lie import rpy_to_matrix
     from hexapod_model.ros.messages import TFMessage
-    from hexapod_model.service.cell import Cell
+    from hexapod_model.service.config.cell import Cell
 
     config = service_config(
         tmp_path, [fixture_table("right")], ros={"robot_frame": "ur10e/base_link", "domain_id": run_domain()}
@@ -131,7 +132,7 @@ def test_without_the_ros_extra_health_says_what_to_install(tmp_path, monkeypatch
     monkeypatch.setitem(sys.modules, "cyclonedds.domain", None)  # as if cyclonedds were not installed
     config = service_config(tmp_path, [fixture_table("right")], ros={"domain_id": run_domain()})
     code, body, record = serve_with_bridge(config, 1.0)
-    assert record is not None and record["status"] == "ok"
+    assert record is not None and record.status == "ok"
     assert body["status"] == "degraded" and body["ros"]["publishing"] is False
     assert "pip install 'hexapod_model[ros]'" in body["ros"]["error"]
 
@@ -159,22 +160,12 @@ def test_a_failed_write_is_on_health_until_writing_works_again(tmp_path):
 
     w = Writer()
     bridge._writers = SimpleNamespace(pose={"right": w}, joints={"right": w}, tf=w, diagnostics=w)  # type: ignore[assignment]
-    rec = {
-        "fixture": "right",
-        "t": 1795672991.5,
-        "readings": [0.0] * 6,
-        "pose": {"x": 0.0, "y": 0.0, "z": 0.4, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": 1.0},
-        "status": "ok",
-        "flags": [],
-        "state": "moving",
-        "stored": False,
-        "sigma": None,
-        "singularity_margin": None,
-    }
+    pose = {"x": 0.0, "y": 0.0, "z": 0.4, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": 1.0}
+    rec = PoseRecord("right", 1795672991.5, [0.0] * 6, pose, "ok", [], 0, "moving", False, None, None, None, None)
     bridge._publish(rec, service.hexapods["right"].q_home)
     h = bridge.health()
     assert h["error"] == "DDS write failed: DDS_RETCODE_TIMEOUT" and h["failed_writes"] == 4 and h["published"] == 0
     w.broken = False
-    bridge._publish({**rec, "t": rec["t"] + 0.02}, service.hexapods["right"].q_home)
+    bridge._publish(rec._replace(t=rec.t + 0.02), service.hexapods["right"].q_home)
     h = bridge.health()
     assert h["error"] is None and h["failed_writes"] == 4 and h["published"] == 3 and len(written) == 3

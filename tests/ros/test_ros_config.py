@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from hexapod_model.service import ConfigError
-from hexapod_model.service.rosconfig import RosConfig
+from hexapod_model.service.config.ros import RosConfig
 
 from ..service.helpers import service_config
 

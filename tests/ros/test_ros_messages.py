@@ -7,6 +7,8 @@ import math
 import numpy as np
 import pytest
 
+from hexapod_model.service.record.pose_record import PoseRecord
+
 from .conftest import need_extra
 
 pytestmark = pytest.mark.ros
@@ -26,18 +28,21 @@ def ros():
 
 
 def record(status="ok", flags=(), t=1795672991.5198855):
-    return {
-        "fixture": "right",
-        "t": t,
-        "readings": [0.001, -0.002, 0.0031, 0.0, 1e-6, -0.004],
-        "pose": {"x": 0.01, "y": -0.02, "z": 0.41, "qx": 0.1, "qy": -0.2, "qz": 0.3, "qw": math.sqrt(0.86)},
-        "status": status,
-        "flags": list(flags),
-        "state": "locked",
-        "stored": True,
-        "sigma": {"translation_mm": 0.0249, "rotation_deg": 0.006},
-        "singularity_margin": 0.95,
-    }
+    return PoseRecord(
+        "right",
+        t,
+        [0.001, -0.002, 0.0031, 0.0, 1e-6, -0.004],
+        {"x": 0.01, "y": -0.02, "z": 0.41, "qx": 0.1, "qy": -0.2, "qz": 0.3, "qw": math.sqrt(0.86)},
+        status,
+        list(flags),
+        3,
+        "locked",
+        True,
+        {"translation_mm": 0.0249, "rotation_deg": 0.006},
+        0.95,
+        None,
+        None,
+    )
 
 
 def decode(store, msg, name):
@@ -54,7 +59,7 @@ def test_pose_stamped_decodes_to_the_record(ros):
     m = decode(store, convert.pose_stamped(rec, names), "geometry_msgs/msg/PoseStamped")
     assert m.header.frame_id == "right/base"
     assert m.header.stamp.sec == 1795672991 and abs(m.header.stamp.nanosec - 519885540) <= 1
-    p = rec["pose"]
+    p = rec.pose
     got = [m.pose.position.x, m.pose.position.y, m.pose.position.z]
     got += [m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w]
     assert got == [p[k] for k in ("x", "y", "z", "qx", "qy", "qz", "qw")]  # the same floats, carried
@@ -68,7 +73,7 @@ def test_transform_and_joint_state_decode(ros):
     tf = decode(store, TFMessage([convert.transform(rec, names)]), "tf2_msgs/msg/TFMessage")
     (t,) = tf.transforms
     assert (t.header.frame_id, t.child_frame_id) == ("right/base", "right/platform")
-    assert t.transform.translation.z == 0.41 and t.transform.rotation.w == rec["pose"]["qw"]
+    assert t.transform.translation.z == 0.41 and t.transform.rotation.w == rec.pose["qw"]
     q = hexa.q_home.copy()
     q[: hexa.nq - 7] = np.linspace(-0.3, 0.3, hexa.nq - 7)
     js = decode(store, convert.joint_state(rec, names, q), "sensor_msgs/msg/JointState")
@@ -77,7 +82,7 @@ def test_transform_and_joint_state_decode(ros):
         q[hexa.model.joints[hexa.model.getJointId(n)].idx_q] for n in js.name
     ]
     legs = decode(store, convert.joint_state(rec, names, None), "sensor_msgs/msg/JointState")
-    assert legs.name == list(hexa.prismatic_names) and list(legs.position) == rec["readings"]
+    assert legs.name == list(hexa.prismatic_names) and list(legs.position) == rec.readings
 
 
 @pytest.mark.parametrize(
@@ -112,7 +117,7 @@ def test_diagnostic_levels_and_values(ros, status, flags, store_error, level):
     rec = record(status, flags)
     status_msg = convert.diagnostic(rec, names, "cell/hexapod/right", store_error)
     arr = decode(
-        store, DiagnosticArray(Header(convert.stamp(rec["t"]), ""), [status_msg]), "diagnostic_msgs/msg/DiagnosticArray"
+        store, DiagnosticArray(Header(convert.stamp(rec.t), ""), [status_msg]), "diagnostic_msgs/msg/DiagnosticArray"
     )
     (s,) = arr.status
     values = {kv.key: kv.value for kv in s.values}
@@ -153,7 +158,7 @@ def test_placement_on_tf_static(ros):
 
 def test_cyclone_configuration_stays_on_this_machine_unless_peers_are_given():
     from hexapod_model.ros.dds import cyclone_xml
-    from hexapod_model.service.rosconfig import RosConfig
+    from hexapod_model.service.config.ros import RosConfig
 
     local = cyclone_xml(RosConfig())
     assert '<NetworkInterface address="127.0.0.1"/>' in local and "<AllowMulticast>false</AllowMulticast>" in local

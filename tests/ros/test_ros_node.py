@@ -67,7 +67,7 @@ def tf_reader():
 
     from hexapod_model.ros.dds import cyclone_xml
     from hexapod_model.ros.messages import TFMessage
-    from hexapod_model.service.rosconfig import RosConfig
+    from hexapod_model.service.config.ros import RosConfig
 
     domain = Domain(run_domain(), cyclone_xml(RosConfig()))
     participant = DomainParticipant(run_domain())

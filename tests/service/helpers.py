@@ -9,7 +9,14 @@ import can
 import numpy as np
 import pinocchio as pin
 
-from hexapod_model.service import FixtureCycle, Simulator, config_from_dict, geometry_hash, simulation_from_dict
+from hexapod_model.service import (
+    FixtureCycle,
+    PoseRecord,
+    Simulator,
+    config_from_dict,
+    geometry_hash,
+    simulation_from_dict,
+)
 
 from ..conftest import hexapod
 
@@ -78,7 +85,7 @@ def drive(service, sim, seconds: float, recovered=None, t0: float = 1.0e9, cycle
 
 def pose_error(rec: dict, truth: np.ndarray) -> tuple[float, float]:
     """Position (m) and rotation (rad) error of a record's pose against a 4x4 truth."""
-    p = rec["pose"]
+    p = rec.pose
     R = pin.Quaternion(p["qw"], p["qx"], p["qy"], p["qz"]).toRotationMatrix()
     dp = float(np.linalg.norm(np.array([p["x"], p["y"], p["z"]]) - truth[:3, 3]))
     return dp, float(np.linalg.norm(pin.log3(truth[:3, :3].T @ R)))
@@ -87,10 +94,22 @@ def pose_error(rec: dict, truth: np.ndarray) -> tuple[float, float]:
 def stored_locks(records, fixture: str = "left") -> set[float]:
     """``t`` of the first record of each lock of ``fixture`` that some record published as stored."""
     out, prev, first = set(), None, None
-    for r in [r for r in list(records) if r["fixture"] == fixture]:
-        if r["state"] == "locked" and prev != "locked":
-            first = r["t"]
-        if r["state"] == "locked" and r["stored"]:
+    records = [PoseRecord.from_dict(r) if isinstance(r, dict) else r for r in list(records)]  # JSON lines too
+    for r in [r for r in records if r.fixture == fixture]:
+        if r.state == "locked" and prev != "locked":
+            first = r.t
+        if r.state == "locked" and r.stored:
             out.add(first)
-        prev = r["state"]
+        prev = r.state
     return out
+
+
+def record_pose(rec) -> np.ndarray | None:
+    """The 4x4 pose of a record, or of a JSON object with a ``pose`` (guidance, ``pose_in_robot``); None without one."""
+    p = rec.pose if isinstance(rec, PoseRecord) else rec.get("pose")
+    if p is None:
+        return None
+    T = np.eye(4)
+    T[:3, :3] = pin.Quaternion(p["qw"], p["qx"], p["qy"], p["qz"]).normalized().toRotationMatrix()
+    T[:3, 3] = [p["x"], p["y"], p["z"]]
+    return T

@@ -9,12 +9,12 @@ import pytest
 from hexapod_model.exceptions import InputError
 from hexapod_model.lie import xyz_rpy_to_pose as placement
 from hexapod_model.service import ConfigError
-from hexapod_model.service.cell import Cell, locate
-from hexapod_model.service.guidance import guidance, record_pose
-from hexapod_model.service.solve import PoseSolver
+from hexapod_model.service.config.cell import Cell, locate
+from hexapod_model.service.cycle.solver import PoseSolver
+from hexapod_model.service.targets.guidance import guidance
 
 from ..conftest import hexapod
-from .helpers import drive, fixture_table, service_config, sim_config
+from .helpers import drive, fixture_table, record_pose, service_config, sim_config
 
 HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]
 BASE_IN_ROBOT = [0.85, -0.3, 0.02, 1.0, -2.0, 90.0]
@@ -68,22 +68,22 @@ def test_records_carry_pose_in_robot_from_the_configured_cell(tmp_path):
     service = service_config(tmp_path, [fixture_table("right", 1, cell=cell)])
     sim = sim_config(service, [{"name": "right", "rate": 100.0, "hold": HOLD}])
     _, out = drive(service, sim, 0.3)
-    ok = [rec for _, rec in out if rec["status"] == "ok"]
+    ok = [rec for _, rec in out if rec.status == "ok"]
     assert ok
     hexa = hexapod("reference")
     coupling = Cell(placement(BASE_IN_ROBOT), placement(cell["coupling"]))
     X = PoseSolver(hexa, 10e-6).propagation(hexa.inverse(placement(HOLD)).q)
     for rec in ok:
         expected = placement(BASE_IN_ROBOT) @ record_pose(rec) @ placement(cell["coupling"])
-        got = record_pose(rec["pose_in_robot"])
+        got = record_pose(rec.pose_in_robot)
         assert np.allclose(got, expected, atol=1e-12)
-        s, r = rec["pose_in_robot"]["sigma"], rec["sigma"]
+        s, r = rec.pose_in_robot["sigma"], rec.sigma
         assert s["rotation_deg"] == r["rotation_deg"]
         assert s["translation_mm"] == pytest.approx(coupling.translation_sigma(X, 10e-6) * 1e3, rel=1e-3)
-    assert guidance(ok[-1], None)["pose_in_robot"] == ok[-1]["pose_in_robot"]  # /guidance gives it too
+    assert guidance(ok[-1], None)["pose_in_robot"] == ok[-1].pose_in_robot  # /guidance gives it too
     plain = service_config(tmp_path, [fixture_table("right", 1)])
     _, out = drive(plain, sim_config(plain, [{"name": "right", "rate": 100.0, "hold": HOLD}]), 0.1)
-    assert all(rec["pose_in_robot"] is None for _, rec in out)
+    assert all(rec.pose_in_robot is None for _, rec in out)
 
 
 def test_a_bad_cell_placement_names_the_field(tmp_path):

@@ -11,10 +11,9 @@ import numpy as np
 import pytest
 
 from hexapod_model.service import FixtureService, Simulator
-from hexapod_model.service.guidance import record_pose
 
 from ..conftest import hexapod
-from .helpers import fixture_table, service_config, sim_config
+from .helpers import fixture_table, record_pose, service_config, sim_config
 from .test_http import TOKEN, token_file
 
 HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from hexapod_model.service import RECORD_KEYS, FixtureCycle, LockEvent, geometry_hash
-from hexapod_model.service.cycle import _quaternion
+from hexapod_model.service.cycle.fixture_cycle import _quaternion
 from hexapod_model.tracking.reading_tests import TrackerSettings
 
 from ..conftest import hexapod
@@ -33,10 +33,10 @@ def check_ok_poses(out):
     """Every ok record is within SIGMAS of the truth; returns (errors / sigma) for the statistics."""
     ratios = []
     for sent, rec in out:
-        if rec["status"] != "ok":
+        if rec.status != "ok":
             continue
         dp, dr = pose_error(rec, sent.pose)
-        sig = rec["sigma"]
+        sig = rec.sigma
         ratios.append((dp / (sig["translation_mm"] * 1e-3), dr / np.radians(sig["rotation_deg"])))
     r = np.array(ratios)
     assert len(r) and r.max() < SIGMAS, r.max(0)
@@ -45,25 +45,25 @@ def check_ok_poses(out):
 
 def set_of(rec, t0=1.0e9):
     """The index of the set a record is about (drive() stamps set k at t0 + k / RATE + frame spacing)."""
-    return round((rec["t"] - t0) * RATE)
+    return round((rec.t - t0) * RATE)
 
 
 def statuses(out, t0, t1):
-    return [(set_of(rec), rec["status"], rec["flags"]) for _, rec in out if t0 <= set_of(rec) / RATE < t1]
+    return [(set_of(rec), rec.status, rec.flags) for _, rec in out if t0 <= set_of(rec) / RATE < t1]
 
 
 def test_clean_stream_every_set_ok_within_the_noise_propagated_sigma(tmp_path):
     _, out = run(tmp_path, seconds=3.0)
-    assert all(rec["status"] == "flagged" and rec["flags"] == ["settling"] for _, rec in out[:SETTLE])
-    assert len(out) == 300 and all(rec["status"] == "ok" and rec["flags"] == [] for _, rec in out[SETTLE:])
-    assert all(tuple(rec) == RECORD_KEYS for _, rec in out)
+    assert all(rec.status == "flagged" and rec.flags == ["settling"] for _, rec in out[:SETTLE])
+    assert len(out) == 300 and all(rec.status == "ok" and rec.flags == [] for _, rec in out[SETTLE:])
+    assert all(tuple(rec.to_dict()) == RECORD_KEYS for _, rec in out)
     r = check_ok_poses(out)
     # sigma is the RMS error: the mean squared ratio is 1 when sigma is right (300 samples: +-20 %)
     assert 0.6 < np.mean(r[:, 0] ** 2) < 1.5 and 0.6 < np.mean(r[:, 1] ** 2) < 1.5
     rec = out[-1][1]
-    assert rec["state"] == "moving" and rec["stored"] is False and rec["iterations"] >= 1
-    assert 0.1 < rec["singularity_margin"] < 10 and len(rec["readings"]) == 6
-    assert np.allclose(rec["readings"], out[-1][0].readings, atol=6e-5)
+    assert rec.state == "moving" and rec.stored is False and rec.iterations >= 1
+    assert 0.1 < rec.singularity_margin < 10 and len(rec.readings) == 6
+    assert np.allclose(rec.readings, out[-1][0].readings, atol=6e-5)
 
 
 @pytest.mark.parametrize(
@@ -109,7 +109,7 @@ def test_each_fault_gives_its_status_in_time_and_clean_poses_after(tmp_path, fau
     for k, s, _ in bad:
         if s != "flagged":
             rec = next(r for _, r in out if set_of(r) == k)
-            assert rec["pose"] is None and rec["sigma"] is None  # never a pose with a failure
+            assert rec.pose is None and rec.sigma is None  # never a pose with a failure
     after = statuses(out, (bad[-1][0] + 1) / RATE, 9)
     assert after and all(s == "ok" for _, s, _ in after)
     check_ok_poses(out)
@@ -120,11 +120,11 @@ def test_dropped_frames_never_mix_sampling_instants(tmp_path):
     _, out = run(tmp_path, [fault])
     during = [rec for _, rec in out if 0.5 <= set_of(rec) / RATE < 2.0]
     assert len(during) == 150  # every instant ends in a record: about 0.9^6 of them complete
-    assert {rec["status"] for rec in during} <= {"ok", "flagged", "silent_leg", "incomplete"}
-    missing = [rec for rec in during if rec["status"] == "incomplete"]
-    assert 30 < len(missing) < 100 and all(any(f.startswith("missing:leg") for f in r["flags"]) for r in missing)
-    complete = [rec for rec in during if rec["pose"] is not None]
-    assert sum(rec["status"] == "ok" for rec in complete) > len(complete) / 2  # gaps flag a few sets, not all
+    assert {rec.status for rec in during} <= {"ok", "flagged", "silent_leg", "incomplete"}
+    missing = [rec for rec in during if rec.status == "incomplete"]
+    assert 30 < len(missing) < 100 and all(any(f.startswith("missing:leg") for f in r.flags) for r in missing)
+    complete = [rec for rec in during if rec.pose is not None]
+    assert sum(rec.status == "ok" for rec in complete) > len(complete) / 2  # gaps flag a few sets, not all
     check_ok_poses(out)  # a set mixing two instants would be off by one set's motion: ~20 sigma
 
 
@@ -143,7 +143,7 @@ def test_out_of_stroke_reading_names_the_leg(tmp_path):
 def test_lock_phases_lock_store_and_release(tmp_path):
     fixture = fixture_table(lock_time=0.3)
     cycle, out = run(tmp_path, seconds=5.0, fixture=fixture, move=1.5, lock=1.0, ramp=0.3)
-    states = [(s.t_sim, rec["state"], rec["stored"]) for s, rec in out]
+    states = [(s.t_sim, rec.state, rec.stored) for s, rec in out]
     locked = [t for t, st, _ in states if st == "locked"]
     # still from 1.5 s to 2.5 s (and 4.0 s to 5.0 s): locked 0.3 s after the plate stopped
     assert 1.75 <= locked[0] <= 1.95 and all(st == "locked" for t, st, _ in states if 1.95 <= t < 2.5)
@@ -152,7 +152,7 @@ def test_lock_phases_lock_store_and_release(tmp_path):
     first_locked = {k for k in range(1, len(states)) if states[k][1] == "locked" and states[k - 1][1] != "locked"}
     assert len(first_locked) == 2
     assert all(stored == (st == "locked" and k not in first_locked) for k, (_, st, stored) in enumerate(states))
-    assert all(rec["status"] == "ok" for _, rec in out[SETTLE:])
+    assert all(rec.status == "ok" for _, rec in out[SETTLE:])
     check_ok_poses(out)
 
 
@@ -167,20 +167,20 @@ def test_recovery_without_motion_is_locked_and_stored_from_the_first_pose(tmp_pa
     cycle, out = drive(svc, sim, 0.2, recovered=lock, t0=2.0e9)
     assert cycle.recovered is lock and "initial guess" in cycle.recovery
     # locked and stored from the first pose the tracker checks (the first SETTLE are `settling`)
-    assert all(rec["flags"] == ["settling"] and not rec["stored"] for _, rec in out[:SETTLE])
-    assert all(rec["state"] == "locked" and rec["stored"] and rec["status"] == "ok" for _, rec in out[SETTLE:])
-    assert all("moved_while_off" not in rec["flags"] for _, rec in out)
+    assert all(rec.flags == ["settling"] and not rec.stored for _, rec in out[:SETTLE])
+    assert all(rec.state == "locked" and rec.stored and rec.status == "ok" for _, rec in out[SETTLE:])
+    assert all("moved_while_off" not in rec.flags for _, rec in out)
     moved = sim_config(svc, [{"name": "left", "rate": RATE, "hold": [0.015, -0.02, 0.41, 5.0, -3.0, 10.0]}])
     cycle, out = drive(svc, moved, 0.6, recovered=lock, t0=3.0e9)
     first_ok = out[SETTLE][1]
-    assert "moved_while_off" in first_ok["flags"] and first_ok["status"] == "ok" and not first_ok["stored"]
-    relocked = [rec for _, rec in out if rec["stored"]]
-    assert relocked and all("moved_while_off" not in rec["flags"] for rec in relocked[1:])
+    assert "moved_while_off" in first_ok.flags and first_ok.status == "ok" and not first_ok.stored
+    relocked = [rec for _, rec in out if rec.stored]
+    assert relocked and all("moved_while_off" not in rec.flags for rec in relocked[1:])
     other = type(lock)(**{**lock.__dict__, "geometry_hash": "0" * 64})
     cycle, out = drive(svc, sim, 0.1, recovered=other, t0=4.0e9)
     assert cycle.recovered is None and "another geometry" in cycle.recovery
-    assert all("stored_geometry_changed" in rec["flags"] for _, rec in out)
-    assert all(rec["status"] == "ok" for _, rec in out[SETTLE:])
+    assert all("stored_geometry_changed" in rec.flags for _, rec in out)
+    assert all(rec.status == "ok" for _, rec in out[SETTLE:])
 
 
 def test_one_leg_creeping_while_locked_is_an_alarm_naming_it_until_acknowledged(tmp_path, caplog):
@@ -201,15 +201,15 @@ def test_one_leg_creeping_while_locked_is_an_alarm_naming_it_until_acknowledged(
             for leg, codec in enumerate(cfg.legs):
                 rec = cycle.on_frame(leg, codec.message(float(r[leg])).data, 1.0 + k / RATE)
             out.append(rec)
-    drifting = [k for k, rec in enumerate(out) if "drift:leg1" in rec["flags"]]
-    assert drifting and out[drifting[0]]["state"] == "locked" and out[drifting[0]]["status"] != "ok"
+    drifting = [k for k, rec in enumerate(out) if "drift:leg1" in rec.flags]
+    assert drifting and out[drifting[0]].state == "locked" and out[drifting[0]].status != "ok"
     assert 50 + 25 <= drifting[0] <= 50 + 80  # 3 sigma = 30 um of creep, plus the average's lag
-    assert all("drift:leg1" == f for rec in out[drifting[0] :] for f in rec["flags"] if f.startswith("drift"))
+    assert all("drift:leg1" == f for rec in out[drifting[0] :] for f in rec.flags if f.startswith("drift"))
     # latched: nothing ok until the acknowledgement (set 150), then a new lock from the readings as they are
-    assert all(rec["status"] != "ok" for rec in out[drifting[0] : 150])
-    assert all("moved_while_locked:leg1" in rec["flags"] for rec in out[drifting[0] : 150])
-    assert out[150]["state"] == "moving" and cycle.fault is None and cycle.acknowledged is ack
-    assert all(rec["status"] == "ok" and rec["flags"] == [] for rec in out[151:])
-    assert out[-1]["state"] == "locked"
+    assert all(rec.status != "ok" for rec in out[drifting[0] : 150])
+    assert all("moved_while_locked:leg1" in rec.flags for rec in out[drifting[0] : 150])
+    assert out[150].state == "moving" and cycle.fault is None and cycle.acknowledged is ack
+    assert all(rec.status == "ok" and rec.flags == [] for rec in out[151:])
+    assert out[-1].state == "locked"
     assert sum("drift" in m for m in caplog.messages) == 1
     assert any("acknowledged by operator" in m for m in caplog.messages)

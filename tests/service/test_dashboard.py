@@ -107,7 +107,7 @@ def test_the_dashboard_shows_what_guidance_says(tmp_path):
         )
         service.changeover.activate("bracket", "test")
         deadline = time.monotonic() + 30.0  # both held plates locked: the state no longer changes
-        while not all((service.record(n) or {}).get("stored") for n in ("left", "right")):
+        while not all(getattr(service.record(n), "stored", False) for n in ("left", "right")):
             assert time.monotonic() < deadline, [service.record(n) for n in ("left", "right")]
             time.sleep(0.05)
         host, port = service.address

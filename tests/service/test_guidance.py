@@ -11,12 +11,13 @@ import pytest
 
 from hexapod_model.analysis.jacobian import leg_jacobian_local
 from hexapod_model.service import FixtureCycle, geometry_hash
-from hexapod_model.service.guidance import MARGIN_SIGMAS, deviation, guidance, record_pose
-from hexapod_model.service.pose import pose_record
-from hexapod_model.service.targets import target_from_json
+from hexapod_model.service.record.pose import pose_record
+from hexapod_model.service.record.pose_record import PoseRecord
+from hexapod_model.service.targets.guidance import MARGIN_SIGMAS, deviation, guidance
+from hexapod_model.service.targets.target import target_from_json
 
 from ..conftest import hexapod
-from .helpers import drive, fixture_table, service_config, sim_config
+from .helpers import drive, fixture_table, record_pose, service_config, sim_config
 
 HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]
 POSE = dict(zip(("x", "y", "z", "roll", "pitch", "yaw"), HOLD))
@@ -31,17 +32,11 @@ def shifted(target_pose: np.ndarray, along_mm: np.ndarray) -> np.ndarray:
 
 
 def record_at(T, readings, status="ok", sigma=(0.02, 0.005)):
-    return {
-        "fixture": "right",
-        "t": 1.0,
-        "readings": list(readings),
-        "pose": pose_record(T),
-        "status": status,
-        "flags": [] if status == "ok" else ["jump"],
-        "state": "moving",
-        "stored": False,
-        "sigma": {"translation_mm": sigma[0], "rotation_deg": sigma[1]},
-    }
+    flags = [] if status == "ok" else ["jump"]
+    sig = {"translation_mm": sigma[0], "rotation_deg": sigma[1]}
+    return PoseRecord(
+        "right", 1.0, list(readings), pose_record(T), status, flags, 1, "moving", False, sig, 1.0, None, None, T
+    )
 
 
 def test_deviation_is_in_the_targets_frame_and_leg_changes_are_the_inverse_kinematics_differences():
@@ -106,7 +101,7 @@ def test_a_record_without_a_pose_gives_legs_but_no_deviation():
     hexa = hexapod("reference")
     target = target_from_json({"pose": POSE, "tolerance": TOL}, "right", hexa, "anna", 1.0)
     rec = record_at(np.eye(4), [None] * 6, "silent_leg")
-    rec["pose"] = rec["sigma"] = None
+    rec = rec._replace(pose=None, sigma=None, transform=None)
     g = guidance(rec, target)
     assert g["deviation"] is None and not g["in_tolerance"] and g["legs"][0]["change_mm"] is None
     assert g["legs"][0]["target_mm"] == pytest.approx(target.readings[0] * 1e3)

@@ -17,8 +17,8 @@ import pytest
 from starlette.routing import Route
 
 from hexapod_model.service import ConfigError
-from hexapod_model.service.http import build_app, json_response, read_json, requires_token, service_of
-from hexapod_model.service.server import HttpServer
+from hexapod_model.service.http.app import build_app, json_response, read_json, requires_token, service_of
+from hexapod_model.service.http.server import HttpServer
 
 from .helpers import service_config
 
@@ -205,7 +205,7 @@ def test_an_endpoint_error_is_a_json_500_and_one_log_line(served, caplog):
 
 def test_bad_host_and_port_in_use_name_the_field(tmp_path):
     from hexapod_model.service import ServiceError
-    from hexapod_model.service.server import bind
+    from hexapod_model.service.http.server import bind
 
     with pytest.raises(ServiceError, match=r"set \[http\] host"):
         bind("no-such-host.invalid", 0)

@@ -67,19 +67,16 @@ def test_end_to_end_poses_equal_the_truth_within_sigma_over_http_and_subscribers
     )
     hexapods = {"left": hexapod("reference"), "right": hexapod("reference")}
     records, truth, answers = run_service(config, sim, 3.0, hexapods)
-    good = [r for r in records if r["status"] == "ok"]
-    assert (
-        len([r for r in good if r["fixture"] == "left"]) > 200
-        and len([r for r in good if r["fixture"] == "right"]) > 50
-    )
+    good = [r for r in records if r.status == "ok"]
+    assert len([r for r in good if r.fixture == "left"]) > 200 and len([r for r in good if r.fixture == "right"]) > 50
     # silent only before the encoders start, unless this busy machine stalled the simulator
-    assert len(good) >= 0.9 * len(records), {r["status"] for r in records}
+    assert len(good) >= 0.9 * len(records), {r.status for r in records}
     ratios = []
     for r in good:
-        sent = truth_of(truth, r["fixture"], r["t"])
-        assert sent is not None, r["t"]
+        sent = truth_of(truth, r.fixture, r.t)
+        assert sent is not None, r.t
         dp, dr = pose_error(r, sent.pose)
-        ratios.append((dp / (r["sigma"]["translation_mm"] * 1e-3), dr / np.radians(r["sigma"]["rotation_deg"])))
+        ratios.append((dp / (r.sigma["translation_mm"] * 1e-3), dr / np.radians(r.sigma["rotation_deg"])))
     ratios = np.array(ratios)
     assert ratios.max() < 5.0 and 0.5 < np.mean(ratios**2) < 1.6, (ratios.max(0), np.mean(ratios**2, 0))
     code, body = answers["/fixtures"]
@@ -92,15 +89,15 @@ def test_end_to_end_poses_equal_the_truth_within_sigma_over_http_and_subscribers
     code, body = answers["/health"]
     assert code == 200 and body["fixtures"]["right"]["state"] == "locked" and body["frames"] > 1000
     assert body["fixtures"]["right"]["stored"] is True and body["store"]["error"] is None
-    right = [r for r in records if r["fixture"] == "right"]
-    locking = next(k for k, r in enumerate(right) if r["state"] == "locked")
-    first_stored = next(k for k, r in enumerate(right) if r["stored"])
+    right = [r for r in records if r.fixture == "right"]
+    locking = next(k for k, r in enumerate(right) if r.state == "locked")
+    first_stored = next(k for k, r in enumerate(right) if r.stored)
     # the locking record is published, then committed: stored only from a later record on (the
     # next one, unless the commit took longer than a set period on a busy machine)
-    assert locking < first_stored and all(r["state"] == "locked" for r in right[locking:first_stored])
+    assert locking < first_stored and all(r.state == "locked" for r in right[locking:first_stored])
     with Store(config.store.path, create=False) as store:
         events = store.locks("right")
-        assert [e.t for e in events] == [right[locking]["t"]]
+        assert [e.t for e in events] == [right[locking].t]
         assert 0 < len(store.samples()) <= len(records)
 
 
@@ -137,13 +134,13 @@ def test_restart_recovers_the_last_lock_or_says_why_not(tmp_path):
     records, _, answers = run_service(config, sim_config(config, [hold]), 0.6, hexapods)
     health = answers["/health"][1]["fixtures"]["left"]
     assert health["recovered_t"] == last.t and "initial guess" in health["recovery"]
-    good = [r for r in records if r["status"] == "ok"]
-    assert good[0]["state"] == "locked" and good[0]["stored"] and "moved_while_off" not in good[0]["flags"]
+    good = [r for r in records if r.status == "ok"]
+    assert good[0].state == "locked" and good[0].stored and "moved_while_off" not in good[0].flags
     other = service_config(tmp_path, [fixture_table("left", hexapod="intersecting")], channel=config.bus.channel)
     records, _, answers = run_service(other, sim_config(other, [hold]), 0.6, {"left": hexapod("intersecting")})
     health = answers["/health"][1]["fixtures"]["left"]
     assert health["recovered_t"] is None and "another geometry" in health["recovery"]
-    assert all("stored_geometry_changed" in r["flags"] for r in records if r["status"] == "ok")
+    assert all("stored_geometry_changed" in r.flags for r in records if r.status == "ok")
 
 
 def test_non_get_methods_are_refused(tmp_path):

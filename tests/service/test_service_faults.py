@@ -69,7 +69,7 @@ def test_a_step_holds_every_record_off_ok_until_an_authenticated_acknowledgement
         n = len(records)
         code, body = call(service.address, path, {"by": "ana", "note": "encoder 3 checked"}, token=TOKEN)
         assert code == 200 and body["acknowledged"]["by"] == "ana" and body["acknowledged"]["fault"]["legs"] == [3]
-        wait_until(lambda: any(r["status"] == "ok" for r in records[n:]))
+        wait_until(lambda: any(r.status == "ok" for r in records[n:]))
         assert call(service.address, path, {"by": "ana"}, token=TOKEN)[0] == 409  # nothing waits any more
         time.sleep(0.2)
         code, health = call(service.address, "/health", token=TOKEN)
@@ -79,9 +79,9 @@ def test_a_step_holds_every_record_off_ok_until_an_authenticated_acknowledgement
     finally:
         service.stop()
         bus.shutdown()
-    stepped = [r for r in records if r["t"] >= records[0]["t"] + 1.1]  # after the step
-    first_ok_again = next(k for k, r in enumerate(stepped) if r["status"] == "ok")
-    assert first_ok_again > 10 and all(r["status"] != "ok" for r in stepped[:first_ok_again])
+    stepped = [r for r in records if r.t >= records[0].t + 1.1]  # after the step
+    first_ok_again = next(k for k, r in enumerate(stepped) if r.status == "ok")
+    assert first_ok_again > 10 and all(r.status != "ok" for r in stepped[:first_ok_again])
     assert any("acknowledged by ana (127.0.0.1:" in m for m in caplog.messages)
 
 
@@ -118,10 +118,8 @@ def test_late_legs_and_a_second_sender_give_a_record_per_instant_and_health_says
     right = health["fixtures"]["right"]
     assert right["status"] == "duplicate_frame" and "duplicate:leg3" in right["flags"]
     for name in ("left", "right"):  # one record per instant (100 Hz), none ok during the fault
-        during = [r for r in records if r["fixture"] == name and r["t"] >= records[0]["t"] + 0.7]
-        assert len(during) > 0.7 * 100 * (during[-1]["t"] - during[0]["t"]) and not any(
-            r["status"] == "ok" for r in during
-        )
+        during = [r for r in records if r.fixture == name and r.t >= records[0].t + 0.7]
+        assert len(during) > 0.7 * 100 * (during[-1].t - during[0].t) and not any(r.status == "ok" for r in during)
 
 
 def test_store_file_deleted_while_serving_every_lock_published_stored_is_in_the_file(tmp_path):
@@ -172,8 +170,8 @@ def test_a_stale_frame_of_20_sets_ago_never_completes_a_set_on_the_bus(tmp_path)
     finally:
         service.stop()
         bus.shutdown()
-    t0 = records[0]["t"]
-    during = [r for r in records if r["t"] >= t0 + 0.8]
-    assert len(during) > 40 and not any(r["status"] == "ok" for r in during)  # was: ok, up to 4.7 mm off
-    assert all("missing:leg6" in r["flags"] or "silent:leg6" in r["flags"] for r in during)
+    t0 = records[0].t
+    during = [r for r in records if r.t >= t0 + 0.8]
+    assert len(during) > 40 and not any(r.status == "ok" for r in during)  # was: ok, up to 4.7 mm off
+    assert all("missing:leg6" in r.flags or "silent:leg6" in r.flags for r in during)
     assert service.cycles["left"].counters["late_frames"] > 40

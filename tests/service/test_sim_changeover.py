@@ -8,7 +8,7 @@ import pytest
 
 from hexapod_model.lie import xyz_rpy_to_pose as placement
 from hexapod_model.service import ConfigError, Simulator
-from hexapod_model.service.sim_changeover import ChangeoverScript
+from hexapod_model.service.sim.changeover import ChangeoverScript
 
 from ..conftest import hexapod
 from .helpers import CollectingBus, fixture_table, service_config, sim_config

@@ -100,7 +100,7 @@ def test_a_failed_solve_reports_no_pose_and_tracking_restarts():
 
 def test_pose_record_angles_are_numpy_degrees_of_pinocchio_rpy_bit_for_bit():
     """The record's roll, pitch, yaw (deg): the same product as ``np.degrees`` (x * 180/pi), on floats."""
-    from hexapod_model.service.pose import pose_record
+    from hexapod_model.service.record.pose import pose_record
 
     rng = np.random.default_rng(7)
     for _ in range(2000):

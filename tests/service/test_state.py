@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexapod_model.service.state import LockDetector, StuckDetector
+from hexapod_model.service.cycle.lock import LockDetector
+from hexapod_model.service.cycle.stuck import StuckDetector
 
 NOISE = 10e-6
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from hexapod_model.service import LockEvent, ServiceError, Store
-from hexapod_model.service.store import SAMPLE_COLUMNS
-from hexapod_model.service.writer import StoreWriter
+from hexapod_model.service.store.fixture_store import SAMPLE_COLUMNS
+from hexapod_model.service.store.writer import StoreWriter
 
 
 def event(fixture="left", t=1.5, k=0.0):

@@ -11,9 +11,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from hexapod_model.service import Changeover, Store, UnknownError
-from hexapod_model.service.target_store import SCHEMA_VERSION
-from hexapod_model.service.targets import TargetError, parse_pose, recipe_from_json, target_from_json
+from hexapod_model.service import Changeover, PoseRecord, Store, UnknownError
+from hexapod_model.service.store.target_tables import SCHEMA_VERSION
+from hexapod_model.service.targets.target import TargetError, parse_pose, recipe_from_json, target_from_json
 
 from ..conftest import hexapod
 
@@ -179,9 +179,8 @@ def test_a_stored_target_that_no_longer_solves_is_not_used_and_guidance_says_why
     far = good.pose.copy()
     far[2, 3] = 0.6  # e.g. after a change to a shorter-stroke geometry: outside the workspace now
     store.targets.add_target(replace(good, fixture="left", pose=far))
-    record = {"fixture": "left", "t": 1.0, "readings": [0.0] * 6, "pose": None, "status": "no_data", "flags": []}
-    record |= {"state": "moving", "stored": False, "sigma": None}
-    cycles = {name: SimpleNamespace(target=None, last={**record, "fixture": name}) for name in ("left", "right")}
+    record = PoseRecord("left", 1.0, [0.0] * 6, None, "no_data", [], 0, "moving", False, None, None, None, None)
+    cycles = {name: SimpleNamespace(target=None, last=record._replace(fixture=name)) for name in ("left", "right")}
     changeover = Changeover(store, {"left": hexapod("reference"), "right": hexapod("reference")}, cycles)  # type: ignore[arg-type]
     assert changeover.target("left") is None and cycles["left"].target is None
     g = changeover.guidance("left")
@@ -189,4 +188,24 @@ def test_a_stored_target_that_no_longer_solves_is_not_used_and_guidance_says_why
     assert changeover.target("right") is not None and cycles["right"].target is changeover.target("right")
     with pytest.raises(UnknownError, match="no fixture 'middle'"):
         changeover.guidance("middle")
+    store.close()
+
+
+def test_listing_the_recipes_solves_each_stored_recipe_once(tmp_path, monkeypatch):
+    from hexapod_model.service.changeover import changeover as module
+
+    store = Store(tmp_path / "s.sqlite")
+    record = PoseRecord("right", 1.0, [0.0] * 6, None, "no_data", [], 0, "moving", False, None, None, None, None)
+    changeover = Changeover(
+        store, {"right": hexapod("reference")}, {"right": SimpleNamespace(target=None, last=record)}
+    )  # type: ignore[dict-item]
+    changeover.put_recipe("bracket", {"targets": {"right": body()}}, by="anna")
+    solved: list[str] = []
+    original = module.recipe_from_json
+    monkeypatch.setattr(module, "recipe_from_json", lambda *a, **k: solved.append(a[1]) or original(*a, **k))
+    first = changeover.recipes()
+    assert changeover.recipes() == first and solved == ["bracket"]  # the second listing solves nothing
+    changeover.put_recipe("bracket", {"targets": {"right": body(z=0.405)}}, by="bob")  # a new row: solved again
+    again = changeover.recipes()["recipes"]["bracket"]
+    assert solved[-1] == "bracket" and again["set_by"] == "bob" and again != first["recipes"]["bracket"]
     store.close()

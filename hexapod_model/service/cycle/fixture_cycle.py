@@ -1,0 +1,418 @@
+"""One fixture's cycle: encoder frames in, one record per sampling instant out.
+
+A **reading set** holds one frame of each leg from one sampling instant: every frame within
+``max_skew`` (default: 3/4 of the measured frame period) of the set's first, whatever the
+arrival order. A frame older than the newest seen by more than that is *late* and never joins a
+set (``late_frame:legN`` in the next record); a second frame on one leg's id within the instant
+fails the set (``duplicate_frame``, ``duplicate:legN``: two senders on one id); a frame of a
+newer instant closes an unfinished set, published as ``incomplete`` (``missing:legN``) or, when a
+missing leg's newest frame is older than ``staleness``, ``silent_leg``. So every instant ends in
+a record, and a set never mixes two instants. A set with a bad frame, an error bit, a reading
+outside the stroke or a stuck leg is published with that status and **no pose**; a solved set
+is ``ok`` only when the tracker (through :class:`~hexapod_model.service.cycle.solver.PoseSolver`)
+raised no flag, no leg of a locked fixture moved and no fault waits for an acknowledgement
+(:mod:`~hexapod_model.service.cycle.alarms`).
+
+Status values: ``ok``, ``no_data`` (nothing received yet), ``incomplete``, ``duplicate_frame``,
+``silent_leg``, ``bad_frame``, ``encoder_error``, ``out_of_stroke``, ``stuck_leg``,
+``leg_moved`` (one or two legs of a locked fixture left the band: no pose), ``not_converged``,
+``flagged``, ``drift`` (a locked fixture's averaged readings moved: a pose, named legs),
+``unacknowledged_fault`` (a pose, but a latched fault waits). Flags name the leg
+(``encoder_error:leg3``) or the tracker's doubt (``jump``, ``branch_uncertain``,
+``near_singular``, ``out_of_limits``); *advisory* flags leave a good pose ``ok``:
+``encoder_warning:legN``, ``late_frame:legN``, ``moved_while_off``, ``stored_geometry_changed``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import replace
+
+import numpy as np
+import pinocchio as pin
+
+from ...analysis.sensitivity import SensitivityEvaluator
+from ...kinematics.hexapod import Hexapod
+from ...lie import quaternion_of_matrix
+from ..config.cell import InRobot
+from ..config.settings import FixtureConfig
+from ..record.pose import pose_record
+from ..record.pose_record import PoseRecord
+from ..store.fixture_store import LockEvent
+from ..targets.guidance import deviation, within
+from ..targets.target import Target
+from .alarms import UNACKNOWLEDGED, Acknowledgement, FaultLatch, LatchedFault
+from .lock import MOTION_LEGS, LockDetector
+from .lock_load import lock_load
+from .solver import PoseSolver, SolveOutcome
+from .steps import StepDetector
+from .stuck import StuckDetector
+
+log = logging.getLogger(__name__)
+_POSE_STATUSES = ("ok", "flagged", "drift")
+CLOCK_BACK_FRAMES = 12  # late frames in a row (two sets, no frame on time): the bus's clock went back
+MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
+
+
+class FixtureCycle:
+    """Frames of one fixture in, published records out (not thread-safe: one caller thread).
+
+    Args:
+        cfg: the fixture's configuration.
+        hexa: its hexapod.
+        geometry_hash: of ``hexa`` (stored with every lock).
+        recovered: the last stored lock event of this fixture, or None.
+        t0: start time (s, Unix), the ``t`` of the first ``no_data`` record.
+        sensitivity: an evaluator of ``hexa`` shared with the other cycles run on the same thread
+            (default: one of its own; see :class:`~hexapod_model.service.cycle.solver.PoseSolver`).
+    """
+
+    def __init__(
+        self,
+        cfg: FixtureConfig,
+        hexa: Hexapod,
+        geometry_hash: str,
+        recovered: LockEvent | None,
+        t0: float,
+        sensitivity: SensitivityEvaluator | None = None,
+    ):
+        self.cfg, self.hexa, self.geometry_hash = cfg, hexa, geometry_hash
+        self.layout = cfg.legs[0].layout
+        self._unpack, self._min_length = self.layout.unpack, self.layout.length
+        self._metres_per_count = self.layout.metres_per_count
+        self._lo, self._hi = hexa.stroke[:, 0].tolist(), hexa.stroke[:, 1].tolist()
+        self._home = [leg.home_count for leg in cfg.legs]
+        self._t = [-math.inf] * 6  # receipt time of each leg's newest frame (lists: faster than arrays here)
+        self._readings = [math.nan] * 6
+        self._counts = [0] * 6
+        self._err, self._warn, self._bad, self._fresh = [False] * 6, [False] * 6, [False] * 6, [False] * 6
+        self._n_fresh = 0
+        self._max_skew, self._staleness = cfg.max_skew, cfg.staleness  # read per frame (the config is frozen)
+        self.lock = LockDetector(cfg.lock_time, cfg.steady_band, cfg.drift_limit, cfg.unlock_samples)
+        self.stuck = StuckDetector(cfg.stuck_sigmas, cfg.noise, self.layout.metres_per_count)
+        self.steps = StepDetector(cfg.noise)
+        self._period = math.nan  # s, median interval between two frames of one leg (recent frames)
+        self._intervals: list[float] = []
+        self._n_frames = 0
+        self._instant = self._lost = 0  # sampling instants, and sets lost since the last complete one
+        self._t_set = math.nan
+        self._t_newest = self._t_first = -math.inf  # newest frame seen; first frame of the set being collected
+        self._late: set[int] = set()  # legs whose late frames were dropped since the last record
+        self._late_run = 0  # late frames in a row (more than CLOCK_BACK_FRAMES: the bus clock went back)
+        self._duplicate: set[int] = set()  # legs with a second frame in the set being collected
+        #: frames and sets that could not be used, since the start (``/health``)
+        self.counters = {"late_frames": 0, "duplicate_frames": 0, "incomplete_sets": 0}
+        self.alarm = FaultLatch(cfg.name)
+        self._drift_logged = False
+        self._advisory: set[str] = set()
+        self._episode = self._stored_episode = 0
+        self._new_lock_stored = False
+        self._load: dict | None = None  # the process wrench's loads at the lock pose
+        self.recovered: LockEvent | None = None
+        self.recovery = "no stored lock pose"
+        if recovered is not None and recovered.geometry_hash == geometry_hash:
+            self.recovered, self.recovery = recovered, f"initial guess: the lock pose stored at t={recovered.t!r}"
+            self.alarm.fault = LatchedFault.from_stored(recovered.status)  # stored while a fault waited
+        elif recovered is not None:
+            self._advisory.add("stored_geometry_changed")
+            self.recovery = "stored lock pose not used: solved with another geometry (hash differs)"
+        self._check_moved = self.recovered is not None
+        initial = None if self.recovered is None else self.recovered.q
+        self.solver = PoseSolver(hexa, cfg.noise, cfg.predictor, initial, cfg.confirm_samples, sensitivity)
+        #: the changeover target (set by :class:`~hexapod_model.service.changeover.changeover.Changeover`): a lock
+        #: pose within its tolerance is stored naming it
+        self.target: Target | None = None
+        #: the lock to commit: the service takes it, stores it and calls :meth:`lock_stored`
+        self.pending_lock: tuple[int, LockEvent] | None = None
+        self._in_robot = None if cfg.cell is None else InRobot(cfg.cell, cfg.noise, self.solver.propagation)
+        #: the latest record
+        self.last: PoseRecord = self._record(t0, "no_data", [], None)
+
+    # ----- input -----
+    def on_frame(self, leg: int, data: bytes | bytearray, t: float) -> PoseRecord | None:
+        """A frame of leg ``leg`` (0-based) stamped ``t`` (s); returns a record when one is published.
+
+        A set holds frames of one sampling instant: within ``max_skew`` of its first frame. A
+        frame older than the newest by more than that is *late* (an instant already closed) and
+        is dropped, named in the next record; a second frame on one leg's id within the instant
+        is a *duplicate* (two senders?) and fails the set; a frame of a newer instant closes an
+        unfinished set as ``incomplete`` (or ``silent_leg``) naming the missing legs.
+        """
+        skew = self._max_skew or 0.75 * self._period  # NaN until the period is measured
+        published = None
+        if t < self._t_newest - skew:  # older than this instant: a late frame (False for NaN)
+            self._late_run += 1
+            if self._late_run <= CLOCK_BACK_FRAMES:
+                self.counters["late_frames"] += 1
+                self._late.add(leg)
+                return None
+            self._clock_went_back(t)
+        self._late_run = 0
+        if self._n_fresh:
+            repeat = self._fresh[leg]
+            if t - self._t_first > skew or (repeat and not t - self._t[leg] <= skew):
+                published = self._close_incomplete()  # a newer instant begins: this set cannot complete
+            elif repeat:  # a second frame on this id within one instant
+                self.counters["duplicate_frames"] += 1
+                self._duplicate.add(leg)
+                return None
+        if len(data) >= self._min_length:  # codec.decode's check, without its exception on the hot path
+            count, self._err[leg], self._warn[leg] = self._unpack(data)
+            self._counts[leg], self._bad[leg] = count, False
+            self._readings[leg] = (count - self._home[leg]) * self._metres_per_count
+        else:
+            self._bad[leg], self._readings[leg] = True, math.nan
+        dt = t - self._t[leg]
+        if 0.0 < dt <= self._staleness:  # the median ignores missed frames and bunched arrivals
+            if len(self._intervals) < 63:
+                self._intervals.append(dt)
+            else:
+                self._intervals[self._n_frames % 63] = dt
+            self._n_frames += 1
+            if self._n_frames % 32 == 8:
+                self._period = sorted(self._intervals)[len(self._intervals) // 2]
+        self._t[leg] = t
+        if t > self._t_newest:
+            self._t_newest = t
+        if not self._n_fresh:
+            self._t_first = t
+        self._fresh[leg] = True
+        self._n_fresh += 1
+        if self._n_fresh == 6:
+            self._fresh = [False] * 6
+            self._n_fresh = 0
+            if self._duplicate:
+                self._lost += 1
+                return self._failure(self._t_newest, "duplicate_frame", self._set_flags([]))
+            return self._complete(self._t_newest)
+        return published
+
+    def _clock_went_back(self, t: float) -> None:
+        """Frames keep coming older than the newest one: the bus's clock was set back; follow it."""
+        back = self._t_newest - t
+        log.warning("fixture %s: frame times went back %.3g s: following the bus clock", self.cfg.name, back)
+        self._t_newest, self._t_set, self._t = t, math.nan, [min(tk, t) for tk in self._t]
+        self._fresh, self._n_fresh = [False] * 6, 0
+        self._lost += round(self._late_run / 6)  # the sets whose frames were taken for late ones
+        self._late.clear()
+        self.lock.restart_clock(t)
+
+    def _close_incomplete(self) -> PoseRecord:
+        """Publish the unfinished set: ``silent_leg`` when a missing leg is stale, else what went wrong."""
+        t = self._t_newest
+        missing = [k for k in range(6) if not self._fresh[k]]
+        self._fresh = [False] * 6
+        self._n_fresh = 0
+        self._lost += 1
+        self.counters["incomplete_sets"] += 1
+        silent = [k for k in missing if t - self._t[k] > self.cfg.staleness and k not in self._late]
+        if silent:
+            return self._failure(t, "silent_leg", self._set_flags([f"silent:leg{k + 1}" for k in silent]))
+        status = "duplicate_frame" if self._duplicate else "incomplete"
+        return self._failure(t, status, self._set_flags([f"missing:leg{k + 1}" for k in missing]))
+
+    def _set_flags(self, flags: list[str]) -> list[str]:
+        """``flags`` plus the set's duplicate and late frames (then forgotten)."""
+        if self._duplicate:
+            flags += [f"duplicate:leg{k + 1}" for k in sorted(self._duplicate)]
+            self._duplicate.clear()
+        if self._late:
+            flags += [f"late_frame:leg{k + 1}" for k in sorted(self._late)]
+            self._late.clear()
+        return flags
+
+    def check_silence(self, now: float) -> PoseRecord | None:
+        """Publish ``silent_leg`` when nothing was published for ``staleness`` and a leg is silent."""
+        if now - self.last.t <= self.cfg.staleness:
+            return None
+        silent = [k for k in range(6) if now - self._t[k] > self.cfg.staleness]
+        if not silent:
+            return None
+        return self._failure(now, "silent_leg", [f"silent:leg{k + 1}" for k in silent])
+
+    def lock_stored(self, episode: int, event: LockEvent) -> None:
+        """Called (from the store's thread) once ``event`` of lock ``episode`` is committed."""
+        self._stored_episode = episode
+        self._new_lock_stored = True
+        log.info("fixture %s: lock pose stored (id %s, t=%r)", self.cfg.name, event.id, event.t)
+
+    @property
+    def fault(self) -> LatchedFault | None:
+        """The fault waiting for an acknowledgement (:mod:`~hexapod_model.service.cycle.alarms`)."""
+        return self.alarm.fault
+
+    @property
+    def acknowledged(self) -> Acknowledgement | None:
+        """The last acknowledgement."""
+        return self.alarm.acknowledged
+
+    def acknowledge(self, by: str, client: str, note: str = "", now: float | None = None) -> Acknowledgement | None:
+        """Acknowledge the latched fault (None when there is none); safe from another thread.
+
+        The cycle's thread clears the fault at its next set; a locked fixture then takes a new
+        lock from its readings as they are.
+        """
+        return self.alarm.request(by, client, note, now)
+
+    # ----- one set -----
+    def _complete(self, t: float) -> PoseRecord:
+        steps, dt = 1 + self._lost, t - self._t_set  # instants since the last set: lost sets count
+        if dt > 0.0 and self._period > 0.0:  # (False for NaN)
+            steps = max(steps, round(dt / self._period))
+        self._instant += steps
+        self._lost, self._t_set = 0, t
+        if self.alarm.requested and self.alarm.take() is not None:  # acknowledged: readings taken as they are
+            self.steps.reset()
+            if self.lock.state == "locked":
+                self.lock.release(t, self._readings)
+                self._episode += 1
+        r = np.array(self._readings)
+        for status, bad, name in (
+            ("bad_frame", self._bad, "bad_frame"),
+            ("encoder_error", self._err, "encoder_error"),
+        ):
+            if any(bad):
+                return self._failure(t, status, self._set_flags([f"{name}:leg{k + 1}" for k in range(6) if bad[k]]))
+        out = [k for k in range(6) if not self._lo[k] <= self._readings[k] <= self._hi[k]]
+        if out:
+            return self._failure(t, "out_of_stroke", self._set_flags([f"out_of_stroke:leg{k + 1}" for k in out]))
+        stuck = self.stuck.update(self._instant, self._counts, self._readings)
+        if stuck:
+            return self._failure(t, "stuck_leg", self._set_flags([f"stuck:leg{k + 1}" for k in stuck]))
+        was_locked = self.lock.state == "locked"
+        ready = self.lock.update(t, self._readings)
+        if was_locked and self.lock.state != "locked":
+            self._episode += 1
+            log.info("fixture %s: moving (lock released)", self.cfg.name)
+        outcome = self.solver.step(r, self._instant)
+        jumped = outcome.legs if "jump" in outcome.flags else ()
+        stepped = self.steps.update(self._instant, self._readings, jumped)
+        if stepped:  # on a locked fixture a leg moved alone: brake slip or encoder, six readings cannot tell
+            self.alarm.latch("moved_while_locked" if was_locked else "discontinuity", stepped, t)
+        if self.lock.slipped:
+            self.alarm.latch("moved_while_locked", self.lock.slipped, t)
+        if outcome.status == "ok":
+            if self._check_moved:
+                self._compare_recovered(t, outcome)
+            elif ready:
+                self._take_lock(t, outcome)
+        flags = self._set_flags(list(outcome.flags))
+        if self.lock.moved:  # one or two legs left the band of a locked fixture: not a new pose
+            return self._failure(t, "leg_moved", flags + [f"moved:leg{k + 1}" for k in self.lock.moved])
+        if self.lock.drift and not self._drift_logged:
+            log.warning("fixture %s: drift: locked readings moved beyond %g m", self.cfg.name, self.cfg.drift_limit)
+        self._drift_logged = self.lock.drift
+        if self.lock.drift:
+            if len(self.lock.drift_legs) < MOTION_LEGS:
+                self.alarm.latch("moved_while_locked", self.lock.drift_legs, t)
+            flags += [f"drift:leg{k + 1}" for k in self.lock.drift_legs]
+        status = {"ok": "ok", "flagged": "flagged", "failed": "not_converged"}[outcome.status]
+        if self.steps.pending and "jump" not in flags:  # a jump that may be a step: not ok until it is known
+            flags.append("jump")
+            status = "flagged" if status == "ok" else status
+        if status == "ok" and self.lock.drift:
+            status = "drift"
+        return self._record(t, status, flags, outcome)
+
+    def _compare_recovered(self, t: float, outcome: SolveOutcome) -> None:
+        rec = self.recovered
+        assert rec is not None and outcome.pose is not None and outcome.uncertainty is not None
+        self._check_moved = False
+        u = outcome.uncertainty
+        dt = float(np.linalg.norm(outcome.pose[:3, 3] - rec.position))
+        R = pin.Quaternion(*rec.quaternion[[3, 0, 1, 2]]).toRotationMatrix()
+        dr = float(np.linalg.norm(pin.log3(R.T @ outcome.pose[:3, :3])))
+        if dt > MOVED_SIGMAS * u.translation or dr > MOVED_SIGMAS * u.rotation:
+            self._advisory.add("moved_while_off")
+            log.warning(
+                "fixture %s: moved while off: %.3g mm, %.3g deg from the stored lock pose",
+                self.cfg.name,
+                dt * 1e3,
+                math.degrees(dr),
+            )
+        else:
+            self.lock.lock(t, rec.readings)
+            self._load = lock_load(self.cfg, self.hexa, rec.q)
+            self._episode += 1
+            self._stored_episode = self._episode
+
+    def _take_lock(self, t: float, outcome: SolveOutcome) -> None:
+        mean = self.lock.run_mean
+        sol = self.solver.solve_once(mean, outcome.q)  # type: ignore[arg-type]
+        if sol.status != "converged":
+            self.lock.restart(t, np.array(self._readings))
+            return
+        quat = _quaternion(sol.pose[:3, :3])
+        status = "ok" if self.fault is None else self.fault.stored_status()  # the lock carries a waiting fault
+        event = LockEvent(self.cfg.name, t, sol.pose[:3, 3].copy(), quat, mean, status, self.geometry_hash, sol.q)
+        target, u = self.target, outcome.uncertainty
+        if target is not None and u is not None and status == "ok":  # a lock with a fault meets no target
+            sigma = {"translation_mm": u.translation * 1e3, "rotation_deg": math.degrees(u.rotation)}
+            if within(deviation(sol.pose, target.pose), sigma, target.tolerance):
+                event = replace(event, target_id=target.id, recipe=target.recipe)
+        self.lock.lock(t, mean)
+        self._load = lock_load(self.cfg, self.hexa, sol.q)
+        self._episode += 1
+        self.pending_lock = (self._episode, event)
+        log.info("fixture %s: locked", self.cfg.name)
+
+    # ----- records -----
+    def _failure(self, t: float, status: str, flags: list[str]) -> PoseRecord:
+        return self._record(t, status, flags, None)
+
+    def _record(self, t: float, status: str, flags: list[str], outcome: SolveOutcome | None) -> PoseRecord:
+        if self._new_lock_stored:
+            self._new_lock_stored = False
+            self._advisory -= {"moved_while_off", "stored_geometry_changed"}
+        if any(self._warn):
+            flags.extend(f"encoder_warning:leg{k + 1}" for k in range(6) if self._warn[k] and not self._err[k])
+        if self._advisory:
+            flags.extend(sorted(self._advisory))
+        if self.fault is not None:  # nothing is ok until the fault is acknowledged
+            flags.extend(self.fault.flags())
+            if status in _POSE_STATUSES:
+                status = UNACKNOWLEDGED
+        pose = sigma = margin = in_robot = None
+        if outcome is not None and outcome.pose is not None and outcome.uncertainty is not None:
+            u = outcome.uncertainty
+            pose = pose_record(outcome.pose)
+            if math.isfinite(u.translation) and math.isfinite(u.rotation):
+                sigma = {"translation_mm": u.translation * 1e3, "rotation_deg": math.degrees(u.rotation)}
+                margin = u.margin
+            elif status == "ok":
+                status = "flagged"
+                flags.append("near_singular")
+            if self._in_robot is not None:
+                in_robot = self._in_robot.record(outcome.pose, outcome.q, sigma)
+        old, readings = t - self.cfg.staleness, self._readings
+        total = sum(readings)  # NaN when a reading is (readings are finite otherwise)
+        if total == total and min(self._t) >= old:  # every reading fresh: the common case
+            fresh: list[float | None] = list(readings)
+        else:
+            fresh = [None if v != v or self._t[k] < old else v for k, v in enumerate(readings)]  # v != v: NaN
+        locked = self.lock.state == "locked"
+        record = PoseRecord(
+            self.cfg.name,
+            t,
+            fresh,
+            pose,
+            status,
+            flags,
+            0 if outcome is None else outcome.iterations,
+            self.lock.state,
+            locked and self._stored_episode == self._episode,
+            sigma,
+            margin,
+            self._load if locked else None,
+            in_robot,
+            None if pose is None else outcome.pose,  # type: ignore[union-attr]
+            None if pose is None else outcome.q,  # type: ignore[union-attr]
+        )
+        self.last = record
+        return record
+
+
+def _quaternion(R: np.ndarray) -> np.ndarray:
+    """``qx, qy, qz, qw`` of ``R`` with ``qw >= 0``."""
+    return np.array(quaternion_of_matrix(R))

@@ -1,0 +1,241 @@
+"""The simulation file ``sim.toml``: simulated encoders per fixture, validated like ``fixture.toml``.
+
+Per fixture: a pose sequence (Jakobović and Jelenković's trajectory A or B played there and back, a CSV of poses
+played one row per set, or a held pose), the set rate, the reading noise, optional lock phases
+(the plate slows down, stays still with the brakes on, speeds up again) and injected faults.
+Every field is documented in ``docs/service.md``; an example is ``docs/examples/sim.toml``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ...analysis.trajectories import DURATION_S, trajectory_coordinates
+from ...exceptions import HexapodError
+from ...io.tables import poses_from_table, read_table
+from ...lie import rpy_to_matrix, xyz_rpy_to_pose
+from ..config.settings import ServiceConfig, read_toml
+from ..config.table import Table
+from ..errors import ConfigError
+from .changeover import ChangeoverScript
+
+FAULTS = (
+    "dropped_frames",
+    "silent_leg",
+    "stuck_leg",
+    "error_bit",
+    "warning_bit",
+    "spike",
+    "step",
+    "late_frame",
+    "duplicate_id",
+)
+
+
+@dataclass(frozen=True)
+class Fault:
+    """An injected fault.
+
+    Attributes:
+        kind: one of :data:`FAULTS`.
+        legs: affected legs (0-based).
+        start: seconds after the simulation starts.
+        duration: seconds (a ``spike`` affects the first set at or after ``start`` only).
+        probability: chance that a frame is lost (``dropped_frames``).
+        size: reading offset (m) of a ``spike``, a ``step`` (an encoder that slipped, for
+            ``duration``) or the second sender's frame of a ``duplicate_id`` (sent on the leg's
+            CAN id just before the genuine frame).
+        sets: a ``late_frame`` leg sends its frame of this many sets earlier, with that set's
+            timestamp, last in the set, instead of the current one.
+    """
+
+    kind: str
+    legs: tuple[int, ...]
+    start: float
+    duration: float = 0.0
+    probability: float = 1.0
+    size: float = 0.0
+    sets: int = 1
+
+    def active(self, t: float) -> bool:
+        """True while the fault acts at simulation time ``t`` (s)."""
+        return self.start <= t < self.start + self.duration
+
+
+@dataclass(frozen=True)
+class SimFixture:
+    """Simulated encoders of one fixture.
+
+    Attributes:
+        name: the fixture (of ``fixture.toml``).
+        rate: reading sets per second (six frames each).
+        noise: 1-sigma Gaussian reading noise (m).
+        poses: (n, 4, 4) pose sequence (base -> platform, m): one held pose, CSV rows (one per
+            set), or the trajectory sampled at ``rate`` over one there-and-back ``period``.
+        move, lock: seconds of motion, then seconds still (``lock = 0``: always moving).
+        ramp: seconds to slow down before and speed up after a lock phase.
+        faults: injected faults.
+        changeover: follow the fixture's target when it changes (``None``: never).
+    """
+
+    name: str
+    rate: float
+    noise: float
+    poses: np.ndarray
+    move: float = 1.0
+    lock: float = 0.0
+    ramp: float = 0.2
+    faults: tuple[Fault, ...] = ()
+    changeover: ChangeoverScript | None = None
+
+    def speed(self, t: float) -> float:
+        """Playback speed (0..1) of the pose sequence at simulation time ``t`` (s)."""
+        if self.lock <= 0.0:
+            return 1.0
+        p = t % (self.move + self.lock)
+        if p >= self.move:
+            return 0.0
+        x = min(p, self.move - p) / self.ramp if self.ramp > 0 else 1.0
+        return 1.0 if x >= 1.0 else 0.5 * (1.0 - np.cos(np.pi * x))
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """The whole ``sim.toml``."""
+
+    fixtures: tuple[SimFixture, ...]
+    seed: int = 0
+    source: str = "<dict>"
+
+
+def trajectory_sequence(name: str, home: np.ndarray, scale: float, rate: float, period: float) -> np.ndarray:
+    """Trajectory ``name`` (Jakobović and Jelenković (2002) eqs. 20-21) there and back in ``period`` s, at ``rate`` Hz.
+
+    The trajectory's time runs as ``2 (1 - cos(2 pi t / period))`` (0 -> 4 s -> 0), so the
+    turns are smooth; positions are scaled by ``scale`` (m per paper unit) about ``home``.
+    """
+    t = np.arange(0.0, period, 1.0 / rate)
+    tau = 0.5 * DURATION_S * (1.0 - np.cos(2.0 * np.pi * t / period))
+    c = trajectory_coordinates(name, tau)
+    poses = np.tile(np.eye(4), (len(t), 1, 1))
+    poses[:, :3, :3] = home[:3, :3] @ rpy_to_matrix(*np.radians(c[:, 3:6]).T)
+    poses[:, :3, 3] = home[:3, 3] + scale * c[:, :3]
+    return poses
+
+
+def load_simulation(path: str | Path, service: ServiceConfig) -> SimConfig:
+    """Read and validate ``sim.toml`` against the service configuration."""
+    path = Path(path)
+    return simulation_from_dict(read_toml(path), service, str(path), path.parent)
+
+
+def simulation_from_dict(data: dict, service: ServiceConfig, source: str = "<dict>", folder: Path | None = None):
+    """Validate a parsed ``sim.toml``; CSV paths are relative to ``folder``."""
+    top = Table(data, "", source)
+    seed = top.integer("seed", 0, 0, 2**63)
+    items = top.take("fixtures")
+    if not isinstance(items, list) or not items:
+        raise top.error("fixtures", items, "expected one or more [[fixtures]] tables")
+    fixtures = tuple(
+        _fixture(Table(f, f"fixtures[{i}]", source), service, folder or Path(".")) for i, f in enumerate(items)
+    )
+    top.finish()
+    names = [f.name for f in fixtures]
+    for i, n in enumerate(names):
+        if n in names[:i]:
+            raise ConfigError(f"fixtures[{i}].name", n, "simulated twice", source)
+    return SimConfig(fixtures, seed, source)
+
+
+def _fixture(t: Table, service: ServiceConfig, folder: Path) -> SimFixture:
+    name = t.text("name")
+    try:
+        fc = service.fixture(name)
+    except KeyError:
+        raise t.error("name", name, f"no such fixture in {service.source}") from None
+    rate = t.number("rate", 100.0, 0.1, 20_000.0)
+    sources = [k for k in ("trajectory", "csv", "hold") if k in t.data]
+    if len(sources) != 1:
+        raise t.error("trajectory", sources, "give exactly one pose source: trajectory, csv or hold")
+    hexa = fc.load_hexapod()
+    if "trajectory" in t.data:
+        poses = trajectory_sequence(
+            t.text("trajectory", choices=("A", "B")),
+            hexa.home_pose,
+            t.number("scale", 0.01, 0.0, 1.0),
+            rate,
+            t.number("period", 8.0, 0.1, 3600.0),
+        )
+    elif "csv" in t.data:
+        p = folder / t.text("csv")
+        try:
+            poses, invalid = poses_from_table(*read_table(p))
+        except (HexapodError, OSError) as exc:
+            raise t.error("csv", str(p), f"cannot read poses: {exc}") from None
+        bad = next((k for k, why in enumerate(invalid) if why), None)
+        if bad is not None:
+            raise t.error("csv", str(p), f"pose row {bad + 1}: {invalid[bad]}")
+    else:
+        v = t.take("hold")
+        if not isinstance(v, list) or len(v) != 6 or not all(isinstance(x, (int, float)) for x in v):
+            raise t.error("hold", v, "expected [x, y, z, roll, pitch, yaw] in m and degrees")
+        poses = xyz_rpy_to_pose(v)[None]
+    faults = t.take("faults", [])
+    if not isinstance(faults, list):
+        raise t.error("faults", faults, "expected [[fixtures.faults]] tables")
+    sim = SimFixture(
+        name=name,
+        rate=rate,
+        noise=t.number("noise", 10e-6, 0.0, 0.01),
+        poses=poses,
+        move=t.number("move", 1.0, 0.01, 3600.0),
+        lock=t.number("lock", 0.0, 0.0, 3600.0),
+        ramp=t.number("ramp", 0.2, 0.0, 60.0),
+        faults=tuple(_fault(Table(f, t.name(f"faults[{k}]"), t.source)) for k, f in enumerate(faults)),
+        changeover=_changeover(t.table("changeover")) if "changeover" in t.data else None,
+    )
+    if 2 * sim.ramp > sim.move and sim.lock > 0:
+        raise t.error("ramp", sim.ramp, f"two ramps must fit in move = {sim.move:g} s")
+    t.finish()
+    _check_reachable(t, sources[0], hexa, poses)
+    return sim
+
+
+def _changeover(t: Table) -> ChangeoverScript:
+    script = ChangeoverScript(
+        move=t.number("move", 4.0, 0.01, 3600.0),
+        overshoot=t.number("overshoot", 0.0, 0.0, 1.0),
+        settle=t.number("settle", 1.0, 0.01, 3600.0),
+    )
+    t.finish()
+    return script
+
+
+def _fault(t: Table) -> Fault:
+    kind = t.text("kind", choices=FAULTS)
+    leg = t.take("leg", 0)
+    legs = tuple(range(6)) if leg == 0 and kind == "dropped_frames" else (t.integer("leg", lo=1, hi=6) - 1,)
+    fault = Fault(
+        kind=kind,
+        legs=legs,
+        start=t.number("start", 0.0, 0.0, 1e6),
+        duration=t.number("duration", {"spike": 0.0, "step": 1e6}.get(kind, 1.0), 0.0, 1e6),
+        probability=t.number("probability", 0.2, 0.0, 1.0) if kind == "dropped_frames" else 1.0,
+        size=t.number("size", 0.002, -0.5, 0.5) if kind in ("spike", "step", "duplicate_id") else 0.0,
+        sets=t.integer("sets", 1, 1, 1000) if kind == "late_frame" else 1,
+    )
+    t.finish()
+    return fault
+
+
+def _check_reachable(t: Table, key: str, hexa, poses: np.ndarray) -> None:
+    """Every pose of the sequence (at most 200 spread over it) solves by inverse kinematics."""
+    guess = None
+    for k in np.unique(np.linspace(0, len(poses) - 1, min(len(poses), 200)).astype(int)):
+        try:
+            guess = hexa.inverse(poses[k], guess=guess)
+        except HexapodError as exc:
+            raise t.error(key, t.data[key], f"pose {k} of {len(poses)} is outside the workspace: {exc}") from None

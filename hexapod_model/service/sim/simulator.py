@@ -1,0 +1,292 @@
+"""Simulated encoders: poses -> inverse kinematics -> noisy readings -> the fixture's own frames.
+
+Each simulated fixture plays its pose sequence (:mod:`hexapod_model.service.sim.config`) at a
+playback speed that slows to 0 in lock phases; a pose between two samples of the sequence is
+interpolated on SE(3). Its leg readings come from the hexapod's inverse kinematics (warm
+started), get Gaussian noise, then the faults act, and every leg's reading is encoded with the
+fixture's frame layout, CAN id and home count and sent on the bus. Every sent set is kept in
+:attr:`Simulator.truth` (the poses the service should report).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import can
+import numpy as np
+import pinocchio as pin
+
+from ...exceptions import HexapodError
+from ...kinematics.hexapod import Hexapod
+from ...kinematics.newton.solver import Solution
+from ..config.settings import FixtureConfig, ServiceConfig
+from ..errors import FrameError
+from .changeover import Follower
+from .config import SimConfig, SimFixture
+
+log = logging.getLogger(__name__)
+FRAME_TIME = 130e-6  # s: one 8-byte frame on a 1 Mbit/s bus, the spacing of a set's stamps
+
+
+@dataclass(frozen=True)
+class SentSet:
+    """One simulated reading set as sent.
+
+    Attributes:
+        fixture: its name.
+        t_sim: simulation time (s).
+        t_first, t_last: time (s, Unix) of the set: its stamp and that of its last frame, or the
+            wall-clock time just before the first and after the last frame when not stamped.
+        pose: the true pose (4x4, base -> platform, m).
+        readings: the true readings (m), before noise and faults.
+        sent: which legs' frames went on the bus.
+        faults: kinds of the faults active on this set.
+    """
+
+    fixture: str
+    t_sim: float
+    t_first: float
+    t_last: float
+    pose: np.ndarray
+    readings: np.ndarray
+    sent: tuple[bool, ...]
+    faults: tuple[str, ...]
+
+
+class _Encoders:
+    """The six simulated encoders of one fixture."""
+
+    def __init__(self, sim: SimFixture, cfg: FixtureConfig, hexa: Hexapod, rng: np.random.Generator, targets=None):
+        self.sim, self.cfg, self.hexa, self.rng = sim, cfg, hexa, rng
+        self.follower = None if sim.changeover is None or targets is None else Follower(sim.changeover, sim.ramp)
+        self._targets = targets
+        self.tau = 0.0  # position in the pose sequence (samples)
+        self._key: float | None = None
+        self._sol: Solution | None = None
+        self._stuck: dict[int, float] = {}
+        self._spiked: set[int] = set()
+        #: sent sets, newest last (for late_frame)
+        self.past: deque[list[can.Message | None]] = deque(maxlen=1001)
+        self.late: dict[int, int] = {}
+        self.duplicate: dict[int, float] = {}
+
+    def pose(self) -> np.ndarray:
+        n = len(self.sim.poses)
+        k = int(np.floor(self.tau))
+        a, b = self.sim.poses[k % n], self.sim.poses[(k + 1) % n]
+        frac = self.tau - k
+        if frac == 0.0 or n == 1:
+            return a
+        A, B = pin.SE3(a), pin.SE3(b)
+        return (A * pin.exp6(frac * pin.log6(A.inverse() * B))).homogeneous
+
+    def advance(self, t_sim: float) -> tuple[np.ndarray, np.ndarray]:
+        """True pose and readings at ``t_sim``; the sequence position then moves on one set."""
+        factor = 1.0
+        if self.follower is not None:
+            f = self.follower
+            key, target = self._targets(self.sim.name)
+            f.request(key, target)
+            playing = len(self.sim.poses) > 1 and self.sim.speed(t_sim) > 0.0
+            current = self.pose() if self._sol is None else self._sol.pose
+            if f.follow(current, t_sim, playing):
+                self._sol = self.hexa.inverse(f.pose(t_sim), guess=self._sol)
+                self._key = None
+                return self._sol.pose, self._sol.lengths.copy()
+            factor = f.sequence_speed(t_sim, playing)
+        if self._key != self.tau:
+            pose = self.pose()
+            self._sol = self.hexa.inverse(pose, guess=self._sol)
+            self._key = self.tau
+        assert self._sol is not None
+        pose, true = self._sol.pose, self._sol.lengths.copy()
+        if len(self.sim.poses) > 1:
+            self.tau = (self.tau + factor * self.sim.speed(t_sim)) % len(self.sim.poses)
+        return pose, true
+
+    def skip(self, t_sim: float) -> None:
+        """Let a set's time pass unsent: the plate moves on."""
+        f = self.follower
+        if f is not None and f.active:
+            return  # the move is a function of time: nothing to advance
+        if len(self.sim.poses) > 1:
+            playing = self.sim.speed(t_sim) > 0.0
+            factor = 1.0 if f is None else f.sequence_speed(t_sim, playing)
+            self.tau = (self.tau + factor * self.sim.speed(t_sim)) % len(self.sim.poses)
+
+    def frames(self, t_sim: float, true: np.ndarray) -> tuple[list[can.Message | None], tuple[str, ...]]:
+        """The six frames (``None``: not sent) of a set at ``t_sim``."""
+        r = true + self.rng.normal(0.0, self.sim.noise, 6) if self.sim.noise > 0 else true.copy()
+        err, warn, drop = [False] * 6, [False] * 6, [False] * 6
+        self.late = {}  # leg -> sets: send that old frame last instead (late_frame)
+        self.duplicate = {}  # leg -> reading of a second sender (duplicate_id)
+        active = []
+        for i, f in enumerate(self.sim.faults):
+            if f.kind == "spike":
+                if t_sim >= f.start and i not in self._spiked:
+                    self._spiked.add(i)
+                    active.append(f.kind)
+                    for k in f.legs:
+                        r[k] += f.size
+                continue
+            if not f.active(t_sim):
+                for k in f.legs:
+                    if f.kind == "stuck_leg":
+                        self._stuck.pop(k, None)
+                continue
+            active.append(f.kind)
+            for k in f.legs:
+                if f.kind == "dropped_frames":
+                    drop[k] |= bool(self.rng.random() < f.probability)
+                elif f.kind == "silent_leg":
+                    drop[k] = True
+                elif f.kind == "stuck_leg":
+                    r[k] = self._stuck.setdefault(k, float(r[k]))
+                elif f.kind == "error_bit":
+                    err[k] = True
+                elif f.kind == "warning_bit":
+                    warn[k] = True
+                elif f.kind == "step":
+                    r[k] += f.size
+                elif f.kind == "late_frame":
+                    self.late[k] = f.sets
+                elif f.kind == "duplicate_id":
+                    self.duplicate[k] = float(r[k] + f.size)
+        msgs: list[can.Message | None] = []
+        for k, leg in enumerate(self.cfg.legs):
+            try:
+                msgs.append(None if drop[k] else leg.message(float(r[k]), err[k], warn[k]))
+            except FrameError as exc:
+                log.warning("simulated fixture %s leg %d: frame not sent: %s", self.cfg.name, k + 1, exc)
+                msgs.append(None)
+        return msgs, tuple(active)
+
+
+class Simulator:
+    """Simulated encoders of every fixture of ``sim`` on ``bus``.
+
+    Args:
+        service: the service configuration (frame layouts, CAN ids, hexapods).
+        sim: the simulation.
+        bus: where the frames go (a python-can bus; ``virtual`` reaches this process only and
+            keeps the sampling-time stamps when created with ``preserve_timestamps=True``).
+        truth: how many sent sets :attr:`truth` keeps.
+        hexapods: already loaded hexapods by fixture name (else loaded here).
+        targets: ``targets(name) -> (key, 4x4 pose or None)``: each fixture's current target (the
+            key changes with it), which fixtures with a ``changeover`` script move to.
+    """
+
+    def __init__(
+        self,
+        service: ServiceConfig,
+        sim: SimConfig,
+        bus: can.BusABC,
+        truth: int = 200_000,
+        hexapods: dict[str, Hexapod] | None = None,
+        targets: Callable[[str], tuple[object, np.ndarray | None]] | None = None,
+    ):
+        self.bus, self.sim = bus, sim
+        rng = np.random.default_rng(sim.seed)
+        hexapods = hexapods or {}
+        self._encoders = []
+        for s in sim.fixtures:
+            cfg = service.fixture(s.name)
+            hexa = hexapods.get(s.name) or cfg.load_hexapod()
+            self._encoders.append(_Encoders(s, cfg, hexa, np.random.default_rng(rng.integers(2**63)), targets))
+        self.truth: deque[SentSet] = deque(maxlen=truth)
+        self.frames_sent = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def send_set(self, index: int, t_sim: float, stamp: float | None = None, stall_check: bool = True) -> SentSet:
+        """Send one reading set of fixture ``index`` (of ``sim.fixtures``) at simulation time ``t_sim``.
+
+        With ``stamp`` (s, Unix) the frames carry it (plus :data:`FRAME_TIME` per frame, as a bus
+        delivers a burst) as their timestamps; a virtual bus keeps them when it was created with
+        ``preserve_timestamps=True``, so the receiver sees the sampling times however late this
+        thread runs. Without, the bus stamps them when sent. ``stall_check``: a set sent more
+        than a period after its stamp is lost, as an encoder's would be.
+        """
+        enc = self._encoders[index]
+        pose, true = enc.advance(t_sim)
+        msgs, faults = enc.frames(t_sim, true)
+        t_first = time.time()
+        if stamp is not None and stall_check and t_first - stamp > 1.0 / enc.sim.rate:  # this thread stalled: lost
+            msgs = [None] * 6
+        for k, m in enumerate(msgs):
+            if m is not None and stamp is not None:
+                m.timestamp = stamp + k * FRAME_TIME
+        enc.past.append(list(msgs))
+        order: list[can.Message | None] = []
+        for k, m in enumerate(msgs):
+            if k in enc.duplicate and m is not None:
+                second = enc.cfg.legs[k].message(enc.duplicate[k])
+                second.timestamp = m.timestamp - FRAME_TIME / 2
+                order.append(second)
+            order.append(None if k in enc.late else m)
+        for k, sets in enc.late.items():  # the frame of `sets` sets ago, with its own stamp, last
+            old = enc.past[-1 - sets][k] if len(enc.past) > sets else None
+            order.append(old)
+            msgs[k] = old
+        for m in order:
+            if m is not None:
+                self.bus.send(m)
+        if stamp is not None:
+            t_first, t_last = stamp, stamp + 5 * FRAME_TIME
+        else:
+            t_last = time.time()
+        sent = SentSet(enc.sim.name, t_sim, t_first, t_last, pose, true, tuple(m is not None for m in msgs), faults)
+        self.frames_sent += sum(sent.sent)
+        self.truth.append(sent)
+        return sent
+
+    def run(self, duration: float | None = None) -> None:
+        """Send sets at each fixture's rate until :meth:`stop` or ``duration`` seconds of simulation.
+
+        Frames are stamped with their sampling time (see :meth:`send_set`); a set due more than
+        one period ago is skipped (its time passes unsent), never sent in a burst.
+        """
+        start, wall = time.monotonic(), time.time()
+        due = [0.0] * len(self._encoders)
+        while not self._stop.is_set():
+            i = min(range(len(due)), key=due.__getitem__)
+            t_sim = due[i]
+            if duration is not None and t_sim >= duration:
+                return
+            wait = start + t_sim - time.monotonic()
+            if wait > 0:
+                self._stop.wait(min(wait, 0.05))
+                continue
+            period = 1.0 / self._encoders[i].sim.rate
+            if -wait > period:  # late by more than a period (busy machine): encoders sample on their
+                self._encoders[i].skip(t_sim)  # own clock, so this set is lost, not sent in a burst
+            else:
+                try:
+                    self.send_set(i, t_sim, wall + t_sim)
+                except (can.CanError, HexapodError) as exc:
+                    log.error("simulated fixture %s: %s", self._encoders[i].sim.name, exc)
+            due[i] += period
+
+    @property
+    def running(self) -> bool:
+        """True while the background thread sends."""
+        return self._thread is not None and self._thread.is_alive()
+
+    def start(self, duration: float | None = None) -> None:
+        """Run in a background thread."""
+        self._stop.clear()
+        self._thread = threading.Thread(target=self.run, args=(duration,), name="hexapod-sim", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Stop sending (and wait for the background thread)."""
+        self._stop.set()
+        if self._thread is not None:
+            if self._thread.ident is not None:  # Ctrl-C may land between creating and starting it
+                self._thread.join()
+            self._thread = None
