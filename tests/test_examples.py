@@ -8,6 +8,7 @@ import signal
 import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -93,18 +94,29 @@ def free_port() -> int:
 
 
 def test_robot_cell_client(tmp_path):
+    """With the token set-up of docs/changeover.md: a missing token is said at once, with the fix."""
     port = free_port()
     config = (ROOT / "docs/examples/fixture.toml").read_text()
     config = config.replace("port = 8765", f"port = {port}").replace('channel = "fixtures"', 'channel = "cell-test"')
+    config = config.replace('# token_file = "fixture.token"', 'token_file = "fixture.token"')
     (tmp_path / "fixture.toml").write_text(config)
+    (tmp_path / "fixture.token").write_text("robot-cell-client-token-0123456789\n")
+    (tmp_path / "fixture.token").chmod(0o600)
     sim = str(ROOT / "docs/examples/sim.toml")
     log = (tmp_path / "serve.log").open("w")
     serve = subprocess.Popen(
         [sys.executable, "-m", "hexapod_model", "serve", "fixture.toml", "--simulate", sim],
         cwd=tmp_path, env=env(), stdout=subprocess.DEVNULL, stderr=log,
     )  # fmt: skip
+    url = ["--url", f"http://127.0.0.1:{port}", "--timeout", "240"]
     try:
-        out = run("robot_cell_client.py", "--url", f"http://127.0.0.1:{port}", "--timeout", "240", cwd=tmp_path)
+        t0 = time.monotonic()
+        refused = subprocess.run(
+            [sys.executable, str(EXAMPLES / "robot_cell_client.py"), *url], cwd=tmp_path, env=env(),
+            capture_output=True, text=True, timeout=300,
+        )  # fmt: skip
+        said_in = time.monotonic() - t0
+        out = run("robot_cell_client.py", *url, "--token-file", "fixture.token", cwd=tmp_path)
     finally:
         serve.send_signal(signal.SIGINT)
         try:
@@ -113,6 +125,8 @@ def test_robot_cell_client(tmp_path):
             serve.kill()
             serve.wait()
         log.close()
+    assert refused.returncode != 0 and "401" in refused.stderr and "--token-file" in refused.stderr, refused.stderr
+    assert said_in < 120.0, said_in  # at the first answer (the service starts), not after --timeout
     assert "fixtures left, right" in out
     found = re.search(r"right: locked at x (\S+) y (\S+) z (\S+) m, roll (\S+) pitch (\S+) yaw (\S+) deg", out)
     sigma = re.search(r"1-sigma ([\d.]+) mm, ([\d.]+) deg", out)
