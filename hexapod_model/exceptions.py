@@ -137,6 +137,18 @@ class AssemblyError(SolverError):
     """
 
 
+class HexapodWarning(UserWarning):
+    """Base class of every warning issued by hexapod_model."""
+
+
+class CompileWarning(HexapodWarning):
+    """The solver's kernels compile now: the first solve after installation waits for it, once.
+
+    Issued once per process, before the first compilation (the ``hexapod_model.compile`` logger
+    says each entry at INFO). Silence it with ``warnings.filterwarnings("ignore", category=CompileWarning)``.
+    """
+
+
 class ViewError(HexapodError):
     """The 3-D scene cannot be built or shown (missing optional package, bad configuration)."""
 
