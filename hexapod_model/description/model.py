@@ -272,10 +272,17 @@ class ClosedLoopModel:
             return pin.GeometryModel()
         import tempfile
 
+        from .mjcf import FLOOR
+
         with tempfile.TemporaryDirectory() as tmp:  # Pinocchio reads MJCF from files only
             path = Path(tmp) / "hexapod.xml"
             path.write_text(self.mjcf_xml)
-            return pin.buildGeomFromMJCF(self.model, str(path), pin.GeometryType.VISUAL)
+            visual = pin.buildGeomFromMJCF(self.model, str(path), pin.GeometryType.VISUAL)
+        hexapod = pin.GeometryModel()  # without the exported scene's floor: not part of the hexapod
+        for g in visual.geometryObjects:
+            if not (g.name == FLOOR and g.parentJoint == 0):
+                hexapod.addGeometryObject(g.copy())
+        return hexapod
 
     def limited_q(self) -> np.ndarray:
         """Indices of q that carry finite joint limits (all leg joints)."""
