@@ -154,6 +154,7 @@ def test_fixture_target_without_a_service_is_one_line(tmp_path, capsys):
     assert err.count("\n") == 1 and "is hexapod serve running?" in err
 
 
+@pytest.mark.cell
 def test_view_live_cell_places_the_ur10_by_the_served_pose_in_robot(tmp_path, capsys):
     from hexapod_model.viz.robot_cell import robot_base_pose, tool_changer_pose
 
