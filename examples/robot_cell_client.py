@@ -21,6 +21,7 @@ says which.
 import argparse
 import json
 import os
+import sys
 import time
 import urllib.error
 import urllib.request
@@ -61,7 +62,15 @@ def get(path: str) -> dict:
         raise
 
 
+def waiting(what: str, said: set) -> None:
+    """Say on stderr, once per distinct ``what``, what the script waits for."""
+    if what not in said:
+        said.add(what)
+        print(f"waiting up to {args.timeout:g} s: {what}", file=sys.stderr, flush=True)
+
+
 deadline = time.monotonic() + args.timeout
+said: set = set()
 while True:  # the service may still be starting (connection refused, or 503 while it prepares)
     try:
         fixtures = get("/fixtures")["fixtures"]
@@ -69,6 +78,8 @@ while True:  # the service may still be starting (connection refused, or 503 whi
     except (urllib.error.URLError, ConnectionError, TimeoutError) as exc:
         if time.monotonic() > deadline:
             raise SystemExit(f"no pose service at {args.url}: {exc}") from None
+        starting = isinstance(exc, urllib.error.HTTPError) and exc.code == 503
+        waiting(f"the pose service at {args.url} ({'starting' if starting else 'not answering yet'})", said)
         time.sleep(0.5)
 print(f"{args.url}: fixtures {', '.join(fixtures)}")
 if args.fixture not in fixtures:
@@ -81,6 +92,7 @@ while True:
         break
     if time.monotonic() > deadline:
         raise SystemExit(f"{args.fixture}: no locked pose ({record['status']}, {record['state']}, {record['flags']})")
+    waiting(f"a locked, stored pose of {args.fixture} (now {record['status']}, {record['state']})", said)
     time.sleep(0.1)
 
 pose, sigma = record["pose"], record["sigma"]  # the platform in the hexapod's base frame: m and degrees
