@@ -21,6 +21,7 @@ import logging
 import os
 import sys
 import warnings
+from types import FrameType
 from typing import Any
 
 from ...exceptions import CompileWarning
@@ -64,7 +65,8 @@ def announce(dispatcher: Any) -> None:
 
 def _caller_level() -> int:
     """The ``stacklevel`` of the first frame outside the package: the warning names the user's line."""
-    frame, level = sys._getframe(1), 1
+    frame: FrameType | None = sys._getframe(1)
+    level = 1
     while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE):
         frame, level = frame.f_back, level + 1
     return level
