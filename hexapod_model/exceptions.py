@@ -106,7 +106,7 @@ class SolverError(HexapodError, RuntimeError):
     """The Newton solver did not return a pose to use.
 
     Attributes:
-        result: the :class:`hexapod_model.solver.Solution` with ``status`` saying why
+        result: the :class:`hexapod_model.kinematics.newton.solver.Solution` with ``status`` saying why
             (``"max_iterations"``, ``"singular"``, ``"out_of_limits"``).
     """
 

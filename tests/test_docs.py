@@ -210,6 +210,10 @@ def test_the_sites_roles_become_links_that_keep_the_names():
         '<autoref identifier="hexapod_model.kinematics.newton.kernels" optional><code>.kernels</code></autoref>'
         " and ``q``."
     )
+    assert roles.markdown_roles("`hexapod_model.io.tables` or ``hexapod_model.files``") == (
+        '<autoref identifier="hexapod_model.io.tables" optional><code>hexapod_model.io.tables</code></autoref> or '
+        '<autoref identifier="hexapod_model.files" optional><code>hexapod_model.files</code></autoref>'
+    )
     assert roles.markdown_roles(":func:`..rotations.pose_distance`", "hexapod_model.kinematics.newton") == (
         '<autoref identifier="hexapod_model.kinematics.rotations.pose_distance" optional>'
         "<code>..rotations.pose_distance</code></autoref>"
