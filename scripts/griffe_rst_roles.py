@@ -5,7 +5,7 @@ The docstrings name objects the Sphinx way (``:class:`~hexapod_model.kinematics.
 extension, loaded by ``mkdocs.yml`` (``extensions`` of the Python handler), rewrites each role as
 an optional mkdocs-autorefs cross-reference: a link to the name's entry in the API pages, shown
 as code the way Sphinx shows it (``~`` keeps the last component only); a name the site does not
-document (a private helper) stays plain code. A relative name (``.kernels``, ``..rotations.x``)
+document (a private function) stays plain code. A relative name (``.kernels``, ``..rotations.x``)
 is resolved against the package of the docstring's module, one level up per extra dot; a bare
 one (``InputError``, ``Hexapod.forward``) as Python would in the docstring's scope (its imports,
 its class), once the whole package is loaded.
