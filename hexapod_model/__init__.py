@@ -15,9 +15,11 @@ from .description.presets import DEFAULT_PRESET, PRESETS, get_preset
 from .description.urdf import geometry_to_urdf, read_closures, write_urdf
 from .exceptions import (
     AssemblyError,
+    CompileWarning,
     ConvergenceError,
     GeometryError,
     HexapodError,
+    HexapodWarning,
     InputError,
     LimitError,
     MjcfError,
@@ -35,9 +37,11 @@ from .kinematics.newton.solver import STATUSES, Solution
 
 __all__ = [
     "AssemblyError",
+    "CompileWarning",
     "ConvergenceError",
     "GeometryError",
     "HexapodError",
+    "HexapodWarning",
     "InputError",
     "LimitError",
     "MjcfError",

@@ -106,7 +106,7 @@ class SolverError(HexapodError, RuntimeError):
     """The Newton solver did not return a pose to use.
 
     Attributes:
-        result: the :class:`hexapod_model.solver.Solution` with ``status`` saying why
+        result: the :class:`hexapod_model.kinematics.newton.solver.Solution` with ``status`` saying why
             (``"max_iterations"``, ``"singular"``, ``"out_of_limits"``).
     """
 
@@ -134,6 +134,18 @@ class AssemblyError(SolverError):
     Status ``ambiguous_assembly`` (``result.candidates`` holds the poses of the assemblies
     found) or ``uncertified`` (``result.pose`` closes the loops near a singularity, but may be
     another assembly than the one connected to the start).
+    """
+
+
+class HexapodWarning(UserWarning):
+    """Base class of every warning issued by hexapod_model."""
+
+
+class CompileWarning(HexapodWarning):
+    """The solver's kernels compile now: the first solve after installation waits for it, once.
+
+    Issued once per process, before the first compilation (the ``hexapod_model.compile`` logger
+    says each entry at INFO). Silence it with ``warnings.filterwarnings("ignore", category=CompileWarning)``.
     """
 
 

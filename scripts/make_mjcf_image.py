@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +54,7 @@ def main(argv=None) -> int:
     T[:3, 3] = POSE[:3]
     lengths = hexa.inverse(T).lengths
     text = geometry_to_mjcf(get_preset("reference"), actuated=True)
+    text = re.sub(r'\s*<geom name="floor"[^>]*/>', "", text)  # the exported plain floor: this one has a material
     text = text.replace("<worldbody>", SCENE.strip() + "\n  <worldbody>" + LIGHTS.rstrip(), 1)
     m = mujoco.MjModel.from_xml_string(text)
     m.opt.gravity[:] = 0.0

@@ -1,8 +1,9 @@
-"""Shared fixtures: one loaded Hexapod per preset for the whole session; the chromium marker."""
+"""Shared fixtures: one loaded Hexapod per preset for the whole session; the chromium and cell markers."""
 
 from __future__ import annotations
 
 import functools
+import importlib.metadata
 import re
 import shutil
 
@@ -14,6 +15,19 @@ from hexapod_model.viz.render import CHROMIUM_NAMES
 
 PRESET_NAMES = list(hm.PRESETS)
 HAVE_CHROMIUM = any(shutil.which(name) for name in CHROMIUM_NAMES)
+
+
+def _have_cell() -> bool:
+    try:
+        importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        return False
+    return True
+
+
+#: the UR10 of the robot cell (example-robot-data, ~400 MB; the `cell` extra, in `test`)
+HAVE_CELL = _have_cell()
+CELL_HINT = "needs example-robot-data (the UR10, ~400 MB): pip install -e '.[cell]'"
 
 
 @functools.cache
@@ -69,10 +83,11 @@ def preset_hexapod(request) -> hm.Hexapod:
 
 
 def pytest_collection_modifyitems(config, items):
-    """Tests marked ``chromium`` are skipped, with the reason, on a machine without the browser."""
-    if HAVE_CHROMIUM:
-        return
-    skip = pytest.mark.skip(reason="needs headless Chromium: apt-get install chromium (.ci/run installs it)")
+    """Tests marked ``chromium`` (``cell``) are skipped, with the reason, without the browser (the UR10's data)."""
+    chromium = pytest.mark.skip(reason="needs headless Chromium: apt-get install chromium (.ci/run installs it)")
+    cell = pytest.mark.skip(reason=CELL_HINT)
     for item in items:
-        if "chromium" in item.keywords:
-            item.add_marker(skip)
+        if "chromium" in item.keywords and not HAVE_CHROMIUM:
+            item.add_marker(chromium)
+        if "cell" in item.keywords and not HAVE_CELL:
+            item.add_marker(cell)

@@ -196,7 +196,7 @@ def test_performance_page_is_generated_by_the_current_script():
         assert f"`python benchmarks/{' '.join(shlex.quote(a) for a in quick)}`" in text
 
 
-def test_the_sites_role_rewriting_keeps_the_names():
+def test_the_sites_roles_become_links_that_keep_the_names():
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("griffe_rst_roles", ROOT / "scripts" / "griffe_rst_roles.py")
@@ -204,7 +204,20 @@ def test_the_sites_role_rewriting_keeps_the_names():
     roles = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(roles)
     text = "See :class:`~hexapod_model.kinematics.hexapod.Hexapod`, :mod:`.kernels` and ``q``."
-    assert roles.markdown_roles(text) == "See `Hexapod`, `.kernels` and ``q``."
+    # a link where the site documents the name (an optional cross-reference: plain code where it does not)
+    assert roles.markdown_roles(text, "hexapod_model.kinematics.newton") == (
+        'See <autoref identifier="hexapod_model.kinematics.hexapod.Hexapod" optional><code>Hexapod</code></autoref>, '
+        '<autoref identifier="hexapod_model.kinematics.newton.kernels" optional><code>.kernels</code></autoref>'
+        " and ``q``."
+    )
+    assert roles.markdown_roles("`hexapod_model.io.tables` or ``hexapod_model.files``") == (
+        '<autoref identifier="hexapod_model.io.tables" optional><code>hexapod_model.io.tables</code></autoref> or '
+        '<autoref identifier="hexapod_model.files" optional><code>hexapod_model.files</code></autoref>'
+    )
+    assert roles.markdown_roles(":func:`..rotations.pose_distance`", "hexapod_model.kinematics.newton") == (
+        '<autoref identifier="hexapod_model.kinematics.rotations.pose_distance" optional>'
+        "<code>..rotations.pose_distance</code></autoref>"
+    )
 
 
 def test_every_docs_page_is_in_the_sites_nav():

@@ -8,6 +8,7 @@ import signal
 import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -24,12 +25,15 @@ def env() -> dict[str, str]:
     return {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
 
 
-def run(script: str, *args: str, cwd: Path, timeout: float = 300) -> str:
+def run(script: str, *args: str, cwd: Path, timeout: float = 300, stderr: list[str] | None = None) -> str:
+    """The script's stdout (its stderr appended to ``stderr`` when given); it must exit 0."""
     out = subprocess.run(
         [sys.executable, str(EXAMPLES / script), *args], cwd=cwd, env=env(), capture_output=True, text=True,
         timeout=timeout,
     )  # fmt: skip
     assert out.returncode == 0, out.stderr
+    if stderr is not None:
+        stderr.append(out.stderr)
     return out.stdout
 
 
@@ -68,7 +72,10 @@ def test_urdf_variant(tmp_path):
 
 
 def test_calibrate_fixture(tmp_path):
-    out = run("calibrate_fixture.py", "-o", "cal.toml", cwd=tmp_path)  # a simulated fixture with joint errors
+    err: list[str] = []
+    out = run("calibrate_fixture.py", "-o", "cal.toml", cwd=tmp_path, stderr=err)  # a simulated fixture, joint errors
+    # it says what it does while it works: a line per stage, the validation's folds
+    assert "identifying" in err[0] and "5-fold validation" in err[0] and "5/5" in err[0], err[0]
     nominal, calibrated = map(float, re.search(r"nominal ([\d.]+) mm, calibrated ([\d.]+) mm", out).groups())
     assert calibrated < 0.6 * nominal and "wrote cal.toml" in out
     hexa = hm.Hexapod.load(str(tmp_path / "cal.toml"), compiled=False)
@@ -93,18 +100,29 @@ def free_port() -> int:
 
 
 def test_robot_cell_client(tmp_path):
+    """With the token set-up of docs/changeover.md: a missing token is said at once, with the fix."""
     port = free_port()
     config = (ROOT / "docs/examples/fixture.toml").read_text()
     config = config.replace("port = 8765", f"port = {port}").replace('channel = "fixtures"', 'channel = "cell-test"')
+    config = config.replace('# token_file = "fixture.token"', 'token_file = "fixture.token"')
     (tmp_path / "fixture.toml").write_text(config)
+    (tmp_path / "fixture.token").write_text("robot-cell-client-token-0123456789\n")
+    (tmp_path / "fixture.token").chmod(0o600)
     sim = str(ROOT / "docs/examples/sim.toml")
     log = (tmp_path / "serve.log").open("w")
     serve = subprocess.Popen(
         [sys.executable, "-m", "hexapod_model", "serve", "fixture.toml", "--simulate", sim],
         cwd=tmp_path, env=env(), stdout=subprocess.DEVNULL, stderr=log,
     )  # fmt: skip
+    url = ["--url", f"http://127.0.0.1:{port}", "--timeout", "240"]
     try:
-        out = run("robot_cell_client.py", "--url", f"http://127.0.0.1:{port}", "--timeout", "240", cwd=tmp_path)
+        t0 = time.monotonic()
+        refused = subprocess.run(
+            [sys.executable, str(EXAMPLES / "robot_cell_client.py"), *url], cwd=tmp_path, env=env(),
+            capture_output=True, text=True, timeout=300,
+        )  # fmt: skip
+        said_in = time.monotonic() - t0
+        out = run("robot_cell_client.py", *url, "--token-file", "fixture.token", cwd=tmp_path)
     finally:
         serve.send_signal(signal.SIGINT)
         try:
@@ -113,6 +131,8 @@ def test_robot_cell_client(tmp_path):
             serve.kill()
             serve.wait()
         log.close()
+    assert refused.returncode != 0 and "401" in refused.stderr and "--token-file" in refused.stderr, refused.stderr
+    assert said_in < 120.0, said_in  # at the first answer (the service starts), not after --timeout
     assert "fixtures left, right" in out
     found = re.search(r"right: locked at x (\S+) y (\S+) z (\S+) m, roll (\S+) pitch (\S+) yaw (\S+) deg", out)
     sigma = re.search(r"1-sigma ([\d.]+) mm, ([\d.]+) deg", out)

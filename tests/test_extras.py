@@ -37,3 +37,36 @@ def test_a_command_without_its_extra_says_which_pip_install_brings_it(blocked, a
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].endswith(f"pip install 'hexapod_model[{extra}]'"), out.stderr[-500:]
     assert "Traceback" not in out.stderr
+
+
+_HIDE_CELL = """
+import importlib.metadata
+
+_distribution = importlib.metadata.distribution
+
+
+def distribution(name):
+    if name.replace("_", "-") == "example-robot-data":
+        raise importlib.metadata.PackageNotFoundError(name)
+    return _distribution(name)
+
+
+importlib.metadata.distribution = distribution
+"""
+
+
+def test_without_example_robot_data_the_cell_tests_skip_with_the_hint(tmp_path):
+    """``pip install -e .`` without the cell extra: the tests that need the UR10 skip, naming the install."""
+    import os
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    (tmp_path / "hide_cell.py").write_text(_HIDE_CELL)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(root), os.environ.get("PYTHONPATH", "")])}
+    out = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "hide_cell", "-p", "no:cacheprovider", "-rs",
+         "tests/viz/test_view.py", "-k", "cell_ik or unreachable"],
+        cwd=root, env=env, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert out.returncode == 0 and "2 skipped" in out.stdout, out.stdout[-2000:]
+    assert "pip install -e '.[cell]'" in out.stdout

@@ -11,7 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from .conftest import HAVE_CHROMIUM
+from .conftest import HAVE_CELL, HAVE_CHROMIUM
 
 ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text()
@@ -45,6 +45,8 @@ def quick(args: list[str]) -> list[str] | None:
     if "--png" in args and not HAVE_CHROMIUM:  # the HTML part still runs
         k = args.index("--png")
         del args[k : k + 2]
+    if "--cell" in args and not HAVE_CELL:  # the UR10's data (cell extra) absent: the hexapod alone
+        args.remove("--cell")
     if args[0] == "view":
         args += ["--once", "--rate", "1000"]  # show, then exit instead of serving until Ctrl-C
     if args[0] == "calibrate":  # 2 folds, fixed axis directions: 54 unknowns, 3 fits of 20-40 poses

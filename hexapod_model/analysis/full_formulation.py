@@ -10,7 +10,7 @@ free joint velocities ``v`` (the tangent space of ``pin.integrate``) follows fro
 ``dR = [w] R`` with ``w`` the frame's world angular velocity, and ``dp`` the frame origin's
 velocity, both read from Pinocchio's ``LOCAL_WORLD_ALIGNED`` frame Jacobians.
 
-Reduced formulation: the package's :class:`~hexapod_model.solver.NewtonSolver` residual
+Reduced formulation: the package's :class:`~hexapod_model.kinematics.newton.solver.NewtonSolver` residual
 (3 translation + 3 ``vex(skew(R_tip R_anchor^T))`` rows per leg, 36 in all).
 
 Both are iterated here with the same pseudo-inverse Newton step (Bem et al. (2026) eq. 17),

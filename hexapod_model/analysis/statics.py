@@ -29,6 +29,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from ..description.plausibility import check_pose_position
 from ..exceptions import InputError, SingularityError
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.input_checks import check_vector
@@ -179,10 +180,10 @@ def leg_forces(
         point: where the force acts (m, in ``frame``); default the platform origin.
 
     Raises:
-        InputError: a bad pose, wrench, frame or point.
+        InputError: a bad pose (one whose position is 100 base radii away: in mm?), wrench, frame or point.
         WorkspaceError, ConvergenceError, SingularityError: the pose cannot be reached, or is singular.
     """
-    sol = hexa.inverse(pose)
+    sol = hexa.inverse(check_pose_position("pose", pose, hexa.base_radius))
     return loads_at(hexa, sol.q, wrench, frame, point)
 
 
@@ -234,4 +235,5 @@ def stiffness_of(J: np.ndarray, leg_stiffness: ArrayLike) -> Stiffness:
 
 def fixture_stiffness(hexa: Hexapod, pose: np.ndarray, leg_stiffness: ArrayLike) -> Stiffness:
     """:class:`Stiffness` of the locked fixture at ``pose`` (4x4, base frame) with leg stiffnesses (N/m)."""
-    return stiffness_of(leg_jacobian(hexa, hexa.inverse(pose).q), leg_stiffness)
+    q = hexa.inverse(check_pose_position("pose", pose, hexa.base_radius)).q
+    return stiffness_of(leg_jacobian(hexa, q), leg_stiffness)

@@ -8,7 +8,7 @@ azimuths, with no rotation about the tool axis. For ``spherical`` and ``guideway
 platform ball joint has no limit in the model, the leg must also stay within ``cardan_limit``
 of its home direction as seen from the platform (the paper's joint cone ``phi_max``).
 
-At each workspace point the three figures of :mod:`hexapod_model.jacobian` (condition number,
+At each workspace point the three figures of :mod:`hexapod_model.analysis.jacobian` (condition number,
 sigma_min, |det J|) are averaged over the orientations; their workspace averages are
 Jakobović and Jelenković's Table II. Lengths are expressed in ``length_unit`` metres (see docs/evaluate.md).
 

@@ -50,7 +50,8 @@ def register_actions(actions: argparse._SubParsersAction) -> None:
 
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--url", help="the service (default: the configuration's [http] address)")
-    p.add_argument("--operator", default=None, help="who makes the change (default: the login name)")
+    p.add_argument("--by", default=None, help="who makes the change (logged; default: the login name)")
+    p.add_argument("--operator", dest="by", help=argparse.SUPPRESS)  # the earlier name of --by
     p.add_argument("--json", action="store_true", help="print the service's JSON answer")
 
 
@@ -58,7 +59,7 @@ def _client(args: argparse.Namespace):
     from ..service import load_config
     from ..service.http.client import ServiceClient
 
-    operator = args.operator or getpass.getuser()
+    operator = args.by or getpass.getuser()
     return ServiceClient.for_config(load_config(args.config), operator=operator, url=args.url)
 
 

@@ -11,9 +11,12 @@ from typing import IO, Any
 
 import numpy as np
 
-from ..description.geometry import load_geometry
+from ..description.geometry import GEOMETRY_SUFFIXES, HexapodGeometry, load_geometry
+from ..description.mjcf_loader import MJCF_SUFFIXES
+from ..description.plausibility import position_problem
 from ..description.presets import DEFAULT_PRESET, PRESETS, get_preset
 from ..description.urdf import geometry_to_urdf, validate_urdf
+from ..exceptions import InputError
 from ..files import atomic_write_text, atomic_writer, check_output_path
 from ..io.tables import (
     LENGTH_COLUMNS,
@@ -38,10 +41,16 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="write the URDF of a preset or a geometry file",
         description="Write the URDF (with its <loop_closure> elements) of a preset or geometry file.",
     )
+    p.add_argument(
+        "hexapod",
+        nargs="?",
+        metavar="HEXAPOD",
+        help=f"preset name or geometry file (.toml/.yaml/.json), see docs/geometry.md (default {DEFAULT_PRESET})",
+    )
     p.add_argument("-o", "--output", help="output file (default: stdout)")
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--preset", default=DEFAULT_PRESET, help=f"preset name (default {DEFAULT_PRESET})")
-    src.add_argument("--geometry", help="geometry file (.toml, .yaml or .json), see docs/geometry.md")
+    src.add_argument("--preset", help="the same as HEXAPOD, for a preset name")
+    src.add_argument("--geometry", help="the same as HEXAPOD, for a geometry file (.toml, .yaml or .json)")
     src.add_argument("--list-presets", action="store_true", help="print 'NAME  description' per preset")
     p.set_defaults(func=cmd_urdf)
 
@@ -75,9 +84,9 @@ def cmd_urdf(args: argparse.Namespace) -> int:
         for name, factory in PRESETS.items():
             print(f"{name:14s}{factory().description}")
         return 0
+    geom = _urdf_source(args)
     if args.output:
-        check_output_path(args.output, args.geometry)
-    geom = load_geometry(args.geometry) if args.geometry else get_preset(args.preset)
+        check_output_path(args.output, args.geometry or args.hexapod)
     text = geometry_to_urdf(geom)
     validate_urdf(text, geom.name)  # an independent parser (yourdfpy) accepts it
     Hexapod.from_geometry(geom, compiled=False)  # and it loads and assembles in Pinocchio (no numba needed)
@@ -87,6 +96,22 @@ def cmd_urdf(args: argparse.Namespace) -> int:
     else:
         sys.stdout.write(text)
     return 0
+
+
+def _urdf_source(args: argparse.Namespace) -> HexapodGeometry:
+    """The geometry ``hexapod urdf`` writes: HEXAPOD, ``--preset`` or ``--geometry`` (one of them)."""
+    given = args.preset or args.geometry
+    if args.hexapod is not None and given is not None:
+        option = "--preset" if args.preset else "--geometry"
+        raise InputError("HEXAPOD", args.hexapod, f"given with {option} {given}: name the hexapod once")
+    if args.geometry:
+        return load_geometry(args.geometry)
+    spec = args.hexapod or args.preset or DEFAULT_PRESET
+    if spec.lower().endswith(GEOMETRY_SUFFIXES):
+        return load_geometry(spec)
+    if spec.lower().endswith((".urdf", *MJCF_SUFFIXES)):
+        raise InputError("HEXAPOD", spec, "hexapod urdf writes the URDF of a preset or a geometry file")
+    return get_preset(spec)
 
 
 def _solve_rows(args: argparse.Namespace, kind: str) -> int:
@@ -156,7 +181,8 @@ def _solve_chunk(hexa: Hexapod, kind: str, columns: list[str], rows: Rows, guess
         inputs, errors = rows.values.copy(), rows.errors
     else:
         inputs, pose_errors = poses_from_table(columns, rows.values)
-        errors = [a or b for a, b in zip(rows.errors, pose_errors)]
+        scale = [position_problem(T[:3, 3], hexa.base_radius) for T in inputs]  # a table in mm: said per row
+        errors = [a or b or c for a, b, c in zip(rows.errors, pose_errors, scale)]
     inputs[[k for k, e in enumerate(errors) if e]] = np.nan
     solve = hexa.forward_batch if kind == "fk" else hexa.inverse_batch
     return solve(inputs, guess, warm=True), errors

@@ -8,10 +8,11 @@ import importlib
 import logging
 import os
 import sys
+import warnings
 from collections.abc import Iterator
 
 from .. import __version__
-from ..exceptions import HexapodError, SolverError
+from ..exceptions import CompileWarning, HexapodError, SolverError
 from ..kinematics.newton.first_compile import LOGGER as COMPILE_LOGGER
 
 EXIT_CODES = {
@@ -87,7 +88,18 @@ def main(argv: list[str] | None = None) -> int:
 
 @contextlib.contextmanager
 def _compile_notes(command: str) -> Iterator[None]:
-    """On a terminal, the solver's one line before a first compilation, as ``hexapod COMMAND: ...`` on stderr."""
+    """On a terminal, the solver's one line before a first compilation, as ``hexapod COMMAND: ...`` on stderr.
+
+    The :class:`~hexapod_model.exceptions.CompileWarning` a plain script sees is not shown: this line replaces it.
+    """
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", category=CompileWarning)
+        with _compile_line(command):
+            yield
+
+
+@contextlib.contextmanager
+def _compile_line(command: str) -> Iterator[None]:
     if not sys.stderr.isatty():
         yield
         return

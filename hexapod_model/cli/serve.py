@@ -102,8 +102,10 @@ def _serve(args: argparse.Namespace) -> int:
     from ..service import FixtureService, load_config
 
     config = load_config(args.config)
-    if args.simulate:
+    sim_config = None
+    if args.simulate:  # every input is read before the service starts: its errors are said at once
         config = simulated(config)
+        sim_config = _load_simulation(args.simulate, config)
     stop = threading.Event()
     _stop_on_sigterm(stop)
     service = FixtureService(config)
@@ -111,9 +113,9 @@ def _serve(args: argparse.Namespace) -> int:
         service.subscribe(_jsonl_writer(stop, service.json_of))
     bridge = _ros_bridge(service)
     sim_bus = sim = None
+    error: BaseException | None = None
     try:
         service.start(wait=False)  # HTTP answers 503 "starting" while the kernels compile
-        sim_config = None if not args.simulate else _load_simulation(args.simulate, config)
         deadline = None if args.duration is None else time.monotonic() + args.duration
         while not service.ready:
             if service.failure is not None:
@@ -133,6 +135,9 @@ def _serve(args: argparse.Namespace) -> int:
                     break
     except KeyboardInterrupt:
         pass
+    except BaseException as exc:
+        error = exc
+        raise
     finally:
         if sim is not None:
             sim.stop()
@@ -142,12 +147,32 @@ def _serve(args: argparse.Namespace) -> int:
             bridge.stop()
         service.stop()
         if service.preparing:  # stopped while the kernels compile: a compile cannot be interrupted
-            note("serve", "stopped while starting")
-            sys.stderr.flush()
-            os._exit(0)
+            _exit_while_starting(error)
     note("serve", f"stopped; store {config.store.path}")
     gc.freeze()  # the process ends: the collector's last pass over numba's and pinocchio's objects took 1-5 s
     return 0
+
+
+def _exit_while_starting(error: BaseException | None) -> None:
+    """End the process while the background preparation still compiles (it cannot be interrupted).
+
+    A stop (Ctrl-C, SIGTERM, ``--duration``) exits 0; an error is said in one line and exits 2
+    (a ``HexapodError``) or 1 (anything else, with its type).
+    """
+    from ..exceptions import HexapodError, SolverError
+
+    if error is None:
+        note("serve", "stopped while starting")
+        code = 0
+    elif isinstance(error, HexapodError):
+        note("serve", f"error: {error}")
+        code = 1 if isinstance(error, SolverError) else 2
+    else:
+        note("serve", f"error: {type(error).__name__}: {error}")
+        code = 1
+    sys.stderr.flush()
+    sys.stdout.flush()
+    os._exit(code)
 
 
 def _ros_bridge(service):

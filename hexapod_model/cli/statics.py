@@ -8,6 +8,7 @@ import json
 import numpy as np
 
 from ..analysis.statics import FRAMES, LegLoads, loads_at, stiffness_of
+from ..description.plausibility import check_pose_position
 from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
 from ..kinematics.input_checks import check_vector
@@ -94,6 +95,7 @@ def run(args: argparse.Namespace) -> int:
     if capacity is None and hexa.geometry is not None:
         capacity = hexa.geometry.brake_capacity
     pose = hexa.home_pose if args.pose is None else xyz_rpy_to_pose(check_vector("--pose", args.pose, 6))
+    check_pose_position("--pose", pose, hexa.base_radius)
     sol = hexa.inverse(pose)
     loads = loads_at(hexa, sol.q, args.wrench, args.frame, args.point)
     print(format_loads(loads, capacity))

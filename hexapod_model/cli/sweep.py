@@ -68,10 +68,42 @@ def run(args: argparse.Namespace) -> int:
     png = Path(args.out) / "pareto.png"
     plot_pareto(rows, png)
     invalid = [r for r in rows if r["status"] != "ok"]
+    print(format_table(rows, list(spec.parameters)))
     print(
         f"sweep: {len(rows)} candidates ({result['computed']} computed, {result['reused']} from earlier runs), "
         f"{len(invalid)} invalid; table {result['table']}, figure {png}"
     )
-    for r in invalid:
-        print(f"  invalid {r['id']}: {r['reason']}")
     return 0
+
+
+def _figure(value, scale: float = 1.0, digits: int = 4) -> str:
+    """A table cell: ``value * scale`` to ``digits`` significant digits, ``-`` when missing."""
+    try:
+        return f"{float(value) * scale:.{digits}g}"
+    except (TypeError, ValueError):
+        return "-"
+
+
+def format_table(rows: list[dict], parameters: list[str]) -> str:
+    """The results table ``hexapod sweep`` prints: a line per candidate, ``*`` on the Pareto front.
+
+    Columns: the id, the swept parameters (their units as in the spec), the workspace volume
+    (cm^3), the largest leg force per unit force (N/N), the home condition number, the front
+    mark; an invalid candidate shows its reason instead of figures.
+    """
+    header = ["id", *parameters, "volume_cm3", "force_N_per_N", "home_kappa", "pareto"]
+    body = []
+    for r in rows:
+        values = [str(r["id"]), *(_figure(r.get(p)) for p in parameters)]
+        if r.get("status") != "ok":
+            body.append([*values, f"{r.get('status')}: {r.get('reason')}"])
+            continue
+        figures = [_figure(r["volume_m3"], 1e6), _figure(r["force_per_force_max"]), _figure(r["home_kappa"])]
+        body.append([*values, *figures, "*" if str(r.get("pareto")) == "True" else ""])
+    full = [line for line in [header, *body] if len(line) == len(header)]  # an invalid row ends on its reason
+    width = [max(len(line[i]) for line in full) for i in range(len(header))]
+    lines = []
+    for line in [header, *body]:
+        fixed = [c.rjust(width[i]) for i, c in enumerate(line) if len(line) == len(header) or i < len(line) - 1]
+        lines.append("  ".join(fixed + ([] if len(line) == len(header) else [line[-1]])).rstrip())
+    return "\n".join(lines)

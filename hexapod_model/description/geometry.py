@@ -41,6 +41,7 @@ import numpy as np
 
 from ..exceptions import GeometryError
 from . import body
+from .plausibility import implausible
 
 JOINT_TYPES = ("cardan", "spherical", "guideway")
 Vec3 = tuple[float, float, float]
@@ -212,6 +213,7 @@ class HexapodGeometry:
             self._check_leg(i, leg)
         for name, value in body.check_body(self).items():
             object.__setattr__(self, name, value)
+        self._check_scale()
 
     def leg_radius_of(self, i: int) -> float:
         """Collision radius (m) of leg ``i``: its own or the hexapod's."""
@@ -225,6 +227,18 @@ class HexapodGeometry:
             self.base_cone if leg.base_cone is None else leg.base_cone,
             self.platform_cone if leg.platform_cone is None else leg.platform_cone,
         )
+
+    def _check_scale(self) -> None:
+        """Every length within a plausible multiple of the base radius (a value in mm is refused here)."""
+        r = self.base_radius
+        lengths = [("home_height", self.home_height)]
+        for i, leg in enumerate(self.legs):
+            lengths.append((f"legs[{i}].platform_anchor", float(np.max(np.abs(leg.platform_anchor)))))
+            lengths.append((f"legs[{i}].stroke", float(np.max(np.abs(leg.stroke)))))
+        for name, value in lengths:
+            why = implausible(name, value, r)
+            if why:
+                raise GeometryError(name, value, why)
 
     def offsets(self, i: int) -> tuple[float, float]:
         """Base and platform Cardan axis offsets (m) of leg ``i``: its own or the hexapod's."""
@@ -268,6 +282,11 @@ class HexapodGeometry:
             )
 
     # ----- derived quantities (base frame, home pose) -----
+    @property
+    def base_radius(self) -> float:
+        """Largest horizontal distance (m) of a base anchor from the base origin: the hexapod's size."""
+        return float(max(math.hypot(leg.base_anchor[0], leg.base_anchor[1]) for leg in self.legs))
+
     @property
     def home_translation(self) -> np.ndarray:
         """Platform origin at home in the base frame (m)."""

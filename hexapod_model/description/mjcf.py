@@ -256,6 +256,7 @@ def urdf_to_mjcf(urdf_xml: str, *, actuated: bool = False, source: str = "<strin
     ET.SubElement(ET.SubElement(root, "default"), "joint", damping=_f(JOINT_DAMPING))
     world = ET.SubElement(root, "worldbody")
     conv.body(world, conv.root, None)
+    _light_and_floor(world)
     equality = ET.SubElement(root, "equality")
     legs = []
     for c in conv.closures:
@@ -299,6 +300,41 @@ def urdf_to_mjcf(urdf_xml: str, *, actuated: bool = False, source: str = "<strin
             f"<!-- visuals left out (only boxes, cylinders and spheres are translated): {', '.join(conv.skipped)} -->\n"
         )
     return header + ET.tostring(root, encoding="unicode") + "\n"
+
+
+#: the name of the exported floor plane (a scene geom: the hexapod's visual model leaves it out)
+FLOOR = "floor"
+
+
+def _light_and_floor(world: ET.Element) -> None:
+    """A light above the model and a floor plane just below its base, both after the model's tree.
+
+    Without a light MuJoCo renders the scene dark. The floor is visual only (``contype`` and
+    ``conaffinity`` 0: no contact with the model) and sits below the lowest base geom, so it
+    hides nothing. Pinocchio's parser reads only the first ``<body>``: neither changes the model.
+    """
+    base = world.find("body")
+    geoms = [] if base is None else base.findall("geom")
+    extent, lowest = 0.1, 0.0  # m
+    for g in geoms:
+        pos = [float(v) for v in g.get("pos", "0 0 0").split()]
+        size = [float(v) for v in g.get("size", "0").split()]
+        reach = max(size) if size else 0.0
+        extent = max(extent, math.hypot(pos[0], pos[1]) + reach)
+        lowest = min(lowest, pos[2] - reach)
+    floor_z = lowest - 0.01 * extent
+    ET.SubElement(world, "light", name="light", pos=_vec((0.0, 0.0, 6.0 * extent)), dir="0 0 -1", directional="true")
+    ET.SubElement(
+        world,
+        "geom",
+        name=FLOOR,
+        type="plane",
+        pos=_vec((0.0, 0.0, floor_z)),
+        size=_vec((4.0 * extent, 4.0 * extent, 0.1 * extent)),
+        rgba="0.85 0.85 0.85 1",
+        contype="0",
+        conaffinity="0",
+    )
 
 
 def geometry_to_mjcf(geom: HexapodGeometry, *, actuated: bool = False) -> str:

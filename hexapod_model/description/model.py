@@ -273,14 +273,22 @@ class ClosedLoopModel:
             return pin.GeometryModel()
         import tempfile
 
+        from .mjcf import FLOOR
+
         with tempfile.TemporaryDirectory() as tmp:  # Pinocchio reads MJCF from files only
             path = Path(tmp) / "hexapod.xml"
             path.write_text(self.mjcf_xml)
             visual = pin.buildGeomFromMJCF(self.model, str(path), pin.GeometryType.VISUAL)
-        for el in ET.fromstring(self.mjcf_xml).iter("geom"):  # the collision bodies are not drawn
-            if el.get("group") == str(COLLISION_GROUP) and visual.existGeometryName(str(el.get("name"))):
-                visual.removeGeometryObject(str(el.get("name")))
-        return visual
+        hexapod = pin.GeometryModel()  # without the exported scene's floor nor the collision bodies: not drawn
+        hidden = {
+            str(el.get("name"))
+            for el in ET.fromstring(self.mjcf_xml).iter("geom")
+            if el.get("group") == str(COLLISION_GROUP)
+        }
+        for g in visual.geometryObjects:
+            if not (g.name == FLOOR and g.parentJoint == 0) and g.name not in hidden:
+                hexapod.addGeometryObject(g.copy())
+        return hexapod
 
     def limited_q(self) -> np.ndarray:
         """Indices of q that carry finite joint limits (all leg joints)."""

@@ -11,11 +11,12 @@ from matplotlib.figure import Figure
 from ..files import atomic_save_figure
 
 
-def plot_pareto(rows: list[dict[str, Any]], path: str | Path) -> None:
-    """Workspace volume against the largest leg force per newton of every valid candidate.
+def plot_pareto(rows: list[dict[str, Any]], path: str | Path) -> Figure:
+    """Workspace volume against the largest leg force per newton of every valid candidate; returns the figure.
 
-    The Pareto front (no other candidate has more volume and less force) is joined; points are coloured by
-    the home condition number.
+    The Pareto front (no other candidate has more volume and less force) is joined and its points
+    labelled with their candidate id (the table's ``id``); points are coloured by the home
+    condition number.
     """
     ok = [r for r in rows if r.get("status") == "ok" and float(r["volume_m3"]) > 0]
     fig = Figure(figsize=(7, 5))
@@ -29,6 +30,8 @@ def plot_pareto(rows: list[dict[str, Any]], path: str | Path) -> None:
         front = np.array([bool(r["pareto"]) for r in ok])
         order = np.argsort(v[front])
         ax.plot(v[front][order], f[front][order], "r-o", mfc="none", ms=10, zorder=3, label="Pareto front")
+        for r, x, y in zip((r for r, on in zip(ok, front) if on), v[front], f[front]):
+            ax.annotate(str(r["id"]), (x, y), textcoords="offset points", xytext=(6, 6), fontsize=8)
         ax.legend(loc="best")
     invalid = len(rows) - len(ok)
     ax.set_xlabel("workspace volume for the tool cone (cm^3)")
@@ -36,3 +39,4 @@ def plot_pareto(rows: list[dict[str, Any]], path: str | Path) -> None:
     ax.set_title(f"{len(ok)} candidates" + (f" ({invalid} invalid or empty, not shown)" if invalid else ""))
     ax.grid(alpha=0.3)
     atomic_save_figure(fig, path)
+    return fig

@@ -13,7 +13,7 @@ each rotation-vector component, with r the RMS platform anchor radius).
 
 Every set of readings is solved with the Cardan-aware model (``Hexapod.forward_batch``, cold
 start from home, retried with ``Hexapod.forward`` from the standard model's pose if needed)
-and with the standard spherical model (:mod:`hexapod_model.standard`, batch). Errors are
+and with the standard spherical model (:mod:`hexapod_model.analysis.standard`, batch). Errors are
 eqs. 26-27: ``||p_ref - p_est||`` and the rotation angle of ``R_ref^T R_est``.
 """
 

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from ..description.geometry import HexapodGeometry, load_geometry
+from ..description.plausibility import check_length
 from ..description.presets import PRESETS, get_preset, symmetric_legs
 from ..exceptions import InputError
 from .evaluate import Settings
@@ -49,6 +50,16 @@ PARAMETERS = {
     "base_spread_deg": "angle between the two base anchors of a pair (deg), same layout",
     "platform_spread_deg": "angle between the two platform anchors of a pair (deg), same layout",
 }
+#: the parameters in metres, checked against the base geometry's base radius (a value in mm is refused)
+LENGTHS = (
+    "home_height",
+    "base_offset",
+    "platform_offset",
+    "stroke_min",
+    "stroke_max",
+    "base_radius",
+    "platform_radius",
+)
 LAYOUT = ("base_radius", "platform_radius", "base_spread_deg", "platform_spread_deg")
 MODES = ("grid", "random")
 MAX_CANDIDATES = 100_000
@@ -214,6 +225,9 @@ def load_spec(path: str | Path) -> SweepSpec:
         params[name], is_range = _values(name, value, mode)
         if is_range:
             ranges.add(name)
+        if name in LENGTHS:  # metres: a value in mm would rate a platform 1000 times the base's size
+            for v in params[name]:
+                check_length(f"parameters.{name}", name, v, base.base_radius)
     if mode == "grid" and math.prod(len(v) for v in params.values()) > MAX_CANDIDATES:
         raise InputError("parameters", "grid", f"more than {MAX_CANDIDATES} candidates")
     ev = _table(data, "evaluate")

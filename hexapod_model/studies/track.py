@@ -1,7 +1,7 @@
 """``hexapod track``: Jakobović and Jelenković's 1 kHz tracking experiment (trajectories A/B, predictors, speeds).
 
 True poses follow trajectory A or B (Jakobović and Jelenković (2002) eqs. 20-21; positions scaled by
-``base radius / 50`` m per paper unit, as :mod:`hexapod_model.bench`), leg readings come from
+``base radius / 50`` m per paper unit, as :mod:`hexapod_model.studies.bench`), leg readings come from
 the model's inverse kinematics (offset-Cardan model for the ``reference`` preset), and the
 :class:`~hexapod_model.tracking.Tracker` solves them at 1 kHz. Errors are absolute differences
 of the roll/pitch/yaw angles (deg) and of x, y, z (m) between solved and true poses; the

@@ -154,6 +154,7 @@ def test_fixture_target_without_a_service_is_one_line(tmp_path, capsys):
     assert err.count("\n") == 1 and "is hexapod serve running?" in err
 
 
+@pytest.mark.cell
 def test_view_live_cell_places_the_ur10_by_the_served_pose_in_robot(tmp_path, capsys):
     from hexapod_model.viz.robot_cell import robot_base_pose, tool_changer_pose
 
@@ -181,3 +182,19 @@ def test_view_live_cell_places_the_ur10_by_the_served_pose_in_robot(tmp_path, ca
     plain = write_config(tmp_path, port=port)
     assert main(["view", str(plain), "--live", "--cell", "--once"]) == 2
     assert "no [fixtures.cell]" in capsys.readouterr().err
+
+
+def test_one_flag_names_the_operator_in_every_fixture_command(capsys):
+    from hexapod_model.cli.main import build_parser
+
+    parser = build_parser("fixture")
+    for words in (["acknowledge", "left"], ["target", "left"], ["recipe"]):
+        args = parser.parse_args(["fixture", words[0], "f.toml", *words[1:], "--by", "anna"])
+        assert args.by == "anna", words
+    old = parser.parse_args(["fixture", "target", "f.toml", "left", "--operator", "anna"])  # the earlier name
+    assert old.by == "anna"
+    for name in ("target", "recipe"):
+        with pytest.raises(SystemExit):
+            parser.parse_args(["fixture", name, "-h"])
+        shown = capsys.readouterr().out
+        assert "--by" in shown and "--operator" not in shown

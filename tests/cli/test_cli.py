@@ -34,6 +34,21 @@ def test_urdf_default_and_presets(tmp_path, capsys):
     assert [ln.split()[0] for ln in lines] == PRESET_NAMES and all(len(ln.split()) > 2 for ln in lines)
 
 
+def test_urdf_takes_the_hexapod_as_every_command_does(tmp_path, capsys):
+    assert main(["urdf", "3-6", "-o", str(tmp_path / "a.urdf")]) == 0
+    assert main(["urdf", "--preset", "3-6", "-o", str(tmp_path / "b.urdf")]) == 0  # the option still works
+    assert (tmp_path / "a.urdf").read_text() == (tmp_path / "b.urdf").read_text()
+    (tmp_path / "mine.json").write_text(json.dumps({**hm.get_preset("intersecting").to_dict(), "name": "mine"}))
+    assert main(["urdf", str(tmp_path / "mine.json"), "-o", str(tmp_path / "mine.urdf")]) == 0
+    assert 'robot name="mine"' in (tmp_path / "mine.urdf").read_text()
+    capsys.readouterr()
+    assert main(["urdf", "3-6", "--preset", "reference"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "3-6" in err[0] and "--preset" in err[0], err
+    assert main(["urdf", "referense"]) == 2
+    assert "reference" in capsys.readouterr().err
+
+
 def test_urdf_from_geometry_file(tmp_path, capsys):
     d = hm.get_preset("intersecting").to_dict()
     d["name"] = "mine"

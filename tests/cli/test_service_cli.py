@@ -295,6 +295,59 @@ def test_first_start_answers_503_starting_at_once_and_sigint_stops_within_2_s(tm
     assert not any("Traceback" in line for line in served.err), "".join(served.err)
 
 
+def startup_errors(tmp_path):
+    """(arguments of ``hexapod serve``, words the one line names) per start-up error."""
+    cfg = write_config(tmp_path)
+    busy = socket.socket()
+    busy.bind(("127.0.0.1", 0))
+    busy.listen()
+    (tmp_path / "busy").mkdir()
+    in_use = write_config(tmp_path / "busy", port=busy.getsockname()[1])
+    bad_cfg = tmp_path / "bad.toml"
+    bad_cfg.write_text(cfg.read_text().replace("[store]", "[stor]"))
+    misspelt = HOLD_SIM.replace("rate = 100.0", "rat = 100.0")
+    return busy, {
+        "misspelt sim key": ([str(cfg), "--simulate", str(write_sim(tmp_path, misspelt, "rat.toml"))], "rat"),
+        "misspelt sim table key": (
+            [str(cfg), "--simulate", str(write_sim(tmp_path, HOLD_SIM + 'trajectroy = "A"\n', "traj.toml"))],
+            "trajectroy",
+        ),
+        "missing sim file": ([str(cfg), "--simulate", str(tmp_path / "nosuch.toml")], "nosuch.toml"),
+        "missing fixture file": ([str(tmp_path / "nofixture.toml")], "nofixture.toml"),
+        "bad fixture file": ([str(bad_cfg)], "stor"),
+        "port in use": ([str(in_use), "--simulate", str(write_sim(tmp_path, HOLD_SIM))], "port in use"),
+    }
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        "misspelt sim key",
+        "misspelt sim table key",
+        "missing sim file",
+        "missing fixture file",
+        "bad fixture file",
+        "port in use",
+    ],
+)
+def test_every_start_up_error_of_serve_is_one_line_and_exit_2(tmp_path, case):
+    busy, cases = startup_errors(tmp_path)
+    args, words = cases[case]
+    try:
+        out = subprocess.run(
+            [sys.executable, "-m", "hexapod_model", "serve", *args, "--duration", "60"],
+            capture_output=True,
+            text=True,
+            env=env(),
+            timeout=120,
+        )
+    finally:
+        busy.close()
+    err = [line for line in out.stderr.strip().splitlines() if " INFO " not in line]
+    assert out.returncode == 2, out.stderr
+    assert len(err) == 1 and err[0].startswith("hexapod serve: error:") and words in err[0], out.stderr
+
+
 def test_kill_9_while_committing_locks_then_restart_recovers_the_last_lock(tmp_path):
     ids2 = [0x191 + k for k in range(6)]
     cfg = write_config(

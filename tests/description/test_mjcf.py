@@ -147,6 +147,25 @@ def _rotated_home_urdf(angle: float) -> str:
     return ET.tostring(root, encoding="unicode")
 
 
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_mjcf_has_a_light_and_a_floor_that_touches_nothing(name):
+    """MuJoCo renders a scene without a light dark: one light above, a floor plane below every geom."""
+    root = ET.fromstring(geometry_to_mjcf(hm.get_preset(name)))
+    world = root.find("worldbody")
+    lights = world.findall("light")
+    assert len(lights) == 1 and float(lights[0].get("pos").split()[2]) > 0
+    (floor,) = [g for g in world.findall("geom") if g.get("type") == "plane"]
+    assert floor.get("contype") == "0" and floor.get("conaffinity") == "0"  # never a contact with the model
+    z_floor = float(floor.get("pos").split()[2])
+    base = world.find("body")
+    lowest = min(
+        float(g.get("pos", "0 0 0").split()[2]) - float(g.get("size").split()[-1])
+        for g in base.findall("geom")
+        if g.get("type") in ("cylinder", "box", "sphere")
+    )
+    assert z_floor < lowest  # below the base plate: no geom of the model under it
+
+
 def test_rotated_home_pose_survives_pinocchio_free_flyer_placement():
     """Pinocchio 4.1 places a rotated free body at (I, p - R p); the loader puts it back at home."""
     text = _rotated_home_urdf(0.4)
@@ -173,7 +192,7 @@ def test_mjcf_holds_the_urdf_tree_closures_and_actuators(name):
             assert mj.get("range") == f"{uj.find('limit').get('lower')} {uj.find('limit').get('upper')}"
     assert not joints  # nothing else, and one free joint for the platform
     assert [f.get("name") for f in root.iter("freejoint")] == ["platform_joint"]
-    assert [b.get("name") for b in root.find("worldbody")] == ["base_link"]  # the one tree Pinocchio reads
+    assert [b.get("name") for b in root.find("worldbody").findall("body")] == ["base_link"]  # the tree Pinocchio reads
     closures = hm.read_closures(hm.geometry_to_urdf(hm.get_preset(name)))
     tag = "weld" if closures[0].kind == "6d" else "connect"
     eq = [el for el in root.find("equality") if el.tag == tag]

@@ -99,3 +99,25 @@ def test_the_collector_runs_less_while_numba_compiles_and_as_before_after():
             pass
     assert seen == [max(before[0], first_compile.COMPILING_GC_THRESHOLD)] * 2
     assert gc.get_threshold() == before
+
+
+_PLAIN_SCRIPT = """
+import types
+from hexapod_model.kinematics.newton import first_compile
+first_compile._cached = lambda d: False
+for name in ("solve_schur", "follow"):  # two entries: one warning
+    first_compile.announce(types.SimpleNamespace(py_func=types.SimpleNamespace(__name__=name), signatures=[]))
+"""
+
+
+def test_a_plain_script_sees_one_compile_warning_on_stderr():
+    """No logging configured: the first compilation of a process is said once, as a CompileWarning."""
+    import hexapod_model as hm
+
+    out = subprocess.run([sys.executable, "-c", _PLAIN_SCRIPT], capture_output=True, text=True, check=True)
+    what, seconds = first_compile.ENTRIES["solve_schur"]
+    lines = [line for line in out.stderr.splitlines() if "CompileWarning" in line]
+    assert (
+        len(lines) == 1 and f"compiling the solver kernels ({what}), once after installation: ~{seconds} s" in lines[0]
+    )
+    assert issubclass(hm.CompileWarning, hm.HexapodWarning) and issubclass(hm.HexapodWarning, UserWarning)

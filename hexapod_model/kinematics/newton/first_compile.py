@@ -5,7 +5,9 @@ numba compiles an entry of the compiled path (:mod:`.iteration`, :mod:`.batch_ke
 ``NUMBA_CACHE_DIR``); later processes load it in well under a second. :func:`announce` logs, at
 INFO on the ``hexapod_model.compile`` logger, ``compiling the solver kernels (WHAT), once after
 installation: ~N s`` before a call that will compile (no signature in this process, no cache
-index on disk); the command line shows it on a terminal.
+index on disk); the command line shows it on a terminal. The first of a process is also a
+:class:`~hexapod_model.exceptions.CompileWarning`, which Python shows on stderr in a plain
+script where no logging is configured (the command line shows its own line instead).
 
 While numba compiles, :func:`collect_less` has Python's cyclic garbage collector run less often:
 the compiler allocates millions of short-lived objects, and the collections they trigger took
@@ -17,7 +19,12 @@ from __future__ import annotations
 import gc
 import logging
 import os
+import sys
+import warnings
+from types import FrameType
 from typing import Any
+
+from ...exceptions import CompileWarning
 
 LOGGER = "hexapod_model.compile"
 #: each entry: what it compiles, and the CPU seconds it took from an empty cache on a 2-core machine
@@ -36,6 +43,8 @@ COMPILING_GC_THRESHOLD = 10_000
 
 log = logging.getLogger(LOGGER)
 _announced: set[str] = set()
+_warned: list[bool] = []  # the CompileWarning, once per process
+_PACKAGE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 _collecting_less: list[Any] = []  # the numba event listener, once registered
 
 
@@ -47,7 +56,20 @@ def announce(dispatcher: Any) -> None:
     _announced.add(name)
     collect_less()
     what, seconds = ENTRIES.get(name, ("the solver", 10))
-    log.info("compiling the solver kernels (%s), once after installation: ~%d s", what, seconds)
+    message = f"compiling the solver kernels ({what}), once after installation: ~{seconds} s"
+    log.info("%s", message)
+    if not _warned:
+        _warned.append(True)
+        warnings.warn(message, CompileWarning, stacklevel=_caller_level())
+
+
+def _caller_level() -> int:
+    """The ``stacklevel`` of the first frame outside the package: the warning names the user's line."""
+    frame: FrameType | None = sys._getframe(1)
+    level = 1
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE):
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 def _cached(dispatcher: Any) -> bool:
