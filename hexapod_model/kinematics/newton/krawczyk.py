@@ -1,0 +1,172 @@
+"""A compiled Krawczyk (interval Newton) proof that a readings path stays on one assembly.
+
+For the closure residual ``F(x, s)`` of direct kinematics (:mod:`.intervals`: the unknowns ``x``
+are the legs' free joints and the platform's chart coordinates; the held prismatic joints move
+with the readings path ``l(s) = l0 + s (l1 - l0)``), a box ``X = xc +- rho`` and a parameter
+interval ``S = [s0, s1]``, the Krawczyk operator is
+
+    K(X, S) = xc - Y F(xc, S) + (I - Y J(X, S)) (X - xc),   Y ~ J(xc, s_mid)^-1,
+
+with ``F(xc, S)`` and ``J(X, S)`` the interval enclosures over the box and the parameter interval.
+**Krawczyk's theorem** (Krawczyk 1969; Moore 1977; Neumaier, *Interval methods for systems of
+equations*, 1990, thm. 5.1.8): if ``K(X, S)`` lies in the interior of ``X``, then for every ``s`` in
+``S`` the system ``F(., s) = 0`` has exactly one solution in ``X`` (and ``J`` is regular on ``X``), so
+the solutions for ``s`` in ``S`` form one continuous path inside ``X`` (the implicit function theorem).
+
+:func:`prove_path` covers ``[0, 1]`` with such tests, halving a sub-interval whose test fails (at
+most ``MAX_TESTS`` tests), and chains them: consecutive boxes must hold each other's ``K``
+(then the path's point at the shared ``s`` is the unique solution of both boxes), the first box
+the start ``x0`` and a last test at ``s = 1`` alone, centred on the result ``x1``, gives the box
+that holds the exact solution the path ends at, and must lie inside the box before it.
+Each test tries ``INFLATIONS`` boxes (epsilon-inflation: ``rho <- 1.5 |K - xc|``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .intervals import REL, enclose, up
+from .linalg import _factor, _solve
+
+MAX_TESTS = 32  # Krawczyk tests per path (each sub-interval that fails is halved)
+MIN_WIDTH = 1.0 / 64.0  # narrowest sub-interval of the readings path tried
+INFLATIONS = 4  # boxes tried per test (epsilon-inflation)
+
+
+@njit(cache=True)
+def krawczyk(Fm, Fr, Jm, Jr, rho, Y, off, rad):
+    """One Krawczyk test of the box ``xc +- rho``, from the enclosures of ``F(xc, S)`` and ``J(X, S)``.
+
+    Writes ``K = xc + off +- rad`` and returns True when ``K`` lies in the interior of the box.
+    ``Y`` is the preconditioner (an approximate inverse of the Jacobian at ``xc``).
+    """
+    nf = Fm.shape[0]
+    aY = np.abs(Y)
+    YF = Y @ Fm
+    YFr = aY @ (Fr + REL * np.abs(Fm))  # F's radius and the product's rounding
+    YJ = Y @ Jm
+    Cr = aY @ (Jr + REL * np.abs(Jm))
+    ok = True
+    for a in range(nf):
+        s = 0.0
+        for b in range(nf):
+            c = (1.0 if a == b else 0.0) - YJ[a, b]
+            s += (abs(c) + up(Cr[a, b] + REL * (abs(YJ[a, b]) + 1.0))) * rho[b]
+        off[a] = -YF[a]
+        rad[a] = up(up(s) + up(YFr[a] + REL * abs(YF[a])))
+        if not up(abs(off[a]) + rad[a]) < rho[a]:
+            ok = False
+    return ok
+
+
+@njit(cache=True)
+def _inverse(J):
+    """``J^-1`` by the pivoted LU of :mod:`.linalg` (NaN when singular; any matrix serves as ``Y``)."""
+    nf = J.shape[0]
+    LU = J.copy()
+    piv = np.empty(nf, dtype=np.int64)
+    if _factor(LU, piv, nf) == 0.0:
+        return np.full((nf, nf), np.nan)
+    Y = np.zeros((nf, nf))
+    for a in range(nf):
+        Y[a, a] = 1.0
+        _solve(LU, piv, Y[a], nf)  # row a: column a of J^-1
+    return Y.T.copy()
+
+
+@njit(cache=True)
+def prove_box(tables, T0, xc, spread, hm, hr, off, rad, rho):
+    """Krawczyk with epsilon-inflation around ``xc``; ``spread`` (nf,) is a first radius to cover.
+
+    ``Y`` is the inverse of the Jacobian's midpoint at ``xc`` (over the held joints' interval). Writes the last box tried (``rho``)
+    and its ``K`` (``off``, ``rad``); True when proven.
+    """
+    placements, motions, closure, held, rows = tables
+    nf = xc.shape[0]
+    Fm, Fr, Jm, Jr = np.empty(nf), np.empty(nf), np.empty((nf, nf)), np.empty((nf, nf))
+    Gm, Gr = np.empty(nf), np.empty(nf)  # F over the whole box: not used
+    enclose(placements, motions, closure, held, rows, T0, xc, np.zeros(nf), hm, hr, True, Fm, Fr, Jm, Jr)
+    Y = _inverse(Jm)
+    if not np.all(np.isfinite(Y)):
+        return False
+    first = np.abs(Y @ Fm) + np.abs(Y) @ Fr
+    for a in range(nf):
+        rho[a] = spread[a] + 2.0 * first[a] + 1e-15 * (1.0 + abs(xc[a]))
+    for _ in range(INFLATIONS):
+        enclose(placements, motions, closure, held, rows, T0, xc, rho, hm, hr, True, Gm, Gr, Jm, Jr)
+        if krawczyk(Fm, Fr, Jm, Jr, rho, Y, off, rad):
+            return True
+        for a in range(nf):
+            rho[a] = max(rho[a], 1.5 * (abs(off[a]) + rad[a]))
+    return False
+
+
+@njit(cache=True, inline="always")
+def _inside(c, off, rad, c2, rho2):
+    """Whether the box ``c + off +- rad`` lies inside ``c2 +- rho2`` (rounding allowed for)."""
+    for a in range(c.shape[0]):
+        d = abs(c[a] - c2[a] + off[a])
+        if not up(d + rad[a] + REL * (abs(c[a]) + abs(c2[a]) + abs(off[a]))) < rho2[a]:
+            return False
+    return True
+
+
+@njit(cache=True)
+def prove_path(tables, T0, x0, x1, l0, l1):
+    """Prove that the readings path from ``x0`` (readings ``l0``) to ``x1`` (``l1``) stays on one assembly.
+
+    Args:
+        tables: ``(placements, motions, closure, held, rows)`` (:func:`.intervals.enclose`).
+        T0: (4, 4) the platform chart's origin.
+        x0, x1: (nf,) the start and the result in the unknowns' coordinates.
+        l0, l1: (6,) the held joints' values at the start and at the result (m).
+
+    Returns:
+        ``(proven, tests, radius, parts)``: ``radius`` (nf,) bounds ``|x - x1|`` for the unique
+        exact solution ``x`` the path ends at (rad for the joints and the chart's rotations, m for
+        its translations); ``tests`` the Krawczyk tests run; ``parts`` the sub-intervals of the
+        proven path.
+    """
+    nf = x0.shape[0]
+    off, rad, rho = np.empty(nf), np.empty(nf), np.empty(nf)
+    prev_c, prev_off, prev_rad, prev_rho = np.empty(nf), np.empty(nf), np.empty(nf), np.empty(nf)
+    hm, hr, xc, spread = np.empty(6), np.empty(6), np.empty(nf), np.empty(nf)
+    tests, parts, s0, width = 0, 0, 0.0, 1.0
+    while s0 < 1.0:
+        s1 = min(1.0, s0 + width)
+        sm, half = 0.5 * (s0 + s1), 0.5 * (s1 - s0)
+        for i in range(6):
+            d = l1[i] - l0[i]
+            hm[i] = l0[i] + sm * d
+            hr[i] = up(half * abs(d) + REL * (abs(l0[i]) + abs(d)))
+        for a in range(nf):
+            d = x1[a] - x0[a]
+            xc[a] = x0[a] + sm * d
+            spread[a] = half * abs(d)
+        tests += 1
+        ok = prove_box(tables, T0, xc, spread, hm, hr, off, rad, rho)
+        if ok and s0 == 0.0:  # the start must lie in the first box
+            ok = _inside(x0, np.zeros(nf), np.zeros(nf), xc, rho)
+        if ok and s0 > 0.0:  # chained to the box before
+            ok = _inside(prev_c, prev_off, prev_rad, xc, rho) or _inside(xc, off, rad, prev_c, prev_rho)
+        if ok:
+            prev_c[:], prev_off[:], prev_rad[:], prev_rho[:] = xc, off, rad, rho
+            s0 = s1
+            parts += 1
+            width = min(1.0 - s0, 2.0 * width) if s0 < 1.0 else width
+        else:
+            if width <= MIN_WIDTH or tests >= MAX_TESTS:
+                return False, tests, rho, 0
+            width *= 0.5
+        if tests >= MAX_TESTS and s0 < 1.0:
+            return False, tests, rho, 0
+    for i in range(6):
+        hm[i], hr[i] = l1[i], 0.0
+    tests += 1
+    ok = prove_box(tables, T0, x1, np.zeros(nf), hm, hr, off, rad, rho)
+    if not ok or not _inside(x1, off, rad, prev_c, prev_rho):
+        return False, tests, rho, 0
+    for a in range(nf):
+        rad[a] = up(abs(off[a]) + rad[a])
+    return True, tests, rad, parts
