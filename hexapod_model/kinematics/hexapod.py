@@ -41,6 +41,7 @@ from .checks import (
 )
 from .newton.kernel_sets import KernelSet, kernel_set
 from .newton.outcomes import new_solution
+from .newton.proof import StepProver, with_proof
 from .newton.solver import NewtonSolver, Solution, size_of
 
 DEFAULT_TOL = 1e-12  # closure residual (m, rad) at a 0.25 m base radius: pose errors below 1e-9 on every preset
@@ -315,6 +316,7 @@ class Hexapod:
             done = solver.certified_forward(start, joints, tol, max_iter, sign)  # type: ignore[attr-defined]
             return self._attempted(solver, done, lengths, joints, start, tol, max_iter, sign, guess, check, review)
         sol = self._finish(solver, start.copy(), tol, max_iter, check and not review, (joints, sign, guess is not None))
+        sol = self._proven_near(sol, guess, start, check and not review)
         return self._reviewed(sol, lengths, guess, check) if review else sol
 
     def _stroke_error(self, lengths: np.ndarray, k: int) -> LimitError:
@@ -336,12 +338,41 @@ class Hexapod:
         else:
             forward = (joints, sign, guess is not None, done)
             sol = self._finish(solver, start.copy(), tol, max_iter, check and not review, forward)
+        sol = self._proven_near(sol, guess, start, check and not review)
         return self._reviewed(sol, lengths, guess, check) if review else sol
 
     @functools.cached_property
     def _finder(self) -> AssemblyFinder:
         """The global direct kinematics (:mod:`.assemblies`)."""
         return AssemblyFinder(self)
+
+    @functools.cached_property
+    def _prover(self) -> StepProver | None:
+        """The Krawczyk proof of warm steps (:mod:`.newton.proof`)."""
+        return StepProver.of(self.closed_loop)
+
+    def prove_step(self, guess, sol: Solution) -> Solution:
+        """``sol``, a :meth:`forward` result from ``guess``, with the Krawczyk proof of its readings path.
+
+        The proof (:class:`~.newton.proof.Proof`, rigorous in floating point) that the path of
+        solutions for the readings from ``guess``'s to ``sol``'s stays on one assembly and ends
+        within :attr:`~.newton.proof.Proof.position_m` / ``rotation_rad`` of ``sol.pose``. A
+        ``converged`` result whose proof fails is returned ``uncertified``.
+
+        Args:
+            guess: the closed configuration or :class:`Solution` the solve started from.
+            sol: the result.
+        """
+        return with_proof(self._prover, self._start(guess), sol)
+
+    def _proven_near(self, sol: Solution, guess, start: np.ndarray, check: bool) -> Solution:
+        """A warm ``converged`` result near a singularity stays so only with its proof (:meth:`prove_step`)."""
+        if guess is None or sol.status != "converged" or "near_singular" not in sol.flags:
+            return sol
+        sol = with_proof(self._prover, start, sol)
+        if check and not sol.converged:
+            raise AssemblyError(sol, f"{sol.status}: {sol.message}")
+        return sol
 
     def _reviewed(self, sol: Solution, lengths: np.ndarray, guess, check: bool) -> Solution:
         """A 3-6 hexapod's result checked against every assembly (:func:`.assemblies.review`); raised if ``check``."""

@@ -158,17 +158,22 @@ def enclose(placements, motions, closure, held, rows, T0, xm, xr, hm, hr, jacobi
     """Enclosures of the closure residual ``F`` (6 rows) and, if ``jacobian``, of its Jacobian.
 
     Args:
-        placements, motions, closure: :class:`.legs.ChainTables`'s arrays ((6, n, 4, 4), (6, n, 6),
-            (12, 4, 4)).
+        placements: (6, n, 4, 4) joint placements (:class:`.legs.ChainTables`).
+        motions: (6, n, 6) motion subspaces.
+        closure: (12, 4, 4) tip, then anchor frames.
         held: (6,) position of the held joint in each leg.
         rows: 6 (6-D closures) or 3 (point closures).
         T0: (4, 4) the platform chart's origin (world placement of the platform joint).
-        xm, xr: (nf,) the unknowns' midpoints and radii (leg joints but the held one, leg after
-            leg, then the six chart coordinates).
-        hm, hr: (6,) the held joints' midpoints and radii (m).
-        jacobian: whether to fill ``Jm``, ``Jr`` (6 rows x nf; derivative of ``F`` in the unknowns).
-        Fm, Fr: (6 rows,) written.
-        Jm, Jr: (6 rows, nf) written when ``jacobian``.
+        xm: (nf,) the unknowns' midpoints (leg joints but the held one, leg after leg, then the
+            six chart coordinates).
+        xr: (nf,) their radii.
+        hm: (6,) the held joints' midpoints (m).
+        hr: (6,) their radii (m).
+        jacobian: whether to fill ``Jm``, ``Jr`` (derivative of ``F`` in the unknowns).
+        Fm: (6 rows,) written: the residual's midpoints.
+        Fr: (6 rows,) written: its radii.
+        Jm: (6 rows, nf) written when ``jacobian``: the Jacobian's midpoints.
+        Jr: (6 rows, nf) written when ``jacobian``: its radii.
     """
     n = placements.shape[1]
     nl = 6 * (n - 1)

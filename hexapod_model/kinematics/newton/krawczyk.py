@@ -79,8 +79,8 @@ def _inverse(J):
 def prove_box(tables, T0, xc, spread, hm, hr, off, rad, rho):
     """Krawczyk with epsilon-inflation around ``xc``; ``spread`` (nf,) is a first radius to cover.
 
-    ``Y`` is the inverse of the Jacobian's midpoint at ``xc`` (over the held joints' interval). Writes the last box tried (``rho``)
-    and its ``K`` (``off``, ``rad``); True when proven.
+    ``Y`` is the inverse of the Jacobian's midpoint at ``xc`` and the held joints' midpoint.
+    Writes the last box tried (``rho``) and its ``K`` (``off``, ``rad``); True when proven.
     """
     placements, motions, closure, held, rows = tables
     nf = xc.shape[0]
@@ -119,8 +119,10 @@ def prove_path(tables, T0, x0, x1, l0, l1):
     Args:
         tables: ``(placements, motions, closure, held, rows)`` (:func:`.intervals.enclose`).
         T0: (4, 4) the platform chart's origin.
-        x0, x1: (nf,) the start and the result in the unknowns' coordinates.
-        l0, l1: (6,) the held joints' values at the start and at the result (m).
+        x0: (nf,) the start in the unknowns' coordinates.
+        x1: (nf,) the result.
+        l0: (6,) the held joints' values at the start (m).
+        l1: (6,) the held joints' values at the result (m).
 
     Returns:
         ``(proven, tests, radius, parts)``: ``radius`` (nf,) bounds ``|x - x1|`` for the unique

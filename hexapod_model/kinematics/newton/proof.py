@@ -18,12 +18,13 @@ The numba kernels are imported by the first :class:`StepProver` (they compile on
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ...description.model import ClosedLoopModel
 from .legs import ChainTables
+from .solver import Solution
 
 
 @dataclass(frozen=True)
@@ -64,17 +65,18 @@ class StepProver:
 
     Args:
         clm: the model (every leg a chain of one-dof joints, one prismatic joint held per leg).
-
-    Raises:
-        ValueError: the model's legs are not chains :class:`.legs.ChainTables` can read.
+        tables: its :class:`.legs.ChainTables` (:meth:`of` reads them, or returns None).
     """
 
-    def __init__(self, clm: ClosedLoopModel):
+    @classmethod
+    def of(cls, clm: ClosedLoopModel) -> StepProver | None:
+        """The prover of ``clm``, or None when its legs are not chains :class:`.legs.ChainTables` reads."""
+        tables = ChainTables.of(clm)
+        return None if tables is None else cls(clm, tables)
+
+    def __init__(self, clm: ClosedLoopModel, tables: ChainTables):
         from . import krawczyk  # numba: compiled on first use
 
-        tables = ChainTables.of(clm)
-        if tables is None:
-            raise ValueError("the Krawczyk proof needs legs of one-dof joints (ChainTables)")
         self._prove = krawczyk.prove_path
         self.leg_q = tables.leg_q
         n = tables.leg_q.shape[1]
@@ -119,3 +121,19 @@ class StepProver:
         position = float(np.sqrt(r[0] ** 2 + r[1] ** 2 + r[2] ** 2) * (1.0 + 1e-12)) + slack
         rotation = float((r[3] + r[4] + r[5]) * (1.0 + 1e-12)) + slack
         return Proof(True, position, rotation, int(tests), int(parts))
+
+
+def with_proof(prover: StepProver | None, q0: np.ndarray, sol: Solution) -> Solution:
+    """``sol`` carrying the proof of its readings path from ``q0``; ``uncertified`` if ``converged`` and not proven.
+
+    A result that does not close (any status but ``converged`` and ``uncertified``), or a model
+    without a prover, gets a proof that was not run (``tests`` 0): not proven.
+    """
+    if prover is None or sol.status not in ("converged", "uncertified"):
+        return replace(sol, proof=Proof(False, np.inf, np.inf, 0, 0))
+    proof = prover.prove(np.asarray(q0, dtype=float), sol.q)
+    if proof.proven or sol.status != "converged":
+        return replace(sol, proof=proof)
+    why = f"the Krawczyk proof of the readings path from the guess failed ({proof.tests} tests)"
+    message = f"{sol.message}; {why}" if sol.message else why
+    return replace(sol, status="uncertified", message=message, proof=proof)
