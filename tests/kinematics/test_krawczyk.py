@@ -26,7 +26,9 @@ DATA = Path(__file__).parents[1] / "data"
 
 @functools.cache
 def _prover(name: str) -> StepProver:
-    return StepProver(hexapod(name).closed_loop)
+    prover = StepProver.of(hexapod(name).closed_loop)
+    assert prover is not None
+    return prover
 
 
 def _iv(m: float, r: float):

@@ -16,8 +16,10 @@ the solutions for ``s`` in ``S`` form one continuous path inside ``X`` (the impl
 :func:`prove_path` covers ``[0, 1]`` with such tests, halving a sub-interval whose test fails (at
 most ``MAX_TESTS`` tests), and chains them: consecutive boxes must hold each other's ``K``
 (then the path's point at the shared ``s`` is the unique solution of both boxes), the first box
-the start ``x0`` and a last test at ``s = 1`` alone, centred on the result ``x1``, gives the box
-that holds the exact solution the path ends at, and must lie inside the box before it.
+the start ``x0``, and a last test at ``s = 1`` alone, on a box about the result ``x1`` inside the
+last box (whose Jacobian enclosure, over a larger box and parameter interval, holds the
+Jacobian over it: inclusion isotonicity), gives the box that holds the exact solution the path
+ends at (the unique one of the last box at ``s = 1``).
 Each test tries ``INFLATIONS`` boxes (epsilon-inflation: ``rho <- 1.5 |K - xc|``).
 """
 
@@ -76,18 +78,19 @@ def _inverse(J):
 
 
 @njit(cache=True)
-def prove_box(tables, T0, xc, spread, hm, hr, off, rad, rho):
+def prove_box(tables, T0, xc, spread, hm, hr, off, rad, rho, Jm, Jr, Y):
     """Krawczyk with epsilon-inflation around ``xc``; ``spread`` (nf,) is a first radius to cover.
 
     ``Y`` is the inverse of the Jacobian's midpoint at ``xc`` and the held joints' midpoint.
-    Writes the last box tried (``rho``) and its ``K`` (``off``, ``rad``); True when proven.
+    Writes the last box tried (``rho``), its ``K`` (``off``, ``rad``), the Jacobian's enclosure
+    over it (``Jm``, ``Jr``) and ``Y``; True when proven.
     """
     placements, motions, closure, held, rows = tables
     nf = xc.shape[0]
-    Fm, Fr, Jm, Jr = np.empty(nf), np.empty(nf), np.empty((nf, nf)), np.empty((nf, nf))
+    Fm, Fr = np.empty(nf), np.empty(nf)
     Gm, Gr = np.empty(nf), np.empty(nf)  # F over the whole box: not used
     enclose(placements, motions, closure, held, rows, T0, xc, np.zeros(nf), hm, hr, True, Fm, Fr, Jm, Jr)
-    Y = _inverse(Jm)
+    Y[:, :] = _inverse(Jm)
     if not np.all(np.isfinite(Y)):
         return False
     first = np.abs(Y @ Fm) + np.abs(Y) @ Fr
@@ -125,7 +128,7 @@ def prove_path(tables, T0, x0, x1, l0, l1):
         l1: (6,) the held joints' values at the result (m).
 
     Returns:
-        ``(proven, tests, radius, parts)``: ``radius`` (nf,) bounds ``|x - x1|`` for the unique
+        ``(proven, tests, radius, parts)`` (``tests``: the path's): ``radius`` (nf,) bounds ``|x - x1|`` for the unique
         exact solution ``x`` the path ends at (rad for the joints and the chart's rotations, m for
         its translations); ``tests`` the Krawczyk tests run; ``parts`` the sub-intervals of the
         proven path.
@@ -134,6 +137,7 @@ def prove_path(tables, T0, x0, x1, l0, l1):
     off, rad, rho = np.empty(nf), np.empty(nf), np.empty(nf)
     prev_c, prev_off, prev_rad, prev_rho = np.empty(nf), np.empty(nf), np.empty(nf), np.empty(nf)
     hm, hr, xc, spread = np.empty(6), np.empty(6), np.empty(nf), np.empty(nf)
+    Jm, Jr, Y = np.empty((nf, nf)), np.empty((nf, nf)), np.empty((nf, nf))
     tests, parts, s0, width = 0, 0, 0.0, 1.0
     while s0 < 1.0:
         s1 = min(1.0, s0 + width)
@@ -147,7 +151,7 @@ def prove_path(tables, T0, x0, x1, l0, l1):
             xc[a] = x0[a] + sm * d
             spread[a] = half * abs(d)
         tests += 1
-        ok = prove_box(tables, T0, xc, spread, hm, hr, off, rad, rho)
+        ok = prove_box(tables, T0, xc, spread, hm, hr, off, rad, rho, Jm, Jr, Y)
         if ok and s0 == 0.0:  # the start must lie in the first box
             ok = _inside(x0, np.zeros(nf), np.zeros(nf), xc, rho)
         if ok and s0 > 0.0:  # chained to the box before
@@ -163,12 +167,22 @@ def prove_path(tables, T0, x0, x1, l0, l1):
             width *= 0.5
         if tests >= MAX_TESTS and s0 < 1.0:
             return False, tests, rho, 0
-    for i in range(6):
-        hm[i], hr[i] = l1[i], 0.0
-    tests += 1
-    ok = prove_box(tables, T0, x1, np.zeros(nf), hm, hr, off, rad, rho)
-    if not ok or not _inside(x1, off, rad, prev_c, prev_rho):
-        return False, tests, rho, 0
+    # the end: a box about x1 inside the last one, whose Jacobian enclosure holds J over it at s = 1
+    placements, motions, closure, held, rows = tables
+    Fm, Fr = np.empty(nf), np.empty(nf)
+    enclose(placements, motions, closure, held, rows, T0, x1, np.zeros(nf), l1, np.zeros(6), False, Fm, Fr, Jm, Jr)
+    first = np.abs(Y @ Fm) + np.abs(Y) @ Fr
+    box = np.empty(nf)
     for a in range(nf):
-        rad[a] = up(abs(off[a]) + rad[a])
-    return True, tests, rad, parts
+        box[a] = 2.0 * first[a] + 1e-15 * (1.0 + abs(x1[a]))
+    zero = np.zeros(nf)
+    for _ in range(INFLATIONS):
+        if not _inside(x1, zero, box, prev_c, prev_rho):
+            break
+        if krawczyk(Fm, Fr, Jm, Jr, box, Y, off, rad):
+            for a in range(nf):
+                rad[a] = up(abs(off[a]) + rad[a])
+            return True, tests, rad, parts
+        for a in range(nf):
+            box[a] = max(box[a], 1.5 * (abs(off[a]) + rad[a]))
+    return False, tests, box, 0

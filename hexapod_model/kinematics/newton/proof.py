@@ -38,8 +38,8 @@ class Proof:
             exact one the path ends at (``inf`` when not proven).
         rotation_rad: bound of the rotation angle (rad) between the returned platform
             orientation and the exact one (``inf`` when not proven).
-        tests: Krawczyk tests run (1 per sub-interval of the readings path tried, plus the
-            final one at the result's readings).
+        tests: Krawczyk tests of the readings path run (one per sub-interval tried; the final
+            box about the result reuses the last one's Jacobian enclosure).
         subdivisions: sub-intervals the proven path was split into (0 when not proven).
     """
 
