@@ -109,7 +109,10 @@ def trajectory_proofs(name: str, which: str, samples: int) -> dict:
     """Proven fraction and per-step medians (us) of warm solves along trajectory ``which`` at 1 kHz."""
     hexa = Hexapod.load(name)
     _, poses = trajectory_poses(which, hexa.home_pose, hexa.base_radius / 50.0, 1000.0)
-    readings = hexa.inverse_batch(poses[:samples]).lengths
+    ik = hexa.inverse_batch(poses[:samples])
+    inside = np.asarray(ik.converged, dtype=bool)
+    stop = int(np.argmin(inside)) if not inside.all() else len(inside)  # up to the first pose outside the limits
+    readings = ik.lengths[:stop]
     sol = hexa.forward(readings[0], check=False)
     hexa.prove_step(sol, hexa.forward(readings[1], sol, check=False))  # compile / warm up
     solve_t, proof_t, proven, parts = [], [], 0, []
@@ -129,6 +132,7 @@ def trajectory_proofs(name: str, which: str, samples: int) -> dict:
     n = len(solve_t)
     return {
         "steps": n,
+        "outside_from": stop if stop < len(inside) else None,
         "proven_fraction": proven / n if n else float("nan"),
         "median_subdivisions": float(np.median(parts)) if parts else float("nan"),
         "solve_median_us": float(np.median(solve_t) * 1e6),
@@ -149,7 +153,9 @@ def main(argv=None) -> int:
         for which in ("A", "B"):
             t = trajectory_proofs(name, which, args.trajectory_samples)
             print(
-                f"{name:12s} trajectory {which} at 1 kHz: {t['steps']} warm steps, proven "
+                f"{name:12s} trajectory {which} at 1 kHz: {t['steps']} warm steps"
+                + (f" (sample {t['outside_from']} onwards outside the limits)" if t["outside_from"] is not None else "")
+                + ", proven "
                 f"{100 * t['proven_fraction']:.2f} % (median {t['median_subdivisions']:g} sub-intervals); "
                 f"warm solve {t['solve_median_us']:.1f} us + proof {t['proof_median_us']:.1f} us; "
                 f"floor {t['floor_median_us']:.1f} us (medians)",

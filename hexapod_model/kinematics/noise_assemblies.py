@@ -13,8 +13,9 @@ resultant's coefficients (central differences, ``STEP`` m) through the root's se
 so the linear estimate ``g / |grad g|`` is twice that distance: a pair whose estimate is at most
 twice ``reach`` is taken, the readings moved along ``-grad g`` by up to ``reach`` (1.1, 1.5, 2
 times half the estimate, capped at ``reach``), and the assemblies that appear there with
-``psi_0`` within ``ANGLE`` of the pair's are returned. ``reach`` is
-``NOISE_SIGMAS * READING_NOISE`` (m, Euclidean over the six readings) by default.
+``psi_0`` within ``ANGLE`` of the pair's are returned. ``reach`` (m, Euclidean over the six
+readings) is by default ``REACH`` base radii: ``NOISE_SIGMAS`` times ``READING_NOISE`` at the
+presets' 0.2 m base radius (0.3 mm), relative so that a scaled hexapod gets the same answers.
 """
 
 from __future__ import annotations
@@ -24,17 +25,19 @@ import numpy as np
 from ..exceptions import WorkspaceError
 from .three_six import ThreeSixFK, ThreeSixSolution
 
-#: m, default standard deviation of one reading: the order of the LinACE encoders' accuracy
-#: (Bem et al. (2026) section 2), as the tracker's default
+#: m, standard deviation of one reading on the presets: the order of the LinACE encoders'
+#: accuracy (Bem et al. (2026) section 2), as the tracker's default
 READING_NOISE = 10e-6
-NOISE_SIGMAS = 30.0  # a reading change within this many sigmas (0.3 mm at the default) counts
-STEP = 1e-7  # m, central-difference step of the coefficients' derivative
+NOISE_SIGMAS = 30.0  # a reading change within this many sigmas counts
+REACH = NOISE_SIGMAS * READING_NOISE / 0.2  # base radii: 0.3 mm at the presets' 0.2 m
+STEP = 5e-7  # base radii, central-difference step of the coefficients' derivative
 ANGLE = 0.3  # rad, how near the pair's psi_0 a new assembly must appear
 _CIRCLE = 1e-4  # |log |z|| of a real root (as .three_six)
 
 
 def _gaps(fk: ThreeSixFK, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Roots inside the unit circle (one of each complex pair) and the gradient (n, 6) of their gap."""
+    h = STEP * fk.length
     P = fk.polynomial(lengths)
     z = np.roots(P)
     z = z[np.log(np.abs(z)) < -_CIRCLE]
@@ -42,20 +45,21 @@ def _gaps(fk: ThreeSixFK, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     grad = np.empty((z.size, 6))
     for j in range(6):
         e = np.zeros(6)
-        e[j] = STEP
-        dPj = (fk.polynomial(lengths + e) - fk.polynomial(lengths - e)) / (2 * STEP)
+        e[j] = h
+        dPj = (fk.polynomial(lengths + e) - fk.polynomial(lengths - e)) / (2 * h)
         dz = -np.polyval(dPj, z) / dP
         grad[:, j] = -np.real(dz / z)  # g = -log|z| inside the circle
     return z, grad
 
 
-def noise_assemblies(fk: ThreeSixFK, lengths, reach: float = NOISE_SIGMAS * READING_NOISE) -> list[ThreeSixSolution]:
-    """The assemblies of readings within ``reach`` (m) of ``lengths`` that ``lengths`` themselves lack.
+def noise_assemblies(fk: ThreeSixFK, lengths, reach: float | None = None) -> list[ThreeSixSolution]:
+    """The assemblies of readings within ``reach`` (m; default ``REACH`` base radii) of ``lengths`` that these lack.
 
     Each is a :class:`~.three_six.ThreeSixSolution` of the moved readings (its pose closes those,
     not ``lengths``); none when no complex root pair of the resultant is that close to real.
     """
     lengths = np.asarray(lengths, dtype=float)
+    reach = REACH * fk.length if reach is None else reach
     try:
         z, grad = _gaps(fk, lengths)
     except WorkspaceError:

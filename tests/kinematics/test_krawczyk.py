@@ -138,6 +138,8 @@ def test_a_double_root_at_a_fold_is_not_proven():
     fold = hexa.inverse(np.array(case["fold_pose"]), check=False)
     assert fold.closed
     assert not prover.prove(fold.q, fold.q).proven  # the Jacobian is singular there: no unique root
+    home = hexapod("3-6").q_home
+    assert prover.prove(home, home).proven  # the same zero-length path at a regular pose is
 
 
 def test_a_warm_step_to_another_assembly_is_not_proven():

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hexapod_model.kinematics.noise_assemblies import NOISE_SIGMAS, READING_NOISE, noise_assemblies
+from hexapod_model.kinematics.noise_assemblies import REACH, noise_assemblies
 from hexapod_model.kinematics.rotations import pose_distance
 from hexapod_model.kinematics.three_six import ThreeSixFK
 
@@ -46,7 +46,7 @@ def test_the_assemblies_appear_within_the_reach_and_close_the_moved_readings(k):
     readings = np.array(case["readings_m"])
     near = noise_assemblies(fk, readings)
     assert near
-    reach = NOISE_SIGMAS * READING_NOISE
+    reach = REACH * fk.length
     for s in near:
         moved = hexa.inverse(s.pose, check=False).lengths
         assert np.linalg.norm(moved - readings) <= reach * (1 + 1e-6)

@@ -172,11 +172,13 @@ def enclose(placements, motions, closure, held, rows, T0, xm, xr, hm, hr, jacobi
         jacobian: whether to fill ``Jm``, ``Jr`` (derivative of ``F`` in the unknowns).
         Fm: (6 rows,) written: the residual's midpoints.
         Fr: (6 rows,) written: its radii.
-        Jm: (6 rows, nf) written when ``jacobian``: the Jacobian's midpoints.
-        Jr: (6 rows, nf) written when ``jacobian``: its radii.
+        Jm: (6 rows, nf) written when ``jacobian``: the Jacobian's midpoints; with nf + 6
+            columns, the last six are the derivatives in the held joints (leg order).
+        Jr: (6 rows, nf or nf + 6) written when ``jacobian``: its radii.
     """
     n = placements.shape[1]
     nl = 6 * (n - 1)
+    nf = xm.shape[0]
     Am, Ar, Bm, Br = np.empty((3, 4)), np.empty((3, 4)), np.empty((3, 4)), np.empty((3, 4))
     Mm, Mr = np.empty((3, 4)), np.empty((3, 4))
     Wm, Wr = np.empty((6, n, 3, 4)), np.empty((6, n, 3, 4))  # joints' world placements
@@ -244,13 +246,15 @@ def enclose(placements, motions, closure, held, rows, T0, xm, xr, hm, hr, jacobi
             _weights(Em[i], Er[i], False, Hm, Hr)
         v = i * (n - 1)
         for k in range(n):
-            if k == held[i]:
+            if k == held[i] and Jm.shape[1] == nf:
                 continue
             for a in range(3):
                 dm[a] = Wm[i, k, a, 3] - tipm[i, a, 3]
                 dr[a] = up(Wr[i, k, a, 3] + tipr[i, a, 3] + REL * (abs(Wm[i, k, a, 3]) + abs(tipm[i, a, 3])))
-            _column(Wm[i, k], Wr[i, k], motions[i, k], dm, dr, Hm, Hr, rows, 1.0, Jm, Jr, o, v, wm, wr, vm, vr)
-            v += 1
+            c = nf + i if k == held[i] else v
+            _column(Wm[i, k], Wr[i, k], motions[i, k], dm, dr, Hm, Hr, rows, 1.0, Jm, Jr, o, c, wm, wr, vm, vr)
+            if k != held[i]:
+                v += 1
         if rows == 6:
             _weights(Em[i], Er[i], True, Hm, Hr)
         for j in range(6):

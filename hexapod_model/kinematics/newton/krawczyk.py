@@ -37,29 +37,55 @@ INFLATIONS = 4  # boxes tried per test (epsilon-inflation)
 
 
 @njit(cache=True)
-def krawczyk(Fm, Fr, Jm, Jr, rho, Y, off, rad):
-    """One Krawczyk test of the box ``xc +- rho``, from the enclosures of ``F(xc, S)`` and ``J(X, S)``.
+def krawczyk(YFm, YFr, Jm, Jr, rho, Y, off, rad):
+    """One Krawczyk test of the box ``xc +- rho``.
 
-    Writes ``K = xc + off +- rad`` and returns True when ``K`` lies in the interior of the box.
-    ``Y`` is the preconditioner (an approximate inverse of the Jacobian at ``xc``).
+    ``YFm +- YFr`` encloses ``Y F(xc, S)``, ``Jm +- Jr`` (its first nf columns) ``J(X, S)``; ``Y``
+    is the preconditioner (an approximate inverse of the Jacobian at ``xc``). Writes
+    ``K = xc + off +- rad`` and returns True when ``K`` lies in the interior of the box.
     """
-    nf = Fm.shape[0]
+    nf = YFm.shape[0]
     aY = np.abs(Y)
-    YF = Y @ Fm
-    YFr = aY @ (Fr + REL * np.abs(Fm))  # F's radius and the product's rounding
-    YJ = Y @ Jm
-    Cr = aY @ (Jr + REL * np.abs(Jm))
+    Jf = np.ascontiguousarray(Jm[:, :nf])
+    YJ = Y @ Jf
+    Cr = aY @ (Jr[:, :nf] + REL * np.abs(Jf))  # J's radius and the product's rounding
     ok = True
     for a in range(nf):
         s = 0.0
         for b in range(nf):
             c = (1.0 if a == b else 0.0) - YJ[a, b]
             s += (abs(c) + up(Cr[a, b] + REL * (abs(YJ[a, b]) + 1.0))) * rho[b]
-        off[a] = -YF[a]
-        rad[a] = up(up(s) + up(YFr[a] + REL * abs(YF[a])))
+        off[a] = -YFm[a]
+        rad[a] = up(up(s) + YFr[a])
         if not up(abs(off[a]) + rad[a]) < rho[a]:
             ok = False
     return ok
+
+
+@njit(cache=True)
+def _preconditioned(Y, Fm, Fr, Jm, Jr, dl, half, e):
+    """``Y F(xc, S)`` as midpoint and radius, by the mean-value form along the readings path.
+
+    ``F(xc, l(s)) in F(xc, hm) + J_held(xc, S) (dl (s - sm) + e)``, ``|s - sm| <= half``, ``e``
+    the rounding of the held joints' midpoint ``hm``: ``Y J_held dl`` is about the path's
+    tangent, so the readings' change is not spread over every unknown as ``|Y| |F|`` would.
+    """
+    nf = Fm.shape[0]
+    aY = np.abs(Y)
+    YFm = Y @ Fm
+    YFr = aY @ (Fr + REL * np.abs(Fm))
+    gm, gr = np.zeros(nf), np.zeros(nf)
+    for a in range(nf):
+        for i in range(6):
+            t = Jm[a, nf + i] * dl[i]
+            gm[a] += t
+            gr[a] += Jr[a, nf + i] * abs(dl[i]) * half + REL * abs(t) * half
+            gr[a] += (abs(Jm[a, nf + i]) + Jr[a, nf + i]) * e[i]
+    Yg = Y @ gm
+    YFr += aY @ gr + (np.abs(Yg) + REL * (aY @ np.abs(gm))) * half
+    for a in range(nf):
+        YFr[a] = up(YFr[a] + REL * abs(YFm[a]))
+    return YFm, YFr
 
 
 @njit(cache=True)
@@ -78,27 +104,32 @@ def _inverse(J):
 
 
 @njit(cache=True)
-def prove_box(tables, T0, xc, spread, hm, hr, off, rad, rho, Jm, Jr, Y):
+def prove_box(tables, T0, xc, spread, hm, hr, dl, half, off, rad, rho, Jm, Jr, Y):
     """Krawczyk with epsilon-inflation around ``xc``; ``spread`` (nf,) is a first radius to cover.
 
-    ``Y`` is the inverse of the Jacobian's midpoint at ``xc`` and the held joints' midpoint.
-    Writes the last box tried (``rho``), its ``K`` (``off``, ``rad``), the Jacobian's enclosure
-    over it (``Jm``, ``Jr``) and ``Y``; True when proven.
+    The held joints run over ``hm +- hr``, the path ``l0 + s dl`` with ``|s - sm| <= half``.
+    ``Y`` is the inverse of the Jacobian's midpoint at ``xc`` and ``hm``. Writes the last box
+    tried (``rho``), its ``K`` (``off``, ``rad``), the Jacobian's enclosure over it (``Jm``,
+    ``Jr``: nf + 6 columns) and ``Y``; True when proven.
     """
     placements, motions, closure, held, rows = tables
     nf = xc.shape[0]
-    Fm, Fr = np.empty(nf), np.empty(nf)
-    Gm, Gr = np.empty(nf), np.empty(nf)  # F over the whole box: not used
-    enclose(placements, motions, closure, held, rows, T0, xc, np.zeros(nf), hm, hr, True, Fm, Fr, Jm, Jr)
-    Y[:, :] = _inverse(Jm)
+    Fm, Fr, Gm, Gr = np.empty(nf), np.empty(nf), np.empty(nf), np.empty(nf)
+    zero = np.zeros(nf)
+    enclose(placements, motions, closure, held, rows, T0, xc, zero, hm, np.zeros(6), False, Fm, Fr, Jm, Jr)
+    enclose(placements, motions, closure, held, rows, T0, xc, zero, hm, hr, True, Gm, Gr, Jm, Jr)
+    Y[:, :] = _inverse(Jm[:, :nf])
     if not np.all(np.isfinite(Y)):
         return False
-    first = np.abs(Y @ Fm) + np.abs(Y) @ Fr
+    e = np.empty(6)
+    for i in range(6):
+        e[i] = REL * (abs(hm[i]) + abs(dl[i]))  # hm's rounding
+    YFm, YFr = _preconditioned(Y, Fm, Fr, Jm, Jr, dl, half, e)
     for a in range(nf):
-        rho[a] = spread[a] + 2.0 * first[a] + 1e-15 * (1.0 + abs(xc[a]))
+        rho[a] = spread[a] + 4.0 * (abs(YFm[a]) + YFr[a]) + 1e-12 * (1.0 + abs(xc[a]))  # room for the end box
     for _ in range(INFLATIONS):
         enclose(placements, motions, closure, held, rows, T0, xc, rho, hm, hr, True, Gm, Gr, Jm, Jr)
-        if krawczyk(Fm, Fr, Jm, Jr, rho, Y, off, rad):
+        if krawczyk(YFm, YFr, Jm, Jr, rho, Y, off, rad):
             return True
         for a in range(nf):
             rho[a] = max(rho[a], 1.5 * (abs(off[a]) + rad[a]))
@@ -137,21 +168,21 @@ def prove_path(tables, T0, x0, x1, l0, l1):
     off, rad, rho = np.empty(nf), np.empty(nf), np.empty(nf)
     prev_c, prev_off, prev_rad, prev_rho = np.empty(nf), np.empty(nf), np.empty(nf), np.empty(nf)
     hm, hr, xc, spread = np.empty(6), np.empty(6), np.empty(nf), np.empty(nf)
-    Jm, Jr, Y = np.empty((nf, nf)), np.empty((nf, nf)), np.empty((nf, nf))
+    Jm, Jr, Y = np.empty((nf, nf + 6)), np.empty((nf, nf + 6)), np.empty((nf, nf))
+    dl = l1 - l0
     tests, parts, s0, width = 0, 0, 0.0, 1.0
     while s0 < 1.0:
         s1 = min(1.0, s0 + width)
         sm, half = 0.5 * (s0 + s1), 0.5 * (s1 - s0)
         for i in range(6):
-            d = l1[i] - l0[i]
-            hm[i] = l0[i] + sm * d
-            hr[i] = up(half * abs(d) + REL * (abs(l0[i]) + abs(d)))
+            hm[i] = l0[i] + sm * dl[i]
+            hr[i] = up(half * abs(dl[i]) + REL * (abs(l0[i]) + abs(dl[i])))
         for a in range(nf):
             d = x1[a] - x0[a]
             xc[a] = x0[a] + sm * d
             spread[a] = half * abs(d)
         tests += 1
-        ok = prove_box(tables, T0, xc, spread, hm, hr, off, rad, rho, Jm, Jr, Y)
+        ok = prove_box(tables, T0, xc, spread, hm, hr, dl, half, off, rad, rho, Jm, Jr, Y)
         if ok and s0 == 0.0:  # the start must lie in the first box
             ok = _inside(x0, np.zeros(nf), np.zeros(nf), xc, rho)
         if ok and s0 > 0.0:  # chained to the box before
@@ -171,15 +202,17 @@ def prove_path(tables, T0, x0, x1, l0, l1):
     placements, motions, closure, held, rows = tables
     Fm, Fr = np.empty(nf), np.empty(nf)
     enclose(placements, motions, closure, held, rows, T0, x1, np.zeros(nf), l1, np.zeros(6), False, Fm, Fr, Jm, Jr)
-    first = np.abs(Y @ Fm) + np.abs(Y) @ Fr
+    YFm = Y @ Fm
+    YFr = np.abs(Y) @ (Fr + REL * np.abs(Fm))
     box = np.empty(nf)
     for a in range(nf):
-        box[a] = 2.0 * first[a] + 1e-15 * (1.0 + abs(x1[a]))
+        YFr[a] = up(YFr[a] + REL * abs(YFm[a]))
+        box[a] = 2.0 * (abs(YFm[a]) + YFr[a]) + 1e-15 * (1.0 + abs(x1[a]))
     zero = np.zeros(nf)
     for _ in range(INFLATIONS):
         if not _inside(x1, zero, box, prev_c, prev_rho):
             break
-        if krawczyk(Fm, Fr, Jm, Jr, box, Y, off, rad):
+        if krawczyk(YFm, YFr, Jm, Jr, box, Y, off, rad):
             for a in range(nf):
                 rad[a] = up(abs(off[a]) + rad[a])
             return True, tests, rad, parts

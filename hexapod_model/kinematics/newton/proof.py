@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ...description.model import ClosedLoopModel
+from .first_compile import announce
 from .legs import ChainTables
 from .solver import Solution
 
@@ -113,6 +114,7 @@ class StepProver:
         l0, l1 = q0[self.held_q].astype(float), q1[self.held_q].astype(float)
         if not (np.all(np.isfinite(x0)) and np.all(np.isfinite(x1)) and np.all(np.isfinite(l0 + l1))):
             return Proof(False, np.inf, np.inf, 0, 0)
+        announce(self._prove)
         proven, tests, radius, parts = self._prove(self.tables, T0, x0, x1, l0, l1)
         if not proven:
             return Proof(False, np.inf, np.inf, int(tests), 0)
