@@ -1,6 +1,6 @@
 """What the assembly check of direct kinematics costs and how often it refuses, per preset.
 
-    python benchmarks/certificate.py [PRESET ...] [--poses N] [--seed S] [--warm-offset M]
+    python benchmarks/certificate.py [PRESET ...] [--poses N] [--seed S] [--warm-offset M] [--trajectory-samples K]
 
 For ``N`` random poses per preset (home +- 50 mm, roll/pitch/yaw +- 25 deg, within the limits),
 the readings are solved cold (from home) and warm (from the pose moved by ``warm-offset`` m) by
@@ -13,6 +13,14 @@ It prints per preset and mode the median time of each, and the *refusals*: solve
 checked first attempt fails (the readings path is then followed in substeps), and those whose
 final status is not ``converged``. The check is a heuristic (docs/solver.md): these figures
 measure its cost and how often it declines, not what it proves.
+
+Then the **proof** (``Hexapod.prove_step``, the Krawczyk test of
+:mod:`hexapod_model.kinematics.newton.krawczyk`) along trajectories A and B
+(:func:`hexapod_model.analysis.trajectories.trajectory_poses`, scaled to the preset, sampled at
+1 kHz, the first ``K`` samples): per preset and trajectory the fraction of warm steps proven,
+the median subdivisions, the median time of the warm solve and of its proof, and beside them the
+floor (``floor_newton.fk_newton``, the reference Newton iteration in one njit function, on the
+offset-Cardan presets whose legs it reads) on the same readings.
 """
 
 from __future__ import annotations
@@ -24,8 +32,9 @@ from collections import Counter
 import numpy as np
 
 from hexapod_model import Hexapod
-from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
 from hexapod_model.description.presets import PRESETS
+from hexapod_model.kinematics.newton.solver import MAX_STEP
 
 
 def run(name: str, n: int, seed: int, offset: float) -> dict:
@@ -76,14 +85,85 @@ def run(name: str, n: int, seed: int, offset: float) -> dict:
     return out
 
 
+def floor_times(hexa: Hexapod, readings: np.ndarray) -> list[float]:
+    """Per-step times (s) of the floor's warm Newton solve along ``readings``, or [] where it does not apply."""
+    try:
+        import floor_newton as floor
+
+        tables = floor.extract(hexa)
+    except (AssertionError, ImportError, KeyError):
+        return []
+    theta, R, p = np.zeros((6, 6)), hexa.home_pose[:3, :3].copy(), hexa.home_pose[:3, 3].copy()
+    J, G = np.zeros((6, 42)), np.zeros((1, 1))
+    joints = hexa.joints_of(readings)
+    floor.fk_newton(theta, R, p, joints[0], *tables, 1e-12, 50, MAX_STEP, J, G)
+    out = []
+    for x in joints[1:]:
+        t0 = time.perf_counter()
+        floor.fk_newton(theta, R, p, x, *tables, 1e-12, 50, MAX_STEP, J, G)
+        out.append(time.perf_counter() - t0)
+    return out
+
+
+def trajectory_proofs(name: str, which: str, samples: int) -> dict:
+    """Proven fraction and per-step medians (us) of warm solves along trajectory ``which`` at 1 kHz."""
+    hexa = Hexapod.load(name)
+    _, poses = trajectory_poses(which, hexa.home_pose, hexa.base_radius / 50.0, 1000.0)
+    ik = hexa.inverse_batch(poses[:samples])
+    inside = np.asarray(ik.converged, dtype=bool)
+    stop = int(np.argmin(inside)) if not inside.all() else len(inside)  # up to the first pose outside the limits
+    readings = ik.lengths[:stop]
+    sol = hexa.forward(readings[0], check=False)
+    hexa.prove_step(sol, hexa.forward(readings[1], sol, check=False))  # compile / warm up
+    solve_t, proof_t, proven, parts = [], [], 0, []
+    for x in readings[1:]:
+        t0 = time.perf_counter()
+        nxt = hexa.forward(x, sol, check=False)
+        t1 = time.perf_counter()
+        checked = hexa.prove_step(sol, nxt)
+        t2 = time.perf_counter()
+        solve_t.append(t1 - t0)
+        proof_t.append(t2 - t1)
+        if checked.proof is not None and checked.proof.proven:
+            proven += 1
+            parts.append(checked.proof.subdivisions)
+        sol = nxt if nxt.closed else sol
+    floor = floor_times(hexa, readings)
+    n = len(solve_t)
+    return {
+        "steps": n,
+        "outside_from": stop if stop < len(inside) else None,
+        "proven_fraction": proven / n if n else float("nan"),
+        "median_subdivisions": float(np.median(parts)) if parts else float("nan"),
+        "solve_median_us": float(np.median(solve_t) * 1e6),
+        "proof_median_us": float(np.median(proof_t) * 1e6),
+        "floor_median_us": float(np.median(floor) * 1e6) if floor else float("nan"),
+    }
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("presets", nargs="*", default=list(PRESETS))
     ap.add_argument("--poses", type=int, default=2000)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--warm-offset", type=float, default=1e-4, help="m (default 1e-4: a 1 kHz sample at 0.1 m/s)")
+    ap.add_argument("--trajectory-samples", type=int, default=4001, help="1 kHz samples of A and B (4001: all)")
     args = ap.parse_args(argv)
     for name in args.presets:
+        for which in ("A", "B"):
+            t = trajectory_proofs(name, which, args.trajectory_samples)
+            print(
+                f"{name:12s} trajectory {which} at 1 kHz: {t['steps']} warm steps"
+                + (f" (sample {t['outside_from']} onwards outside the limits)" if t["outside_from"] is not None else "")
+                + ", proven "
+                f"{100 * t['proven_fraction']:.2f} % (median {t['median_subdivisions']:g} sub-intervals); "
+                f"warm solve {t['solve_median_us']:.1f} us + proof {t['proof_median_us']:.1f} us; "
+                f"floor {t['floor_median_us']:.1f} us (medians)",
+                flush=True,
+            )
+    for name in args.presets:
+        if args.poses <= 0:
+            break
         r = run(name, args.poses, args.seed, args.warm_offset)
         for mode in ("cold", "warm"):
             c = r[mode]

@@ -41,6 +41,7 @@ from ..description.model import ClosedLoopModel
 from ..exceptions import GeometryError, WorkspaceError
 from ..lie import pose_distance, rpy_to_matrix
 from .newton.solver import NewtonSolver, Solution
+from .noise_assemblies import noise_assemblies
 from .three_six import ThreeSixFK
 
 SAME = 5e-7  # times the base radius (1e-7 m on the presets): two poses closer than this are one assembly
@@ -61,12 +62,16 @@ class Assemblies:
         complete: True when ``solutions`` are provably all of them (the 3-6 resultant), False
             for the multi-start search.
         method: ``"resultant"`` or ``"multi-start (N starts)"``.
+        near: (3-6 hexapods) the assemblies within the limits of readings within the noise
+            reach of these (:func:`.noise_assemblies.noise_assemblies`: a complex root pair of
+            the resultant that such a reading change makes real), nearest the reference first.
     """
 
     solutions: tuple[Solution, ...]
     outside: int
     complete: bool
     method: str
+    near: tuple[Solution, ...] = ()
 
     @property
     def poses(self) -> tuple[np.ndarray, ...]:
@@ -178,13 +183,15 @@ class AssemblyFinder:
         """Every assembly found for ``readings`` (m, checked), nearest ``reference`` (4x4, default home) first."""
         if self.exact is not None:
             try:
-                poses = [s.pose for s in self.exact.solve_all(self.hexa.joints_of(readings))]
+                joints = self.hexa.joints_of(readings)
+                poses = [s.pose for s in self.exact.solve_all(joints)]
             except WorkspaceError:  # two legs of a pair cannot meet: no assembly
                 poses = []
             method, complete = "resultant", True
+            near = [self.hexa.inverse(s.pose, check=False) for s in noise_assemblies(self.exact, joints)]
         else:
             poses = self._search(readings, starts, seed)
-            method, complete = f"multi-start ({starts} starts)", False
+            method, complete, near = f"multi-start ({starts} starts)", False, []
         inside: list[Solution] = []
         for T in poses:
             sol = self.hexa.inverse(T, check=False)
@@ -192,7 +199,8 @@ class AssemblyFinder:
                 inside.append(sol)
         ref = self.hexa.home_pose if reference is None else reference
         inside.sort(key=lambda s: pose_distance(ref, s.pose, self.length))
-        return Assemblies(tuple(inside), len(poses) - len(inside), complete, method)
+        near = sorted((s for s in near if s.converged), key=lambda s: pose_distance(ref, s.pose, self.length))
+        return Assemblies(tuple(inside), len(poses) - len(inside), complete, method, tuple(near))
 
     def _search(self, readings: np.ndarray, starts: int, seed: int) -> list[np.ndarray]:
         """Poses of the distinct closed configurations plain Newton reaches from home and ``starts`` random poses."""
@@ -235,7 +243,7 @@ def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: o
         return sol
     reference = hexa.home_pose if q_guess is None else hexa.pose_of(q_guess)
     found = finder.find(readings, reference)
-    within, length = found.solutions, finder.length
+    within, length = found.solutions + found.near, finder.length
     same = SAME * length
     if not within:
         if found.outside == 0:

@@ -26,6 +26,7 @@ from .input_checks import LIMIT_SLACK, MAX_TOL, check_home_conditioning, check_m
 from .joint_space import JointSpace
 from .newton.kernel_sets import kernel_set
 from .newton.outcomes import new_solution
+from .newton.proof import StepProver, with_proof
 from .newton.solver import NewtonSolver, Solution
 
 DEFAULT_MAX_ITER = 20
@@ -198,6 +199,7 @@ class SolveEngine(JointSpace):
             done = one_call.certified_forward(start, joints, tol, max_iter, sign)
             return self.attempted(solver, done, lengths, joints, start, tol, max_iter, sign, guess, check, review)
         sol = self.finish(solver, start.copy(), tol, max_iter, check and not review, (joints, sign, guess is not None))
+        sol = self.proven_near(sol, guess, start, check and not review)
         return self.reviewed(sol, lengths, guess, check) if review else sol
 
     def attempted(
@@ -225,7 +227,26 @@ class SolveEngine(JointSpace):
         else:
             forward = (joints, sign, guess is not None, done)
             sol = self.finish(solver, start.copy(), tol, max_iter, check and not review, forward)
+        sol = self.proven_near(sol, guess, start, check and not review)
         return self.reviewed(sol, lengths, guess, check) if review else sol
+
+    @functools.cached_property
+    def prover(self) -> StepProver | None:
+        """The Krawczyk proof of warm steps (:mod:`.newton.proof`)."""
+        return StepProver.of(self.closed_loop)
+
+    def prove_step(self, guess: object, sol: Solution) -> Solution:
+        """``sol``, a direct-kinematics result from ``guess``, with the Krawczyk proof of its readings path."""
+        return with_proof(self.prover, self.start(guess), sol)
+
+    def proven_near(self, sol: Solution, guess: object, start: np.ndarray, check: bool) -> Solution:
+        """A warm ``converged`` result near a singularity stays so only with its proof (:meth:`prove_step`)."""
+        if guess is None or sol.status != "converged" or "near_singular" not in sol.flags:
+            return sol
+        sol = with_proof(self.prover, start, sol)
+        if check and not sol.converged:
+            raise AssemblyError(sol, f"{sol.status}: {sol.message}")
+        return sol
 
     def inverse(
         self,

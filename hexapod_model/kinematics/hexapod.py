@@ -346,6 +346,20 @@ class Hexapod:
         tol = self.default_tol if tol is None else tol
         return batch.inverse_batch(self.engine, poses, guess, warm, tol, max_iter)
 
+    def prove_step(self, guess: Solution | ArrayLike, sol: Solution) -> Solution:
+        """``sol``, a :meth:`forward` result from ``guess``, with the Krawczyk proof of its readings path.
+
+        The proof (:class:`~.newton.proof.Proof`, rigorous in floating point) that the path of
+        solutions for the readings from ``guess``'s to ``sol``'s stays on one assembly and ends
+        within :attr:`~.newton.proof.Proof.position_m` / ``rotation_rad`` of ``sol.pose``. A
+        ``converged`` result whose proof fails is returned ``uncertified``.
+
+        Args:
+            guess: the closed configuration or :class:`Solution` the solve started from.
+            sol: the result.
+        """
+        return self.engine.prove_step(guess, sol)
+
     def clearance(self, q_or_pose: ArrayLike) -> Clearance:
         """Smallest distance between two collision bodies, their names and nearest points (docs/solver.md).
 

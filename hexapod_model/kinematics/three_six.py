@@ -202,8 +202,21 @@ class ThreeSixFK:
             S[:, 4 + k, k : k + 5] = quartic[:, ::-1]
         return np.linalg.det(S), np.prod(np.linalg.norm(S, axis=2), axis=1)
 
-    def _angles(self, Ks: list[np.ndarray]) -> np.ndarray:
-        """Every real root ``psi_0`` of the resultant (and complex ones within ``_CIRCLE`` of real)."""
+    def _roots(self, Ks: list[np.ndarray]) -> np.ndarray:
+        """Every root ``z = exp(i psi_0)`` of the resultant (16, complex)."""
+        return np.roots(self._polynomial(Ks))
+
+    def polynomial(self, lengths) -> np.ndarray:
+        """The resultant for readings ``lengths`` (m) as a polynomial in ``z = exp(i psi_0)``.
+
+        17 complex coefficients, highest power first (``numpy.roots``' order): its roots on the
+        unit circle are the assemblies' ``psi_0``, the others come in pairs ``z``, ``1 / conj(z)``.
+        """
+        C, d = self.circles(lengths)
+        return self._polynomial(self._coefficients(C, d))
+
+    def _polynomial(self, Ks: list[np.ndarray]) -> np.ndarray:
+        """The resultant as a polynomial in ``z = exp(i psi_0)`` (17 coefficients, highest power first)."""
         values, bound = self._resultant(Ks, 2 * np.pi * np.arange(_SAMPLES) / _SAMPLES)
         c = np.fft.fft(values) / _SAMPLES  # resultant = sum_k c[k] exp(i k psi), |k| <= 8
         n = MAX_ASSEMBLIES // 2
@@ -211,7 +224,11 @@ class ThreeSixFK:
             raise WorkspaceError(
                 None, "the 3-6 assembly equations are degenerate for these readings (no isolated solutions)"
             )
-        z = np.roots(np.concatenate([c[n:0:-1], c[:1], c[-1 : -n - 1 : -1]]))  # z^8 times it: c_8 ... c_-8
+        return np.concatenate([c[n:0:-1], c[:1], c[-1 : -n - 1 : -1]])  # z^8 times it: c_8 ... c_-8
+
+    def _angles(self, Ks: list[np.ndarray]) -> np.ndarray:
+        """Every real root ``psi_0`` of the resultant (and complex ones within ``_CIRCLE`` of real)."""
+        z = self._roots(Ks)
         return np.angle(z[np.abs(np.log(np.abs(z))) < _CIRCLE])
 
     @staticmethod

@@ -15,4 +15,8 @@ manifold. The paths:
   readings path (:mod:`.follow`) and the batch loops (:mod:`.batch_kernels`) run compiled too.
 
 :mod:`.outcomes` names the outcome codes; :mod:`.path_rules` the readings path's step rules.
+
+Beside the iteration, the proof of a warm step: :mod:`.proof` (:class:`.proof.Proof`,
+:class:`.proof.StepProver`) runs the compiled Krawczyk test of :mod:`.krawczyk` on interval
+enclosures of the residual and its Jacobian (:mod:`.intervals`, rounding bounded).
 """

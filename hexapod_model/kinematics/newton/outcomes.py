@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .proof import Proof
 from .solver import SINGULAR_PIVOT_RATIO, Solution
 
 #: codes of one Newton iteration (:func:`.newton.iterate_schur`, :func:`.newton.iterate_blocks`)
@@ -48,6 +49,7 @@ def new_solution(
     flags: tuple[str, ...] = (),
     candidates: tuple[np.ndarray, ...] = (),
     det_sign: int = 0,
+    proof: Proof | None = None,
 ) -> Solution:
     """``Solution(pose, q, ...)``, the same object, built at a quarter of the frozen dataclass's ``__init__`` cost.
 
@@ -67,6 +69,7 @@ def new_solution(
         "flags": flags,
         "candidates": candidates,
         "det_sign": det_sign,
+        "proof": proof,
     }
     _set(sol, "__dict__", fields)
     return sol

@@ -25,13 +25,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 import pinocchio as pin
 
 from ...description.model import ClosedLoopModel
 from .kernel_sets import KernelSet, kernel_set
+
+if TYPE_CHECKING:
+    from .proof import Proof
 
 STATUSES = (
     "converged",
@@ -110,6 +113,9 @@ class Solution:
         candidates: with status ``ambiguous_assembly``, the (4, 4) poses of the assemblies
             found (``pose`` is the first).
         det_sign: sign of the direct-kinematics Jacobian's determinant at the result (0: none).
+        proof: the Krawczyk proof of a warm step (:class:`~.proof.Proof`): set by
+            :meth:`~hexapod_model.kinematics.hexapod.Hexapod.prove_step`, and on a warm
+            ``converged`` result near a singularity; ``None`` when no proof was run.
     """
 
     pose: np.ndarray
@@ -123,6 +129,7 @@ class Solution:
     flags: tuple[str, ...] = ()
     candidates: tuple[np.ndarray, ...] = field(default=(), repr=False)
     det_sign: int = 0
+    proof: Proof | None = field(default=None, repr=False)
 
     @property
     def converged(self) -> bool:

@@ -1,0 +1,152 @@
+"""The Krawczyk proof of a warm step (:mod:`hexapod_model.kinematics.newton.krawczyk`).
+
+The interval primitives against mpmath's interval arithmetic (a plain Python reference at 120
+bits), the rounding allowance, the enclosures against point evaluations, the proof's soundness
+on seeded warm steps of every preset, and refusals where a second root lies close by.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hexapod_model.kinematics.newton.intervals import REL, enclose, motion, product
+from hexapod_model.kinematics.newton.proof import StepProver
+from hexapod_model.lie import rpy_to_matrix
+
+from ..conftest import hexapod
+
+iv = pytest.importorskip("mpmath").iv
+DATA = Path(__file__).parents[1] / "data"
+
+
+@functools.cache
+def _prover(name: str) -> StepProver:
+    prover = StepProver.of(hexapod(name).closed_loop)
+    assert prover is not None
+    return prover
+
+
+def _iv(m: float, r: float):
+    return iv.mpf([m, m]) + iv.mpf([-r, r])
+
+
+def _inside(ref, m: float, r: float) -> bool:
+    """Whether the mpmath interval ``ref`` lies within ``m +- r``."""
+    lo, hi = _iv(m, r).a, _iv(m, r).b
+    return bool(ref.a >= lo and ref.b <= hi)
+
+
+def test_the_primitives_enclose_the_exact_values_of_an_mpmath_reference():
+    iv.prec = 120
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        S = np.concatenate([np.zeros(3), axis])
+        xm, xr = rng.uniform(-3, 3), 10.0 ** rng.uniform(-9, -1)
+        Mm, Mr = np.empty((3, 4)), np.empty((3, 4))
+        motion(S, xm, xr, Mm, Mr)
+        x = _iv(xm, xr)
+        c, s = iv.cos(x), iv.sin(x)
+        for a in range(3):
+            for b in range(3):
+                aa = iv.mpf(axis[a]) * iv.mpf(axis[b])
+                K = [[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]][a][b]
+                exact = c * ((1 if a == b else 0) - aa) + s * iv.mpf(K) + aa
+                assert _inside(exact, Mm[a, b], Mr[a, b]), (a, b)
+        Am, Ar = rng.normal(size=(3, 4)), 10.0 ** rng.uniform(-12, -3, (3, 4))
+        Cm, Cr = np.empty((3, 4)), np.empty((3, 4))
+        product(Am, Ar, Mm, Mr, Cm, Cr)
+        for a in range(3):
+            for b in range(4):
+                exact = sum(_iv(Am[a, k], Ar[a, k]) * _iv(Mm[k, b], Mr[k, b]) for k in range(3))
+                if b == 3:
+                    exact += _iv(Am[a, 3], Ar[a, 3])
+                assert _inside(exact, Cm[a, b], Cr[a, b]), (a, b)
+
+
+def test_a_rounding_allowance_is_added_to_every_radius():
+    A = np.array([[0.1, 0.2, 0.3, 0.4], [0.5, 0.6, 0.7, 0.8], [0.9, 1.1, 1.3, 1.7]])
+    Cm, Cr = np.empty((3, 4)), np.empty((3, 4))
+    product(A, np.zeros((3, 4)), A, np.zeros((3, 4)), Cm, Cr)  # point intervals: exact radius 0
+    assert np.all(Cr >= REL * np.abs(Cm))
+    Mm, Mr = np.empty((3, 4)), np.empty((3, 4))
+    motion(np.array([0.0, 0, 0, 0, 0, 1]), 0.3, 0.0, Mm, Mr)  # an exact angle: cos and sin still round
+    assert Mr[0, 0] >= REL and Mr[0, 1] >= REL
+
+
+@pytest.mark.parametrize("name", ["reference", "3-6"])
+def test_the_enclosures_hold_point_evaluations_inside_the_box(name):
+    prover = _prover(name)
+    hexa = hexapod(name)
+    q = hexa.inverse(hexa.home_pose @ _moved(np.random.default_rng(1)), check=False).q
+    T0 = prover.platform(q)
+    x, held = prover.unknowns(q, T0), q[prover.held_q]
+    nf = x.size
+    rho, hr = np.full(nf, 1e-3), np.full(6, 1e-4)
+    Fm, Fr, Jm, Jr = np.empty(nf), np.empty(nf), np.empty((nf, nf)), np.empty((nf, nf))
+    enclose(*prover.tables, T0, x, rho, held, hr, True, Fm, Fr, Jm, Jr)
+    rng = np.random.default_rng(2)
+    fm, fr, jm, jr = np.empty(nf), np.empty(nf), np.empty((nf, nf)), np.empty((nf, nf))
+    for _ in range(30):
+        y = x + rho * rng.choice([-1.0, 1.0], nf) * rng.uniform(0.5, 1.0, nf)
+        enclose(*prover.tables, T0, y, 0 * rho, held + hr * rng.uniform(-1, 1, 6), 0 * hr, True, fm, fr, jm, jr)
+        assert np.all(np.abs(fm - Fm) <= Fr) and np.all(np.abs(jm - Jm) <= Jr)
+
+
+def _moved(rng) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = rng.uniform(-0.03, 0.03, 3)
+    T[:3, :3] = rpy_to_matrix(*np.radians(rng.uniform(-10, 10, 3)))
+    return T
+
+
+@pytest.mark.parametrize("name", ["reference", "intersecting", "spherical", "3-6", "guideway"])
+def test_a_proven_warm_step_holds_the_generating_pose_within_its_bounds(name):
+    hexa, prover = hexapod(name), _prover(name)
+    rng = np.random.default_rng(11)
+    proven = 0
+    for _ in range(6):
+        T = hexa.home_pose @ _moved(rng)
+        start = hexa.inverse(T, check=False)
+        step = np.eye(4)
+        step[:3, 3] = rng.normal(size=3) * 1e-4
+        truth = hexa.inverse(T @ step, check=False)
+        if not (start.converged and truth.converged):
+            continue
+        sol = hexa.forward(truth.lengths, guess=start, check=False)
+        proof = prover.prove(start.q, sol.q)
+        if not proof.proven:
+            continue
+        proven += 1
+        assert proof.position_m < 1e-6 and proof.rotation_rad < 1e-6
+        d = np.linalg.norm(sol.pose[:3, 3] - truth.pose[:3, 3])
+        E = sol.pose[:3, :3].T @ truth.pose[:3, :3]
+        angle = np.arcsin(min(1.0, 0.5 * np.linalg.norm([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])))
+        assert d <= proof.position_m + 1e-12 and angle <= proof.rotation_rad + 1e-12
+    assert proven >= 4
+
+
+def test_a_double_root_at_a_fold_is_not_proven():
+    hexa, prover = hexapod("3-6"), _prover("3-6")
+    case = json.loads((DATA / "three_six_near_fold.json").read_text())["cases"][0]
+    fold = hexa.inverse(np.array(case["fold_pose"]), check=False)
+    assert fold.closed
+    assert not prover.prove(fold.q, fold.q).proven  # the Jacobian is singular there: no unique root
+    home = hexapod("3-6").q_home
+    assert prover.prove(home, home).proven  # the same zero-length path at a regular pose is
+
+
+def test_a_warm_step_to_another_assembly_is_not_proven():
+    hexa, prover = hexapod("3-6"), _prover("3-6")
+    case = json.loads((DATA / "three_six_warm_wrong.json").read_text())
+    guess = hexa.inverse(np.array(case["guess_pose"]), check=False)
+    wrong = hexa.inverse(np.array(case["returned_pose"]), check=False)
+    truth = hexa.inverse(np.array(case["true_pose"]), check=False)
+    assert wrong.closed and truth.closed
+    assert not prover.prove(guess.q, wrong.q).proven
