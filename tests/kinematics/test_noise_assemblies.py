@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from hexapod_model.kinematics.noise_assemblies import REACH, noise_assemblies
-from hexapod_model.lie import pose_distance
 from hexapod_model.kinematics.three_six import ThreeSixFK
+from hexapod_model.lie import pose_distance
 
 from ..conftest import hexapod
 
