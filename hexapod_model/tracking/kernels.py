@@ -15,7 +15,7 @@ formulas Pinocchio's free-flyer joint uses:
 * ``difference(q0, q1) = log6(M0^-1 M1)`` (platform frame, ``[v; w]``),
 * ``integrate(q0, xi) = M0 exp6(xi)``,
 * the motion model's pose ``Mm = M0 exp6(sum_j w_j log6(M0^-1 Mj))`` (``w`` the motion
-  model's weights, newest first; :mod:`~hexapod_model.tracking.checks`),
+  model's weights, newest first; :mod:`~hexapod_model.tracking.reading_tests`),
 * the residual ``e = log6(Mm^-1 Ms) - J^-1 (l - l^)``.
 
 Rotations are handled as unit quaternions (:mod:`hexapod_model.lie.compiled_quaternion`). The
