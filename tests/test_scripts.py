@@ -284,3 +284,28 @@ def test_service_benchmark_runs():
     assert out.returncode == 0, out.stderr
     assert "1 x    100 Hz" in out.stdout and "2 x     20 Hz" in out.stdout
     assert "capacity   1 x   1000 Hz" in out.stdout and "capacity   2 x    100 Hz" in out.stdout
+
+
+def test_coverage_table_sums_every_module_per_package(tmp_path):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("coverage_table", ROOT / "scripts" / "coverage_table.py")
+    assert spec is not None and spec.loader is not None
+    table = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(table)
+    package = tmp_path / "pkg"
+    for name in ("__init__.py", "top.py", "sub/__init__.py", "sub/deep/kernel.py", "other/never_imported.py"):
+        (package / name).parent.mkdir(parents=True, exist_ok=True)
+        (package / name).write_text("x = 1\n")
+    measured = {"top.py": (10, 4), "sub/__init__.py": (2, 0), "sub/deep/kernel.py": (8, 8), "__init__.py": (0, 0)}
+
+    class Data:  # what coverage.Coverage.analysis2 gives: statements and missed lines
+        def analysis2(self, path):
+            n, m = measured.get(str(Path(path).relative_to(package)), (5, 5))  # not imported: all missed
+            return path, list(range(n)), [], list(range(m)), ""
+
+    rows = table.per_package(Data(), package)
+    assert rows == {"(top)": (10, 4), "other": (5, 5), "sub": (10, 8)}
+    text, total = table.table(rows)
+    assert total == pytest.approx(100 * (25 - 17) / 25)
+    assert text.splitlines()[-1].split() == ["TOTAL", "25", "17", "32.0%"]

@@ -63,14 +63,12 @@ class Identifiability:
         combinations: the unidentifiable combinations found, in the order they were held.
         basis: (P, n) orthonormal basis of the free scaled corrections (gauge fixed, held zero).
         spectrum: singular values of the scaled Jacobian with only the gauge fixed, descending.
-        identified: singular values once the held parameters are removed, descending.
     """
 
     held: tuple[int, ...]
     combinations: tuple[Combination, ...]
     basis: np.ndarray
     spectrum: np.ndarray
-    identified: np.ndarray
 
 
 def frame_free(J_geometry: np.ndarray, J_frames: np.ndarray) -> np.ndarray:
@@ -125,7 +123,8 @@ def analyse(
         for j, k in enumerate(pivots):
             y = Y[:, j]
             unseen = bool(np.any(np.abs(coef[k, null]) > 1e-9))
-            sigma = float("inf") if unseen else float(np.sqrt(np.sum((coef[k] / s) ** 2)))
+            # seen: over the directions the data see (k has no part in the null ones, whose s is 0 to rounding)
+            sigma = float("inf") if unseen else float(np.sqrt(np.sum((coef[k, ~null] / s[~null]) ** 2)))
             others = [m for m in np.argsort(-np.abs(y)) if abs(y[m]) >= 0.1 and m not in pivots][:5]
             terms = ((names[k], 1.0),) + tuple((names[m], float(y[m])) for m in others)
             combos.append(Combination(sigma, terms, names[k]))
@@ -135,5 +134,4 @@ def analyse(
         if pinned not in held_now:
             held_now.append(pinned)
             combos.append(Combination(0.0, ((names[pinned], 1.0),), names[pinned]))
-    identified = np.linalg.svd(J @ basis, compute_uv=False) if basis.shape[1] else np.zeros(0)
-    return Identifiability(tuple(held_now), tuple(combos), basis, spectrum, identified)
+    return Identifiability(tuple(held_now), tuple(combos), basis, spectrum)

@@ -52,7 +52,6 @@ class Identification:
         frame_sigma: (12,) 1-sigma of the two frames' twists (m, rad; measuring then marker).
         combinations: the unidentifiable combinations (and the parameter held for each).
         spectrum: singular values of the scaled identification Jacobian, gauge fixed.
-        identified_spectrum: the same without the held parameters.
         noise_factor: a-posteriori factor ``s0`` on the stated noise.
         evaluations: model evaluations of the least squares.
     """
@@ -66,7 +65,6 @@ class Identification:
     frame_sigma: np.ndarray
     combinations: tuple[Combination, ...]
     spectrum: np.ndarray
-    identified_spectrum: np.ndarray
     noise_factor: float
     evaluations: int
 
@@ -230,7 +228,6 @@ def _finish(ps, data, noise, problem, result, ana) -> Identification:
         frame_sigma,
         ana.combinations,
         ana.spectrum,
-        ana.identified,
         s0,
         problem.evaluations,
     )

@@ -17,9 +17,9 @@ about 15 % of the first solve's compilation (``benchmarks/startup.py --cold``).
 from __future__ import annotations
 
 import gc
+import inspect
 import logging
 import os
-import sys
 import warnings
 from types import FrameType
 from typing import Any
@@ -66,7 +66,8 @@ def announce(dispatcher: Any) -> None:
 
 def _caller_level() -> int:
     """The ``stacklevel`` of the first frame outside the package: the warning names the user's line."""
-    frame: FrameType | None = sys._getframe(1)
+    here = inspect.currentframe()
+    frame: FrameType | None = None if here is None else here.f_back
     level = 1
     while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE):
         frame, level = frame.f_back, level + 1

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .proof import Proof
+from .proven import Proof
 from .solver import SINGULAR_PIVOT_RATIO, Solution
 
 #: codes of one Newton iteration (:func:`.newton.iterate_schur`, :func:`.newton.iterate_blocks`)

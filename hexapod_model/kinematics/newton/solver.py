@@ -34,7 +34,7 @@ from ...description.model import ClosedLoopModel
 from .kernel_sets import KernelSet, kernel_set
 
 if TYPE_CHECKING:
-    from .proof import Proof
+    from .proven import Proof
 
 STATUSES = (
     "converged",
