@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..exceptions import HexapodError, UnreachableError
-from ..extras import require_distribution
+from ..description.ur10 import ur10_files
+from ..exceptions import UnreachableError
 
 FLANGE_FRAME = "tool0"
 WRIST_FRAME = "wrist_2_link"
@@ -35,12 +35,7 @@ def ur10_urdf() -> tuple[Path, Path]:
     Raises:
         MissingExtraError: example-robot-data is not installed (the ``plan`` extra).
     """
-    dist = require_distribution("example-robot-data", "plan", "the UR10 of changeover planning")
-    for f in dist.files or ():
-        if str(f).endswith("robots/ur_description/urdf/ur10_robot.urdf"):
-            urdf = Path(str(dist.locate_file(f)))
-            return urdf, urdf.parents[3]
-    raise HexapodError("example-robot-data is installed but has no ur_description/urdf/ur10_robot.urdf")
+    return ur10_files("plan", "the UR10 of changeover planning")
 
 
 @lru_cache(maxsize=1)

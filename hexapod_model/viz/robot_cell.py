@@ -11,12 +11,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
-from ..exceptions import HexapodError, UnreachableError
-from ..extras import require_distribution
+from ..description.ur10 import ur10_files
+from ..exceptions import UnreachableError
 from ..kinematics.newton.solver import Solution
 from .meshcat_scene import HexapodScene
 
@@ -48,22 +47,12 @@ def tool_changer_pose(platform_pose: np.ndarray) -> np.ndarray:
     return np.asarray(platform_pose, dtype=float) @ _transform((0.0, 0.0, TOOL_CHANGER_HEIGHT), flip_x=True)
 
 
-def ur10_files() -> tuple[Path, Path]:
-    """The UR10 URDF and the directory that resolves its ``package://`` mesh paths."""
-    dist = require_distribution("example-robot-data", "cell")
-    for f in dist.files or ():
-        if str(f).endswith("robots/ur_description/urdf/ur10_robot.urdf"):
-            urdf = Path(str(dist.locate_file(f)))
-            return urdf, urdf.parents[3]  # .../share/example-robot-data/robots
-    raise HexapodError("example-robot-data is installed but has no ur_description/urdf/ur10_robot.urdf")
-
-
 @lru_cache(maxsize=1)
 def load_ur10():
     """``(model, visual_model)`` of the UR10 (Pinocchio), loaded once."""
     import pinocchio as pin
 
-    urdf, packages = ur10_files()
+    urdf, packages = ur10_files("cell")
     model, _, visual = pin.buildModelsFromUrdf(str(urdf), package_dirs=[str(packages.parent)])
     return model, visual
 
