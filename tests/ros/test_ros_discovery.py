@@ -9,6 +9,7 @@ loopback interface, no multicast.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
@@ -23,6 +24,7 @@ from .conftest import need_rclpy, run_domain
 
 pytestmark = pytest.mark.ros
 LISTENER = Path(__file__).with_name("rclpy_listener.py")
+ECHO = Path(__file__).resolve().parents[2] / "docs/examples/ros2_echo.py"
 LISTEN_SECONDS = 8.0  # the node listens this long (the service announces itself each second)
 
 
@@ -51,13 +53,12 @@ def pose_writer(domain_id: int, topic: str):
     return domain, participant, writer
 
 
-def test_stock_rclpy_node_started_after_the_service_hears_its_poses(tmp_path):
-    need_rclpy()
+@contextlib.contextmanager
+def serving_poses(topic: str):
+    """The service's participant writing a PoseStamped on ``topic`` every 50 ms while the block runs."""
     from hexapod_model.ros.messages import Header, Point, Pose, PoseStamped, Quaternion, Time
 
-    ns = f"hexapod_discovery_{os.getpid()}"
-    dds = list(pose_writer(run_domain(), f"/{ns}/right/pose"))  # domain, participant, writer: deleted at the end
-
+    dds = list(pose_writer(run_domain(), topic))  # domain, participant, writer: deleted at the end
     done = threading.Event()
 
     def write() -> None:
@@ -70,22 +71,49 @@ def test_stock_rclpy_node_started_after_the_service_hears_its_poses(tmp_path):
 
     thread = threading.Thread(target=write, daemon=True)
     thread.start()
-    heard = tmp_path / "heard.jsonl"
-    env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(tmp_path), "ROS_DOMAIN_ID": str(run_domain())}
     try:
         time.sleep(2.0)  # the service's first announcements are over before the node exists
-        done_listening = subprocess.run(
-            [sys.executable, str(LISTENER), ns, "right", str(LISTEN_SECONDS), str(heard), str(tmp_path / "stop")],
-            env=env,
-            capture_output=True,
-            text=True,
-            timeout=120,
-        )
+        yield
     finally:
         done.set()
         thread.join()
         dds.clear()
-    assert done_listening.returncode == 0, done_listening.stderr[-2000:]
+
+
+def stock_env(home: Path) -> dict[str, str]:
+    """A clean environment: no ROS 2 discovery setting, only this test run's domain."""
+    return {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(home), "ROS_DOMAIN_ID": str(run_domain())}
+
+
+def test_stock_rclpy_node_started_after_the_service_hears_its_poses(tmp_path):
+    need_rclpy()
+    ns = f"hexapod_discovery_{os.getpid()}"
+    heard = tmp_path / "heard.jsonl"
+    with serving_poses(f"/{ns}/right/pose"):
+        done = subprocess.run(
+            [sys.executable, str(LISTENER), ns, "right", str(LISTEN_SECONDS), str(heard), str(tmp_path / "stop")],
+            env=stock_env(tmp_path),
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+    assert done.returncode == 0, done.stderr[-2000:]
     poses = [x for x in map(json.loads, heard.read_text().splitlines()) if x["kind"] == "pose"]
     assert len(poses) > 20, f"{len(poses)} poses heard in {LISTEN_SECONDS} s"
     assert all(p["frame"] == "right/base" and p["pose"][2] == 0.5 for p in poses)
+
+
+def test_the_documented_rclpy_echo_prints_the_poses(tmp_path):
+    need_rclpy()
+    topic = f"/hexapod_echo_{os.getpid()}/right/pose"
+    with serving_poses(topic):
+        done = subprocess.run(
+            [sys.executable, str(ECHO), topic, "--count", "5"],
+            env=stock_env(tmp_path),
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = [line.split() for line in done.stdout.splitlines()]
+    assert len(lines) == 5 and all(w[1] == "right/base" and float(w[4]) == 0.5 and float(w[8]) == 1.0 for w in lines)
