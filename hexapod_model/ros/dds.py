@@ -68,14 +68,15 @@ def type_hashes() -> dict[type, str]:
 class _Writers:
     """The DDS entities: one participant, a writer per topic (built in :meth:`RosBridge.start`)."""
 
-    def __init__(self, cfg: RosConfig, names: dict[str, FixtureNames]):
+    def __init__(self, cfg: RosConfig, names: dict[str, FixtureNames], service: FixtureService):
         from cyclonedds.domain import Domain, DomainParticipant
         from cyclonedds.pub import DataWriter
         from cyclonedds.qos import Policy, Qos
         from cyclonedds.topic import Topic
         from cyclonedds.util import duration
 
-        from .messages import DiagnosticArray, JointState, PoseStamped, TFMessage
+        from .changeover_topics import ChangeoverTopics
+        from .messages import DiagnosticArray, JointState, PoseStamped, String, TFMessage
 
         hashes = type_hashes()
         self._entities: list[Any] = []
@@ -101,6 +102,14 @@ class _Writers:
         self.tf = writer("/tf", TFMessage, 100)
         self.tf_static = writer("/tf_static", TFMessage, 1, transient=True)
         self.diagnostics = writer("/diagnostics", DiagnosticArray)
+        reliable = (
+            Policy.Reliability.Reliable(duration(milliseconds=100)),
+            Policy.Durability.Volatile,
+            Policy.History.KeepLast(10),
+            Policy.DataRepresentation(use_cdrv0_representation=True),
+        )
+        self.changeover = ChangeoverTopics(service, self.participant, cfg.namespace, names, reliable, hashes[String])
+        self._entities += self.changeover.entities
 
     def close(self) -> None:
         """Delete every entity, newest first (the participant and domain last)."""
@@ -156,7 +165,7 @@ class RosBridge:
             for f in self.service.config.fixtures
         }
         try:
-            self._writers = _Writers(self.cfg, self.names)
+            self._writers = _Writers(self.cfg, self.names, self.service)
         except ImportError as exc:
             self._fail(f"cannot publish ROS 2 topics: {exc.name or exc} is not installed ({INSTALL_HINT})")
             return self
@@ -223,7 +232,12 @@ class RosBridge:
     def _loop(self) -> None:
         while not self._stop.is_set():
             try:
-                rec, q = self._queue.get(timeout=0.1)
+                if self._writers is not None:
+                    self._writers.changeover.tick(time.monotonic())  # guidance out, targets in
+            except Exception as exc:  # noqa: BLE001 - on /health, the poses go on
+                self._fail(f"changeover topics: {exc}")
+            try:
+                rec, q = self._queue.get(timeout=0.05)
             except queue.Empty:
                 continue
             try:
