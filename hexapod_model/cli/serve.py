@@ -125,6 +125,9 @@ def _serve(args: argparse.Namespace) -> int:
         if bridge is not None:
             bridge.start()
         note("serve", f"fixtures {', '.join(service.names())}; Ctrl-C stops")
+        dashboard = _dashboard(service)
+        if dashboard is not None:
+            note("serve", dashboard)
         if sim_config is not None:
             sim, sim_bus = _start_simulator(config, sim_config, service)
         if args.view:
@@ -173,6 +176,18 @@ def _exit_while_starting(error: BaseException | None) -> None:
     sys.stderr.flush()
     sys.stdout.flush()
     os._exit(code)
+
+
+def _dashboard(service) -> str | None:
+    """Where the dashboard is, and where its token goes when the service has one (None without HTTP)."""
+    if service.endpoint is None:
+        return None
+    http = service.config.http
+    url = service.endpoint.url + "/"
+    where = " (this computer's address in place of the host)" if http.host in ("0.0.0.0", "::") else ""
+    if http.token is None:
+        return f"dashboard {url}{where}"
+    return f"dashboard {url}#token=TOKEN{where}, TOKEN the content of {http.token_file} (kept in the browser tab)"
 
 
 def _ros_bridge(service):

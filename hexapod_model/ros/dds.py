@@ -10,7 +10,10 @@ ROS 2 conventions: the DDS topic of ``/a/b`` is ``rt/a/b``; the types are ROS 2'
 (:mod:`hexapod_model.ros.messages`), written as plain CDR (XCDR1); each writer's USER_DATA holds
 ``typehash=RIHS01_...;``, the type's hash as ``rosidl`` computes it (here by ``rosbags``). QoS:
 reliable, volatile, keep last 10; ``/tf_static``: reliable, transient local, keep last 1.
-Discovery: :func:`cyclone_xml` (this machine only by default).
+Discovery: :func:`cyclone_xml` (this machine only by default). A stock ROS 2 node of this machine
+finds the service with no setting: the service announces itself by unicast to the loopback
+discovery ports every :data:`SPDP_INTERVAL` s, and answers the node's announcement at its
+addresses (a node's default discovery multicasts, which the service never hears).
 """
 
 from __future__ import annotations
@@ -31,16 +34,22 @@ log = logging.getLogger(__name__)
 INSTALL_HINT = install_hint("ros")
 QUEUE_LENGTH = 1000  # records waiting for the publisher thread; more are dropped (counted on /health)
 MAX_PARTICIPANTS = 32  # participant indices probed on each peer: ROS 2 nodes of one machine and domain
+SPDP_INTERVAL = 1.0  # s between the participant announcements sent to the peers (Cyclone DDS's default: 30 s)
 
 
 def cyclone_xml(cfg: RosConfig) -> str:
-    """The Cyclone DDS configuration of ``cfg``: its interface, no multicast, unicast discovery at its peers."""
+    """The Cyclone DDS configuration of ``cfg``: its interface, no multicast, unicast discovery at its peers.
+
+    The participant announces itself to every peer's discovery ports each :data:`SPDP_INTERVAL`
+    s, so that a node started after the service (whose own multicast announcements the service
+    does not hear) learns of it within that time rather than at Cyclone DDS's default 30 s.
+    """
     peers = "".join(f'<Peer address="{p}"/>' for p in cfg.peers)
     return (
         '<CycloneDDS><Domain id="any"><General><Interfaces>'
         f'<NetworkInterface address="{cfg.interface}"/></Interfaces>'
         "<AllowMulticast>false</AllowMulticast></General>"
-        "<Discovery><ParticipantIndex>auto</ParticipantIndex>"
+        f"<Discovery><SPDPInterval>{SPDP_INTERVAL:g}s</SPDPInterval><ParticipantIndex>auto</ParticipantIndex>"
         f"<MaxAutoParticipantIndex>{MAX_PARTICIPANTS}</MaxAutoParticipantIndex>"
         f"<Peers>{peers}</Peers></Discovery></Domain></CycloneDDS>"
     )
@@ -59,14 +68,15 @@ def type_hashes() -> dict[type, str]:
 class _Writers:
     """The DDS entities: one participant, a writer per topic (built in :meth:`RosBridge.start`)."""
 
-    def __init__(self, cfg: RosConfig, names: dict[str, FixtureNames]):
+    def __init__(self, cfg: RosConfig, names: dict[str, FixtureNames], service: FixtureService):
         from cyclonedds.domain import Domain, DomainParticipant
         from cyclonedds.pub import DataWriter
         from cyclonedds.qos import Policy, Qos
         from cyclonedds.topic import Topic
         from cyclonedds.util import duration
 
-        from .messages import DiagnosticArray, JointState, PoseStamped, TFMessage
+        from .changeover_topics import ChangeoverTopics
+        from .messages import DiagnosticArray, JointState, PoseStamped, String, TFMessage
 
         hashes = type_hashes()
         self._entities: list[Any] = []
@@ -92,6 +102,14 @@ class _Writers:
         self.tf = writer("/tf", TFMessage, 100)
         self.tf_static = writer("/tf_static", TFMessage, 1, transient=True)
         self.diagnostics = writer("/diagnostics", DiagnosticArray)
+        reliable = (
+            Policy.Reliability.Reliable(duration(milliseconds=100)),
+            Policy.Durability.Volatile,
+            Policy.History.KeepLast(10),
+            Policy.DataRepresentation(use_cdrv0_representation=True),
+        )
+        self.changeover = ChangeoverTopics(service, self.participant, cfg.namespace, names, reliable, hashes[String])
+        self._entities += self.changeover.entities
 
     def close(self) -> None:
         """Delete every entity, newest first (the participant and domain last)."""
@@ -147,7 +165,7 @@ class RosBridge:
             for f in self.service.config.fixtures
         }
         try:
-            self._writers = _Writers(self.cfg, self.names)
+            self._writers = _Writers(self.cfg, self.names, self.service)
         except ImportError as exc:
             self._fail(f"cannot publish ROS 2 topics: {exc.name or exc} is not installed ({INSTALL_HINT})")
             return self
@@ -214,7 +232,12 @@ class RosBridge:
     def _loop(self) -> None:
         while not self._stop.is_set():
             try:
-                rec, q = self._queue.get(timeout=0.1)
+                if self._writers is not None:
+                    self._writers.changeover.tick(time.monotonic())  # guidance out, targets in
+            except Exception as exc:  # noqa: BLE001 - on /health, the poses go on
+                self._fail(f"changeover topics: {exc}")
+            try:
+                rec, q = self._queue.get(timeout=0.05)
             except queue.Empty:
                 continue
             try:

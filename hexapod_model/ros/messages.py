@@ -6,7 +6,8 @@ structs are then those of every ROS 2 middleware. ``byte`` fields are IDL ``octe
 is unbounded; ``float64[]`` a sequence. Only the types :mod:`hexapod_model.ros.convert` fills
 are defined: ``builtin_interfaces/Time``, ``std_msgs/Header``, ``geometry_msgs/{Point,
 Quaternion, Pose, PoseStamped, Vector3, Transform, TransformStamped}``, ``tf2_msgs/TFMessage``,
-``sensor_msgs/JointState`` and ``diagnostic_msgs/{KeyValue, DiagnosticStatus, DiagnosticArray}``.
+``sensor_msgs/JointState``, ``diagnostic_msgs/{KeyValue, DiagnosticStatus, DiagnosticArray}``
+and ``std_msgs/String``.
 """
 
 # no `from __future__ import annotations`: cyclonedds resolves the annotations at run time
@@ -228,10 +229,18 @@ class DiagnosticArray(IdlStruct, typename=_dds("diagnostic_msgs/msg/DiagnosticAr
     status: sequence[DiagnosticStatus]
 
 
+@dataclass
+class String(IdlStruct, typename=_dds("std_msgs/msg/String")):
+    """A text: the changeover topics' JSON (guidance out, targets in, their results out)."""
+
+    data: str
+
+
 #: ROS 2 name of each message type (``pkg/msg/Name``), for type hashes and bag schemas
 ROS_NAMES: dict[type, str] = {
     PoseStamped: "geometry_msgs/msg/PoseStamped",
     JointState: "sensor_msgs/msg/JointState",
     TFMessage: "tf2_msgs/msg/TFMessage",
     DiagnosticArray: "diagnostic_msgs/msg/DiagnosticArray",
+    String: "std_msgs/msg/String",
 }

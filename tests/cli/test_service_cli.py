@@ -255,6 +255,7 @@ def test_serve_simulated_over_http_and_json_lines_then_ctrl_c_and_fixture_status
         stopped = time.monotonic() - t0
     assert code == 0, "".join(served.err)
     assert stopped < 2.0  # Ctrl-C of a running service: stopped and exited within 2 s
+    assert f"hexapod serve: dashboard http://127.0.0.1:{served.port}/\n" in served.err  # no token: the page as it is
     assert tuple(pose) == RECORD_KEYS and pose["status"] == "ok" and pose["state"] == "locked" and pose["stored"]
     assert health["status"] == "ok" and health["fixtures"]["left"]["stored"]
     ok = [r for r in served.records if r["status"] == "ok"]
@@ -449,6 +450,8 @@ def test_a_step_needs_an_acknowledgement_from_the_command_line_then_ok_again(tmp
     assert "left: discontinuity (leg 2) acknowledged by tester" in err and "409" in err
     log = "".join(served.err)
     assert "acknowledged by tester (127.0.0.1:" in log and "Traceback" not in log
+    page = f"dashboard http://127.0.0.1:{served.port}/#token=TOKEN, TOKEN the content of {token} "
+    assert page in log  # where the dashboard is and where its token goes
     first = next(k for k, r in enumerate(served.records) if r["status"] == "unacknowledged_fault")
     later_ok = next(k for k, r in enumerate(served.records) if k > first and r["status"] == "ok")
     assert all(r["status"] != "ok" and "discontinuity:leg2" in r["flags"] for r in served.records[first:later_ok])

@@ -163,6 +163,7 @@ def test_cyclone_configuration_stays_on_this_machine_unless_peers_are_given():
     local = cyclone_xml(RosConfig())
     assert '<NetworkInterface address="127.0.0.1"/>' in local and "<AllowMulticast>false</AllowMulticast>" in local
     assert '<Peers><Peer address="127.0.0.1"/></Peers>' in local
+    assert "<SPDPInterval>1s</SPDPInterval>" in local  # a node started later finds the service within 1 s
     cell = cyclone_xml(RosConfig(interface="192.168.10.2", peers=("192.168.10.5", "192.168.10.6")))
     assert '<NetworkInterface address="192.168.10.2"/>' in cell and "<AllowMulticast>false</AllowMulticast>" in cell
     assert '<Peer address="192.168.10.5"/><Peer address="192.168.10.6"/>' in cell

@@ -81,16 +81,13 @@ def test_rclpy_node_receives_the_served_poses_joint_states_and_diagnostics(confi
     from hexapod_model import Hexapod
 
     folder, ns = config
-    env = {
-        **os.environ,
-        "PYTHONPATH": str(REPO),
-        "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
-        "ROS_DOMAIN_ID": str(run_domain()),
-    }
+    env = {**os.environ, "PYTHONPATH": str(REPO), "ROS_DOMAIN_ID": str(run_domain())}
+    env.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
+    stock = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(folder), "ROS_DOMAIN_ID": str(run_domain())}
     stop, heard = folder / "stop", folder / "heard.jsonl"
-    listener = subprocess.Popen(
+    listener = subprocess.Popen(  # a stock node: no discovery setting in its environment
         [sys.executable, str(LISTENER), ns, "left,right", "600", str(heard), str(stop)],
-        env=env,
+        env=stock,
         stdout=subprocess.PIPE,
         text=True,
     )

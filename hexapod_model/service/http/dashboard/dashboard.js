@@ -2,10 +2,14 @@
 // fixture's state, pose, target, deviation, per-leg changes and flags. No build step, no external
 // resource. The bearer token (when the service needs one) comes from the page's #token=... and is
 // kept in this tab's sessionStorage; it is sent as an Authorization header, never in a URL.
+// "In tolerance" is green only for a locked fixture whose ok pose is in tolerance: a plate that
+// passes through the tolerance while it moves shows amber. With #measure in the address (for the
+// layout tests) each rendered value also carries its computed font size, box and colour.
 "use strict";
 
 const PERIOD_MS = 1000;  // reconnect delay
-const BAR_MM = 5.0;      // a full half-bar is this change (mm) or the largest change shown, whichever is larger
+const MIN_SCALE_MM = 0.5;  // the leg bars' half-scale: the smallest of 1-2-5 steps above the largest change, at least this
+const MEASURE = /(^|[#&])measure(&|$)/.test(location.hash);  // read before token() clears the address's hash
 
 function token() {
   const m = location.hash.match(/token=([^&]+)/);
@@ -39,6 +43,20 @@ function value(name, field, v, digits, magnitude) {
   return el("span", attrs, fmt(shown, digits));
 }
 
+// the bars' half-scale (mm): 0.5, 1, 2, 5, 10, 20, ... at least the largest change
+function scaleMm(legs) {
+  const largest = Math.max(0, ...legs.map((l) => Math.abs(l.change_mm || 0)));
+  let scale = MIN_SCALE_MM;
+  for (let k = 0; scale < largest; k++) scale = [1, 2, 5][k % 3] * Math.pow(10, Math.floor(k / 3));
+  return scale;
+}
+
+// "yes" (green): locked, ok and in tolerance; "wait": in tolerance but not locked yet; "no"
+function toleranceState(g) {
+  if (!g.in_tolerance) return "no";
+  return g.status === "ok" && g.state === "locked" ? "yes" : "wait";
+}
+
 function displayState(g) {
   if (g.status !== "ok" && g.status !== "flagged" && g.status !== "drift") return "fault";
   return g.state;
@@ -69,26 +87,39 @@ function poseTable(name, rows) {
 
 function legBars(name, legs) {
   const box = el("div", { class: "section legs" });
-  const largest = Math.max(BAR_MM, ...legs.map((l) => Math.abs(l.change_mm || 0)));
+  const scale = scaleMm(legs);
+  const head = el("div", { class: "row" });
+  head.appendChild(el("span", { class: "leg" }));
+  const ruler = el("div", { class: "scale", "data-fixture": name, "data-field": "legs.scale_mm", "data-value": String(scale) });
+  ruler.title = "a full half-bar is " + scale + " mm: left retract, right extend";
+  ruler.appendChild(el("span", { class: "lo" }, "\u2212" + scale));
+  ruler.appendChild(el("span", { class: "zero" }, "0"));
+  ruler.appendChild(el("span", { class: "hi" }, "+" + scale + " mm"));
+  head.appendChild(ruler);
+  box.appendChild(head);
   for (const l of legs) {
     const row = el("div", { class: "row" });
-    row.appendChild(el("span", {}, "leg " + l.leg));
+    row.appendChild(el("span", { class: "leg" }, "leg " + l.leg));
     const bar = el("div", { class: "bar", title: "reading " + fmt(l.reading_mm, 3) + " mm, target " + fmt(l.target_mm, 3) + " mm" });
     bar.appendChild(el("div", { class: "mid" }));
     if (l.change_mm !== null) {
-      const w = (50 * Math.abs(l.change_mm)) / largest;
+      const w = Math.min(50, (50 * Math.abs(l.change_mm)) / scale);
       const fill = el("div", { class: "fill" + (l.change_mm < 0 ? " retract" : "") });
       fill.style.left = (l.change_mm < 0 ? 50 - w : 50) + "%";
       fill.style.width = w + "%";
       bar.appendChild(fill);
     }
     row.appendChild(bar);
-    const text = el("span");
-    text.appendChild(document.createTextNode(l.change_mm === null ? "no reading " : (l.change_mm >= 0 ? "extend " : "retract ")));
-    text.appendChild(value(name, "legs." + l.leg + ".change_mm", l.change_mm, 3, true));
-    text.appendChild(document.createTextNode(" mm"));
+    const way = l.change_mm === null ? "none" : l.change_mm >= 0 ? "extend" : "retract";
+    const text = el("span", { class: "change " + way });
+    text.appendChild(el("span", { class: "arrow" }, way === "none" ? "" : way === "extend" ? "\u25b6" : "\u25c0"));
+    const number = value(name, "legs." + l.leg + ".change_mm", l.change_mm, 3, true);
+    number.setAttribute("class", "value");
+    text.appendChild(number);
+    text.appendChild(el("span", { class: "unit" }, "mm"));
     text.appendChild(value(name, "legs." + l.leg + ".target_mm", l.target_mm, 3));
     text.lastChild.hidden = true;
+    text.appendChild(el("span", { class: "word" }, way === "none" ? "no reading" : way));
     row.appendChild(text);
     box.appendChild(row);
   }
@@ -123,17 +154,27 @@ function card(g) {
   const state = displayState(g);
   h.appendChild(el("span", { class: "badge " + state, "data-fixture": name, "data-field": "state" }, state));
   h.appendChild(el("span", { class: "badge", "data-fixture": name, "data-field": "status" }, g.status));
-  const tol = g.in_tolerance ? "in tolerance" : "not in tolerance";
-  h.appendChild(el("span", { class: "badge " + (g.in_tolerance ? "yes" : "no"), "data-fixture": name, "data-field": "in_tolerance" }, tol));
+  const tol = toleranceState(g);
+  const words = { yes: "in tolerance", wait: "in tolerance, not locked", no: "not in tolerance" };
+  const badge = { class: "badge " + tol, "data-fixture": name, "data-field": "in_tolerance", "data-value": String(g.in_tolerance) };
+  h.appendChild(el("span", badge, words[tol]));
   c.appendChild(h);
-  const target = g.target ? g.target.pose : null;
-  c.appendChild(poseTable(name, [["pose", "pose", g.pose], ["target", "target", target]]));
-  const dev = el("div", { class: "section" });
-  dev.appendChild(document.createTextNode("deviation "));
-  dev.appendChild(value(name, "deviation.translation_mm", g.deviation ? g.deviation.translation_mm : null, 3));
-  dev.appendChild(document.createTextNode(" mm, "));
-  dev.appendChild(value(name, "deviation.rotation_deg", g.deviation ? g.deviation.rotation_deg : null, 4));
-  dev.appendChild(document.createTextNode("\u00b0; tolerance "));
+  const big = el("div", { class: "deviation" });
+  for (const [label, field, v, digits, unit] of [
+    ["deviation", "deviation.translation_mm", g.deviation ? g.deviation.translation_mm : null, 3, "mm"],
+    ["rotation", "deviation.rotation_deg", g.deviation ? g.deviation.rotation_deg : null, 4, "\u00b0"],
+  ]) {
+    const part = el("div");
+    part.appendChild(el("span", { class: "label" }, label));
+    const number = value(name, field, v, digits);
+    number.setAttribute("class", "big");
+    part.appendChild(number);
+    part.appendChild(el("span", { class: "unit" }, unit));
+    big.appendChild(part);
+  }
+  c.appendChild(big);
+  const dev = el("div", { class: "detail" });
+  dev.appendChild(document.createTextNode("tolerance "));
   dev.appendChild(value(name, "tolerance.translation_mm", g.target ? g.target.tolerance.translation_mm : null, 3));
   dev.appendChild(document.createTextNode(" mm, "));
   dev.appendChild(value(name, "tolerance.rotation_deg", g.target ? g.target.tolerance.rotation_deg : null, 3));
@@ -143,6 +184,10 @@ function card(g) {
   if (g.target && g.target.recipe) dev.appendChild(document.createTextNode(" (recipe " + g.target.recipe + ")"));
   c.appendChild(dev);
   if (g.legs.length) c.appendChild(legBars(name, g.legs));
+  const target = g.target ? g.target.pose : null;
+  const pose = el("div", { class: "section pose" });
+  pose.appendChild(poseTable(name, [["pose", "pose", g.pose], ["target", "target", target]]));
+  c.appendChild(pose);
   const flags = el("div", { class: "section flags", "data-fixture": name, "data-field": "flags" }, g.flags.join(", "));
   c.appendChild(flags);
   if (g.target_problem) c.appendChild(el("div", { class: "flags" }, g.target_problem));
@@ -169,6 +214,21 @@ function render(overview) {
     }
   }
   document.body.setAttribute("data-updated", String(overview.t));
+  if (MEASURE) measure();
+}
+
+// #measure: each value, badge and card carries its computed font size (px), box (x,y,w,h px) and
+// background colour; the body the viewport's width and the page's scroll width
+function measure() {
+  for (const e of document.querySelectorAll("[data-field], .card")) {
+    const style = getComputedStyle(e);
+    const r = e.getBoundingClientRect();
+    e.setAttribute("data-font-px", style.fontSize.replace("px", ""));
+    e.setAttribute("data-box", [r.left, r.top, r.width, r.height].map((v) => v.toFixed(1)).join(","));
+    e.setAttribute("data-bg", style.backgroundColor);
+  }
+  document.body.setAttribute("data-viewport", String(window.innerWidth));
+  document.body.setAttribute("data-scroll-width", String(document.documentElement.scrollWidth));
 }
 
 function status(text) {
