@@ -83,7 +83,7 @@ def test_redundant_solve_is_repeatable_bit_for_bit():
 
 @pytest.mark.parametrize("leg", range(6))
 def test_offset_leg_is_named_with_the_inclinometer(leg):
-    """Two parity equations: the offset leg is always among the suspects, alone where its fault direction stands apart."""
+    """Two parity equations: the offset leg is always a suspect, alone where its fault direction stands apart."""
     hexa = hexapod("reference_tilt")
     name = f"leg{leg + 1}"
     named = 0
@@ -145,7 +145,7 @@ def test_false_alarm_rate_matches_the_stated_rate(name):
 
 @pytest.mark.parametrize("name", ["reference7", "reference_tilt"])
 def test_creeping_leg_is_flagged_above_its_detectable_size(name):
-    """A leg creeping 2 um per sample under noise: every sample whose drift is twice its minimal detectable bias fails."""
+    """A leg creeping 2 um per sample under noise: each sample drifted by twice its detectable bias fails."""
     hexa = hexapod(name)
     rng = np.random.default_rng(11)
     sig = hexa.redundancy.sigmas
