@@ -340,7 +340,17 @@ class Hexapod:
         Returns:
             A :class:`~.batch.BatchResult`: per row what :meth:`forward` with ``check=False``
             gives (``invalid_input`` where it raises: NaN, out of stroke); never raises on a row.
+
+        Raises:
+            InputError: a hexapod with redundant sensors (its readings are solved by :meth:`forward`, one set a call).
         """
+        if self.redundancy is not None:
+            names = ", ".join(self.reading_names)
+            raise InputError(
+                "lengths",
+                "(N, 6) rows",
+                f"this hexapod takes its {len(self.reading_names)} readings ({names}) in forward()",
+            )
         tol = self.default_tol if tol is None else tol
         return batch.forward_batch(self.engine, lengths, guess, warm, tol, max_iter)
 

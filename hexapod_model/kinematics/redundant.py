@@ -107,6 +107,18 @@ class RedundantSensing:
             J[:, i] = (plus - minus) / (2.0 * h)
         return J
 
+    def whitened_jacobian(self, pose: np.ndarray, tol: float | None = None, max_iter: int = 50) -> np.ndarray:
+        """``m x 6`` Jacobian of the readings divided row-wise by their sigmas at ``pose`` (4x4, base frame, m).
+
+        The ``A`` of :mod:`.consistency` (its minimal detectable biases, parity projector).
+
+        Raises:
+            SolverError: ``pose`` is outside the workspace (its inverse kinematics does not converge).
+        """
+        tol = self.engine.default_tol if tol is None else check_tolerance(tol)
+        ik = self.readings_at(pose, None, tol, max_iter)[1]
+        return self.jacobian(pose, ik, tol, max_iter) / self.sigmas[:, None]
+
     # ----- the solve -----
     def check(self, readings: object) -> np.ndarray:
         """``readings`` as ``m`` finite floats within every stroke, or the :class:`InputError` / :class:`LimitError`."""

@@ -171,3 +171,9 @@ def test_urdf_variant_carries_the_sensors(tmp_path):
         assert from_urdf.reading_names == preset.reading_names
         z = readings(preset, poses(1, 60)[0])
         assert pose_error(from_urdf.forward(z).pose, preset.forward(z).pose) < POSE_TOL
+
+
+def test_batch_solve_refuses_redundant_readings():
+    hexa = hexapod("reference7")
+    with pytest.raises(hm.InputError, match=r"takes its 7 readings \(leg1, .*leg7\) in forward"):
+        hexa.forward_batch(np.zeros((3, 6)))
