@@ -177,3 +177,10 @@ def test_batch_solve_refuses_redundant_readings():
     hexa = hexapod("reference7")
     with pytest.raises(hm.InputError, match=r"takes its 7 readings \(leg1, .*leg7\) in forward"):
         hexa.forward_batch(np.zeros((3, 6)))
+
+
+def test_tracker_refuses_redundant_readings():
+    from hexapod_model.tracking.tracker import Tracker
+
+    with pytest.raises(hm.InputError, match="redundant sensors .*the tracker takes six readings"):
+        Tracker(hexapod("reference_tilt"))
