@@ -284,3 +284,28 @@ def test_service_benchmark_runs():
     assert out.returncode == 0, out.stderr
     assert "1 x    100 Hz" in out.stdout and "2 x     20 Hz" in out.stdout
     assert "capacity   1 x   1000 Hz" in out.stdout and "capacity   2 x    100 Hz" in out.stdout
+
+
+def test_redundancy_fault_benchmark_runs(tmp_path):
+    out = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "benchmarks" / "redundancy_faults.py"),
+            "reference",
+            "reference_tilt",
+            "--samples",
+            "20",
+            "--clean",
+            "20",
+            "--json",
+            str(tmp_path / "r.json"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 0, out.stdout + out.stderr
+    report = {r["preset"]: r for r in json.loads((tmp_path / "r.json").read_text())}
+    assert report["reference_tilt"]["cases"]["offset 0.3"]["wrong_ok"] == 0
+    assert report["reference_tilt"]["cases"]["offset 0.3"]["flagged"] == 20
+    assert report["reference"]["cases"]["offset 0.3"]["wrong_ok"] == 20  # six readings cannot see it
