@@ -14,6 +14,9 @@ Frames and units (SI throughout):
   ``encoder_scale``, both 0 by default): its reading is then
   ``encoder_zero + (1 + encoder_scale) * d`` with ``d`` the leg's extension from home, which
   ``stroke`` bounds.
+* Beside the six legs a geometry may declare redundant sensors: passive measuring legs and a
+  platform inclinometer (:mod:`hexapod_model.description.sensors`), whose readings follow the
+  six legs' (:attr:`HexapodGeometry.reading_names`).
 * Joint axes need not be exactly perpendicular to the leg at home (a calibrated fixture's are
   not): the common normal of each Cardan joint is then the projection of the leg direction on
   the plane perpendicular to its fixed axis (see :mod:`hexapod_model.description.legs`).

@@ -325,7 +325,9 @@ def validate_urdf(urdf_xml: str, source: str = "<string>") -> None:
 
 
 def read_closures(urdf_xml: str, source: str = "<string>") -> list[Closure]:
-    """The ``<loop_closure>`` elements of a URDF, in file order, validated.
+    """The legs' ``<loop_closure>`` elements of a URDF (``6d``, ``3d``), in file order, validated.
+
+    A measuring leg's ``distance`` closure is no leg's: :func:`.sensor_layout.read_sensors` reads it.
 
     Raises:
         UrdfError: malformed XML, a closure with a missing attribute, a bad ``type``, or a

@@ -128,7 +128,11 @@ class Hexapod:
 
     @classmethod
     def from_preset(cls, name: str = "reference", *, compiled: bool = True) -> Hexapod:
-        """One of the bundled geometries: ``reference``, ``intersecting``, ``spherical``, ``3-6``, ``guideway``."""
+        """One of the bundled geometries (``PRESETS``).
+
+        ``reference``, ``intersecting``, ``spherical``, ``3-6``, ``guideway``; with redundant
+        sensors ``reference7`` and ``reference_tilt``.
+        """
         return cls.from_geometry(get_preset(name), compiled=compiled)
 
     @classmethod
