@@ -9,7 +9,8 @@ A hexapod whose geometry (or URDF) declares measuring legs or an inclinometer
 2. Gauss-Newton on the pose ``T <- T exp6(delta)`` (``delta`` in the platform frame) minimises
    ``sum ((z_j - h_j(T)) / sigma_j)^2``, with ``h`` the readings a pose gives: the six legs'
    by inverse kinematics (the closed-loop model, offset Cardan joints included), the measuring
-   legs' and the tilts' in closed form. The Jacobian ``dh / d delta`` is by central differences
+   legs' and the tilts' in closed form; a step that raises the weighted cost is halved (a gross
+   fault makes the problem far from linear). The Jacobian ``dh / d delta`` is by central differences
    of ``h`` (NumPy and the inverse-kinematics solves; no compiled kernel of its own);
 3. the residual's chi-square test, isolation and the minimal detectable biases
    (:mod:`.consistency`).
@@ -30,13 +31,14 @@ import numpy as np
 import pinocchio as pin
 
 from ..description.sensor_layout import SensorLayout
-from ..exceptions import ConvergenceError, InconsistentReadingsError, InputError, LimitError
+from ..exceptions import ConvergenceError, InconsistentReadingsError, InputError, LimitError, SolverError
 from .consistency import DEFAULT_ALPHA, Consistency, consistency
 from .engine import ERRORS, SolveEngine
 from .input_checks import LIMIT_SLACK, check_max_iter, check_tolerance, check_vector
 from .newton.solver import Solution
 
 MAX_GAUSS_NEWTON = 30  # Gauss-Newton steps of one redundant solve
+HALVINGS = 30  # step halvings of one Gauss-Newton step at most
 STEP = 1e-6  # central-difference step of the measurement Jacobian (m and rad, times the length scale)
 
 
@@ -150,9 +152,16 @@ class RedundantSensing:
             steps += 1
             A = self.jacobian(pose, sol, tol, max_iter) / self.sigmas[:, None]
             r = (z - h_now) / self.sigmas
+            cost = float(r[keep] @ r[keep])
             delta = np.linalg.lstsq(A[keep], r[keep], rcond=None)[0]
-            pose = pose @ pin.exp6(delta).homogeneous
-            h_now, sol = self.readings_at(pose, sol, tol, max_iter)
+            for _ in range(HALVINGS):  # a step that raises the weighted cost is halved (gross faults)
+                trial = pose @ pin.exp6(delta).homogeneous
+                h_trial, sol_trial = self.readings_at(trial, sol, tol, max_iter)
+                r_trial = ((z - h_trial) / self.sigmas)[keep]
+                if float(r_trial @ r_trial) <= cost or float(np.max(np.abs(delta))) <= step_tol:
+                    break
+                delta = delta / 2.0
+            pose, h_now, sol = trial, h_trial, sol_trial
             if float(np.max(np.abs(delta))) <= step_tol:
                 done = True
                 break
@@ -179,7 +188,11 @@ class RedundantSensing:
             sol = self._wrap(six, z, six.status, six.message, six.flags, None)
             return self._raise_or(sol, check)
         every = np.ones(self.m, dtype=bool)
-        pose, ik, A, r, it, done = self.fit(z, every, six.pose, six, tol, max_iter)
+        try:
+            pose, ik, A, r, it, done = self.fit(z, every, six.pose, six, tol, max_iter)
+        except SolverError as exc:  # the least-squares pose left the workspace
+            msg = f"least-squares pose: {exc}"
+            return self._raise_or(self._wrap(exc.result, z, exc.result.status, msg, (), None), check)
         if not done:
             msg = f"Gauss-Newton did not converge in {MAX_GAUSS_NEWTON} steps"
             return self._raise_or(self._wrap(ik, z, "max_iterations", msg, (), None, pose, it), check)
@@ -189,7 +202,10 @@ class RedundantSensing:
         flags: tuple[str, ...] = ()
         if test.isolated is not None:  # the pose from the others: a flagged estimate
             keep = np.array([n != test.isolated for n in self.names])
-            est, est_ik, _, _, _, est_done = self.fit(z, keep, pose, ik, tol, max_iter)
+            try:
+                est, est_ik, _, _, _, est_done = self.fit(z, keep, pose, ik, tol, max_iter)
+            except SolverError:  # the others' pose leaves the workspace: no estimate
+                est_done = False
             if est_done:
                 pose, ik, flags = est, est_ik, ("estimate", f"without_{test.isolated}")
         sol = self._wrap(ik, z, "inconsistent_readings", test.describe(), flags, test, pose, six.iterations + it)

@@ -184,3 +184,25 @@ def test_tracker_refuses_redundant_readings():
 
     with pytest.raises(hm.InputError, match="redundant sensors .*the tracker takes six readings"):
         Tracker(hexapod("reference_tilt"))
+
+
+def test_gross_faults_are_inconsistent_not_a_solver_failure():
+    hexa = hexapod("reference7")
+    z = readings(hexa, hexa.home_pose)
+    z[6] = 0.19  # m: the seventh leg reads 19 cm long, within its stroke
+    sol = hexa.forward(z, check=False)
+    assert sol.status == "inconsistent_readings" and "leg7" in sol.consistency.suspects
+    tilt = hexapod("reference_tilt")
+    z = readings(tilt, tilt.home_pose)
+    z[6:] += (1.2, -1.3)  # rad: both tilts wrong
+    sol = tilt.forward(z, check=False)
+    assert sol.status == "inconsistent_readings" and sol.consistency.suspects == ()
+    assert "no single reading's exclusion restores consistency" in sol.message
+
+
+def test_warm_start_from_a_redundant_solution():
+    hexa = hexapod("reference_tilt")
+    a, b = poses(2, 70)
+    first = hexa.forward(readings(hexa, a))
+    second = hexa.forward(readings(hexa, b), guess=first)
+    assert second.converged and pose_error(second.pose, b) < POSE_TOL
