@@ -106,7 +106,10 @@ def write_sensors(robot: ET.Element, geometry: HexapodGeometry, fmt: Callable[[f
         return
 
     def fixed(name: str, parent: str, xyz, rpy=(0.0, 0.0, 0.0)) -> None:
-        ET.SubElement(robot, "link", name=name)
+        link = ET.SubElement(robot, "link", name=name)
+        inertial = ET.SubElement(link, "inertial")  # as the other links: MJCF bodies need a mass
+        ET.SubElement(inertial, "mass", value="0.01")
+        ET.SubElement(inertial, "inertia", ixx="1e-6", iyy="1e-6", izz="1e-6", ixy="0", ixz="0", iyz="0")
         j = ET.SubElement(robot, "joint", name=f"{name}_joint", type="fixed")
         ET.SubElement(j, "parent", link=parent)
         ET.SubElement(j, "child", link=name)

@@ -85,3 +85,11 @@ def test_urdf_sensor_link_must_be_fixed_where_the_contract_says():
 def test_measuring_leg_values_are_checked():
     with pytest.raises(hm.GeometryError, match="encoder_scale"):
         MeasuringLeg((0, 0, 0), (0, 0, 0.1), (-0.1, 0.1), encoder_scale=0.9)
+
+
+def test_mjcf_keeps_the_sensor_frames_and_solves_six_legs(tmp_path):
+    path = tmp_path / "r7.xml"
+    path.write_text(hm.geometry_to_mjcf(hm.get_preset("reference7")))
+    hexa = hm.Hexapod.from_mjcf(path)
+    assert hexa.redundancy is None and hexa.reading_names == tuple(f"leg{i}" for i in range(1, 7))
+    assert hexa.model.existFrame("leg7_base") and hexa.model.existFrame("leg7_anchor")
