@@ -20,7 +20,8 @@ Gauss-Newton converged from it to the least-squares pose (step below the solve's
 and the residual passes the chi-square test at ``alpha``; the pose is the weighted
 least-squares pose of all readings. A set failing the test gets status
 ``inconsistent_readings``: ``pose`` is the least-squares pose of all readings, or, when the
-data name the faulty reading, the least-squares pose without it, flagged ``estimate``.
+data name the faulty reading and the others pass the test without it, their least-squares
+pose, flagged ``estimate``.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ import pinocchio as pin
 
 from ..description.sensor_layout import SensorLayout
 from ..exceptions import ConvergenceError, InconsistentReadingsError, InputError, LimitError, SolverError
-from .consistency import DEFAULT_ALPHA, Consistency, consistency
+from .consistency import DEFAULT_ALPHA, Consistency, consistency, threshold
 from .engine import ERRORS, SolveEngine
 from .input_checks import LIMIT_SLACK, check_max_iter, check_tolerance, check_vector
 from .newton.solver import Solution
@@ -203,10 +204,12 @@ class RedundantSensing:
         if test.isolated is not None:  # the pose from the others: a flagged estimate
             keep = np.array([n != test.isolated for n in self.names])
             try:
-                est, est_ik, _, _, _, est_done = self.fit(z, keep, pose, ik, tol, max_iter)
+                est, est_ik, _, r_est, _, est_done = self.fit(z, keep, pose, ik, tol, max_iter)
             except SolverError:  # the others' pose leaves the workspace: no estimate
                 est_done = False
-            if est_done:
+            # the others must pass the test themselves (the isolation above is linearised)
+            bound = threshold(alpha, test.dof - 1) if test.dof > 1 else np.inf  # dof 1: the others fit exactly
+            if est_done and float(r_est[keep] @ r_est[keep]) <= bound:
                 pose, ik, flags = est, est_ik, ("estimate", f"without_{test.isolated}")
         sol = self._wrap(ik, z, "inconsistent_readings", test.describe(), flags, test, pose, six.iterations + it)
         return self._raise_or(sol, check)
