@@ -309,3 +309,11 @@ def test_redundancy_fault_benchmark_runs(tmp_path):
     assert report["reference_tilt"]["cases"]["offset 0.3"]["wrong_ok"] == 0
     assert report["reference_tilt"]["cases"]["offset 0.3"]["flagged"] == 20
     assert report["reference"]["cases"]["offset 0.3"]["wrong_ok"] == 20  # six readings cannot see it
+
+
+def test_seventh_leg_placement_benchmark_runs():
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "seventh_leg_placement.py"), "--grid", "2"]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stdout + out.stderr
+    worst = [float(line.split("worst")[1].split()[0]) for line in out.stdout.splitlines()]
+    assert len(worst) == 5 and worst[0] == min(worst)  # reference7's placement is the best of them
