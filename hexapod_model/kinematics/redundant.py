@@ -196,10 +196,10 @@ class RedundantSensing:
             return self._raise_or(self._wrap(exc.result, z, exc.result.status, msg, (), None), check)
         if not done:
             msg = f"Gauss-Newton did not converge in {MAX_GAUSS_NEWTON} steps"
-            return self._raise_or(self._wrap(ik, z, "max_iterations", msg, (), None, pose, it), check)
+            return self._raise_or(self._wrap(ik, z, "max_iterations", msg, (), None, pose, it, six.det_sign), check)
         test = consistency(self.names, A, r, self.sigmas, alpha)
         if test.consistent:
-            return self._wrap(ik, z, "converged", "", (), test, pose, six.iterations + it)
+            return self._wrap(ik, z, "converged", "", (), test, pose, six.iterations + it, six.det_sign)
         flags: tuple[str, ...] = ()
         if test.isolated is not None:  # the pose from the others: a flagged estimate
             keep = np.array([n != test.isolated for n in self.names])
@@ -211,7 +211,8 @@ class RedundantSensing:
             bound = threshold(alpha, test.dof - 1) if test.dof > 1 else np.inf  # dof 1: the others fit exactly
             if est_done and float(r_est[keep] @ r_est[keep]) <= bound:
                 pose, ik, flags = est, est_ik, ("estimate", f"without_{test.isolated}")
-        sol = self._wrap(ik, z, "inconsistent_readings", test.describe(), flags, test, pose, six.iterations + it)
+        msg = test.describe()
+        sol = self._wrap(ik, z, "inconsistent_readings", msg, flags, test, pose, six.iterations + it, six.det_sign)
         return self._raise_or(sol, check)
 
     def _wrap(
@@ -224,6 +225,7 @@ class RedundantSensing:
         test: Consistency | None,
         pose: np.ndarray | None = None,
         iterations: int | None = None,
+        det_sign: int | None = None,
     ) -> RedundantSolution:
         return RedundantSolution(
             pose=base.pose if pose is None else pose,
@@ -236,7 +238,7 @@ class RedundantSensing:
             message=message,
             flags=flags or base.flags,
             candidates=base.candidates,
-            det_sign=base.det_sign,
+            det_sign=base.det_sign if det_sign is None else det_sign,
             readings=z,
             consistency=test,
         )

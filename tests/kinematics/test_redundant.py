@@ -206,3 +206,4 @@ def test_warm_start_from_a_redundant_solution():
     first = hexa.forward(readings(hexa, a))
     second = hexa.forward(readings(hexa, b), guess=first)
     assert second.converged and pose_error(second.pose, b) < POSE_TOL
+    assert first.det_sign == hexapod("reference").forward(readings(hexa, a)[:6]).det_sign != 0
