@@ -91,7 +91,7 @@ def rest(hexa: Hexapod, m, poses: np.ndarray) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("presets", nargs="*", default=list(PRESETS))
+    ap.add_argument("presets", nargs="*", default=[n for n in PRESETS if not get_preset(n).redundant])  # six readings
     ap.add_argument("--poses", type=int, default=1000)
     ap.add_argument("--rest", type=int, default=3)
     args = ap.parse_args(argv)

@@ -149,6 +149,14 @@ class CompileWarning(HexapodWarning):
     """
 
 
+class InconsistentReadingsError(SolverError):
+    """Redundant readings fail their chi-square consistency test (status ``inconsistent_readings``).
+
+    ``result.consistency`` holds the statistic, its bound and the readings the fault may be on;
+    the message names them (see docs/redundancy.md).
+    """
+
+
 class ViewError(HexapodError):
     """The 3-D scene cannot be built or shown (missing optional package, bad configuration)."""
 

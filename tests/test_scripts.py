@@ -309,3 +309,36 @@ def test_coverage_table_sums_every_module_per_package(tmp_path):
     text, total = table.table(rows)
     assert total == pytest.approx(100 * (25 - 17) / 25)
     assert text.splitlines()[-1].split() == ["TOTAL", "25", "17", "32.0%"]
+
+
+def test_redundancy_fault_benchmark_runs(tmp_path):
+    out = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "benchmarks" / "redundancy_faults.py"),
+            "reference",
+            "reference_tilt",
+            "--samples",
+            "20",
+            "--clean",
+            "20",
+            "--json",
+            str(tmp_path / "r.json"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 0, out.stdout + out.stderr
+    report = {r["preset"]: r for r in json.loads((tmp_path / "r.json").read_text())}
+    assert report["reference_tilt"]["cases"]["offset 0.3"]["wrong_ok"] == 0
+    assert report["reference_tilt"]["cases"]["offset 0.3"]["flagged"] == 20
+    assert report["reference"]["cases"]["offset 0.3"]["wrong_ok"] == 20  # six readings cannot see it
+
+
+def test_seventh_leg_placement_benchmark_runs():
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "seventh_leg_placement.py"), "--grid", "2"]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stdout + out.stderr
+    worst = [float(line.split("worst")[1].split()[0]) for line in out.stdout.splitlines()]
+    assert len(worst) == 5 and worst[0] == min(worst)  # reference7's placement is the best of them

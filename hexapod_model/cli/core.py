@@ -81,8 +81,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 def cmd_urdf(args: argparse.Namespace) -> int:
     """``hexapod urdf``."""
     if args.list_presets:
+        width = max(map(len, PRESETS)) + 2
         for name, factory in PRESETS.items():
-            print(f"{name:14s}{factory().description}")
+            print(f"{name:{width}s}{factory().description}")
         return 0
     geom = _urdf_source(args)
     if args.output:

@@ -45,7 +45,37 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS", help="run the slices on the Dask cluster at tcp://HOST:PORT")
     p.add_argument("--out", default=None, help="directory for the PNG and the resumable checkpoint (created)")
     p.add_argument("--json", help="write the report as JSON")
+    p.add_argument(
+        "--detectability",
+        metavar="PNG",
+        help="instead: each redundant reading's minimal detectable fault over the x-y section at home height "
+        "(a hexapod with measuring legs or an inclinometer, e.g. reference7; docs/redundancy.md)",
+    )
     p.set_defaults(func=run)
+
+
+def run_detectability(args: argparse.Namespace) -> int:
+    """``hexapod evaluate --detectability PNG``: the table of minimal detectable biases and their figure."""
+    from ..analysis.detectability import detectability_map
+
+    check_output_path(args.detectability, args.hexapod)
+    require_extra("plots")
+    from ..plots.detectability import plot_detectability
+
+    hexa = load_hexapod(args.hexapod)
+    dmap = detectability_map(hexa)
+    half = 1e3 * (dmap.xs[-1] - dmap.xs[0]) / 2
+    print(
+        f"hexapod {args.hexapod}: minimal detectable fault per reading, platform at home +-{half:g} mm in x and y, "
+        f"false-alarm rate {dmap.alpha:g}, power {dmap.power:g}"
+    )
+    print(f"  {'reading':10s}{'smallest':>12s}{'median':>12s}{'largest':>12s}")
+    for name, lo, mid, hi in dmap.summary():
+        unit = "urad" if name.startswith("tilt") else "um"
+        print(f"  {name:10s}{1e6 * lo:12.4g}{1e6 * mid:12.4g}{1e6 * hi:12.4g}  {unit}")
+    plot_detectability(dmap, args.detectability, str(args.hexapod))
+    print(f"  figure: {args.detectability}")
+    return 0
 
 
 def format_report(r: dict) -> str:
@@ -76,6 +106,8 @@ def format_report(r: dict) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """``hexapod evaluate``."""
+    if args.detectability:
+        return run_detectability(args)
     if args.json:
         check_output_path(args.json, args.hexapod)
     settings = Settings(args.grid, args.cone_deg, args.cone_samples, args.length_unit)

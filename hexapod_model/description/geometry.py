@@ -14,6 +14,9 @@ Frames and units (SI throughout):
   ``encoder_scale``, both 0 by default): its reading is then
   ``encoder_zero + (1 + encoder_scale) * d`` with ``d`` the leg's extension from home, which
   ``stroke`` bounds.
+* Beside the six legs a geometry may declare redundant sensors: passive measuring legs and a
+  platform inclinometer (:mod:`hexapod_model.description.sensors`), whose readings follow the
+  six legs' (:attr:`HexapodGeometry.reading_names`).
 * Joint axes need not be exactly perpendicular to the leg at home (a calibrated fixture's are
   not): the common normal of each Cardan joint is then the projection of the leg direction on
   the plane perpendicular to its fixed axis (see :mod:`hexapod_model.description.legs`).
@@ -42,38 +45,15 @@ import numpy as np
 from ..exceptions import GeometryError
 from . import body
 from .plausibility import implausible
+from .sensors import DEFAULT_ENCODER_SIGMA, TILT_NAMES, Inclinometer, MeasuringLeg, sensors_from_dict, sensors_to_dict
+from .values import Vec3
+from .values import number as _number
+from .values import stroke as _stroke
+from .values import vec3 as _vec3
 
 JOINT_TYPES = ("cardan", "spherical", "guideway")
-Vec3 = tuple[float, float, float]
 MAX_AXIS_TILT_DEG = 10.0  # largest angle between a fixed Cardan axis and the plane perpendicular to the leg
 ENCODER_SCALE_LIMIT = 0.5  # |encoder_scale| bound (a relative scale error of the reading)
-
-
-def _vec3(name: str, value: Any, *, unit: bool = False) -> Vec3:
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise GeometryError(name, value, "expected 3 numbers") from None
-    if arr.shape != (3,):
-        raise GeometryError(name, value, "expected 3 numbers")
-    if not np.all(np.isfinite(arr)):
-        raise GeometryError(name, value, "must be finite")
-    if unit:
-        norm = float(np.linalg.norm(arr))
-        if norm < 1e-9:
-            raise GeometryError(name, value, "direction must not be zero")
-        arr = arr / norm
-    return (float(arr[0]), float(arr[1]), float(arr[2]))
-
-
-def _number(name: str, value: Any, lo: float, hi: float, *, open_lo: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise GeometryError(name, value, "expected a number")
-    v = float(value)
-    if not math.isfinite(v) or v < lo or v > hi or (open_lo and v == lo):
-        bracket = "(" if open_lo else "["
-        raise GeometryError(name, value, f"must lie in {bracket}{lo:g}, {hi:g}]")
-    return v
 
 
 @dataclass(frozen=True)
@@ -122,13 +102,7 @@ class LegGeometry:
         for name in ("base_axis", "platform_axis", "guideway"):
             if getattr(self, name) is not None:
                 set_(self, name, _vec3(name, getattr(self, name), unit=True))
-        try:
-            lo, hi = (float(v) for v in self.stroke)
-        except (TypeError, ValueError):
-            raise GeometryError("stroke", self.stroke, "expected [min, max] in metres") from None
-        if not (math.isfinite(lo) and math.isfinite(hi) and lo < 0.0 < hi):
-            raise GeometryError("stroke", self.stroke, "need finite min < 0 < max (0 = home reading)")
-        set_(self, "stroke", (lo, hi))
+        set_(self, "stroke", _stroke("stroke", self.stroke))
         for name in ("base_offset", "platform_offset"):
             if getattr(self, name) is not None:
                 set_(self, name, _number(name, getattr(self, name), 0.0, 10.0))
@@ -165,6 +139,11 @@ class HexapodGeometry:
         platform_cone: same at the platform joints (rad).
         min_clearance: smallest allowed distance between two bodies (m); below it a pose is in collision.
         envelope: operating box about home, half-widths ``(x, y, z [m], roll, pitch, yaw [rad])``, or ``None``.
+        measuring_legs: passive measuring legs beside the six (readings ``leg7``, ...; see
+            :mod:`~hexapod_model.description.sensors`).
+        inclinometer: a two-axis platform inclinometer (readings ``tilt_x``, ``tilt_y``), or ``None``.
+        encoder_sigma: standard deviation of every leg encoder's reading (m); weighs the
+            readings of a hexapod with redundant sensors.
     """
 
     name: str
@@ -186,6 +165,9 @@ class HexapodGeometry:
     platform_cone: float | None = None
     min_clearance: float = body.BODY_DEFAULTS["min_clearance"]
     envelope: tuple[float, ...] | None = None
+    measuring_legs: tuple[MeasuringLeg, ...] = ()
+    inclinometer: Inclinometer | None = None
+    encoder_sigma: float = DEFAULT_ENCODER_SIGMA
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name.replace("-", "_").replace("_", "a").isalnum():
@@ -213,6 +195,17 @@ class HexapodGeometry:
             self._check_leg(i, leg)
         for name, value in body.check_body(self).items():
             object.__setattr__(self, name, value)
+        extra = sensors_from_dict({"measuring_legs": self.measuring_legs, "inclinometer": self.inclinometer})
+        object.__setattr__(self, "measuring_legs", extra["measuring_legs"])
+        object.__setattr__(self, "inclinometer", extra["inclinometer"])
+        for k, m in enumerate(self.measuring_legs):
+            d = self.home_translation + np.asarray(m.platform_anchor) - np.asarray(m.base_anchor)
+            if float(np.linalg.norm(d)) < 1e-6:
+                raise GeometryError(
+                    f"measuring_legs[{k}].platform_anchor", m.platform_anchor, "coincides with its base anchor at home"
+                )
+        object.__setattr__(self, "encoder_sigma", _number("encoder_sigma", self.encoder_sigma, 0.0, 1.0, open_lo=True))
+
         self._check_scale()
 
     def leg_radius_of(self, i: int) -> float:
@@ -239,6 +232,20 @@ class HexapodGeometry:
             why = implausible(name, value, r)
             if why:
                 raise GeometryError(name, value, why)
+
+    @property
+    def redundant(self) -> bool:
+        """Whether the geometry declares sensors beside the six legs (measuring legs, an inclinometer)."""
+        return bool(self.measuring_legs) or self.inclinometer is not None
+
+    @property
+    def reading_names(self) -> tuple[str, ...]:
+        """The names of the readings :meth:`hexapod_model.Hexapod.forward` takes, in their order.
+
+        ``leg1`` .. ``leg6``, then ``leg7``, ... for the measuring legs, then ``tilt_x``, ``tilt_y``.
+        """
+        legs = tuple(f"leg{i + 1}" for i in range(6 + len(self.measuring_legs)))
+        return legs + (TILT_NAMES if self.inclinometer is not None else ())
 
     def offsets(self, i: int) -> tuple[float, float]:
         """Base and platform Cardan axis offsets (m) of leg ``i``: its own or the hexapod's."""
@@ -320,6 +327,10 @@ class HexapodGeometry:
         defaults = {f.name: f.default for f in fields(LegGeometry)}
         for f in fields(self):
             v = getattr(self, f.name)
+            if f.name in ("measuring_legs", "inclinometer"):
+                continue
+            if f.name == "encoder_sigma" and not self.redundant:
+                continue
             if f.name == "legs":
                 v = [
                     {
@@ -333,6 +344,7 @@ class HexapodGeometry:
                 continue
             if v is not None:
                 out[f.name] = list(v) if isinstance(v, tuple) and f.name != "legs" else v
+        out.update(sensors_to_dict(self.measuring_legs, self.inclinometer))
         return out
 
 
@@ -376,7 +388,7 @@ def geometry_from_dict(data: dict, source: str = "<dict>") -> HexapodGeometry:
         except GeometryError as exc:
             raise GeometryError(f"legs[{i}].{exc.field}", exc.value, exc.reason) from None
     data["legs"] = tuple(legs)
-    return HexapodGeometry(**data)
+    return HexapodGeometry(**sensors_from_dict(data))
 
 
 GEOMETRY_SUFFIXES = (".toml", ".yaml", ".yml", ".json")

@@ -26,8 +26,11 @@ import numpy as np
 
 from ..exceptions import GeometryError
 from .geometry import HexapodGeometry, LegGeometry
+from .sensors import Inclinometer, MeasuringLeg
 
 DEG = math.pi / 180.0
+BASE7 = (0.25, 0.0, 0.0)  # m, base frame: the seventh leg's base anchor (reference7)
+PLATFORM7 = (-0.15, 0.0, 0.0)  # m, platform frame: its platform anchor
 
 
 def _circle(radius: float, angle_deg: float, z: float = 0.0) -> tuple[float, float, float]:
@@ -76,6 +79,38 @@ def reference() -> HexapodGeometry:
         base_cone=75 * DEG,
         platform_cone=75 * DEG,
         description="Bem et al. (2026) design: offset-axis Cardan joints (12 mm) at both ends, cylindrical joint",
+    )
+
+
+REFERENCE7_LEG = MeasuringLeg(base_anchor=BASE7, platform_anchor=PLATFORM7, stroke=(-0.16, 0.20))
+
+
+def reference7() -> HexapodGeometry:
+    """The reference fixture with a seventh, passive measuring leg (readings ``leg1`` .. ``leg7``).
+
+    The seventh leg's base anchor sits between base pairs, its platform anchor across the
+    platform (see :data:`REFERENCE7_LEG`): a diagonal strut whose reading depends on every
+    pose coordinate, so that a fault on any of the seven legs moves the one parity residual.
+    """
+    return replace(
+        reference(),
+        name="reference7",
+        measuring_legs=(REFERENCE7_LEG,),
+        description="reference fixture + a seventh, diagonal measuring leg (readings leg1..leg7)",
+    )
+
+
+def reference_tilt() -> HexapodGeometry:
+    """The reference fixture with a two-axis platform inclinometer (readings leg1 .. leg6, tilt_x, tilt_y).
+
+    The inclinometer's mounting frame is the platform frame: two redundant angles, enough to
+    name a single faulty leg (each leg's fault tilts the platform its own way; docs/redundancy.md).
+    """
+    return replace(
+        reference(),
+        name="reference_tilt",
+        inclinometer=Inclinometer(),
+        description="reference fixture + a 2-axis platform inclinometer (readings leg1..leg6, tilt_x, tilt_y)",
     )
 
 
@@ -171,6 +206,8 @@ PRESETS: dict[str, Callable[[], HexapodGeometry]] = {
     "spherical": spherical,
     "3-6": three_six,
     "guideway": guideway,
+    "reference7": reference7,
+    "reference_tilt": reference_tilt,
 }
 DEFAULT_PRESET = "reference"
 

@@ -20,17 +20,20 @@ from ..description.geometry import GEOMETRY_SUFFIXES, HexapodGeometry, load_geom
 from ..description.mjcf_loader import MJCF_SUFFIXES, load_mjcf
 from ..description.model import ClosedLoopModel
 from ..description.presets import PRESETS, get_preset
+from ..description.sensor_layout import SensorLayout, read_sensors
 from ..description.urdf import geometry_to_urdf
 from ..exceptions import InputError
 from . import batch, hybrid
 from .all_assemblies import DEFAULT_STARTS, Assemblies
 from .batch import BatchResult
 from .certificate import NEAR_SINGULAR_FACTOR
+from .consistency import DEFAULT_ALPHA
 from .engine import DEFAULT_MAX_ITER, HOME_CONDITION_LIMIT, SolveEngine
 from .input_checks import LIMIT_SLACK, MAX_TOL, POSE_TOLERANCE, check_pose, check_vector
 from .joint_space import DEFAULT_TOL
 from .newton.outcomes import new_solution
 from .newton.solver import OneCallSolver, Solution
+from .redundant import RedundantSensing
 
 if TYPE_CHECKING:
     from .clearance import Clearance
@@ -89,6 +92,18 @@ class Hexapod:
         self.base_radius, self.scale = engine.base_radius, engine.scale
         #: the closure residual a solve stops at by default (m, rad): ``DEFAULT_TOL * scale``
         self.default_tol = engine.default_tol
+        layout = (
+            SensorLayout.from_geometry(geometry)
+            if geometry is not None
+            else read_sensors(model.urdf_xml, model.source)
+            if model.urdf_xml
+            else None
+        )
+        #: the least-squares solve over the measuring legs and inclinometer, ``None`` without any
+        #: (:mod:`~hexapod_model.kinematics.redundant`)
+        self.redundancy = None if layout is None else RedundantSensing(engine, layout)
+        #: the names of the readings :meth:`forward` takes, in their order
+        self.reading_names = ("leg1", "leg2", "leg3", "leg4", "leg5", "leg6") if layout is None else layout.names
 
     # ----- construction -----
     @classmethod
@@ -117,7 +132,11 @@ class Hexapod:
 
     @classmethod
     def from_preset(cls, name: str = "reference", *, compiled: bool = True) -> Hexapod:
-        """One of the bundled geometries: ``reference``, ``intersecting``, ``spherical``, ``3-6``, ``guideway``."""
+        """One of the bundled geometries (``PRESETS``).
+
+        ``reference``, ``intersecting``, ``spherical``, ``3-6``, ``guideway``; with redundant
+        sensors ``reference7`` and ``reference_tilt``.
+        """
         return cls.from_geometry(get_preset(name), compiled=compiled)
 
     @classmethod
@@ -170,11 +189,19 @@ class Hexapod:
         tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
         check: bool = True,
+        alpha: float = DEFAULT_ALPHA,
     ) -> Solution:
-        """Direct kinematics: platform pose from the six leg readings (m).
+        """Direct kinematics: platform pose from the six leg readings (m), or from all readings of redundant sensors.
+
+        A hexapod with measuring legs or an inclinometer (:attr:`redundancy`) takes every
+        reading, in the order of :attr:`reading_names`, and returns a
+        :class:`~hexapod_model.kinematics.redundant.RedundantSolution`: the weighted
+        least-squares pose and its chi-square consistency test (status
+        ``inconsistent_readings`` when it fails; docs/redundancy.md).
 
         Args:
-            lengths: six readings, leg order, metres (zero at home).
+            lengths: six readings, leg order, metres (zero at home); with redundant sensors the
+                readings of :attr:`reading_names` (m for legs, rad for tilts).
             guess: previous :class:`Solution` or configuration to start from (default: home).
             tol: closure residual to reach, in (0, 1e-6] (metres and radians); default
                 :attr:`default_tol` (``DEFAULT_TOL`` = 1e-12 scaled with the base radius to the
@@ -182,14 +209,18 @@ class Hexapod:
             max_iter: Newton step limit (an int >= 0).
             check: raise on a result that is not ``converged`` (default). With
                 ``check=False`` the :class:`Solution` is returned and its ``status`` says why.
+            alpha: false-alarm rate of the consistency test (redundant sensors only).
 
         Raises:
             InputError: wrong count or shape, NaN or inf, complex or text values, a bad
-                ``guess``, ``tol`` or ``max_iter``.
+                ``guess``, ``tol``, ``max_iter`` or ``alpha``.
             LimitError: a reading outside its stroke.
-            ConvergenceError, SingularityError, WorkspaceError: when ``check`` and the solve failed.
+            ConvergenceError, SingularityError, WorkspaceError, InconsistentReadingsError: when
+                ``check`` and the solve failed.
         """
         tol = self.default_tol if tol is None else tol
+        if self.redundancy is not None:
+            return self.redundancy.forward(lengths, guess, tol, max_iter, check, alpha)
         if not (isinstance(lengths, np.ndarray) and lengths.shape == (6,) and lengths.dtype == np.float64):
             lengths = check_vector("lengths", lengths, 6)
         fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
@@ -317,7 +348,17 @@ class Hexapod:
         Returns:
             A :class:`~.batch.BatchResult`: per row what :meth:`forward` with ``check=False``
             gives (``invalid_input`` where it raises: NaN, out of stroke); never raises on a row.
+
+        Raises:
+            InputError: a hexapod with redundant sensors (its readings are solved by :meth:`forward`, one set a call).
         """
+        if self.redundancy is not None:
+            names = ", ".join(self.reading_names)
+            raise InputError(
+                "lengths",
+                "(N, 6) rows",
+                f"this hexapod takes its {len(self.reading_names)} readings ({names}) in forward()",
+            )
         tol = self.default_tol if tol is None else tol
         return batch.forward_batch(self.engine, lengths, guess, warm, tol, max_iter)
 

@@ -108,6 +108,10 @@ class Tracker(PassageMixin):
     ):
         if predictor not in PREDICTORS:
             raise InputError("predictor", predictor, f"choose one of {PREDICTORS}")
+        if hexa.redundancy is not None:  # its forward() takes more than six readings
+            names = ", ".join(hexa.reading_names)
+            why = f"has redundant sensors ({names}); the tracker takes six readings: solve them with Hexapod.forward"
+            raise InputError("hexapod", hexa.closed_loop.source, why)
         tol = 100.0 * hexa.default_tol if tol is None else tol
         self.hexa, self.predictor, self.tol, self.max_iter = hexa, predictor, tol, max_iter
         self.settings = s = TrackerSettings.with_options(settings, options) if options or settings is None else settings

@@ -31,7 +31,7 @@ def test_urdf_default_and_presets(tmp_path, capsys):
     assert 'type="3d"' in (tmp_path / "sensor.urdf").read_text()
     assert main(["urdf", "--list-presets"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
-    assert [ln.split()[0] for ln in lines] == PRESET_NAMES and all(len(ln.split()) > 2 for ln in lines)
+    assert [ln.split()[0] for ln in lines] == list(hm.PRESETS) and all(len(ln.split()) > 2 for ln in lines)
 
 
 def test_urdf_takes_the_hexapod_as_every_command_does(tmp_path, capsys):

@@ -46,6 +46,7 @@ STATUSES = (
     "singular",
     "out_of_limits",
     "invalid_input",
+    "inconsistent_readings",
 )
 SINGULAR_PIVOT_RATIO = 1e-13
 #: m: the base radius the solver's constants in metres are stated for (their length scale 1)
