@@ -13,6 +13,7 @@ import sys
 import threading
 import time
 
+from ..exceptions import InputError
 from ..extras import require_extra
 from ._common import note
 
@@ -33,6 +34,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("config", metavar="FIXTURE.toml", help="the service configuration")
     p.add_argument("--simulate", metavar="SIM.toml", help="simulated encoders on a virtual bus (no hardware)")
+    p.add_argument(
+        "--plan",
+        metavar="PLAN.json",
+        help="with --simulate: play this changeover plan, monitored for coupling_mismatch (docs/planning.md §8)",
+    )
     p.add_argument("--jsonl", action="store_true", help="also write every record as a JSON line on stdout")
     p.add_argument("--view", action="store_true", help="show the served poses in a local meshcat view")
     p.add_argument("--fixture", help="the fixture --view shows (default: the first)")
@@ -102,6 +108,8 @@ def _serve(args: argparse.Namespace) -> int:
     from ..service import FixtureService, load_config
 
     config = load_config(args.config)
+    if args.plan and not args.simulate:
+        raise InputError("--plan", args.plan, "plays in the simulator only: give --simulate SIM.toml")
     if args.simulate:
         config = simulated(config)
     stop = threading.Event()
@@ -113,7 +121,7 @@ def _serve(args: argparse.Namespace) -> int:
     sim_bus = sim = None
     try:
         service.start(wait=False)  # HTTP answers 503 "starting" while the kernels compile
-        sim_config = None if not args.simulate else _load_simulation(args.simulate, config)
+        sim_config = None if not args.simulate else _load_simulation(args.simulate, config, args.plan)
         deadline = None if args.duration is None else time.monotonic() + args.duration
         while not service.ready:
             if service.failure is not None:
@@ -160,10 +168,10 @@ def _ros_bridge(service):
     return RosBridge(service, ros)
 
 
-def _load_simulation(path: str, config):
+def _load_simulation(path: str, config, plan: str | None = None):
     from ..service import load_simulation
 
-    return load_simulation(path, config)
+    return load_simulation(path, config, plan)
 
 
 def _start_simulator(config, sim_config, service):
@@ -173,7 +181,12 @@ def _start_simulator(config, sim_config, service):
 
     sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
     follow = service.changeover.followed  # fixtures with a scripted changeover move to their targets
-    sim = Simulator(config, sim_config, sim_bus, truth=1, hexapods=service.hexapods, targets=follow)
+    monitor = None
+    if sim_config.plan is not None:  # the plan's coupled phases checked against every record
+        monitor = sim_config.plan.monitor(config)
+        service.watch(monitor)
+        note("serve", f"playing {sim_config.plan.file}: {sim_config.plan.plan.total_time:.2f} s")
+    sim = Simulator(config, sim_config, sim_bus, truth=1, hexapods=service.hexapods, targets=follow, monitor=monitor)
     sim.start()
     return sim, sim_bus
 
