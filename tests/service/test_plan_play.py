@@ -20,7 +20,7 @@ import pinocchio as pin
 import pytest
 
 from hexapod_model.lie import xyz_rpy_to_pose
-from hexapod_model.planning.model import FixtureCell, Margins, Plan
+from hexapod_model.planning.model import PHASES, FixtureCell, Margins, Plan
 from hexapod_model.service import ConfigError, FixtureService, Simulator, load_simulation, simulation_from_dict
 
 from ..conftest import hexapod
@@ -174,12 +174,15 @@ def test_a_plan_the_configuration_cannot_play_is_refused_in_one_line(tmp_path, c
         load_simulation(tmp_path / "sim.toml", cell_config, plan=tmp_path / "sim.toml")
 
 
-def play(config, sim, until, seconds):
-    """The service and the simulated plan on one virtual channel until ``until(service, monitor)`` or ``seconds``."""
+def play(config, sim, until, seconds, then=None):
+    """The service and the simulated plan on one virtual channel until ``until(service, monitor)`` or ``seconds``.
+
+    ``then(service)`` runs once ``until`` holds, before the service stops.
+    """
     hexa = hexapod("reference")
     hexapods = {"left": hexa, "right": hexa}
     bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
-    service = FixtureService(config, hexapods=hexapods, http=False)
+    service = FixtureService(config, hexapods=hexapods, http=then is not None)
     try:
         service.start()
         for f in sim.plan.plan.fixtures:
@@ -192,6 +195,8 @@ def play(config, sim, until, seconds):
         deadline = time.monotonic() + seconds
         while time.monotonic() < deadline and not until(service, monitor):
             time.sleep(0.1)
+        if then is not None:
+            then(service)
         simulator.stop()
         return monitor, service.changeover.overview(), service.health()
     finally:
@@ -234,3 +239,28 @@ def test_a_brake_that_does_not_release_raises_coupling_mismatch(tmp_path, cell_c
     assert m["translation_mm"] > 2.0 or m["rotation_deg"] > 0.5
     assert health["status"] == "degraded"
     assert any(p.startswith("plan: fixture left: coupling_mismatch at t = ") for p in health["problems"]), health
+
+
+@pytest.mark.chromium
+def test_the_dashboard_shows_the_plans_progress_and_its_mismatch(tmp_path, cell_config):
+    from .test_dashboard import Fields, render
+
+    plan = make_plan(cell_config)
+    carry = [k for k in range(len(plan.t)) if plan.phase[k] == "carry" and plan.fixture[k] == "left"]
+    leg = int(np.argmax(np.abs(plan.readings[carry[-1]] - plan.readings[carry[0]])))
+    sim = simulation(tmp_path, cell_config, plan, faults=[{"kind": "held_brake", "leg": leg + 1}], start=1.0)
+    dom = []
+
+    def look(service):
+        host, port = service.address
+        dom.append(render(f"http://{host}:{port}/", tmp_path / "profile"))
+
+    monitor, _, _ = play(cell_config, sim, lambda s, m: m.mismatch is not None, 1.0 + plan.total_time + 5.0, look)
+    page = Fields()
+    page.feed(dom[0])
+    shown = page.found
+    assert shown[(None, "plan.coupling_mismatch")][1] == "left"
+    assert "coupling_mismatch: left (carry)" in shown[(None, "plan.coupling_mismatch")][0]
+    assert shown[(None, "plan.phase")][1] in PHASES
+    assert 0.0 < float(shown[(None, "plan.fraction")][1]) <= 1.0
+    assert 0.0 < float(shown[(None, "plan.t_s")][1]) <= plan.total_time + 10.0
