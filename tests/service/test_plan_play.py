@@ -22,6 +22,7 @@ import pytest
 from hexapod_model.lie import xyz_rpy_to_pose
 from hexapod_model.planning.model import PHASES, FixtureCell, Margins, Plan
 from hexapod_model.service import ConfigError, FixtureService, Simulator, load_simulation, simulation_from_dict
+from hexapod_model.service.sim.plan_player import PlatePath
 
 from ..conftest import hexapod
 from .helpers import CollectingBus, fixture_table, record_pose, service_config
@@ -132,6 +133,14 @@ def test_the_simulated_plates_follow_the_plan_at_its_times(tmp_path, cell_config
             assert np.allclose(sent.readings, plan.readings[k], atol=1e-9)
         after = simulator.send_set(index, 0.5 + plan.t[-1] + 1.0)
         assert np.allclose(after.pose, first.target, atol=1e-9)
+        # between the points the velocity is continuous (a step at each point would be a discontinuity to the
+        # service): the acceleration at 1 kHz stays within 3 times the carry's own, pi^2 d / (2 T^2) for a distance d
+        t = 0.5 + np.arange(plan.t[carry[0]] - 0.05, plan.t[carry[-1]] + 0.05, 1e-3)
+        path = PlatePath(sim.plan, name)
+        p = np.array([path.pose(x)[:3, 3] for x in t])
+        accel = np.linalg.norm(np.diff(p, 2, axis=0), axis=1) / 1e-6
+        d = np.linalg.norm(first.target[:3, 3] - first.start[:3, 3])
+        assert accel.max() < 3.0 * math.pi**2 * d / (2 * CARRY**2)
 
 
 def test_a_held_brake_keeps_its_leg_and_the_plate_goes_where_the_readings_put_it(tmp_path, cell_config):
