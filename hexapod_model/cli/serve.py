@@ -37,7 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--plan",
         metavar="PLAN.json",
-        help="with --simulate: play this changeover plan, monitored for coupling_mismatch (docs/planning.md §8)",
+        help="with --simulate: play this changeover plan, monitored for coupling_mismatch (docs/planning.md §7)",
     )
     p.add_argument("--jsonl", action="store_true", help="also write every record as a JSON line on stdout")
     p.add_argument("--view", action="store_true", help="show the served poses in a local meshcat view")
