@@ -133,6 +133,8 @@ def _serve(args: argparse.Namespace) -> int:
         note("serve", f"fixtures {', '.join(service.names())}; Ctrl-C stops")
         if sim_config is not None:
             sim, sim_bus = _start_simulator(config, sim_config, service)
+            if bridge is not None and sim_config.plan is not None:  # the played plan on ROS 2 too
+                bridge.publish_plan(sim_config.plan.plan)
         if args.view:
             _view(args, service, stop, deadline)
         else:
