@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from pathlib import Path
 
 import can
 import numpy as np
@@ -229,6 +230,7 @@ def test_played_as_planned_both_fixtures_lock_in_tolerance_without_coupling_mism
     coupled = sum(1 for p in plan.phase if p in ("couple", "release_brakes", "carry", "lock_brakes", "decouple"))
     assert progress["checked"] > coupled  # records of both fixtures' coupled phases were compared (100 sets/s)
     assert progress["largest"]["translation_mm"] < 0.05  # the encoders' coupling is the commanded flange
+    assert progress["unchecked"] < 0.05 * progress["checked"]  # a set lost on a busy machine has no pose
     for g in overview["fixtures"]:
         assert g["in_tolerance"] and g["state"] == "locked", g
         target = next(f.target for f in plan.fixtures if f.name == g["fixture"])
@@ -273,3 +275,15 @@ def test_the_dashboard_shows_the_plans_progress_and_its_mismatch(tmp_path, cell_
     assert shown[(None, "plan.phase")][1] in PHASES
     assert 0.0 < float(shown[(None, "plan.fraction")][1]) <= 1.0
     assert 0.0 < float(shown[(None, "plan.t_s")][1]) <= plan.total_time + 10.0
+
+
+def test_serve_plays_a_plan_in_the_simulator_only(capsys):
+    from hexapod_model.cli.main import main
+
+    config = Path(__file__).resolve().parents[2] / "docs/examples/fixture.toml"
+    assert main(["serve", str(config), "--plan", "plan.json"]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert (
+        line
+        == "hexapod serve: error: invalid --plan 'plan.json': plays in the simulator only: give --simulate SIM.toml"
+    )

@@ -21,6 +21,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -89,7 +90,7 @@ class PlanMonitor:
         cells: dict[str, Cell | None],
         translation_mm: float = 2.0,
         rotation_deg: float = 0.5,
-        clock=time.time,
+        clock: Callable[[], float] = time.time,
     ):
         for key, v in (("translation_mm", translation_mm), ("rotation_deg", rotation_deg)):
             if not (math.isfinite(v) and v > 0.0):
@@ -115,11 +116,13 @@ class PlanMonitor:
         self.mismatch: Mismatch | None = None
         self.worst: Mismatch | None = None
         self.checked = 0  # records compared
+        self.unchecked = 0  # records of a held plate without a pose to compare (a failed set, a fault)
         self._over: dict[str, int] = {}
 
     def begin(self, t0: float) -> None:
         """The plan starts: its ``t = 0`` is at Unix time ``t0`` (s); a raised mismatch is cleared."""
-        self.t0, self.mismatch, self.worst, self.checked, self._over = t0, None, None, 0, {}
+        self.t0, self.mismatch, self.worst, self._over = t0, None, None, {}
+        self.checked = self.unchecked = 0
 
     def commanded(self, name: str, t: float) -> np.ndarray | None:
         """The flange's 4x4 pose (robot frame) commanded at plan time ``t`` (s), holding ``name``'s plate."""
@@ -137,11 +140,14 @@ class PlanMonitor:
 
     def check(self, rec: PoseRecord) -> None:
         """Compare one record (a service subscriber: on the cycle thread)."""
-        if self.t0 is None or rec.pose_in_robot is None:
+        if self.t0 is None:
             return
         t = rec.t - self.t0
         flange = self.commanded(rec.fixture, t)
         if flange is None:
+            return
+        if rec.pose_in_robot is None:
+            self.unchecked += 1
             return
         p = rec.pose_in_robot["pose"]
         coupling = pin.XYZQUATToSE3(np.array([p["x"], p["y"], p["z"], p["qx"], p["qy"], p["qz"], p["qw"]]))
@@ -195,6 +201,7 @@ class PlanMonitor:
             "order": list(plan.order),
             "tolerance": {"translation_mm": self.tolerance[0], "rotation_deg": self.tolerance[1]},
             "checked": self.checked,
+            "unchecked": self.unchecked,
             "coupling_mismatch": None if m is None else m.to_json(),
             "largest": None if worst is None else worst.to_json(),
         }
