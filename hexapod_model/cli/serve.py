@@ -13,6 +13,7 @@ import sys
 import threading
 import time
 
+from ..exceptions import InputError
 from ..extras import require_extra
 from ._common import note
 
@@ -33,6 +34,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("config", metavar="FIXTURE.toml", help="the service configuration")
     p.add_argument("--simulate", metavar="SIM.toml", help="simulated encoders on a virtual bus (no hardware)")
+    p.add_argument(
+        "--plan",
+        metavar="PLAN.json",
+        help="with --simulate: play this changeover plan, monitored for coupling_mismatch (docs/planning.md §7)",
+    )
     p.add_argument("--jsonl", action="store_true", help="also write every record as a JSON line on stdout")
     p.add_argument("--view", action="store_true", help="show the served poses in a local meshcat view")
     p.add_argument("--fixture", help="the fixture --view shows (default: the first)")
@@ -102,10 +108,12 @@ def _serve(args: argparse.Namespace) -> int:
     from ..service import FixtureService, load_config
 
     config = load_config(args.config)
+    if args.plan and not args.simulate:
+        raise InputError("--plan", args.plan, "plays in the simulator only: give --simulate SIM.toml")
     sim_config = None
     if args.simulate:  # every input is read before the service starts: its errors are said at once
         config = simulated(config)
-        sim_config = _load_simulation(args.simulate, config)
+        sim_config = _load_simulation(args.simulate, config, args.plan)
     stop = threading.Event()
     _stop_on_sigterm(stop)
     service = FixtureService(config)
@@ -130,6 +138,8 @@ def _serve(args: argparse.Namespace) -> int:
             note("serve", dashboard)
         if sim_config is not None:
             sim, sim_bus = _start_simulator(config, sim_config, service)
+            if bridge is not None and sim_config.plan is not None:  # the played plan on ROS 2 too
+                bridge.publish_plan(sim_config.plan.plan)
         if args.view:
             _view(args, service, stop, deadline)
         else:
@@ -200,10 +210,10 @@ def _ros_bridge(service):
     return RosBridge(service, ros)
 
 
-def _load_simulation(path: str, config):
+def _load_simulation(path: str, config, plan: str | None = None):
     from ..service import load_simulation
 
-    return load_simulation(path, config)
+    return load_simulation(path, config, plan)
 
 
 def _start_simulator(config, sim_config, service):
@@ -213,7 +223,12 @@ def _start_simulator(config, sim_config, service):
 
     sim_bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
     follow = service.changeover.followed  # fixtures with a scripted changeover move to their targets
-    sim = Simulator(config, sim_config, sim_bus, truth=1, hexapods=service.hexapods, targets=follow)
+    monitor = None
+    if sim_config.plan is not None:  # the plan's coupled phases checked against every record
+        monitor = sim_config.plan.monitor(config)
+        service.watch(monitor)
+        note("serve", f"playing {sim_config.plan.file}: {sim_config.plan.plan.total_time:.2f} s")
+    sim = Simulator(config, sim_config, sim_bus, truth=1, hexapods=service.hexapods, targets=follow, monitor=monitor)
     sim.start()
     return sim, sim_bus
 

@@ -25,6 +25,7 @@ import time
 from typing import Any
 
 from ..extras import install_hint
+from ..planning.model import Plan
 from ..service.config.ros import RosConfig
 from ..service.record.pose_record import PoseRecord
 from ..service.service import FixtureService
@@ -84,13 +85,13 @@ class _Writers:
         self.participant = DomainParticipant(cfg.domain_id, qos=Qos(Policy.Userdata(b"enclave=/;")))
         self._entities = [self.domain, self.participant]
 
-        def writer(name: str, cls: type, depth: int = 10, transient: bool = False):
+        def writer(name: str, cls: type, depth: int = 10, transient: bool = False, typehash: str | None = None):
             qos = Qos(
                 Policy.Reliability.Reliable(duration(milliseconds=100)),
                 Policy.Durability.TransientLocal if transient else Policy.Durability.Volatile,
                 Policy.History.KeepLast(depth),
                 Policy.DataRepresentation(use_cdrv0_representation=True),
-                Policy.Userdata(f"typehash={hashes[cls]};".encode()),
+                Policy.Userdata(f"typehash={typehash or hashes[cls]};".encode()),
             )
             topic: Any = Topic(self.participant, "rt" + name, cls, qos=qos)
             w = DataWriter(self.participant, topic, qos=qos)
@@ -110,6 +111,7 @@ class _Writers:
         )
         self.changeover = ChangeoverTopics(service, self.participant, cfg.namespace, names, reliable, hashes[String])
         self._entities += self.changeover.entities
+        self.writer = writer  # more topics later (a played plan's trajectory)
 
     def close(self) -> None:
         """Delete every entity, newest first (the participant and domain last)."""
@@ -209,6 +211,29 @@ class RosBridge:
             "failed_writes": self.failed_writes,
             "error": self.error,
         }
+
+    def publish_plan(self, plan: Plan) -> None:
+        """Publish a played plan once on ``/hexapod/changeover/trajectory`` (:mod:`~hexapod_model.ros.plan_topic`).
+
+        Transient local: a subscriber that joins later still gets it. A failure is kept in
+        :attr:`error` (``/health``), never raised.
+        """
+        if self._writers is None:
+            return  # not publishing: start() said why
+        from rosbags.typesys import Stores, get_typestore
+
+        from .plan_topic import ROS_NAME, JointTrajectory, trajectory
+        from .trajectory import TOPIC
+
+        try:
+            typehash = get_typestore(Stores.ROS2_JAZZY).hash_rihs01(ROS_NAME)
+            w = self._writers.writer(TOPIC, JointTrajectory, 1, transient=True, typehash=typehash)
+            msg = trajectory(plan, time.time())
+        except Exception as exc:  # noqa: BLE001 - DDSException and its like: shown on /health
+            self._fail(f"{TOPIC}: {exc}")
+            return
+        self._write(lambda _: w.write(msg))
+        log.info("published the changeover plan (%d points) on %s", len(plan.t), TOPIC)
 
     def _fail(self, message: str) -> None:
         """Keep ``message`` for ``/health``; log it when it is new (not once per record)."""

@@ -18,6 +18,7 @@ Public API::
 """
 
 from .changeover.changeover import Changeover, UnknownError
+from .changeover.plan_monitor import PlanMonitor
 from .config.cell import Cell, Located, locate
 from .config.codec import Decoded, FrameLayout, LegCodec, decode, encode
 from .config.settings import (
@@ -38,6 +39,7 @@ from .http.client import RequestError, ServiceClient
 from .record.pose_record import RECORD_KEYS, PoseRecord
 from .service import FixtureService
 from .sim.config import Fault, SimConfig, SimFixture, load_simulation, simulation_from_dict
+from .sim.plan_player import PlanPlay
 from .sim.simulator import SentSet, Simulator
 from .store.fixture_store import LockEvent, Store
 from .targets.guidance import guidance
@@ -59,6 +61,8 @@ __all__ = [
     "LegCodec",
     "Located",
     "LockEvent",
+    "PlanMonitor",
+    "PlanPlay",
     "PoseRecord",
     "PoseSolver",
     "RECORD_KEYS",

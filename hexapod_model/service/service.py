@@ -40,6 +40,7 @@ if TYPE_CHECKING:
     from starlette.routing import BaseRoute
 
     from ..kinematics.hexapod import Hexapod
+    from .changeover.plan_monitor import PlanMonitor
     from .http.server import HttpServer
 
 log = logging.getLogger(__name__)
@@ -317,6 +318,18 @@ class FixtureService:
         text = rec.to_json()
         self._json[name] = (rec, text)  # one entry per fixture; a race only serialises twice
         return text
+
+    def watch(self, monitor: PlanMonitor) -> None:
+        """Check every record against a playing changeover plan (once ready).
+
+        The plan's progress and a ``coupling_mismatch`` appear in ``GET /events``' ``plan`` (the
+        dashboard) and in ``/health``'s ``plan`` section (a mismatch: ``degraded``).
+        """
+        if self.changeover is None:
+            raise ServiceError("the service is not ready: watch a plan once it runs")
+        self.changeover.monitor = monitor
+        self.subscribe(monitor.check)
+        self.health_sections["plan"] = monitor.health
 
     def acknowledge(self, name: str, by: str, client: str = "local", note: str = "") -> Acknowledgement | None:
         """Acknowledge the fault latched on fixture ``name`` (None when none waits; ``KeyError``: no such fixture).

@@ -33,6 +33,7 @@ from ..cycle.fixture_cycle import FixtureCycle
 from ..store.fixture_store import Store
 from ..targets.guidance import guidance
 from ..targets.target import Recipe, Target, TargetError, reachable, recipe_from_json, target_from_json
+from .plan_monitor import PlanMonitor
 
 log = logging.getLogger(__name__)
 
@@ -68,6 +69,8 @@ class Changeover:
         self._recipe_json: dict[str, tuple[tuple[str, str, float], dict[str, Any]]] = {}
         self.problems: dict[str, str] = {}  # stored targets that no longer solve (geometry changed)
         self._active = self.store.active()  # (name, set_by, set_at) of the active recipe, kept here
+        #: the changeover plan being played and watched (its progress in :meth:`overview`), or None
+        self.monitor: PlanMonitor | None = None
         for name, row in self.store.current_targets().items():
             if name not in cycles:
                 continue  # a fixture no longer configured: its rows stay in the store
@@ -182,12 +185,13 @@ class Changeover:
         return guidance(self.cycles[name].last, self._targets.get(name), extra)
 
     def overview(self) -> dict[str, Any]:
-        """Every fixture's guidance and the active recipe: what the dashboard shows."""
-        active = self._active
+        """Every fixture's guidance, the active recipe and a playing plan's progress: what the dashboard shows."""
+        active, monitor = self._active, self.monitor
         return {
             "t": self.clock(),
             "active_recipe": None if active is None else active[0],
             "fixtures": [self.guidance(name) for name in self.cycles],
+            "plan": None if monitor is None else monitor.progress(),
         }
 
 

@@ -3,6 +3,7 @@
 Per fixture: a pose sequence (Jakobović and Jelenković's trajectory A or B played there and back, a CSV of poses
 played one row per set, or a held pose), the set rate, the reading noise, optional lock phases
 (the plate slows down, stays still with the brakes on, speeds up again) and injected faults.
+A ``[plan]`` table plays a changeover plan (:mod:`~hexapod_model.service.sim.plan_player`).
 Every field is documented in ``docs/service.md``; an example is ``docs/examples/sim.toml``.
 """
 
@@ -21,6 +22,7 @@ from ..config.settings import ServiceConfig, read_toml
 from ..config.table import Table
 from ..errors import ConfigError
 from .changeover import ChangeoverScript
+from .plan_player import PlanPlay, plan_from_table
 
 FAULTS = (
     "dropped_frames",
@@ -32,12 +34,17 @@ FAULTS = (
     "step",
     "late_frame",
     "duplicate_id",
+    "held_brake",
 )
 
 
 @dataclass(frozen=True)
 class Fault:
     """An injected fault.
+
+    A ``held_brake`` leg keeps the reading it had at ``start`` for ``duration`` (its brake did not
+    release): the plate goes where the readings put it
+    (:class:`~hexapod_model.service.sim.plan_player.HeldBrakes`).
 
     Attributes:
         kind: one of :data:`FAULTS`.
@@ -104,11 +111,12 @@ class SimFixture:
 
 @dataclass(frozen=True)
 class SimConfig:
-    """The whole ``sim.toml``."""
+    """The whole ``sim.toml``; ``plan``: the changeover plan it plays (``[plan]``), or None."""
 
     fixtures: tuple[SimFixture, ...]
     seed: int = 0
     source: str = "<dict>"
+    plan: PlanPlay | None = None
 
 
 def trajectory_sequence(name: str, home: np.ndarray, scale: float, rate: float, period: float) -> np.ndarray:
@@ -126,16 +134,30 @@ def trajectory_sequence(name: str, home: np.ndarray, scale: float, rate: float, 
     return poses
 
 
-def load_simulation(path: str | Path, service: ServiceConfig) -> SimConfig:
-    """Read and validate ``sim.toml`` against the service configuration."""
+def load_simulation(path: str | Path, service: ServiceConfig, plan: str | Path | None = None) -> SimConfig:
+    """Read and validate ``sim.toml`` against the service configuration; ``plan``: a ``plan.json`` to play."""
     path = Path(path)
-    return simulation_from_dict(read_toml(path), service, str(path), path.parent)
+    return simulation_from_dict(read_toml(path), service, str(path), path.parent, plan)
 
 
-def simulation_from_dict(data: dict, service: ServiceConfig, source: str = "<dict>", folder: Path | None = None):
-    """Validate a parsed ``sim.toml``; CSV paths are relative to ``folder``."""
+def simulation_from_dict(
+    data: dict,
+    service: ServiceConfig,
+    source: str = "<dict>",
+    folder: Path | None = None,
+    plan: str | Path | None = None,
+) -> SimConfig:
+    """Validate a parsed ``sim.toml``; CSV and plan paths are relative to ``folder``.
+
+    ``plan`` (a ``plan.json``) is played instead of the ``[plan]`` table's ``file``, with the
+    table's other fields when there is one.
+    """
     top = Table(data, "", source)
     seed = top.integer("seed", 0, 0, 2**63)
+    play = None
+    if "plan" in data or plan is not None:
+        given = None if plan is None else str(Path(plan).resolve())
+        play = plan_from_table(top.table("plan", {}), service, folder or Path("."), given)
     items = top.take("fixtures")
     if not isinstance(items, list) or not items:
         raise top.error("fixtures", items, "expected one or more [[fixtures]] tables")
@@ -147,7 +169,10 @@ def simulation_from_dict(data: dict, service: ServiceConfig, source: str = "<dic
     for i, n in enumerate(names):
         if n in names[:i]:
             raise ConfigError(f"fixtures[{i}].name", n, "simulated twice", source)
-    return SimConfig(fixtures, seed, source)
+    missing = [] if play is None else [n for n in play.fixtures() if n not in names]
+    if play is not None and missing:
+        raise ConfigError("plan.file", play.file, f"fixture {missing[0]!r} of the plan is not simulated", source)
+    return SimConfig(fixtures, seed, source, play)
 
 
 def _fixture(t: Table, service: ServiceConfig, folder: Path) -> SimFixture:
@@ -222,7 +247,7 @@ def _fault(t: Table) -> Fault:
         kind=kind,
         legs=legs,
         start=t.number("start", 0.0, 0.0, 1e6),
-        duration=t.number("duration", {"spike": 0.0, "step": 1e6}.get(kind, 1.0), 0.0, 1e6),
+        duration=t.number("duration", {"spike": 0.0, "step": 1e6, "held_brake": 1e6}.get(kind, 1.0), 0.0, 1e6),
         probability=t.number("probability", 0.2, 0.0, 1.0) if kind == "dropped_frames" else 1.0,
         size=t.number("size", 0.002, -0.5, 0.5) if kind in ("spike", "step", "duplicate_id") else 0.0,
         sets=t.integer("sets", 1, 1, 1000) if kind == "late_frame" else 1,

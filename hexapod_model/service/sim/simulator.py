@@ -24,10 +24,12 @@ import pinocchio as pin
 from ...exceptions import HexapodError
 from ...kinematics.hexapod import Hexapod
 from ...kinematics.newton.solver import Solution
+from ..changeover.plan_monitor import PlanMonitor
 from ..config.settings import FixtureConfig, ServiceConfig
 from ..errors import FrameError
 from .changeover import Follower
 from .config import SimConfig, SimFixture
+from .plan_player import HeldBrakes, PlatePath, carried
 
 log = logging.getLogger(__name__)
 FRAME_TIME = 130e-6  # s: one 8-byte frame on a 1 Mbit/s bus, the spacing of a set's stamps
@@ -61,9 +63,14 @@ class SentSet:
 class _Encoders:
     """The six simulated encoders of one fixture."""
 
-    def __init__(self, sim: SimFixture, cfg: FixtureConfig, hexa: Hexapod, rng: np.random.Generator, targets=None):
+    def __init__(
+        self, sim: SimFixture, cfg: FixtureConfig, hexa: Hexapod, rng: np.random.Generator, targets=None, path=None
+    ):
         self.sim, self.cfg, self.hexa, self.rng = sim, cfg, hexa, rng
-        self.follower = None if sim.changeover is None or targets is None else Follower(sim.changeover, sim.ramp)
+        self.path: PlatePath | None = path  # a plan carries this plate: it follows that, nothing else
+        self.brakes = HeldBrakes(sim.faults, hexa)
+        script = sim.changeover if targets is not None and path is None else None
+        self.follower = None if script is None else Follower(script, sim.ramp)
         self._targets = targets
         self.tau = 0.0  # position in the pose sequence (samples)
         self._key: float | None = None
@@ -86,7 +93,15 @@ class _Encoders:
         return (A * pin.exp6(frac * pin.log6(A.inverse() * B))).homogeneous
 
     def advance(self, t_sim: float) -> tuple[np.ndarray, np.ndarray]:
-        """True pose and readings at ``t_sim``; the sequence position then moves on one set."""
+        """True pose and readings at ``t_sim`` (held brakes kept); the sequence position then moves on one set."""
+        if self.path is not None:
+            self._sol = self.hexa.inverse(self.path.pose(t_sim), guess=self._sol)
+            pose, true = self._sol.pose, self._sol.lengths.copy()
+        else:
+            pose, true = self._play(t_sim)
+        return self.brakes.apply(t_sim, pose, true, self._sol)
+
+    def _play(self, t_sim: float) -> tuple[np.ndarray, np.ndarray]:
         factor = 1.0
         if self.follower is not None:
             f = self.follower
@@ -112,7 +127,7 @@ class _Encoders:
     def skip(self, t_sim: float) -> None:
         """Let a set's time pass unsent: the plate moves on."""
         f = self.follower
-        if f is not None and f.active:
+        if (f is not None and f.active) or self.path is not None:
             return  # the move is a function of time: nothing to advance
         if len(self.sim.poses) > 1:
             playing = self.sim.speed(t_sim) > 0.0
@@ -179,6 +194,7 @@ class Simulator:
         hexapods: already loaded hexapods by fixture name (else loaded here).
         targets: ``targets(name) -> (key, 4x4 pose or None)``: each fixture's current target (the
             key changes with it), which fixtures with a ``changeover`` script move to.
+        monitor: watches the plan ``sim`` plays: :meth:`run` tells it when the plan starts.
     """
 
     def __init__(
@@ -189,15 +205,17 @@ class Simulator:
         truth: int = 200_000,
         hexapods: dict[str, Hexapod] | None = None,
         targets: Callable[[str], tuple[object, np.ndarray | None]] | None = None,
+        monitor: PlanMonitor | None = None,
     ):
-        self.bus, self.sim = bus, sim
+        self.bus, self.sim, self.monitor = bus, sim, monitor
         rng = np.random.default_rng(sim.seed)
         hexapods = hexapods or {}
         self._encoders = []
         for s in sim.fixtures:
             cfg = service.fixture(s.name)
             hexa = hexapods.get(s.name) or cfg.load_hexapod()
-            self._encoders.append(_Encoders(s, cfg, hexa, np.random.default_rng(rng.integers(2**63)), targets))
+            enc_rng = np.random.default_rng(rng.integers(2**63))
+            self._encoders.append(_Encoders(s, cfg, hexa, enc_rng, targets, carried(sim.plan, s.name)))
         self.truth: deque[SentSet] = deque(maxlen=truth)
         self.frames_sent = 0
         self._stop = threading.Event()
@@ -252,6 +270,8 @@ class Simulator:
         one period ago is skipped (its time passes unsent), never sent in a burst.
         """
         start, wall = time.monotonic(), time.time()
+        if self.monitor is not None and self.sim.plan is not None:
+            self.monitor.begin(wall + self.sim.plan.start)  # the frames' stamps are wall + t_sim
         due = [0.0] * len(self._encoders)
         while not self._stop.is_set():
             i = min(range(len(due)), key=due.__getitem__)

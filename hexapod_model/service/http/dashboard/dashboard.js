@@ -199,8 +199,32 @@ function card(g) {
   return c;
 }
 
+// a playing changeover plan: its phase, the fixture the robot serves, how far (bar) and a coupling mismatch
+function planProgress(plan) {
+  const box = document.getElementById("plan");
+  box.hidden = !plan;
+  box.replaceChildren();
+  if (!plan) return;
+  const m = plan.coupling_mismatch;
+  box.className = "plan" + (m ? " mismatch" : "");
+  box.appendChild(document.createTextNode("plan: "));
+  box.appendChild(el("strong", { "data-field": "plan.phase", "data-value": plan.phase }, plan.phase));
+  if (plan.fixture) box.appendChild(el("span", { "data-field": "plan.fixture", "data-value": plan.fixture }, " " + plan.fixture));
+  const bar = el("progress", { max: "1", "data-field": "plan.fraction", "data-value": plan.fraction === null ? "" : String(plan.fraction) });
+  bar.value = plan.fraction || 0;
+  box.appendChild(bar);
+  box.appendChild(value(null, "plan.t_s", plan.t_s, 1));
+  box.lastChild.removeAttribute("data-fixture");
+  box.appendChild(document.createTextNode(" / " + fmt(plan.total_s, 1) + " s"));
+  if (m) {
+    const text = "coupling_mismatch: " + m.fixture + " (" + m.phase + ") " + fmt(m.translation_mm, 3) + " mm, " + fmt(m.rotation_deg, 3) + "\u00b0";
+    box.appendChild(el("span", { class: "flags", "data-field": "plan.coupling_mismatch", "data-value": m.fixture }, " " + text));
+  }
+}
+
 function render(overview) {
   document.getElementById("active-recipe").textContent = overview.active_recipe || "\u2013";
+  planProgress(overview.plan);
   const main = document.getElementById("fixtures");
   for (const g of overview.fixtures) {
     const fresh = card(g);
