@@ -34,6 +34,7 @@ from .errors import ServiceError
 from .http.health import health
 from .record.pose_record import PoseRecord
 from .store.fixture_store import Store, sample_row
+from .store.owner import StoreOwner
 from .store.writer import StoreWriter
 
 if TYPE_CHECKING:
@@ -87,6 +88,7 @@ class FixtureService:
         self.cycles: dict[str, FixtureCycle] = {}
         self.endpoint: HttpServer | None = None
         self.store: Store | None = None
+        self._owner: StoreOwner | None = None  # the exclusive lock on the store while started
         #: targets, recipes and guidance (:class:`~hexapod_model.service.changeover.Changeover`), once started
         self.changeover: Changeover | None = None
         self.writer: StoreWriter | None = None
@@ -106,6 +108,7 @@ class FixtureService:
         self._started = time.time()
         self._stop.clear()
         try:  # what can fail fails first, before anything is logged or written
+            self._owner = StoreOwner(cfg.store.path)  # one service per store: a second one is refused here
             if self._http:
                 from .http.server import HttpServer
 
@@ -122,6 +125,7 @@ class FixtureService:
                 self._bus = open_bus(cfg)
             if self.endpoint is not None:
                 self.endpoint.start()
+                self._owner.describe(self.endpoint.url)
                 log.info("serving %s", self.endpoint.url)
             if wait:
                 self._prepare()
@@ -277,6 +281,9 @@ class FixtureService:
         if self.store is not None:
             self.store.close()
             self.store = None
+        if self._owner is not None:
+            self._owner.release()
+            self._owner = None
 
     def __enter__(self) -> FixtureService:
         return self.start()
