@@ -29,6 +29,7 @@ from .config.settings import ServiceConfig, geometry_hash
 from .cycle.alarms import Acknowledgement
 from .cycle.bus import open_bus
 from .cycle.fixture_cycle import FixtureCycle
+from .cycle.routes import frame_routes
 from .cycle.solver import warm_up
 from .errors import ServiceError
 from .http.health import health
@@ -179,16 +180,7 @@ class FixtureService:
                 return
             self.store, self.cycles = store, cycles
             self.changeover = Changeover(store, self.hexapods, cycles)
-            # by extended flag, then id: one dict look-up a frame, no key tuple built
-            self._routes = {
-                extended: {
-                    leg.can_id: (self.cycles[f.name], self.cycles[f.name].on_frame, k)
-                    for f in cfg.fixtures
-                    for k, leg in enumerate(f.legs)
-                    if leg.extended_id == extended
-                }
-                for extended in (False, True)
-            }
+            self._routes = frame_routes(cfg, self.cycles)  # by extended flag, then id (CANopen links too)
             self.writer = StoreWriter(self.store)
             self._last_logged = {name: -1e300 for name in self.cycles}
             # what is alive now (numba, pinocchio, python-can, the hexapods) lives as long as the
