@@ -65,6 +65,8 @@ class HttpConfig:
         certfile: PEM certificate chain for HTTPS, with ``keyfile``; None: plain HTTP.
         keyfile: PEM private key of ``certfile``.
         max_connections: open connections served at once; more are answered ``503``.
+        max_connections_per_address: connections of one client address beyond which its oldest
+            one not in a request is closed for a new one.
         idle_timeout: s an idle connection (or one that sends no request) is kept open.
     """
 
@@ -76,6 +78,7 @@ class HttpConfig:
     certfile: Path | None = None
     keyfile: Path | None = None
     max_connections: int = 64
+    max_connections_per_address: int = 32
     idle_timeout: float = 5.0
 
     @property
@@ -246,6 +249,7 @@ def _http(h: Table, folder: Path) -> HttpConfig:
         certfile=certfile,
         keyfile=keyfile,
         max_connections=h.integer("max_connections", 64, 1, 10_000),
+        max_connections_per_address=h.integer("max_connections_per_address", 32, 1, 10_000),
         idle_timeout=h.number("idle_timeout", 5.0, 0.1, 3600.0),
     )
     if token is None and not http.allow_unauthenticated_reads and not is_loopback(host):
