@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 from .helpers import drive, fixture_table, service_config, sim_config
 
 
@@ -17,3 +19,21 @@ def test_a_fixture_at_rest_with_5um_counts_and_2um_noise_publishes_no_false_stuc
     stuck = [rec for rec in records if "stuck" in rec.flags or any(f.startswith("stuck") for f in rec.flags)]
     assert stuck == [], f"{len(stuck)} of {len(records)} records falsely stuck: {stuck[0].flags}"
     assert cycle.solver.tracker.settings.resolution == 5e-6
+
+
+def test_hexapod_serve_simulated_at_rest_with_5um_counts_publishes_no_stuck(tmp_path, capsys):
+    from hexapod_model.cli.main import main
+
+    from ..cli.test_service_cli import write_config, write_sim
+
+    more = "noise = 2e-6\n[fixtures.encoder]\nmetres_per_count = 5e-6\n"
+    cfg = write_config(tmp_path, fixtures=[("left", "reference", [0x181 + k for k in range(6)], more)])
+    sim = write_sim(
+        tmp_path,
+        '[[fixtures]]\nname = "left"\nrate = 100.0\nnoise = 2e-6\nhold = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]\n',
+    )
+    assert main(["serve", str(cfg), "--simulate", str(sim), "--jsonl", "--duration", "4"]) == 0
+    records = [json.loads(line) for line in capsys.readouterr().out.splitlines() if line.startswith("{")]
+    moving = [r for r in records if r["status"] in ("ok", "flagged", "stuck_leg")]
+    assert len(moving) >= 200
+    assert not [r for r in records if any(f.startswith("stuck") for f in r["flags"])]
