@@ -182,3 +182,21 @@ def _settle(got, quiet=0.3, limit=5.0):
     while time.monotonic() - t0 < limit and n != len(got):
         n = len(got)
         time.sleep(quiet)
+
+
+@pytest.mark.parametrize("encoder", [f'protocol = "canopen"\neds = "{EDS}"\n', f'protocol = "dbc"\ndbc = "{DBC}"\n'])
+def test_hexapod_serve_simulated_canopen_and_dbc_fixtures_publish_ok_records(tmp_path, capsys, encoder):
+    import json
+
+    from hexapod_model.cli.main import main
+
+    from ..cli.test_service_cli import HOLD_SIM, write_config, write_sim
+
+    more = f"[fixtures.encoder]\n{encoder}"
+    cfg = write_config(tmp_path, fixtures=[("left", "reference", [0x181 + k for k in range(6)], more)])
+    assert (
+        main(["serve", str(cfg), "--simulate", str(write_sim(tmp_path, HOLD_SIM)), "--jsonl", "--duration", "3"]) == 0
+    )
+    records = [json.loads(line) for line in capsys.readouterr().out.splitlines() if line.startswith("{")]
+    ok = [r for r in records if r["status"] == "ok"]
+    assert len(ok) >= 100 and len(ok) >= 0.8 * len(records), {r["status"] for r in records}

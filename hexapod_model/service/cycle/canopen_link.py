@@ -21,6 +21,8 @@ import logging
 import math
 from collections.abc import Callable
 
+import can
+
 from ..config.fieldbus import CanopenEncoders
 from ..record.pose_record import PoseRecord
 
@@ -112,3 +114,21 @@ class CanopenLink:
         if leg in self._reported and self._operational[leg]:
             self._reported.discard(leg)
             log.warning("fixture %s: leg%d: heartbeat heard again", self.name, leg + 1)
+
+
+def master_frames(encoders: CanopenEncoders, stamp: float | None, heartbeats: bool) -> list[can.Message]:
+    """What a CANopen bus carries besides the TPDOs of one instant, for a simulation.
+
+    The SYNC that starts the instant (stamped ``stamp``, s, when given) and, with
+    ``heartbeats``, each node's heartbeat in the *operational* state.
+    """
+    out = [can.Message(arbitration_id=encoders.sync_id, is_extended_id=False, data=b"")]
+    if heartbeats:
+        out += [
+            can.Message(arbitration_id=0x700 + n, is_extended_id=False, data=bytes([OPERATIONAL]))
+            for n in encoders.node_ids
+        ]
+    if stamp is not None:
+        for m in out:
+            m.timestamp = stamp
+    return out

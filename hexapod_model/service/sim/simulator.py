@@ -25,6 +25,7 @@ from ...exceptions import HexapodError
 from ...kinematics.hexapod import Hexapod
 from ...kinematics.newton.solver import Solution
 from ..config.settings import FixtureConfig, ServiceConfig
+from ..cycle.canopen_link import master_frames
 from ..errors import FrameError
 from .changeover import Follower
 from .config import SimConfig, SimFixture
@@ -66,6 +67,7 @@ class _Encoders:
         self.follower = None if sim.changeover is None or targets is None else Follower(sim.changeover, sim.ramp)
         self._targets = targets
         self.tau = 0.0  # position in the pose sequence (samples)
+        self.next_beat = 0.0  # s of simulation: the CANopen nodes' next heartbeat
         self._key: float | None = None
         self._sol: Solution | None = None
         self._stuck: dict[int, float] = {}
@@ -233,6 +235,11 @@ class Simulator:
             old = enc.past[-1 - sets][k] if len(enc.past) > sets else None
             order.append(old)
             msgs[k] = old
+        if enc.cfg.canopen is not None:  # CANopen encoders answer a SYNC; their heartbeats are due
+            beat = t_sim >= enc.next_beat
+            if beat:
+                enc.next_beat = t_sim + enc.cfg.canopen.heartbeat
+            order[:0] = master_frames(enc.cfg.canopen, None if stamp is None else stamp - FRAME_TIME, beat)
         for m in order:
             if m is not None:
                 self.bus.send(m)
