@@ -86,3 +86,27 @@ def test_a_deeply_nested_json_body_is_a_422_not_a_recursion_error(guarded, caplo
     status, _, answer = request(server, "POST", "/write", body[:20_000] if len(body) > 20_000 else body, _bearer(TOKEN))
     assert status == 422 and "deep" in answer["error"], answer
     assert not any("RecursionError" in r.getMessage() for r in caplog.records) and service.writes == []
+
+
+def test_the_service_takes_a_rotated_token_file_and_refuses_once_it_is_deleted(tmp_path):
+    from hexapod_model.service import FixtureService
+
+    from ..conftest import hexapod
+    from .helpers import service_config
+
+    path = token_file(tmp_path)
+    config = service_config(tmp_path, http={"host": "127.0.0.1", "port": 0, "token_file": str(path)})
+    with FixtureService(config, hexapods={"left": hexapod("reference")}) as service:
+        server = service.endpoint
+        ack = b'{"by": "A. Operator"}'
+        assert request(server, "POST", "/fixtures/left/acknowledge", ack, _bearer(TOKEN))[0] == 409  # none waits
+        fresh = path.with_name("fresh.token")
+        fresh.write_text(NEW + "\n")
+        fresh.chmod(0o600)
+        os.replace(fresh, path)
+        assert request(server, "POST", "/fixtures/left/acknowledge", ack, _bearer(TOKEN))[0] == 401
+        assert request(server, "POST", "/fixtures/left/acknowledge", ack, _bearer(NEW))[0] == 409
+        assert request(server, "GET", "/health", headers=_bearer(NEW))[0] == 200
+        path.unlink()
+        status, _, body = request(server, "GET", "/fixtures/left/pose", headers=_bearer(NEW))
+        assert status == 503 and str(path) in body["error"]
