@@ -127,7 +127,14 @@ async def read_json(request: Request, max_bytes: int = MAX_BODY) -> dict:
 
 
 def nesting(data: bytes) -> int:
-    """Deepest nesting of ``[`` and ``{`` in JSON text ``data`` (brackets inside strings not counted)."""
+    """Deepest nesting of ``[`` and ``{`` in JSON text ``data`` (brackets inside strings not counted).
+
+    A body with at most :data:`MAX_DEPTH` opening brackets is not scanned: their number, an
+    upper bound of the nesting, is returned (enough for the check against the limit).
+    """
+    opening = data.count(b"[") + data.count(b"{")
+    if opening <= MAX_DEPTH:
+        return opening
     depth = deepest = 0
     in_string = escaped = False
     for byte in data:
