@@ -8,6 +8,7 @@ what needs them:
 * ``view``: meshcat and Pillow, ``hexapod view`` / ``snapshot`` and :mod:`hexapod_model.viz`;
 * ``plots``: matplotlib, the figures of ``reproduce``, ``evaluate``, ``calibrate`` and ``track``;
 * ``service``: python-can (and the web server's packages), ``hexapod serve``, ``fixture``, ``live``;
+* ``fieldbus``: canopen and cantools, the CANopen (EDS/DCF) and DBC encoder protocols of ``hexapod serve``;
 * ``sweep``: Dask ``distributed``, ``hexapod sweep`` and ``hexapod evaluate``'s tasks;
 * ``plan``: example-robot-data, toppra and coal, ``hexapod changeover plan`` and :mod:`hexapod_model.planning`;
 * ``all``: every one of them.
@@ -30,6 +31,7 @@ EXTRAS = {
     "view": "the 3-D view and snapshots",
     "plots": "the figures",
     "service": "the fixture pose service",
+    "fieldbus": "the CANopen and DBC encoder protocols",
     "sweep": "design sweeps and evaluate on Dask",
     "plan": "changeover planning",
 }
@@ -40,6 +42,7 @@ MODULES = {
     "view": ("meshcat", "PIL"),
     "plots": ("matplotlib",),
     "service": ("can", "starlette", "uvicorn"),
+    "fieldbus": ("canopen", "cantools"),
     "sweep": ("distributed",),
     "plan": ("toppra", "coal"),
 }

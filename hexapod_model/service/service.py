@@ -29,11 +29,13 @@ from .config.settings import ServiceConfig, geometry_hash
 from .cycle.alarms import Acknowledgement
 from .cycle.bus import open_bus
 from .cycle.fixture_cycle import FixtureCycle
+from .cycle.routes import frame_routes
 from .cycle.solver import warm_up
 from .errors import ServiceError
 from .http.health import health
 from .record.pose_record import PoseRecord
 from .store.fixture_store import Store, sample_row
+from .store.owner import StoreOwner
 from .store.writer import StoreWriter
 
 if TYPE_CHECKING:
@@ -88,6 +90,7 @@ class FixtureService:
         self.cycles: dict[str, FixtureCycle] = {}
         self.endpoint: HttpServer | None = None
         self.store: Store | None = None
+        self._owner: StoreOwner | None = None  # the exclusive lock on the store while started
         #: targets, recipes and guidance (:class:`~hexapod_model.service.changeover.Changeover`), once started
         self.changeover: Changeover | None = None
         self.writer: StoreWriter | None = None
@@ -107,6 +110,7 @@ class FixtureService:
         self._started = time.time()
         self._stop.clear()
         try:  # what can fail fails first, before anything is logged or written
+            self._owner = StoreOwner(cfg.store.path)  # one service per store: a second one is refused here
             if self._http:
                 from .http.server import HttpServer
 
@@ -123,6 +127,7 @@ class FixtureService:
                 self._bus = open_bus(cfg)
             if self.endpoint is not None:
                 self.endpoint.start()
+                self._owner.describe(self.endpoint.url)
                 log.info("serving %s", self.endpoint.url)
             if wait:
                 self._prepare()
@@ -176,16 +181,7 @@ class FixtureService:
                 return
             self.store, self.cycles = store, cycles
             self.changeover = Changeover(store, self.hexapods, cycles)
-            # by extended flag, then id: one dict look-up a frame, no key tuple built
-            self._routes = {
-                extended: {
-                    leg.can_id: (self.cycles[f.name], self.cycles[f.name].on_frame, k)
-                    for f in cfg.fixtures
-                    for k, leg in enumerate(f.legs)
-                    if leg.extended_id == extended
-                }
-                for extended in (False, True)
-            }
+            self._routes = frame_routes(cfg, self.cycles)  # by extended flag, then id (CANopen links too)
             self.writer = StoreWriter(self.store)
             self._last_logged = {name: -1e300 for name in self.cycles}
             # what is alive now (numba, pinocchio, python-can, the hexapods) lives as long as the
@@ -278,6 +274,9 @@ class FixtureService:
         if self.store is not None:
             self.store.close()
             self.store = None
+        if self._owner is not None:
+            self._owner.release()
+            self._owner = None
 
     def __enter__(self) -> FixtureService:
         return self.start()

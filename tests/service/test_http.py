@@ -125,13 +125,18 @@ def test_200_concurrent_gets_all_answer_and_held_connections_are_bounded_and_tim
 
 
 def test_more_connections_than_the_bound_get_503_not_a_hang(tmp_path):
-    _, server = serve(tmp_path, {"max_connections": 4, "idle_timeout": 30})
+    _, server = serve(tmp_path, {"max_connections": 4, "idle_timeout": 30, "token_file": str(token_file(tmp_path))})
     try:
-        held = [socket.create_connection(server.address, timeout=5) for _ in range(4)]
-        time.sleep(0.2)
+        # three connections in a request (its body still to come): no place can be made by closing one,
+        # and the fourth is the bound (uvicorn answers 503 there)
+        held = [socket.create_connection(server.address, timeout=5) for _ in range(3)]
+        for s in held:
+            s.sendall(f"POST /write HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer {TOKEN}\r\n".encode())
+            s.sendall(b"Content-Length: 10\r\n\r\n")
+        time.sleep(0.5)
         host, port = server.address
         conn = http.client.HTTPConnection(host, port, timeout=5)
-        conn.request("GET", "/health")
+        conn.request("GET", "/health", headers={"Authorization": f"Bearer {TOKEN}"})
         assert conn.getresponse().status == 503  # uvicorn's own answer (plain text), at once
         conn.close()
         for s in held:

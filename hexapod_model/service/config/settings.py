@@ -25,6 +25,7 @@ from ...tracking.tracker import PREDICTORS
 from ..errors import ConfigError
 from .cell import Cell, cell_from_table
 from .codec import FrameLayout, LegCodec
+from .fieldbus import PROTOCOLS, CanopenEncoders, canopen_layout, dbc_layout
 from .ros import RosConfig, ros_config
 from .table import Table
 from .token import read_token
@@ -64,6 +65,8 @@ class HttpConfig:
         certfile: PEM certificate chain for HTTPS, with ``keyfile``; None: plain HTTP.
         keyfile: PEM private key of ``certfile``.
         max_connections: open connections served at once; more are answered ``503``.
+        max_connections_per_address: connections of one client address beyond which its oldest
+            one not in a request is closed for a new one.
         idle_timeout: s an idle connection (or one that sends no request) is kept open.
     """
 
@@ -75,6 +78,7 @@ class HttpConfig:
     certfile: Path | None = None
     keyfile: Path | None = None
     max_connections: int = 64
+    max_connections_per_address: int = 32
     idle_timeout: float = 5.0
 
     @property
@@ -115,6 +119,9 @@ class FixtureConfig:
         index: position in the file's ``[[fixtures]]`` list (for messages).
         cell: the base's placement in the robot cell and the coupling on the plate
             (``[fixtures.cell]``; ``None``: records carry no ``pose_in_robot``).
+        protocol: the encoders' protocol, ``raw``, ``dbc`` or ``canopen``
+            (:mod:`~hexapod_model.service.config.fieldbus`).
+        canopen: the CANopen encoders' SYNC, EMCY and heartbeat (``protocol = "canopen"``), else None.
     """
 
     name: str
@@ -136,6 +143,8 @@ class FixtureConfig:
     index: int = 0
     source: str = field(default="<dict>", compare=False)
     cell: Cell | None = field(default=None, compare=False)
+    protocol: str = "raw"
+    canopen: CanopenEncoders | None = None
 
     def load_hexapod(self) -> Hexapod:
         """The fixture's :class:`Hexapod`; a file that cannot be read is a :class:`ConfigError`."""
@@ -240,6 +249,7 @@ def _http(h: Table, folder: Path) -> HttpConfig:
         certfile=certfile,
         keyfile=keyfile,
         max_connections=h.integer("max_connections", 64, 1, 10_000),
+        max_connections_per_address=h.integer("max_connections_per_address", 32, 1, 10_000),
         idle_timeout=h.number("idle_timeout", 5.0, 0.1, 3600.0),
     )
     if token is None and not http.allow_unauthenticated_reads and not is_loopback(host):
@@ -319,7 +329,17 @@ def _fixture(t: Table, index: int, folder: Path) -> FixtureConfig:
         raise t.error("home_counts", homes, "expected one integer or six (leg order)")
     sub = Table({f"home_counts[{k}]": v for k, v in enumerate(homes)}, t.where, t.source)
     home_counts = [sub.integer(f"home_counts[{k}]", lo=-(2**63), hi=2**64) for k in range(6)]
-    layout = FrameLayout.from_table(t.table("encoder", {}))
+    encoder = t.table("encoder", {})
+    protocol = encoder.text("protocol", "raw", PROTOCOLS)
+    canopen = None
+    if protocol == "dbc":
+        layout = dbc_layout(encoder, folder)
+    elif protocol == "canopen":
+        if extended:
+            raise t.error("extended_id", True, "CANopen COB-IDs are 11-bit")
+        layout, canopen = canopen_layout(encoder, folder, can_ids)
+    else:
+        layout = FrameLayout.from_table(encoder)
     lo, hi = layout.count_range
     for k, c in enumerate(home_counts):
         if not lo <= c <= hi:
@@ -346,6 +366,8 @@ def _fixture(t: Table, index: int, folder: Path) -> FixtureConfig:
         index=index,
         source=t.source,
         cell=cell_from_table(t.table("cell")) if "cell" in t.data else None,
+        protocol=protocol,
+        canopen=canopen,
     )
     if cfg.drift_limit >= cfg.steady_band:
         raise t.error("drift_limit", cfg.drift_limit, f"must be below steady_band = {cfg.steady_band:g} m")
@@ -368,3 +390,10 @@ def _check_unique(fixtures: tuple[FixtureConfig, ...], source: str) -> None:
             if key in ids:
                 raise ConfigError(here, hex(leg.can_id), f"duplicate CAN id: also {ids[key]} (one bus)", source)
             ids[key] = here
+        if f.canopen is not None:  # EMCY and heartbeat ids: the SYNC is shared by every CANopen fixture
+            for can_id in f.canopen.ids()[1:]:
+                here = f"fixtures[{f.index}].encoder (EMCY/heartbeat of node {can_id & 0x7F})"
+                if (can_id, False) in ids:
+                    why = f"duplicate CAN id: also {ids[(can_id, False)]} (one bus)"
+                    raise ConfigError(here, hex(can_id), why, source)
+                ids[(can_id, False)] = here

@@ -1,6 +1,7 @@
 """The HTTP bearer token: read from ``[http] token_file`` (mode checked) and compared in constant time.
 
-The file holds one line, the token (at least :data:`MIN_LENGTH` characters); it must not be
+The file holds one line, the token (at least :data:`MIN_LENGTH` characters; a UTF-8 byte-order
+mark and surrounding whitespace are stripped); it must not be
 readable or writable by group or others (``chmod 600``). Make one with::
 
     python -c "import secrets; print(secrets.token_urlsafe(32))" > fixture.token && chmod 600 fixture.token
@@ -21,7 +22,7 @@ def read_token(path: Path, field: str = "http.token_file", source: str = "<dict>
     """The token held by ``path``; :class:`ConfigError` when unreadable, too short or open to others."""
     try:
         mode = path.stat().st_mode
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a leading BOM is dropped
     except OSError as exc:
         raise ConfigError(field, str(path), f"cannot read the token file: {exc.strerror or exc}", source) from None
     except UnicodeDecodeError:

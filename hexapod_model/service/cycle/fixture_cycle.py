@@ -119,7 +119,9 @@ class FixtureCycle:
             self.recovery = "stored lock pose not used: solved with another geometry (hash differs)"
         self._check_moved = self.recovered is not None
         initial = None if self.recovered is None else self.recovered.q
-        self.solver = PoseSolver(hexa, cfg.noise, cfg.predictor, initial, cfg.confirm_samples, sensitivity)
+        self.solver = PoseSolver(
+            hexa, cfg.noise, cfg.predictor, initial, cfg.confirm_samples, sensitivity, self.layout.metres_per_count
+        )
         #: the changeover target (set by :class:`~hexapod_model.service.changeover.changeover.Changeover`): a lock
         #: pose within its tolerance is stored naming it
         self.target: Target | None = None

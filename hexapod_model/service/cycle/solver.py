@@ -88,6 +88,8 @@ class PoseSolver:
         sensitivity: the tracker's evaluator (see :class:`~hexapod_model.tracking.tracker.Tracker`),
             also used for poses outside the stream; solvers stepped on one thread may share one
             (its Pinocchio data is ~3 MB); default: one of its own.
+        resolution: the encoders' count (m; 0: continuous readings): the tracker's checks allow
+            for the rounding and for a leg at rest repeating its count.
     """
 
     def __init__(
@@ -98,6 +100,7 @@ class PoseSolver:
         initial=None,
         confirm_samples: int = 5,
         sensitivity: SensitivityEvaluator | None = None,
+        resolution: float = 0.0,
     ):
         self.hexa, self.noise, self.confirm_samples = hexa, float(noise), confirm_samples
         self.length = characteristic_length(hexa)
@@ -105,7 +108,13 @@ class PoseSolver:
             sensitivity = SensitivityEvaluator(hexa, self.length)
         q0 = hexa.q_home if initial is None else np.asarray(initial, dtype=float)
         self.tracker = Tracker(
-            hexa, predictor, initial=q0, length=self.length, noise=self.noise, sensitivity=sensitivity
+            hexa,
+            predictor,
+            initial=q0,
+            length=self.length,
+            noise=self.noise,
+            resolution=abs(float(resolution)),
+            sensitivity=sensitivity,
         )
         self._sens = sensitivity  # for poses outside the stream, between two steps
         self._instant: int | None = None  # of the last set given to the tracker

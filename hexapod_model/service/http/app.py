@@ -44,11 +44,13 @@ from starlette.routing import BaseRoute, Route
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from ..config.token import bearer_matches
+from ..config.token_watch import TokenWatch
 from .view import ServiceView
 
 log = logging.getLogger(__name__)
 Endpoint = Callable[[Request], Awaitable[Response]]
 MAX_BODY = 65_536  # bytes of a request body read by read_json
+MAX_DEPTH = 32  # nesting of a request body's arrays and objects
 RESOURCES = ["/fixtures", "/fixtures/NAME/pose", "/fixtures/NAME/acknowledge", "/health"]
 
 
@@ -84,9 +86,12 @@ def requires_token(endpoint: Endpoint) -> Endpoint:
 
     @functools.wraps(endpoint)
     async def checked(request: Request) -> Response:
-        token = service_of(request).config.http.token
-        if token is None:
+        tokens: TokenWatch = request.app.state.tokens
+        if not tokens.configured:
             return error_response(403, "writes need a token: set [http] token_file in the configuration")
+        token, problem = tokens.current()
+        if token is None:
+            return error_response(503, problem or "no token in force", {"Retry-After": "5"})
         if not bearer_matches(request.headers.get("authorization"), token):
             return _unauthorized()
         request.state.client = client_of(request.scope)
@@ -96,7 +101,11 @@ def requires_token(endpoint: Endpoint) -> Endpoint:
 
 
 async def read_json(request: Request, max_bytes: int = MAX_BODY) -> dict:
-    """The request body as a JSON object; ``HTTPException`` 413 (too long) or 400 (not a JSON object)."""
+    """The request body as a JSON object; ``HTTPException`` 413 (too long), 400 (not a JSON object) or 422.
+
+    422: arrays and objects nested deeper than :data:`MAX_DEPTH` (checked before parsing: no
+    recursion error).
+    """
     declared = request.headers.get("content-length")
     if declared is not None and (not declared.isdigit() or int(declared) > max_bytes):
         raise HTTPException(413, f"body longer than {max_bytes} bytes")
@@ -105,6 +114,9 @@ async def read_json(request: Request, max_bytes: int = MAX_BODY) -> dict:
         data += chunk
         if len(data) > max_bytes:
             raise HTTPException(413, f"body longer than {max_bytes} bytes")
+    depth = nesting(data)
+    if depth > MAX_DEPTH:
+        raise HTTPException(422, f"body nested {depth} deep; at most {MAX_DEPTH} levels of arrays and objects")
     try:
         body = json.loads(data) if data else None
     except (ValueError, UnicodeDecodeError) as exc:
@@ -112,6 +124,35 @@ async def read_json(request: Request, max_bytes: int = MAX_BODY) -> dict:
     if not isinstance(body, dict):
         raise HTTPException(400, "body must be a JSON object")
     return body
+
+
+def nesting(data: bytes) -> int:
+    """Deepest nesting of ``[`` and ``{`` in JSON text ``data`` (brackets inside strings not counted).
+
+    A body with at most :data:`MAX_DEPTH` opening brackets is not scanned: their number, an
+    upper bound of the nesting, is returned (enough for the check against the limit).
+    """
+    opening = data.count(b"[") + data.count(b"{")
+    if opening <= MAX_DEPTH:
+        return opening
+    depth = deepest = 0
+    in_string = escaped = False
+    for byte in data:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif byte == 0x5C:  # backslash
+                escaped = True
+            elif byte == 0x22:  # quote
+                in_string = False
+        elif byte == 0x22:
+            in_string = True
+        elif byte in (0x5B, 0x7B):  # [ {
+            depth += 1
+            deepest = max(deepest, depth)
+        elif byte in (0x5D, 0x7D):  # ] }
+            depth -= 1
+    return deepest
 
 
 def _unauthorized() -> Response:
@@ -171,8 +212,8 @@ def _static(path: str) -> bool:
 class _Gate:
     """ASGI middleware: ``503 starting`` before the service is ready, the read token, no traceback out."""
 
-    def __init__(self, app: ASGIApp, service: ServiceView):
-        self.app, self.service = app, service
+    def __init__(self, app: ASGIApp, service: ServiceView, tokens: TokenWatch):
+        self.app, self.service, self.tokens = app, service, tokens
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] not in ("http", "websocket"):
@@ -181,11 +222,12 @@ class _Gate:
         refusal = None
         if not self.service.ready:
             refusal = json_response(self.service.starting(), 503, {"Retry-After": "1"})
-        elif (token := self.service.config.http.token) is not None and self.service.config.http.reads_need_token:
+        elif self.service.config.http.reads_need_token and not _static(scope.get("path", "")):
+            token, problem = self.tokens.current()
             headers = dict(scope.get("headers") or [])
-            if not _static(scope.get("path", "")) and not bearer_matches(
-                headers.get(b"authorization", b"").decode("latin-1"), token
-            ):
+            if token is None:
+                refusal = error_response(503, problem or "no token in force", {"Retry-After": "5"})
+            elif not bearer_matches(headers.get(b"authorization", b"").decode("latin-1"), token):
                 refusal = _unauthorized()
         if refusal is not None:
             if scope["type"] == "websocket":
@@ -220,12 +262,15 @@ async def _http_error(request: Request, exc: Exception) -> Response:
 def build_app(service: ServiceView, routes: Sequence[BaseRoute] = ()) -> Starlette:
     """The Starlette application of ``service``: its endpoints, then ``routes`` (yours).
 
-    ``app.state.service`` is the service (:func:`service_of` in an endpoint).
+    ``app.state.service`` is the service (:func:`service_of` in an endpoint); ``app.state.tokens``
+    the watched token file (:class:`~hexapod_model.service.config.token_watch.TokenWatch`).
     """
+    http = service.config.http
+    tokens = TokenWatch(http.token_file, http.token)
     app = Starlette(
         routes=[*core_routes(), *routes],
-        middleware=[Middleware(_Gate, service=service)],
+        middleware=[Middleware(_Gate, service=service, tokens=tokens)],
         exception_handlers={HTTPException: _http_error},
     )
-    app.state.service = service
+    app.state.service, app.state.tokens = service, tokens
     return app

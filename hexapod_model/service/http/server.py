@@ -2,7 +2,9 @@
 
 Bounded: at most ``[http] max_connections`` connections are served at once (more get ``503``);
 a connection that sends no request, or stays idle between requests, is closed after
-``idle_timeout``; a stop waits at most a second for the requests underway (a server-sent event
+``idle_timeout``, and sooner when a new connection needs its place (the oldest such one, from
+an address holding more than ``max_connections_per_address`` first: a slowloris of unfinished
+headers cannot keep a polling client out); a stop waits at most a second for the requests underway (a server-sent event
 stream is cut). HTTPS with ``[http] certfile`` / ``keyfile``.
 """
 
@@ -21,6 +23,7 @@ from ..config.settings import HttpConfig
 from ..errors import ServiceError
 
 log = logging.getLogger(__name__)
+GRACE = 0.25  # s: a connection this young is never closed for another (its request may be on its way)
 INSTALL_HINT = f"the HTTP endpoint needs starlette and uvicorn: {install_hint('service')}"
 
 
@@ -46,18 +49,50 @@ def bind(host: str, port: int) -> socket.socket:
     return sock
 
 
-def _protocol(idle_timeout: float) -> type:
-    """The h11 protocol of uvicorn, closing a connection that sends no request within ``idle_timeout``."""
+def _protocol(idle_timeout: float, limit: int, per_address: int) -> type:
+    """The h11 protocol of uvicorn, bounded against connections that never send a request.
+
+    * A connection that sends no complete request within ``idle_timeout`` is closed (a request
+      line and headers trickled byte by byte do not keep it).
+    * When a new connection brings the server to ``limit`` connections, or its address to more
+      than ``per_address``, the oldest connection that is not in a request (its headers
+      unfinished, or idle between requests) and older than :data:`GRACE` is closed to make
+      room: from that address first.
+      So 200 connections that never finish their headers cannot keep a polling client out;
+      only connections in a request count against the ``503`` of ``limit``.
+    """
     from uvicorn.protocols.http.h11_impl import H11Protocol
 
     class Protocol(H11Protocol):
         def connection_made(self, transport: Any) -> None:
             super().connection_made(transport)
+            self._opened = self.loop.time()
             self._first_request = self.loop.call_later(idle_timeout, self._no_request)
+            self._make_room()
 
         def _no_request(self) -> None:
             if self.cycle is None and not self.transport.is_closing():
                 self.transport.close()
+
+        def _make_room(self) -> None:
+            peer = self.client[0] if self.client else None
+            born = self._opened - GRACE  # a connection younger than GRACE may not have sent its request yet
+            others = [c for c in self.connections if c is not self and isinstance(c, Protocol)]
+            over_all = len(others) + 2 - limit  # leave one place: uvicorn answers 503 at `limit`
+            over_address = sum(1 for c in others if c.client and c.client[0] == peer) + 1 - per_address
+            if over_all <= 0 and over_address <= 0:
+                return
+            waiting = sorted(
+                (c for c in others if c.cycle is None and c._opened < born and not c.transport.is_closing()),
+                key=lambda c: (not (c.client and c.client[0] == peer), c._opened),  # this address first, oldest first
+            )
+            for c in waiting:
+                same = bool(c.client and c.client[0] == peer)
+                if over_all <= 0 and (over_address <= 0 or not same):
+                    break
+                c.transport.close()
+                over_all -= 1
+                over_address -= same
 
         def connection_lost(self, exc: Exception | None) -> None:
             self._first_request.cancel()
@@ -86,7 +121,7 @@ class HttpServer:
         self.tls = config.certfile is not None
         uv_config = uvicorn.Config(
             app,
-            http=_protocol(config.idle_timeout),
+            http=_protocol(config.idle_timeout, config.max_connections, config.max_connections_per_address),
             lifespan="off",
             log_config=None,
             access_log=False,

@@ -26,6 +26,7 @@ from ...kinematics.hexapod import Hexapod
 from ...kinematics.newton.solver import Solution
 from ..changeover.plan_monitor import PlanMonitor
 from ..config.settings import FixtureConfig, ServiceConfig
+from ..cycle.canopen_link import master_frames
 from ..errors import FrameError
 from .changeover import Follower
 from .config import SimConfig, SimFixture
@@ -73,6 +74,7 @@ class _Encoders:
         self.follower = None if script is None else Follower(script, sim.ramp)
         self._targets = targets
         self.tau = 0.0  # position in the pose sequence (samples)
+        self.next_beat = 0.0  # s of simulation: the CANopen nodes' next heartbeat
         self._key: float | None = None
         self._sol: Solution | None = None
         self._stuck: dict[int, float] = {}
@@ -251,6 +253,11 @@ class Simulator:
             old = enc.past[-1 - sets][k] if len(enc.past) > sets else None
             order.append(old)
             msgs[k] = old
+        if enc.cfg.canopen is not None:  # CANopen encoders answer a SYNC; their heartbeats are due
+            beat = t_sim >= enc.next_beat
+            if beat:
+                enc.next_beat = t_sim + enc.cfg.canopen.heartbeat
+            order[:0] = master_frames(enc.cfg.canopen, None if stamp is None else stamp - FRAME_TIME, beat)
         for m in order:
             if m is not None:
                 self.bus.send(m)
