@@ -10,6 +10,7 @@ from __future__ import annotations
 import ipaddress
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -50,3 +51,19 @@ def test_multicast_and_the_default_route_go_to_the_namespaces_card():
 def test_a_process_in_the_namespace_sees_only_its_interfaces():
     seen = in_namespace(sys.executable, "-c", "import socket; print(sorted(n for _, n in socket.if_nameindex()))")
     assert seen.strip() == str(netns.INTERFACES)
+
+
+def test_need_rclpy_fails_outside_the_namespace(monkeypatch):
+    from .conftest import need_rclpy
+
+    monkeypatch.delenv(netns.INSIDE, raising=False)
+    with pytest.raises(pytest.fail.Exception, match="mark the test netns"):
+        need_rclpy()
+
+
+def test_every_test_module_that_names_rclpy_is_marked_netns():
+    tests = Path(__file__).resolve().parents[1]
+    named = [p for p in tests.rglob("test_*.py") if "rclpy" in p.read_text() and p != Path(__file__).resolve()]
+    assert named  # the stock node's tests are found
+    unmarked = [str(p.relative_to(tests)) for p in named if "pytest.mark.netns" not in p.read_text()]
+    assert not unmarked, f"{unmarked} name rclpy but do not run in a network namespace (pytest.mark.netns)"
