@@ -8,6 +8,7 @@ messages of /NS/FIXTURE/guidance it received (JSON texts decoded), within SECOND
 """
 
 import json
+import socket
 import sys
 import time
 
@@ -17,9 +18,17 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 
 
+def only_loopback() -> None:
+    """Refuse to start a node whose discovery multicast could leave this machine (not in the test's namespace)."""
+    seen = sorted(name for _, name in socket.if_nameindex())
+    if seen != ["hxnet0", "hxnet1", "lo"]:
+        sys.exit(f"not started: the interfaces {seen} are not the test's network namespace's (tests/ros/netns.py)")
+
+
 def main() -> None:
     ns, fixture, requests, out, seconds = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], float(sys.argv[5])
     todo = json.loads(open(requests).read())
+    only_loopback()
     rclpy.init()
     node = Node("hexapod_test_changeover")
     qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)

@@ -10,6 +10,7 @@ writes one line per message, then a line with the publishers' type hashes rclpy 
 
 import json
 import os
+import socket
 import sys
 import time
 
@@ -25,8 +26,16 @@ def stamp(h):
     return h.stamp.sec + h.stamp.nanosec * 1e-9
 
 
+def only_loopback() -> None:
+    """Refuse to start a node whose discovery multicast could leave this machine (not in the test's namespace)."""
+    seen = sorted(name for _, name in socket.if_nameindex())
+    if seen != ["hxnet0", "hxnet1", "lo"]:
+        sys.exit(f"not started: the interfaces {seen} are not the test's network namespace's (tests/ros/netns.py)")
+
+
 def main() -> None:
     ns, fixtures, seconds, out, stop = sys.argv[1], sys.argv[2].split(","), float(sys.argv[3]), sys.argv[4], sys.argv[5]
+    only_loopback()
     rclpy.init()
     node = Node("hexapod_test_listener")
     qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)

@@ -20,7 +20,7 @@ import pytest
 
 from .conftest import need_rclpy, run_domain
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.netns]
 NODE = Path(__file__).with_name("rclpy_changeover.py")
 HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]
 POSE = dict(zip(("x", "y", "z", "roll", "pitch", "yaw"), HOLD))

@@ -22,7 +22,7 @@ import pytest
 
 from .conftest import need_rclpy, run_domain
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.netns]
 LISTENER = Path(__file__).with_name("rclpy_listener.py")
 ECHO = Path(__file__).resolve().parents[2] / "docs/examples/ros2_echo.py"
 LISTEN_SECONDS = 8.0  # the node listens this long (the service announces itself each second)

@@ -24,7 +24,7 @@ import pytest
 
 from .conftest import need_rclpy, run_domain
 
-pytestmark = [pytest.mark.ros, pytest.mark.slow]
+pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.netns]
 REPO = Path(__file__).resolve().parents[2]
 LISTENER = Path(__file__).with_name("rclpy_listener.py")
 SIM_SECONDS = 9.0  # the fault is at 6.0-6.2 s
