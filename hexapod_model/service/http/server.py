@@ -12,13 +12,13 @@ import asyncio
 import errno
 import logging
 import socket
-import threading
 import time
 from typing import Any
 
 from ...extras import install_hint
 from ..config.settings import HttpConfig
 from ..errors import ServiceError
+from ..threads import NamedThread
 
 log = logging.getLogger(__name__)
 INSTALL_HINT = f"the HTTP endpoint needs starlette and uvicorn: {install_hint('service')}"
@@ -103,7 +103,7 @@ class HttpServer:
             self.sock.close()
             raise ServiceError(f"[http] certfile/keyfile: cannot be used: {exc}") from None
         self.server = uvicorn.Server(uv_config)
-        self._thread = threading.Thread(target=self._run, name="hexapod-http", daemon=True)
+        self._thread = NamedThread(target=self._run, name="hx-http")
 
     def _run(self) -> None:
         try:

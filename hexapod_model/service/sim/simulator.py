@@ -26,6 +26,7 @@ from ...kinematics.hexapod import Hexapod
 from ...kinematics.newton.solver import Solution
 from ..config.settings import FixtureConfig, ServiceConfig
 from ..errors import FrameError
+from ..threads import NamedThread
 from .changeover import Follower
 from .config import SimConfig, SimFixture
 
@@ -280,7 +281,7 @@ class Simulator:
     def start(self, duration: float | None = None) -> None:
         """Run in a background thread."""
         self._stop.clear()
-        self._thread = threading.Thread(target=self.run, args=(duration,), name="hexapod-sim", daemon=True)
+        self._thread = NamedThread(target=self.run, args=(duration,), name="hx-sim")
         self._thread.start()
 
     def stop(self) -> None:
