@@ -16,8 +16,9 @@ subscriber's call; a backlog counts), and the CPU time
 of the service's threads (cycle + store + HTTP) and of the whole process (feeder included), in
 percent of one core; the process's CPU is also split as read from outside, by OS thread name
 (``/proc/self/task/*/comm``: the service's ``hx-cycle``, ``hx-store``, ``hx-http``; the feeder,
-named ``hx-sim`` as the simulator of ``hexapod serve --simulate`` is; the rest). A rate is *sustained* when at least 99 % of the sets sent are solved and
-the p99 latency stays under 10 ms (no backlog). The machine's other load is part of the figures:
+named ``hx-sim`` as the simulator of ``hexapod serve --simulate`` is; the rest). A rate is
+*sustained* when at least 99 % of the sets sent are solved and the p99 latency stays under 10 ms
+(no backlog). The machine's other load is part of the figures:
 run it on an idle machine for the capacity. Each run prints the service's CPU per solved set
 beside the tracker step's and the solve's own (measured first, alone, in this process).
 ``--capacity`` also queues the frames of 3 s of sets before the cycle thread reads them and
