@@ -14,8 +14,11 @@ it, so the feeder only stamps and queues them. Per run: sets sent and solved, th
 from the arrival of the frame that completed a set to the publication of its record (the
 subscriber's call; a backlog counts), and the CPU time
 of the service's threads (cycle + store + HTTP) and of the whole process (feeder included), in
-percent of one core. A rate is *sustained* when at least 99 % of the sets sent are solved and
-the p99 latency stays under 10 ms (no backlog). The machine's other load is part of the figures:
+percent of one core; the process's CPU is also split as read from outside, by OS thread name
+(``/proc/self/task/*/comm``: the service's ``hx-cycle``, ``hx-store``, ``hx-http``; the feeder,
+named ``hx-sim`` as the simulator of ``hexapod serve --simulate`` is; the rest). A rate is
+*sustained* when at least 99 % of the sets sent are solved and the p99 latency stays under 10 ms
+(no backlog). The machine's other load is part of the figures:
 run it on an idle machine for the capacity. Each run prints the service's CPU per solved set
 beside the tracker step's and the solve's own (measured first, alone, in this process).
 ``--capacity`` also queues the frames of 3 s of sets before the cycle thread reads them and
@@ -41,6 +44,7 @@ import numpy as np
 from hexapod_model import Hexapod
 from hexapod_model.service import FixtureService, PoseSolver, config_from_dict
 from hexapod_model.service.sim.config import trajectory_sequence
+from hexapod_model.service.threads import NamedThread
 
 SETS = 2000  # one there-and-back of trajectory A, whatever the rate
 
@@ -72,6 +76,27 @@ def thread_cpu(threads: list[threading.Thread]) -> float:
         if t is not None and t.ident is not None and t.is_alive():
             total += time.clock_gettime(time.pthread_getcpuclockid(t.ident))
     return total
+
+
+def cpu_by_thread_name(pid: int | str = "self") -> dict[str, float]:
+    """CPU seconds used so far by the live threads of process ``pid``, summed by OS thread name.
+
+    Read from outside the threads, as ``top -H`` does: ``/proc/PID/task/*/comm`` names each
+    thread (the service's are ``hx-cycle``, ``hx-store``, ``hx-http``; the simulator's
+    ``hx-sim``), ``schedstat`` gives its run time in ns.
+    """
+    out: dict[str, float] = {}
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        try:
+            name = (task / "comm").read_text().strip()
+            seconds = int((task / "schedstat").read_text().split()[0]) * 1e-9
+        except (OSError, ValueError, IndexError):  # the thread ended meanwhile
+            continue
+        out[name] = out.get(name, 0.0) + seconds
+    return out
+
+
+SERVICE_THREADS = ("hx-cycle", "hx-store", "hx-http")
 
 
 def make_config(fixtures: int, folder: Path):
@@ -224,14 +249,20 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         ahead = prepared(int((seconds + 1.0) * rate))
         c0, p0, t0 = thread_cpu(threads), time.process_time(), time.perf_counter()
         k0 = thread_cpu(threads[:1])
-        feeder = threading.Thread(target=feed, args=(ahead,), daemon=True)
+        feeder = NamedThread(target=feed, args=(ahead,), name="hx-sim")  # the stand-in for the simulator
+        n0 = cpu_by_thread_name()
         feeder.start()
         time.sleep(seconds)
         stop.set()
+        n1 = cpu_by_thread_name()  # before the feeder ends: its thread's time is read while it lives
         feeder.join()
         fed = time.perf_counter() - t0
+        n1 |= {k: v for k, v in cpu_by_thread_name().items() if k != "hx-sim"}
         drain(service)  # a backlog is worked off (and its latency counted), up to 10 s
         c1, p1, k1 = thread_cpu(threads), time.process_time(), thread_cpu(threads[:1])
+        n2 = cpu_by_thread_name()
+        named = {k: n2.get(k, n1.get(k, 0.0)) - n0.get(k, 0.0) for k in set(n0) | set(n1) | set(n2)}
+        named["hx-sim"] = n1.get("hx-sim", 0.0) - n0.get("hx-sim", 0.0)
     finally:
         service.stop()
         bus.shutdown()
@@ -249,6 +280,12 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         "service_cpu_us_per_set": 1e6 * (c1 - c0) / max(records, 1),
         "cycle_cpu_us_per_set": 1e6 * (k1 - k0) / max(records, 1),  # the cycle thread alone
         "process_cpu_pct": 100.0 * (p1 - p0) / fed,
+        # the same split as read from outside, by OS thread name (/proc/PID/task/*/comm)
+        "os_service_cpu_pct": 100.0 * sum(named.get(k, 0.0) for k in SERVICE_THREADS) / fed,
+        "os_sim_cpu_pct": 100.0 * named.get("hx-sim", 0.0) / fed,
+        "os_other_cpu_pct": 100.0
+        * sum(v for k, v in named.items() if k not in SERVICE_THREADS and k != "hx-sim")
+        / fed,
         "sustained": records >= 0.99 * sent[0] * fixtures and records > 0 and float(np.percentile(lat, 99)) < 10.0,
     }
 
@@ -259,7 +296,8 @@ def line(r: dict) -> str:
         f"latency median {r['latency_ms_median']:6.2f} ms  p99 {r['latency_ms_p99']:7.2f} ms  "
         f"CPU service {r['service_cpu_pct']:5.1f} % ({r['service_cpu_us_per_set']:4.0f} us a set, "
         f"cycle thread {r['cycle_cpu_us_per_set']:4.0f})  "
-        f"process {r['process_cpu_pct']:5.1f} %  "
+        f"process {r['process_cpu_pct']:5.1f} % (by OS thread name: service {r['os_service_cpu_pct']:.1f}, "
+        f"hx-sim {r['os_sim_cpu_pct']:.1f}, other {r['os_other_cpu_pct']:.1f})  "
         f"{'sustained' if r['sustained'] else 'NOT sustained'}  {r['statuses']}"
     )
 

@@ -29,6 +29,7 @@ from ..planning.model import Plan
 from ..service.config.ros import RosConfig
 from ..service.record.pose_record import PoseRecord
 from ..service.service import FixtureService
+from ..service.threads import NamedThread
 from .names import FixtureNames
 
 log = logging.getLogger(__name__)
@@ -179,7 +180,7 @@ class RosBridge:
         except ValueError as exc:  # a placement that is no transform: the other topics go on
             self._fail(f"/tf_static: {exc}")
         self._stop.clear()
-        self._thread = threading.Thread(target=self._loop, name="hexapod-ros", daemon=True)
+        self._thread = NamedThread(target=self._loop, name="hx-ros")
         self._thread.start()
         log.info(
             "publishing ROS 2 topics /%s/<fixture>/... on domain %d (interface %s, peers %s)",

@@ -37,6 +37,7 @@ from .record.pose_record import PoseRecord
 from .store.fixture_store import Store, sample_row
 from .store.owner import StoreOwner
 from .store.writer import StoreWriter
+from .threads import NamedThread
 
 if TYPE_CHECKING:
     from starlette.routing import BaseRoute
@@ -135,7 +136,7 @@ class FixtureService:
             self._close()
             raise
         if not wait:
-            self._preparing = threading.Thread(target=self._prepare_logged, name="hexapod-start", daemon=True)
+            self._preparing = NamedThread(target=self._prepare_logged, name="hx-start")
             self._preparing.start()
         return self
 
@@ -189,7 +190,7 @@ class FixtureService:
             # thread for ~100 ms (the p99 latency); the records' garbage is still collected
             gc.collect()
             gc.freeze()
-            self._thread = threading.Thread(target=self._loop, name="hexapod-cycle", daemon=True)
+            self._thread = NamedThread(target=self._loop, name="hx-cycle")
             self._thread.start()
             self.phase = "running"
             self._ready.set()

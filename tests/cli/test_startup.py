@@ -37,17 +37,21 @@ def test_fk_and_ik_import_nothing_heavy(tmp_path):
     assert out.stdout.strip() == "[]", out.stdout[:500]
 
 
-def test_urdf_imports_no_numba(tmp_path):
-    """Writing a URDF loads and assembles it in Pinocchio without the solver's compiled kernels."""
+def test_urdf_imports_nothing_heavy(tmp_path):
+    """Writing a URDF loads and assembles it in Pinocchio: no numba, no yourdfpy (trimesh, SciPy) unless asked."""
     code = (
         "import sys\nfrom hexapod_model.cli.main import main\n"
         f"assert main(['urdf', '-o', {str(tmp_path / 'my.urdf')!r}]) == 0\n"
         "assert main(['urdf', '--preset', '3-6']) == 0\n"
-        "print(sorted(k for k in sys.modules if k.startswith(('numba', 'llvmlite'))), file=sys.stderr)"
+        f"print(sorted(k for k in sys.modules if k.startswith({HEAVY!r})), file=sys.stderr)\n"
+        f"assert main(['urdf', '--yourdfpy', '-o', {str(tmp_path / 'checked.urdf')!r}]) == 0\n"
+        "print('yourdfpy' in sys.modules, file=sys.stderr)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)
-    assert out.stderr.strip().splitlines()[-1] == "[]", out.stderr[-500:]
+    lines = out.stderr.strip().splitlines()
+    assert lines[-3] == "[]" and lines[-1] == "True", out.stderr[-500:]
     assert (tmp_path / "my.urdf").read_text() == (ROOT / "urdf" / "reference.urdf").read_text()
+    assert (tmp_path / "checked.urdf").read_text() == (ROOT / "urdf" / "reference.urdf").read_text()
 
 
 def test_a_long_input_is_solved_compiled(tmp_path):

@@ -14,13 +14,13 @@ import asyncio
 import errno
 import logging
 import socket
-import threading
 import time
 from typing import Any
 
 from ...extras import install_hint
 from ..config.settings import HttpConfig
 from ..errors import ServiceError
+from ..threads import NamedThread
 
 log = logging.getLogger(__name__)
 GRACE = 0.25  # s: a connection this young is never closed for another (its request may be on its way)
@@ -138,7 +138,7 @@ class HttpServer:
             self.sock.close()
             raise ServiceError(f"[http] certfile/keyfile: cannot be used: {exc}") from None
         self.server = uvicorn.Server(uv_config)
-        self._thread = threading.Thread(target=self._run, name="hexapod-http", daemon=True)
+        self._thread = NamedThread(target=self._run, name="hx-http")
 
     def _run(self) -> None:
         try:

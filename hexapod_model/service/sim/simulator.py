@@ -28,6 +28,7 @@ from ..changeover.plan_monitor import PlanMonitor
 from ..config.settings import FixtureConfig, ServiceConfig
 from ..cycle.canopen_link import master_frames
 from ..errors import FrameError
+from ..threads import NamedThread
 from .changeover import Follower
 from .config import SimConfig, SimFixture
 from .plan_player import HeldBrakes, PlatePath, carried
@@ -307,7 +308,7 @@ class Simulator:
     def start(self, duration: float | None = None) -> None:
         """Run in a background thread."""
         self._stop.clear()
-        self._thread = threading.Thread(target=self.run, args=(duration,), name="hexapod-sim", daemon=True)
+        self._thread = NamedThread(target=self.run, args=(duration,), name="hx-sim")
         self._thread.start()
 
     def stop(self) -> None:

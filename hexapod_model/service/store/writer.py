@@ -10,6 +10,7 @@ from collections import deque
 from collections.abc import Callable
 from functools import partial
 
+from ..threads import NamedThread
 from .fixture_store import LockEvent, Store
 
 log = logging.getLogger(__name__)
@@ -42,7 +43,7 @@ class StoreWriter:
         self._retry: list[tuple[LockEvent, Callable[[LockEvent], None]]] = []  # locks a store error held back
         self._wake = threading.Event()
         self._stopping = False
-        self._thread = threading.Thread(target=self._run, name="hexapod-store", daemon=True)
+        self._thread = NamedThread(target=self._run, name="hx-store")
         self._thread.start()
 
     def sample(self, row: tuple) -> None:
