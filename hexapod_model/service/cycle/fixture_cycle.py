@@ -85,6 +85,7 @@ class FixtureCycle:
         self._home = [leg.home_count for leg in cfg.legs]
         self._t = [-math.inf] * 6  # receipt time of each leg's newest frame (lists: faster than arrays here)
         self._readings = [math.nan] * 6
+        self._data: list[bytes | bytearray] = [b""] * 6  # each leg's newest frame (a repeat of it is dropped)
         self._counts = [0] * 6
         self._err, self._warn, self._bad, self._fresh = [False] * 6, [False] * 6, [False] * 6, [False] * 6
         self._n_fresh = 0
@@ -92,7 +93,7 @@ class FixtureCycle:
         self.lock = LockDetector(cfg.lock_time, cfg.steady_band, cfg.drift_limit, cfg.unlock_samples)
         self.stuck = StuckDetector(cfg.stuck_sigmas, cfg.noise, self.layout.metres_per_count)
         self.steps = StepDetector(cfg.noise)
-        self._period = math.nan  # s, median interval between two frames of one leg (recent frames)
+        self._period = math.nan  # s, lower quartile of the intervals between two frames of one leg (recent frames)
         self._intervals: list[float] = []
         self._n_frames = 0
         self._instant = self._lost = 0  # sampling instants, and sets lost since the last complete one
@@ -102,7 +103,7 @@ class FixtureCycle:
         self._late_run = 0  # late frames in a row (more than CLOCK_BACK_FRAMES: the bus clock went back)
         self._duplicate: set[int] = set()  # legs with a second frame in the set being collected
         #: frames and sets that could not be used, since the start (``/health``)
-        self.counters = {"late_frames": 0, "duplicate_frames": 0, "incomplete_sets": 0}
+        self.counters = {"late_frames": 0, "duplicate_frames": 0, "incomplete_sets": 0, "repeated_frames": 0}
         self.alarm = FaultLatch(cfg.name)
         self._drift_logged = False
         self._advisory: set[str] = set()
@@ -149,6 +150,10 @@ class FixtureCycle:
                 return None
             self._clock_went_back(t)
         self._late_run = 0
+        since = t - self._t[leg]
+        if (since == 0.0 or since <= skew) and data == self._data[leg]:  # the same frame again (a gateway's repeat)
+            self.counters["repeated_frames"] += 1
+            return None
         if self._n_fresh:
             repeat = self._fresh[leg]
             if t - self._t_first > skew or (repeat and not t - self._t[leg] <= skew):
@@ -164,15 +169,15 @@ class FixtureCycle:
         else:
             self._bad[leg], self._readings[leg] = True, math.nan
         dt = t - self._t[leg]
-        if 0.0 < dt <= self._staleness:  # the median ignores missed frames and bunched arrivals
+        if 0.0 < dt <= self._staleness:  # the lower quartile ignores missed frames (up to 3 in 4 intervals)
             if len(self._intervals) < 63:
                 self._intervals.append(dt)
             else:
                 self._intervals[self._n_frames % 63] = dt
             self._n_frames += 1
             if self._n_frames % 32 == 8:
-                self._period = sorted(self._intervals)[len(self._intervals) // 2]
-        self._t[leg] = t
+                self._period = sorted(self._intervals)[len(self._intervals) // 4]
+        self._t[leg], self._data[leg] = t, data
         if t > self._t_newest:
             self._t_newest = t
         if not self._n_fresh:

@@ -1,0 +1,65 @@
+"""The bus as the field has it, through one fixture's cycle: lost sets, glitches, repeated frames, skewed stamps.
+
+Rate 100 Hz, trajectory A, reading noise 10 um. None of these is a step or a swap the data show,
+so none may latch a fault that waits for a person's acknowledgement, and no record may be
+stamped ahead of the frames it is made of.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hexapod_model.service import FixtureCycle, Simulator, geometry_hash
+
+from ..conftest import hexapod
+from .helpers import CollectingBus, fixture_table, service_config, sim_config
+from .test_cycle import RATE, check_ok_poses, set_of
+
+
+def deliver(tmp_path, sets, transform, faults=(), seed=3):
+    """Drive a cycle set by set; ``transform(k, frames) -> frames`` edits each set's ``(leg, data, t)`` list."""
+    svc = service_config(tmp_path, [fixture_table()])
+    sim = sim_config(svc, [{"name": "left", "rate": RATE, "trajectory": "A", "faults": list(faults)}], seed=seed)
+    cfg, hexa = svc.fixtures[0], hexapod("reference")
+    cycle = FixtureCycle(cfg, hexa, geometry_hash(hexa), None, 1.0e9)
+    bus = CollectingBus()
+    simulator = Simulator(svc, sim, bus, hexapods={"left": hexa})  # type: ignore[arg-type]
+    leg_of = {leg.can_id: k for k, leg in enumerate(cfg.legs)}
+    out = []
+    for k in range(sets):
+        bus.sent.clear()
+        sent = simulator.send_set(0, k / RATE, stamp=1.0e9 + k / RATE, stall_check=False)
+        frames = [(leg_of[m.arbitration_id], bytes(m.data), m.timestamp) for m in bus.sent]
+        for leg, data, t in transform(k, frames):
+            rec = cycle.on_frame(leg, data, t)
+            if rec is not None:
+                out.append((sent, rec))
+    return cycle, out
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3, 4, 5])
+def test_thirty_percent_of_sets_lost_at_random_latch_nothing(tmp_path, seed):
+    rng = np.random.default_rng(seed)
+    lost = rng.random(400) < 0.3
+    cycle, out = deliver(tmp_path, 400, lambda k, frames: [] if lost[k] and k > 20 else frames, seed=seed)
+    assert cycle.fault is None, cycle.fault
+    check_ok_poses(out)
+
+
+def test_two_consecutive_one_frame_glitches_on_one_leg_latch_nothing(tmp_path):
+    faults = [
+        {"kind": "spike", "leg": 4, "start": 1.0, "size": 0.002},
+        {"kind": "spike", "leg": 4, "start": 1.01, "size": -0.0015},
+    ]
+    cycle, out = deliver(tmp_path, 250, lambda k, frames: frames, faults)
+    assert cycle.fault is None, cycle.fault
+    assert all(rec.status == "ok" for _, rec in out if set_of(rec) >= 130)
+    check_ok_poses(out)
+
+
+def test_every_frame_repeated_ten_times_latches_nothing(tmp_path):
+    cycle, out = deliver(tmp_path, 250, lambda k, frames: [f for f in frames for _ in range(10)])
+    assert cycle.fault is None, cycle.fault
+    assert cycle.counters["repeated_frames"] == 9 * 6 * 250 and cycle.counters["duplicate_frames"] == 0
+    check_ok_poses(out)
