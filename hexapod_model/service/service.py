@@ -349,7 +349,8 @@ class FixtureService:
             if msg is None:
                 clock = time.time()  # nothing queued: the bus is quiet now
             else:
-                clock = msg.timestamp or time.time()  # the bus's own clock: a backlog is not silence
+                # the bus's own clock: a backlog is not silence; a stamp ahead of the wall clock has not come yet
+                clock = min(msg.timestamp, time.time()) if msg.timestamp else time.time()
                 route = routes[bool(msg.is_extended_id)].get(msg.arbitration_id)
                 if route is None or msg.is_error_frame or msg.is_remote_frame:
                     self.unknown_frames += 1

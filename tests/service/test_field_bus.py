@@ -63,3 +63,20 @@ def test_every_frame_repeated_ten_times_latches_nothing(tmp_path):
     assert cycle.fault is None, cycle.fault
     assert cycle.counters["repeated_frames"] == 9 * 6 * 250 and cycle.counters["duplicate_frames"] == 0
     check_ok_poses(out)
+
+
+def test_a_leg_stamped_50_ms_ahead_is_named_and_no_record_runs_ahead(tmp_path):
+    def ahead(k, frames):
+        return [(leg, data, t + (0.05 if leg == 3 and k >= 100 else 0.0)) for leg, data, t in frames]
+
+    cycle, out = deliver(tmp_path, 250, ahead)
+    assert cycle.fault is None, cycle.fault
+    times = [rec.t for _, rec in out]
+    assert all(b >= a for a, b in zip(times, times[1:])), "record times ran backwards"
+    assert all(rec.t <= sent.t_last + 1e-9 for sent, rec in out), "a record stamped ahead of its frames"
+    later = [rec for _, rec in out if set_of(rec) >= 101]
+    assert later and all(rec.status != "ok" for rec in later)
+    for rec in later:
+        named = {f.split(":")[1] for f in rec.flags if ":leg" in f}
+        assert named == {"leg4"}, rec.flags
+    check_ok_poses(out)

@@ -42,6 +42,7 @@ from ..record.pose_record import PoseRecord
 from ..store.fixture_store import LockEvent
 from ..targets.guidance import deviation, within
 from ..targets.target import Target
+from .ahead import AheadCheck
 from .alarms import UNACKNOWLEDGED, Acknowledgement, FaultLatch, LatchedFault
 from .lock import MOTION_LEGS, LockDetector
 from .lock_load import lock_load
@@ -53,6 +54,7 @@ log = logging.getLogger(__name__)
 _POSE_STATUSES = ("ok", "flagged", "drift")
 CLOCK_BACK_FRAMES = 12  # late frames in a row (two sets, no frame on time): the bus's clock went back
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
+INTERVALS = 255  # frame intervals kept for the period: about 40 sets, so lost sets cannot stretch it
 
 
 class FixtureCycle:
@@ -103,7 +105,14 @@ class FixtureCycle:
         self._late_run = 0  # late frames in a row (more than CLOCK_BACK_FRAMES: the bus clock went back)
         self._duplicate: set[int] = set()  # legs with a second frame in the set being collected
         #: frames and sets that could not be used, since the start (``/health``)
-        self.counters = {"late_frames": 0, "duplicate_frames": 0, "incomplete_sets": 0, "repeated_frames": 0}
+        self.counters = {
+            "late_frames": 0,
+            "duplicate_frames": 0,
+            "incomplete_sets": 0,
+            "repeated_frames": 0,
+            "ahead_frames": 0,
+        }
+        self._ahead = AheadCheck()
         self.alarm = FaultLatch(cfg.name)
         self._drift_logged = False
         self._advisory: set[str] = set()
@@ -138,10 +147,12 @@ class FixtureCycle:
         frame older than the newest by more than that is *late* (an instant already closed) and
         is dropped, named in the next record; a second frame on one leg's id within the instant
         is a *duplicate* (two senders?) and fails the set; a frame of a newer instant closes an
-        unfinished set as ``incomplete`` (or ``silent_leg``) naming the missing legs.
+        unfinished set as ``incomplete`` (or ``silent_leg``) naming the missing legs. A frame that
+        would open a newer instant waits for the next frame (:mod:`~hexapod_model.service.cycle.ahead`):
+        one whose stamp ran ahead of the others is dropped and named (``ahead:legN``). An exact
+        repeat of a leg's frame (a gateway's) is dropped and counted.
         """
         skew = self._max_skew or 0.75 * self._period  # NaN until the period is measured
-        published = None
         if t < self._t_newest - skew:  # older than this instant: a late frame (False for NaN)
             self._late_run += 1
             if self._late_run <= CLOCK_BACK_FRAMES:
@@ -151,9 +162,17 @@ class FixtureCycle:
             self._clock_went_back(t)
         self._late_run = 0
         since = t - self._t[leg]
-        if (since == 0.0 or since <= skew) and data == self._data[leg]:  # the same frame again (a gateway's repeat)
-            self.counters["repeated_frames"] += 1
+        if (since == 0.0 or since <= skew) and data == self._data[leg] or self._ahead.repeats(leg, data, t, skew):
+            self.counters["repeated_frames"] += 1  # the same frame again (a gateway's repeat)
             return None
+        published = None
+        for frame in self._ahead.offer(leg, data, t, skew, self._t_newest):
+            published = self._take(*frame, skew) or published
+        return published
+
+    def _take(self, leg: int, data: bytes | bytearray, t: float, skew: float) -> PoseRecord | None:
+        """Add a frame that is neither late, a repeat nor ahead to the set (see :meth:`on_frame`)."""
+        published = None
         if self._n_fresh:
             repeat = self._fresh[leg]
             if t - self._t_first > skew or (repeat and not t - self._t[leg] <= skew):
@@ -170,10 +189,10 @@ class FixtureCycle:
             self._bad[leg], self._readings[leg] = True, math.nan
         dt = t - self._t[leg]
         if 0.0 < dt <= self._staleness:  # the lower quartile ignores missed frames (up to 3 in 4 intervals)
-            if len(self._intervals) < 63:
+            if len(self._intervals) < INTERVALS:
                 self._intervals.append(dt)
             else:
-                self._intervals[self._n_frames % 63] = dt
+                self._intervals[self._n_frames % INTERVALS] = dt
             self._n_frames += 1
             if self._n_frames % 32 == 8:
                 self._period = sorted(self._intervals)[len(self._intervals) // 4]
@@ -199,6 +218,7 @@ class FixtureCycle:
         log.warning("fixture %s: frame times went back %.3g s: following the bus clock", self.cfg.name, back)
         self._t_newest, self._t_set, self._t = t, math.nan, [min(tk, t) for tk in self._t]
         self._fresh, self._n_fresh = [False] * 6, 0
+        self._ahead.clear()
         self._lost += round(self._late_run / 6)  # the sets whose frames were taken for late ones
         self._late.clear()
         self.lock.restart_clock(t)
@@ -211,7 +231,8 @@ class FixtureCycle:
         self._n_fresh = 0
         self._lost += 1
         self.counters["incomplete_sets"] += 1
-        silent = [k for k in missing if t - self._t[k] > self.cfg.staleness and k not in self._late]
+        quiet = self._late | self._ahead.legs  # legs that sent, late or ahead: not silent
+        silent = [k for k in missing if t - self._t[k] > self.cfg.staleness and k not in quiet]
         if silent:
             return self._failure(t, "silent_leg", self._set_flags([f"silent:leg{k + 1}" for k in silent]))
         status = "duplicate_frame" if self._duplicate else "incomplete"
@@ -225,6 +246,10 @@ class FixtureCycle:
         if self._late:
             flags += [f"late_frame:leg{k + 1}" for k in sorted(self._late)]
             self._late.clear()
+        if self._ahead.legs:
+            flags += [f"ahead:leg{k + 1}" for k in sorted(self._ahead.legs)]
+            self._ahead.legs.clear()
+            self.counters["ahead_frames"] = self._ahead.frames
         return flags
 
     def check_silence(self, now: float) -> PoseRecord | None:

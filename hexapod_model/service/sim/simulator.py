@@ -74,6 +74,8 @@ class _Encoders:
         self.past: deque[list[can.Message | None]] = deque(maxlen=1001)
         self.late: dict[int, int] = {}
         self.duplicate: dict[int, float] = {}
+        self.ahead: dict[int, float] = {}  # leg -> seconds its stamps run ahead (ahead_stamp)
+        self.repeats = 1  # times each frame is sent (repeated_frames)
 
     def pose(self) -> np.ndarray:
         n = len(self.sim.poses)
@@ -125,6 +127,7 @@ class _Encoders:
         err, warn, drop = [False] * 6, [False] * 6, [False] * 6
         self.late = {}  # leg -> sets: send that old frame last instead (late_frame)
         self.duplicate = {}  # leg -> reading of a second sender (duplicate_id)
+        self.ahead, self.repeats = {}, 1
         active = []
         for i, f in enumerate(self.sim.faults):
             if f.kind == "spike":
@@ -157,6 +160,12 @@ class _Encoders:
                     self.late[k] = f.sets
                 elif f.kind == "duplicate_id":
                     self.duplicate[k] = float(r[k] + f.size)
+                elif f.kind == "ahead_stamp":
+                    self.ahead[k] = f.seconds
+                elif f.kind == "repeated_frames":
+                    self.repeats = f.sets
+            if f.kind == "lost_sets" and self.rng.random() < f.probability:
+                drop = [True] * 6
         msgs: list[can.Message | None] = []
         for k, leg in enumerate(self.cfg.legs):
             try:
@@ -220,7 +229,7 @@ class Simulator:
             msgs = [None] * 6
         for k, m in enumerate(msgs):
             if m is not None and stamp is not None:
-                m.timestamp = stamp + k * FRAME_TIME
+                m.timestamp = stamp + k * FRAME_TIME + enc.ahead.get(k, 0.0)
         enc.past.append(list(msgs))
         order: list[can.Message | None] = []
         for k, m in enumerate(msgs):
@@ -235,7 +244,8 @@ class Simulator:
             msgs[k] = old
         for m in order:
             if m is not None:
-                self.bus.send(m)
+                for _ in range(enc.repeats):
+                    self.bus.send(m)
         if stamp is not None:
             t_first, t_last = stamp, stamp + 5 * FRAME_TIME
         else:
