@@ -37,6 +37,7 @@ def health(service: ServiceView) -> dict:
         if c.fault is not None and rec.status != "unacknowledged_fault":
             problems.append(f"{name}: {', '.join(c.fault.flags())} waits for an acknowledgement")
     store_error = None if service.writer is None else service.writer.error
+    lost_samples = 0 if service.writer is None else service.writer.dropped  # sample-log rows, since the start
     if store_error is not None:
         problems.append(f"store: {store_error}")
     if not service.running:
@@ -49,7 +50,7 @@ def health(service: ServiceView) -> dict:
         "uptime_s": now - service.started,
         "frames": service.frames,
         "unknown_frames": service.unknown_frames,
-        "store": {"file": service.config.store.path.name, "error": store_error},
+        "store": {"file": service.config.store.path.name, "error": store_error, "lost_samples": lost_samples},
         "fixtures": fixtures,
         **extra,
     }

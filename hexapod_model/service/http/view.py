@@ -22,7 +22,7 @@ class ServiceView(Protocol):
     Attributes:
         config: the service's configuration (HTTP token, store path).
         cycles: the fixtures' cycles by name (empty until the service is ready).
-        writer: the store's writer thread (None until ready): its ``error``.
+        writer: the store's writer thread (None until ready): its ``error`` and ``dropped`` rows.
         changeover: targets, recipes and guidance (None until ready).
         health_sections: more ``/health`` sections by name, each a callable returning a dict.
         frames: frames read from the bus for a fixture since the start.
