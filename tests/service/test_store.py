@@ -181,6 +181,7 @@ def test_health_shows_the_sample_rows_lost(tmp_path):
         started=0.0,
         frames=0,
         unknown_frames=0,
+        lag=0.0,
         health_sections={},
     )
     lost = health(view)["store"]["lost_samples"]  # type: ignore[arg-type]

@@ -8,13 +8,17 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from .view import ServiceView
 
+OVERLOADED = 0.25  # s: frames handled this long after their bus stamps: the service is behind, not the fixture
+
 
 def health(service: ServiceView) -> dict:
     """Service state: ``ok`` or ``degraded``, with every problem as one line in ``problems``.
 
     Degraded: a store error, the cycle stopped, a fixture whose latest record is not ``ok``
     (its status and flags say why) or whose fault waits for an acknowledgement, or a section of
-    ``service.health_sections`` (other parts' own state, by name) with an ``error``.
+    ``service.health_sections`` (other parts' own state, by name) with an ``error``, or the
+    service running behind the bus (``service_overloaded``: frames handled more than
+    :data:`OVERLOADED` s after their stamps; the fixture is not at fault).
     """
     now = time.time()
     fixtures, problems = {}, []
@@ -42,6 +46,10 @@ def health(service: ServiceView) -> dict:
         problems.append(f"store: {store_error}")
     if not service.running:
         problems.append("the cycle thread is not running")
+    if service.lag > OVERLOADED:
+        problems.append(
+            f"service_overloaded: frames handled {service.lag:.3g} s after their bus stamps (limit {OVERLOADED} s)"
+        )
     extra = {name: section() for name, section in service.health_sections.items()}
     problems += [f"{name}: {section['error']}" for name, section in extra.items() if section.get("error") is not None]
     return {
@@ -50,6 +58,7 @@ def health(service: ServiceView) -> dict:
         "uptime_s": now - service.started,
         "frames": service.frames,
         "unknown_frames": service.unknown_frames,
+        "lag_s": service.lag,
         "store": {"file": service.config.store.path.name, "error": store_error, "lost_samples": lost_samples},
         "fixtures": fixtures,
         **extra,
