@@ -6,7 +6,9 @@ arrival order. A frame older than the newest seen by more than that is *late* an
 set (``late_frame:legN`` in the next record); a second frame on one leg's id within the instant
 fails the set (``duplicate_frame``, ``duplicate:legN``: two senders on one id); a frame of a
 newer instant closes an unfinished set, published as ``incomplete`` (``missing:legN``) or, when a
-missing leg's newest frame is older than ``staleness``, ``silent_leg``. So every instant ends in
+missing leg's newest frame is older than ``staleness``, ``silent_leg``; a leg whose stamps run
+ahead of the others' is dropped and named (``ahead:legN``, :mod:`~hexapod_model.service.cycle.ahead`),
+and an exact repeat of a frame is dropped and counted. So every instant ends in
 a record, and a set never mixes two instants. A set with a bad frame, an error bit, a reading
 outside the stroke or a stuck leg is published with that status and **no pose**; a solved set
 is ``ok`` only when the tracker (through :class:`~hexapod_model.service.cycle.solver.PoseSolver`)
