@@ -13,7 +13,7 @@ import pytest
 from hexapod_model.service import FixtureCycle, Simulator, geometry_hash
 
 from ..conftest import hexapod
-from .helpers import CollectingBus, fixture_table, service_config, sim_config
+from .helpers import CollectingBus, fixture_table, pose_error, service_config, sim_config
 from .test_cycle import RATE, check_ok_poses, set_of
 
 
@@ -80,3 +80,26 @@ def test_a_leg_stamped_50_ms_ahead_is_named_and_no_record_runs_ahead(tmp_path):
         named = {f.split(":")[1] for f in rec.flags if ":leg" in f}
         assert named == {"leg4"}, rec.flags
     check_ok_poses(out)
+
+
+def test_a_gateway_stamping_five_instants_with_one_time_gives_no_wrong_ok(tmp_path):
+    burst: list = []
+
+    def batch(k, frames):  # five sets held, then delivered in order with the stamp of the burst's last frame
+        burst.extend(frames)
+        if k % 5 != 4:
+            return []
+        stamp = frames[-1][2]
+        out = [(leg, data, stamp) for leg, data, _ in burst]
+        burst.clear()
+        return out
+
+    cycle, out = deliver(tmp_path, 300, batch)
+    wrong = []
+    for sent, rec in out:  # the truth at the record's time: the burst's last set
+        if rec.status == "ok":
+            dp, _ = pose_error(rec, sent.pose)
+            if dp > 5 * rec.sigma["translation_mm"] * 1e-3:
+                wrong.append((set_of(rec), dp))
+    assert not wrong, wrong[:5]
+    assert sum("batched_stamps" in rec.flags for _, rec in out) > 200

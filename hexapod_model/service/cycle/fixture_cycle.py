@@ -23,6 +23,9 @@ Status values: ``ok``, ``no_data`` (nothing received yet), ``incomplete``, ``dup
 (``encoder_error:leg3``) or the tracker's doubt (``jump``, ``branch_uncertain``,
 ``near_singular``, ``out_of_limits``); *advisory* flags leave a good pose ``ok``:
 ``encoder_warning:legN``, ``late_frame:legN``, ``moved_while_off``, ``stored_geometry_changed``.
+``batched_stamps`` (``flagged``): sets share one stamp (a gateway stamping a burst once), so a
+record's ``t`` is the burst's, not its instant's: the pose is right for an instant the stamp does
+not give.
 """
 
 from __future__ import annotations
@@ -56,6 +59,8 @@ log = logging.getLogger(__name__)
 _POSE_STATUSES = ("ok", "flagged", "drift")
 CLOCK_BACK_FRAMES = 12  # late frames in a row (two sets, no frame on time): the bus's clock went back
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
+SAME_STAMP = 1e-6  # s: two sets stamped closer than this cannot be told apart in time (a batching gateway)
+BATCH_MEMORY = 64  # sets after the last two sharing a stamp during which records stay `batched_stamps`
 INTERVALS = 255  # frame intervals kept for the period: about 40 sets, so lost sets cannot stretch it
 
 
@@ -102,6 +107,7 @@ class FixtureCycle:
         self._n_frames = 0
         self._instant = self._lost = 0  # sampling instants, and sets lost since the last complete one
         self._t_set = math.nan
+        self._batched = -(10**9)  # the last instant whose set shared its stamp with the previous set
         self._t_newest = self._t_first = -math.inf  # newest frame seen; first frame of the set being collected
         self._late: set[int] = set()  # legs whose late frames were dropped since the last record
         self._late_run = 0  # late frames in a row (more than CLOCK_BACK_FRAMES: the bus clock went back)
@@ -293,6 +299,8 @@ class FixtureCycle:
         if dt > 0.0 and self._period > 0.0:  # (False for NaN)
             steps = max(steps, round(dt / self._period))
         self._instant += steps
+        if dt < SAME_STAMP:  # this set has the stamp of the previous one: a gateway stamped the burst once
+            self._batched = self._instant
         self._lost, self._t_set = 0, t
         if self.alarm.requested and self.alarm.take() is not None:  # acknowledged: readings taken as they are
             self.steps.reset()
@@ -342,6 +350,9 @@ class FixtureCycle:
         status = {"ok": "ok", "flagged": "flagged", "failed": "not_converged"}[outcome.status]
         if self.steps.pending and "jump" not in flags:  # a jump that may be a step: not ok until it is known
             flags.append("jump")
+            status = "flagged" if status == "ok" else status
+        if self._instant - self._batched <= BATCH_MEMORY:  # t is the burst's stamp, not this instant's time
+            flags.append("batched_stamps")
             status = "flagged" if status == "ok" else status
         if status == "ok" and self.lock.drift:
             status = "drift"
