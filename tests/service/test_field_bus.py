@@ -103,3 +103,21 @@ def test_a_gateway_stamping_five_instants_with_one_time_gives_no_wrong_ok(tmp_pa
                 wrong.append((set_of(rec), dp))
     assert not wrong, wrong[:5]
     assert sum("batched_stamps" in rec.flags for _, rec in out) > 200
+
+
+def test_a_gateway_reordering_frames_within_a_burst_never_gives_a_pose_of_two_instants(tmp_path):
+    burst: list = []
+    rng = np.random.default_rng(7)
+
+    def shuffled(k, frames):
+        burst.extend(frames)
+        if k % 5 != 4:
+            return []
+        stamp = frames[-1][2]
+        out = [(leg, data, stamp) for leg, data, _ in burst]
+        burst.clear()
+        order = rng.permutation(len(out))
+        return [out[i] for i in order]
+
+    cycle, out = deliver(tmp_path, 300, shuffled)
+    assert not any(rec.status == "ok" for _, rec in out)

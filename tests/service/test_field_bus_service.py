@@ -59,3 +59,25 @@ def test_a_leg_stamped_50_ms_ahead_is_the_one_named_and_no_record_runs_ahead(tmp
     for r in later:
         assert {f.split(":")[1] for f in r.flags if ":leg" in f} == {"leg4"}, r.flags
     assert cycle.counters["ahead_frames"] > 100
+
+
+def test_a_batching_gateway_gives_no_wrong_ok_through_the_service(tmp_path):
+    config = service_config(tmp_path)
+    fault = {"kind": "gateway_burst", "sets": 5, "start": 0.0, "duration": 60}
+    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A", "faults": [fault]}])
+    records = []
+    hexa = hexapod("reference")
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    service = FixtureService(config, hexapods={"left": hexa}, http=False)
+    service.subscribe(records.append)
+    try:
+        service.start()
+        simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
+        simulator.run(3.0)
+        time.sleep(0.2)
+    finally:
+        service.stop()
+        bus.shutdown()
+    assert len(records) > 100
+    assert not any(r.status == "ok" for r in records), [r.flags for r in records if r.status == "ok"][:3]
+    assert sum("batched_stamps" in r.flags for r in records) > 100

@@ -35,6 +35,7 @@ FAULTS = (
     "lost_sets",
     "repeated_frames",
     "ahead_stamp",
+    "gateway_burst",
 )
 
 
@@ -53,7 +54,9 @@ class Fault:
             CAN id just before the genuine frame).
         sets: a ``late_frame`` leg sends its frame of this many sets earlier, with that set's
             timestamp, last in the set, instead of the current one; ``repeated_frames``: every
-            frame is sent this many times in a row, stamp and all (a gateway's repeats).
+            frame is sent this many times in a row, stamp and all (a gateway's repeats);
+            ``gateway_burst``: this many sets are held, then sent in order with the stamp of the
+            last frame (a gateway that batches and stamps a burst once).
         seconds: an ``ahead_stamp`` leg's frames carry stamps this much later (s) than its set's.
     """
 
@@ -223,7 +226,7 @@ def _changeover(t: Table) -> ChangeoverScript:
 def _fault(t: Table) -> Fault:
     kind = t.text("kind", choices=FAULTS)
     leg = t.take("leg", 0)
-    every = kind in ("lost_sets", "repeated_frames") or (leg == 0 and kind == "dropped_frames")
+    every = kind in ("lost_sets", "repeated_frames", "gateway_burst") or (leg == 0 and kind == "dropped_frames")
     legs = tuple(range(6)) if every else (t.integer("leg", lo=1, hi=6) - 1,)
     fault = Fault(
         kind=kind,
@@ -232,8 +235,8 @@ def _fault(t: Table) -> Fault:
         duration=t.number("duration", {"spike": 0.0, "step": 1e6}.get(kind, 1.0), 0.0, 1e6),
         probability=t.number("probability", 0.2, 0.0, 1.0) if kind in ("dropped_frames", "lost_sets") else 1.0,
         size=t.number("size", 0.002, -0.5, 0.5) if kind in ("spike", "step", "duplicate_id") else 0.0,
-        sets=t.integer("sets", {"late_frame": 1, "repeated_frames": 10}.get(kind, 1), 1, 1000)
-        if kind in ("late_frame", "repeated_frames")
+        sets=t.integer("sets", {"late_frame": 1, "repeated_frames": 10, "gateway_burst": 5}.get(kind, 1), 1, 1000)
+        if kind in ("late_frame", "repeated_frames", "gateway_burst")
         else 1,
         seconds=t.number("seconds", 0.05, -10.0, 10.0) if kind == "ahead_stamp" else 0.0,
     )

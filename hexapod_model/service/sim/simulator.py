@@ -76,6 +76,9 @@ class _Encoders:
         self.duplicate: dict[int, float] = {}
         self.ahead: dict[int, float] = {}  # leg -> seconds its stamps run ahead (ahead_stamp)
         self.repeats = 1  # times each frame is sent (repeated_frames)
+        self.burst = 0  # sets a gateway holds before sending them with one stamp (gateway_burst)
+        self.held: list[can.Message] = []
+        self.held_sets = 0
 
     def pose(self) -> np.ndarray:
         n = len(self.sim.poses)
@@ -127,7 +130,7 @@ class _Encoders:
         err, warn, drop = [False] * 6, [False] * 6, [False] * 6
         self.late = {}  # leg -> sets: send that old frame last instead (late_frame)
         self.duplicate = {}  # leg -> reading of a second sender (duplicate_id)
-        self.ahead, self.repeats = {}, 1
+        self.ahead, self.repeats, self.burst = {}, 1, 0
         active = []
         for i, f in enumerate(self.sim.faults):
             if f.kind == "spike":
@@ -164,6 +167,8 @@ class _Encoders:
                     self.ahead[k] = f.seconds
                 elif f.kind == "repeated_frames":
                     self.repeats = f.sets
+                elif f.kind == "gateway_burst":
+                    self.burst = f.sets
             if f.kind == "lost_sets" and self.rng.random() < f.probability:
                 drop = [True] * 6
         msgs: list[can.Message | None] = []
@@ -242,10 +247,17 @@ class Simulator:
             old = enc.past[-1 - sets][k] if len(enc.past) > sets else None
             order.append(old)
             msgs[k] = old
-        for m in order:
-            if m is not None:
-                for _ in range(enc.repeats):
-                    self.bus.send(m)
+        out = [m for m in order if m is not None for _ in range(enc.repeats)]
+        if enc.burst > 1 or enc.held:  # a gateway: the burst goes out at once, stamped with its last frame
+            enc.held += out
+            enc.held_sets += 1
+            out = []
+            if enc.burst <= 1 or enc.held_sets >= enc.burst:
+                out, enc.held, enc.held_sets = enc.held, [], 0
+                for m in out:
+                    m.timestamp = out[-1].timestamp
+        for m in out:
+            self.bus.send(m)
         if stamp is not None:
             t_first, t_last = stamp, stamp + 5 * FRAME_TIME
         else:
