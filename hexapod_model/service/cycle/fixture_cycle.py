@@ -40,6 +40,7 @@ import pinocchio as pin
 from ...analysis.sensitivity import SensitivityEvaluator
 from ...kinematics.hexapod import Hexapod
 from ...lie import quaternion_of_matrix
+from ...tracking.steps import StepDetector
 from ..config.cell import InRobot
 from ..config.settings import FixtureConfig
 from ..record.pose import pose_record
@@ -52,7 +53,6 @@ from .alarms import UNACKNOWLEDGED, Acknowledgement, FaultLatch, LatchedFault
 from .lock import MOTION_LEGS, LockDetector
 from .lock_load import lock_load
 from .solver import PoseSolver, SolveOutcome
-from .steps import StepDetector
 from .stuck import StuckDetector
 
 log = logging.getLogger(__name__)
