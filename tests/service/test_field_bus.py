@@ -17,8 +17,11 @@ from .helpers import CollectingBus, fixture_table, pose_error, service_config, s
 from .test_cycle import RATE, check_ok_poses, set_of
 
 
-def deliver(tmp_path, sets, transform, faults=(), seed=3):
-    """Drive a cycle set by set; ``transform(k, frames) -> frames`` edits each set's ``(leg, data, t)`` list."""
+def deliver(tmp_path, sets, transform, faults=(), seed=3, truth=None):
+    """Drive a cycle set by set; ``transform(k, frames) -> frames`` edits each set's ``(leg, data, t)`` list.
+
+    ``truth``: a list that receives every sent set, in order.
+    """
     svc = service_config(tmp_path, [fixture_table()])
     sim = sim_config(svc, [{"name": "left", "rate": RATE, "trajectory": "A", "faults": list(faults)}], seed=seed)
     cfg, hexa = svc.fixtures[0], hexapod("reference")
@@ -30,6 +33,8 @@ def deliver(tmp_path, sets, transform, faults=(), seed=3):
     for k in range(sets):
         bus.sent.clear()
         sent = simulator.send_set(0, k / RATE, stamp=1.0e9 + k / RATE, stall_check=False)
+        if truth is not None:
+            truth.append(sent)
         frames = [(leg_of[m.arbitration_id], bytes(m.data), m.timestamp) for m in bus.sent]
         for leg, data, t in transform(k, frames):
             rec = cycle.on_frame(leg, data, t)
@@ -121,3 +126,21 @@ def test_a_gateway_reordering_frames_within_a_burst_never_gives_a_pose_of_two_in
 
     cycle, out = deliver(tmp_path, 300, shuffled)
     assert not any(rec.status == "ok" for _, rec in out)
+
+
+def test_a_frame_of_the_instant_arriving_after_the_next_instant_began_names_no_healthy_leg(tmp_path):
+    pending: list = []
+
+    def leg6_after_next_leg1(k, frames):  # leg 6's frame (its own stamp) arrives after the next set's first
+        if k < 100:
+            return frames
+        before = pending[:]
+        pending[:] = [f for f in frames if f[0] == 5]
+        return [frames[0], *before, *[f for f in frames[1:] if f[0] != 5]]
+
+    truth: list = []
+    cycle, out = deliver(tmp_path, 250, leg6_after_next_leg1, truth=truth)
+    named = {f for _, rec in out if set_of(rec) >= 101 for f in rec.flags if ":leg" in f}
+    assert not any(f.startswith("ahead:") for f in named), named
+    assert cycle.counters["ahead_frames"] == 0
+    check_ok_poses([(truth[set_of(rec)], rec) for _, rec in out])

@@ -3,10 +3,11 @@
 A leg whose stamps run ahead of the others' (a gateway or encoder clock of its own, set wrong)
 would open a new instant with each frame, so every set would close ``incomplete`` naming the
 five healthy legs, and its stamp would date the records ahead of the frames they are made of.
-So a frame newer than every frame seen by more than the set's skew is held until the next frame
-of the fixture arrives: when that one is of the held frame's instant (or newer), the held frame
-opens it as before; when it is older than the held frame by more than the skew, the held frame
-ran ahead of the bus: it is dropped and its leg named (``ahead:legN``). After sets were lost
+So a frame newer than every frame seen by more than the set's skew is held until a frame of
+another instant arrives: when that one is of the held frame's instant (or newer), the held frame
+opens it as before; when it is of an instant between the one being collected and the held
+frame's, the held frame ran ahead of the bus: it is dropped and its leg named (``ahead:legN``).
+Frames of the instant being collected that arrive meanwhile join it. After sets were lost
 the next frame can be of the instant the ahead stamp names, so for :data:`MEMORY` seconds after
 a leg was last found ahead its frames that would open an instant are dropped too: a set never
 mixes that leg's old reading with the others' new ones. The cost is one frame's delay of an
@@ -37,7 +38,9 @@ class AheadCheck:
         held = self._held
         return held is not None and held[0] == leg and held[1] == data and abs(t - held[2]) <= skew
 
-    def offer(self, leg: int, data: bytes | bytearray, t: float, skew: float, newest: float) -> list[Frame]:
+    def offer(
+        self, leg: int, data: bytes | bytearray, t: float, skew: float, newest: float, current: float
+    ) -> list[Frame]:
         """The frames to take now, in order, given a new frame and the newest stamp taken (s).
 
         Args:
@@ -46,11 +49,15 @@ class AheadCheck:
             t: its stamp (s).
             skew: the set's skew (s; NaN until the period is known: nothing is held then).
             newest: the newest stamp among the frames taken so far (s).
+            current: the stamp of the instant being collected (s): its first frame's, else ``newest``.
         """
         out: list[Frame] = []
         held, self._held = self._held, None
+        if held is not None and t < held[2] - skew and t <= current + skew:
+            self._held = held  # a frame of the instant being collected, arriving after it: not yet known
+            return [(leg, data, t)]
         if held is not None:
-            if t < held[2] - skew:  # the frames after it are of an older instant: its stamp ran ahead
+            if t < held[2] - skew:  # a newer instant than the collected one, older than it: its stamp ran ahead
                 self._found[held[0]] = t
                 self.legs.add(held[0])
                 self.frames += 1

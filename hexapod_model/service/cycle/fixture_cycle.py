@@ -174,7 +174,8 @@ class FixtureCycle:
             self.counters["repeated_frames"] += 1  # the same frame again (a gateway's repeat)
             return None
         published = None
-        for frame in self._ahead.offer(leg, data, t, skew, self._t_newest):
+        current = self._t_first if self._n_fresh else self._t_newest
+        for frame in self._ahead.offer(leg, data, t, skew, self._t_newest, current):
             published = self._take(*frame, skew) or published
         return published
 
