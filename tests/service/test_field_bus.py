@@ -14,6 +14,7 @@ from hexapod_model.service import FixtureCycle, Simulator, geometry_hash
 
 from ..conftest import hexapod
 from .helpers import CollectingBus, fixture_table, pose_error, service_config, sim_config
+from .test_cell import HOLD
 from .test_cycle import RATE, check_ok_poses, set_of
 
 
@@ -144,3 +145,23 @@ def test_a_frame_of_the_instant_arriving_after_the_next_instant_began_names_no_h
     assert not any(f.startswith("ahead:") for f in named), named
     assert cycle.counters["ahead_frames"] == 0
     check_ok_poses([(truth[set_of(rec)], rec) for _, rec in out])
+
+
+def test_a_leg_at_rest_sending_equal_frames_each_period_is_no_repeat_with_a_skew_of_one_period(tmp_path):
+    svc = service_config(tmp_path, [fixture_table(max_skew=0.01)])  # free-running encoders: one period
+    sim = sim_config(svc, [{"name": "left", "rate": RATE, "hold": HOLD, "noise": 0.0}])
+    cfg, hexa = svc.fixtures[0], hexapod("reference")
+    cycle = FixtureCycle(cfg, hexa, geometry_hash(hexa), None, 1.0e9)
+    bus = CollectingBus()
+    simulator = Simulator(svc, sim, bus, hexapods={"left": hexa})  # type: ignore[arg-type]
+    leg_of = {leg.can_id: k for k, leg in enumerate(cfg.legs)}
+    records = []
+    for k in range(100):
+        bus.sent.clear()
+        simulator.send_set(0, k / RATE, stamp=1.0e9 + k / RATE, stall_check=False)
+        for m in bus.sent:
+            rec = cycle.on_frame(leg_of[m.arbitration_id], bytes(m.data), m.timestamp)
+            if rec is not None:
+                records.append(rec)
+    assert cycle.counters["repeated_frames"] == 0
+    assert len(records) >= 99 and all(r.status != "incomplete" for r in records)

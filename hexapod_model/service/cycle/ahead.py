@@ -33,10 +33,10 @@ class AheadCheck:
         #: frames dropped for running ahead, since the start
         self.frames = 0
 
-    def repeats(self, leg: int, data: bytes | bytearray, t: float, skew: float) -> bool:
-        """Whether the frame repeats the held one (same leg and payload, within ``skew`` s)."""
+    def repeats(self, leg: int, data: bytes | bytearray, t: float, window: float) -> bool:
+        """Whether the frame repeats the held one (same leg and payload, the same stamp or within ``window`` s)."""
         held = self._held
-        return held is not None and held[0] == leg and held[1] == data and abs(t - held[2]) <= skew
+        return held is not None and held[0] == leg and held[1] == data and (t == held[2] or abs(t - held[2]) <= window)
 
     def offer(
         self, leg: int, data: bytes | bytearray, t: float, skew: float, newest: float, current: float

@@ -61,6 +61,7 @@ CLOCK_BACK_FRAMES = 12  # late frames in a row (two sets, no frame on time): the
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
 SAME_STAMP = 1e-6  # s: two sets stamped closer than this cannot be told apart in time (a batching gateway)
 BATCH_MEMORY = 64  # sets after the last two sharing a stamp during which records stay `batched_stamps`
+REPEAT = 0.25  # periods: a frame equal to its leg's last one within this is a repeat (a leg at rest sends equal ones)
 INTERVALS = 255  # frame intervals kept for the period: about 40 sets, so lost sets cannot stretch it
 
 
@@ -169,8 +170,8 @@ class FixtureCycle:
                 return None
             self._clock_went_back(t)
         self._late_run = 0
-        since = t - self._t[leg]
-        if (since == 0.0 or since <= skew) and data == self._data[leg] or self._ahead.repeats(leg, data, t, skew):
+        since, window = t - self._t[leg], REPEAT * self._period  # a repeat comes at once, not a period later
+        if (since == 0.0 or since <= window) and data == self._data[leg] or self._ahead.repeats(leg, data, t, window):
             self.counters["repeated_frames"] += 1  # the same frame again (a gateway's repeat)
             return None
         published = None
