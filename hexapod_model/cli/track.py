@@ -24,7 +24,9 @@ errors against the true poses; --table runs every trajectory x predictor x speed
 With --readings FILE.csv (columns t,l1..l6: seconds, metres) the tracker runs over a recorded
 stream instead and writes one row per sample: t,x,y,z,qx,qy,qz,qw,roll,pitch,yaw (m, unit
 quaternion, degrees), status (ok or the failure's name), flags (separated by ';', empty when
-none) and iterations. Exit code 1 when a sample failed or was flagged after the first ones."""
+none; from a step or a swap the data show, every later row carries discontinuity:legN, as the
+fixture service latches it) and iterations. Exit code 1 when a sample failed or was flagged
+after the first ones."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:

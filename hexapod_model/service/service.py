@@ -96,6 +96,9 @@ class FixtureService:
         self.changeover: Changeover | None = None
         self.writer: StoreWriter | None = None
         self.frames = self.unknown_frames = 0
+        #: seconds the frames of the last check interval waited between their bus stamps and their handling (more than
+        #: :data:`~hexapod_model.service.http.health.OVERLOADED`: ``/health`` says ``service_overloaded``)
+        self.lag = 0.0
         self._started = 0.0
 
     # ----- life cycle -----
@@ -352,28 +355,34 @@ class FixtureService:
         assert self._bus is not None
         tick = min(0.05, max(0.002, min(f.staleness for f in self.config.fixtures) / 2))
         routes, recv, last_check = self._routes, self._bus.recv, time.time()
+        behind = 0.0  # s, the most a frame waited between its stamp and its handling since the last check
         while not self._stop.is_set():
+            asked = time.time()
             try:
                 msg = recv(tick)
             except (can.CanError, OSError) as exc:
                 log.error("bus: %s", exc)
                 self._stop.wait(tick)
                 continue
-            if msg is None:
-                clock = time.time()  # nothing queued: the bus is quiet now
+            if msg is None:  # nothing queued until the wait ended: quiet until then, not until this thread ran
+                clock = min(time.time(), asked + tick)  # (a stall after the wait is the service's, not the bus's)
             else:
-                clock = msg.timestamp or time.time()  # the bus's own clock: a backlog is not silence
+                now = time.time()
+                stamp = msg.timestamp or now  # the bus's own clock: a backlog is not silence
+                behind = max(behind, now - stamp)
+                clock = min(stamp, now)  # for silence: a stamp ahead of the wall clock has not come yet
                 route = routes[bool(msg.is_extended_id)].get(msg.arbitration_id)
                 if route is None or msg.is_error_frame or msg.is_remote_frame:
                     self.unknown_frames += 1
                 else:
                     self.frames += 1
                     cycle, on_frame, leg = route
-                    rec = on_frame(leg, msg.data, clock)
+                    rec = on_frame(leg, msg.data, stamp)
                     if rec is not None:
                         self._publish(cycle, rec)
             if clock - last_check >= tick:
                 last_check = clock
+                self.lag, behind = behind, 0.0  # the most a frame waited since the last check: the service's delay
                 for cycle in self.cycles.values():
                     rec = cycle.check_silence(clock)
                     if rec is not None:

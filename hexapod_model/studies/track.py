@@ -22,6 +22,7 @@ from ..exceptions import InputError
 from ..io.tables import POSE_COLUMNS, pose_row
 from ..kinematics.hexapod import Hexapod
 from ..lie import matrix_to_rpy
+from ..tracking.steps import StepDetector
 from ..tracking.tracker import PREDICTORS, Tracker, characteristic_length, pose_distance
 
 SPEEDS = (1, 2, 4, 8)
@@ -180,20 +181,34 @@ def track_log(
 
     ``times`` (s) must increase strictly (the checks assume one sample per period); a row of
     readings with NaN (an unreadable cell) is that sample's ``invalid_input``. A failed
-    sample's pose cells are NaN (written empty), never the previous pose.
+    sample's pose cells are NaN (written empty), never the previous pose. As in the fixture
+    service, a jump the tracker flags is checked for a step (:class:`~hexapod_model.tracking.steps.StepDetector`:
+    a slipped encoder, swapped legs): rows are flagged ``jump`` until it is known, and from a
+    step on every row carries ``discontinuity:legN`` (what the service latches until someone
+    acknowledges it; an audit has no one to, so it stays to the end).
     """
     times = np.asarray(times, dtype=float)
     if times.size > 1 and not np.all(np.diff(times) > 0):
         k = int(np.flatnonzero(~(np.diff(times) > 0))[0])
         raise InputError("t", float(times[k + 1]), f"row {k + 2}: times must increase strictly")
     tracker = Tracker(hexa, predictor, **options)
+    steps = StepDetector(tracker.settings.noise)
+    latched: list[str] = []  # discontinuity:legN, from the first step found on
     rows: list[list] = []
     counts: dict[str, int] = {}
     items = zip(times, readings)
-    for t, lengths in progress(items, len(times), "track") if progress else items:
+    for k, (t, lengths) in enumerate(progress(items, len(times), "track") if progress else items):
         r = tracker.step(lengths)
+        flags = list(r.flags)
+        if not r.failed:  # a failed sample is a gap for the step check, as a failed set in the service
+            stepped = steps.update(k, lengths, r.legs if "jump" in r.flags else ())
+            if stepped and not latched:
+                latched = [f"discontinuity:leg{j + 1}" for j in stepped]
+            if steps.pending and "jump" not in flags:
+                flags.append("jump")
+        flags += latched
         pose = pose_row(r.pose) if not r.failed else [float("nan")] * len(POSE_COLUMNS)
-        rows.append([float(t), *map(float, pose), r.status, ";".join(r.flags), r.iterations])
-        for key in (r.status,) if r.failed else r.flags:
+        rows.append([float(t), *map(float, pose), r.status, ";".join(flags), r.iterations])
+        for key in (r.status,) if r.failed else flags:
             counts[key] = counts.get(key, 0) + 1
     return rows, counts

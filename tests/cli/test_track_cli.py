@@ -51,7 +51,10 @@ def test_track_readings_writes_one_row_per_sample(tmp_path, stream, capsys):
         assert np.linalg.norm([float(r[c]) for c in "xyz"] - poses[k][:3, 3]) < 1e-3
         assert np.abs(R - poses[k][:3, :3]).max() < 1e-2
     err = capsys.readouterr().err
-    assert "failed or flagged" in err and "jump 1" in err and "invalid_input 1" in err
+    jumps = sum("jump" in r["flags"].split(";") for r in rows)  # the spike, and the rows its step check took
+    assert 1 <= jumps <= 4 and all(r["flags"] == "jump" for r in rows[40 : 40 + jumps])
+    assert "failed or flagged" in err and f"jump {jumps}" in err and "invalid_input 1" in err
+    assert "discontinuity" not in err  # a spike is not a step
 
 
 def test_track_readings_clean_stream_exits_0_to_stdout(tmp_path, stream, capsys):
@@ -77,3 +80,26 @@ def test_track_readings_bad_input_is_one_line(tmp_path, stream, capsys):
     assert main(["track", "reference", "--readings", str(inp), "-o", str(inp)]) == 2
     assert main(["track", "reference", "--readings", str(inp), "--noise", "-1"]) == 2
     assert inp.read_text().startswith("t,l1")
+
+
+@pytest.mark.parametrize("fault", ["swap", "step"])
+def test_track_readings_flags_every_row_after_a_swap_or_a_step_like_the_service(tmp_path, fault):
+    hexa = hexapod("reference")
+    t, poses = trajectory_poses("A", hexa.home_pose, 0.005, 1000.0, 8.0)
+    t, poses = t[:400], poses[:400]
+    readings = true_readings(hexa, poses)[0] + np.random.default_rng(1).normal(0.0, 10e-6, (400, 6))
+    if fault == "swap":
+        readings[150:, [1, 2]] = readings[150:, [2, 1]]
+    else:
+        readings[150:, 2] += 3e-4
+    inp, out = tmp_path / "stream.csv", tmp_path / "poses.csv"
+    write_stream(inp, t, readings)
+    assert main(["track", "reference", "--readings", str(inp), "-o", str(out)]) == 1
+    with open(out, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    after = rows[150:]
+    assert not any(r["status"] == "ok" and not r["flags"] for r in after), [
+        k + 150 for k, r in enumerate(after) if r["status"] == "ok" and not r["flags"]
+    ][:5]
+    legs = {"swap": {"discontinuity:leg2", "discontinuity:leg3"}, "step": {"discontinuity:leg3"}}[fault]
+    assert legs <= set(rows[-1]["flags"].split(";"))

@@ -120,3 +120,30 @@ def test_bad_simulation_names_the_field(tmp_path, sim, field):
     with pytest.raises(ConfigError) as info:
         sim_config(service, [sim])
     assert info.value.field == field
+
+
+def test_a_fifo_as_the_token_file_is_refused_in_one_line_without_waiting_for_a_writer(tmp_path):
+    import os
+    import threading
+
+    from hexapod_model.service.config.token import read_token
+
+    fifo = tmp_path / "token"
+    os.mkfifo(fifo, 0o600)
+    result: list = []
+
+    def read():
+        try:
+            read_token(fifo)
+        except ConfigError as exc:
+            result.append(str(exc))
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    reader.join(5.0)
+    if reader.is_alive():  # blocked opening the FIFO: let it go before failing
+        with open(fifo, "w") as f:
+            f.write("x")
+        reader.join(5.0)
+        raise AssertionError("reading the token hung on a FIFO")
+    assert len(result) == 1 and "not a regular file" in result[0] and "\n" not in result[0], result

@@ -140,3 +140,51 @@ def test_another_process_holding_the_database_is_an_error_until_it_lets_go(tmp_p
     writer.stop()
     assert [e.t for e in store.locks()] == [7.0]
     store.close()
+
+
+def test_every_sample_row_a_full_disk_lost_is_counted(tmp_path):
+    store = Store(tmp_path / "s.sqlite")
+    writer = StoreWriter(store, flush_interval=0.05)
+    pages = store.db.execute("PRAGMA page_count").fetchone()[0]
+    store.db.execute(f"PRAGMA max_page_count = {pages + 1}")  # a full disk, as SQLite sees it
+    from dataclasses import replace
+
+    sent = 0
+    stored, done = _writer_lock(writer, replace(event(t=5.0), q=np.linspace(0, 1, 20_000)))  # held back: no room
+    for _batch in range(40):  # rows queued while the lock waits: each batch tries the lock with them
+        for _ in range(50):
+            writer.sample(sample(10.0 + sent * 0.01))
+            sent += 1
+        threading.Event().wait(0.02)
+    assert not done.is_set() and writer.error is not None
+    store.db.execute("PRAGMA max_page_count = 1073741823")  # space again
+    assert done.wait(10)
+    writer.stop()
+    assert len(store.samples()) + writer.dropped == sent, (len(store.samples()), writer.dropped, sent)
+    store.close()
+
+
+def test_health_shows_the_sample_rows_lost(tmp_path):
+    from types import SimpleNamespace
+
+    from hexapod_model.service.http.health import health
+
+    store = Store(tmp_path / "s.sqlite")
+    writer = StoreWriter(store, flush_interval=60.0, max_pending=10)  # no batch before stop()
+    for k in range(25):  # the log holds 10: the 15 oldest go
+        writer.sample(sample(float(k)))
+    view = SimpleNamespace(
+        cycles={},
+        writer=writer,
+        config=SimpleNamespace(store=SimpleNamespace(path=store.path)),
+        running=True,
+        started=0.0,
+        frames=0,
+        unknown_frames=0,
+        lag=0.0,
+        health_sections={},
+    )
+    lost = health(view)["store"]["lost_samples"]  # type: ignore[arg-type]
+    writer.stop()
+    store.close()
+    assert lost == 15

@@ -22,13 +22,13 @@ def read_token(path: Path, field: str = "http.token_file", source: str = "<dict>
     """The token held by ``path``; :class:`ConfigError` when unreadable, too short or open to others."""
     try:
         mode = path.stat().st_mode
+        if not stat.S_ISREG(mode):  # before reading: a FIFO would wait for a writer
+            raise ConfigError(field, str(path), "not a regular file", source)
         text = path.read_text(encoding="utf-8-sig")  # a leading BOM is dropped
     except OSError as exc:
         raise ConfigError(field, str(path), f"cannot read the token file: {exc.strerror or exc}", source) from None
     except UnicodeDecodeError:
         raise ConfigError(field, str(path), "the token file is not UTF-8 text", source) from None
-    if not stat.S_ISREG(mode):
-        raise ConfigError(field, str(path), "not a regular file", source)
     if mode & 0o077:
         raise ConfigError(
             field, str(path), f"mode {stat.S_IMODE(mode):04o} lets others read or change it: chmod 600 {path}", source

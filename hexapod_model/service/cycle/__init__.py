@@ -1,11 +1,11 @@
 """One fixture's cycle: CAN frames in, reading sets judged (lock, stuck legs, steps, faults), solved, records out."""
 
+from ...tracking.steps import StepDetector
 from .alarms import Acknowledgement, FaultLatch, LatchedFault
 from .bus import open_bus
 from .fixture_cycle import FixtureCycle
 from .lock import LockDetector
 from .solver import PoseSolver, SolveOutcome, Uncertainty
-from .steps import StepDetector
 from .stuck import StuckDetector
 
 __all__ = [

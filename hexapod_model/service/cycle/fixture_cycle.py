@@ -6,7 +6,9 @@ arrival order. A frame older than the newest seen by more than that is *late* an
 set (``late_frame:legN`` in the next record); a second frame on one leg's id within the instant
 fails the set (``duplicate_frame``, ``duplicate:legN``: two senders on one id); a frame of a
 newer instant closes an unfinished set, published as ``incomplete`` (``missing:legN``) or, when a
-missing leg's newest frame is older than ``staleness``, ``silent_leg``. So every instant ends in
+missing leg's newest frame is older than ``staleness``, ``silent_leg``; a leg whose stamps run
+ahead of the others' is dropped and named (``ahead:legN``, :mod:`~hexapod_model.service.cycle.ahead`),
+and an exact repeat of a frame is dropped and counted. So every instant ends in
 a record, and a set never mixes two instants. A set with a bad frame, an error bit, a reading
 outside the stroke or a stuck leg is published with that status and **no pose**; a solved set
 is ``ok`` only when the tracker (through :class:`~hexapod_model.service.cycle.solver.PoseSolver`)
@@ -21,6 +23,9 @@ Status values: ``ok``, ``no_data`` (nothing received yet), ``incomplete``, ``dup
 (``encoder_error:leg3``) or the tracker's doubt (``jump``, ``branch_uncertain``,
 ``near_singular``, ``out_of_limits``); *advisory* flags leave a good pose ``ok``:
 ``encoder_warning:legN``, ``late_frame:legN``, ``moved_while_off``, ``stored_geometry_changed``.
+``batched_stamps`` (``flagged``): sets share one stamp (a gateway stamping a burst once), so a
+record's ``t`` is the burst's, not its instant's: the pose is right for an instant the stamp does
+not give.
 """
 
 from __future__ import annotations
@@ -35,6 +40,7 @@ import pinocchio as pin
 from ...analysis.sensitivity import SensitivityEvaluator
 from ...kinematics.hexapod import Hexapod
 from ...lie import quaternion_of_matrix
+from ...tracking.steps import StepDetector
 from ..config.cell import InRobot
 from ..config.settings import FixtureConfig
 from ..record.pose import pose_record
@@ -42,17 +48,21 @@ from ..record.pose_record import PoseRecord
 from ..store.fixture_store import LockEvent
 from ..targets.guidance import deviation, within
 from ..targets.target import Target
+from .ahead import AheadCheck
 from .alarms import UNACKNOWLEDGED, Acknowledgement, FaultLatch, LatchedFault
 from .lock import MOTION_LEGS, LockDetector
 from .lock_load import lock_load
 from .solver import PoseSolver, SolveOutcome
-from .steps import StepDetector
 from .stuck import StuckDetector
 
 log = logging.getLogger(__name__)
 _POSE_STATUSES = ("ok", "flagged", "drift")
 CLOCK_BACK_FRAMES = 12  # late frames in a row (two sets, no frame on time): the bus's clock went back
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
+SAME_STAMP = 1e-6  # s: two sets stamped closer than this cannot be told apart in time (a batching gateway)
+BATCH_MEMORY = 64  # sets after the last two sharing a stamp during which records stay `batched_stamps`
+REPEAT = 0.25  # periods: a frame equal to its leg's last one within this is a repeat (a leg at rest sends equal ones)
+INTERVALS = 255  # frame intervals kept for the period: about 40 sets, so lost sets cannot stretch it
 
 
 class FixtureCycle:
@@ -85,6 +95,7 @@ class FixtureCycle:
         self._home = [leg.home_count for leg in cfg.legs]
         self._t = [-math.inf] * 6  # receipt time of each leg's newest frame (lists: faster than arrays here)
         self._readings = [math.nan] * 6
+        self._data: list[bytes | bytearray] = [b""] * 6  # each leg's newest frame (a repeat of it is dropped)
         self._counts = [0] * 6
         self._err, self._warn, self._bad, self._fresh = [False] * 6, [False] * 6, [False] * 6, [False] * 6
         self._n_fresh = 0
@@ -92,17 +103,25 @@ class FixtureCycle:
         self.lock = LockDetector(cfg.lock_time, cfg.steady_band, cfg.drift_limit, cfg.unlock_samples)
         self.stuck = StuckDetector(cfg.stuck_sigmas, cfg.noise, self.layout.metres_per_count)
         self.steps = StepDetector(cfg.noise)
-        self._period = math.nan  # s, median interval between two frames of one leg (recent frames)
+        self._period = math.nan  # s, lower quartile of the intervals between two frames of one leg (recent frames)
         self._intervals: list[float] = []
         self._n_frames = 0
         self._instant = self._lost = 0  # sampling instants, and sets lost since the last complete one
         self._t_set = math.nan
+        self._batched = -(10**9)  # the last instant whose set shared its stamp with the previous set
         self._t_newest = self._t_first = -math.inf  # newest frame seen; first frame of the set being collected
         self._late: set[int] = set()  # legs whose late frames were dropped since the last record
         self._late_run = 0  # late frames in a row (more than CLOCK_BACK_FRAMES: the bus clock went back)
         self._duplicate: set[int] = set()  # legs with a second frame in the set being collected
         #: frames and sets that could not be used, since the start (``/health``)
-        self.counters = {"late_frames": 0, "duplicate_frames": 0, "incomplete_sets": 0}
+        self.counters = {
+            "late_frames": 0,
+            "duplicate_frames": 0,
+            "incomplete_sets": 0,
+            "repeated_frames": 0,
+            "ahead_frames": 0,
+        }
+        self._ahead = AheadCheck()
         self.alarm = FaultLatch(cfg.name)
         self._drift_logged = False
         self._advisory: set[str] = set()
@@ -139,10 +158,12 @@ class FixtureCycle:
         frame older than the newest by more than that is *late* (an instant already closed) and
         is dropped, named in the next record; a second frame on one leg's id within the instant
         is a *duplicate* (two senders?) and fails the set; a frame of a newer instant closes an
-        unfinished set as ``incomplete`` (or ``silent_leg``) naming the missing legs.
+        unfinished set as ``incomplete`` (or ``silent_leg``) naming the missing legs. A frame that
+        would open a newer instant waits for the next frame (:mod:`~hexapod_model.service.cycle.ahead`):
+        one whose stamp ran ahead of the others is dropped and named (``ahead:legN``). An exact
+        repeat of a leg's frame (a gateway's) is dropped and counted.
         """
         skew = self._max_skew or 0.75 * self._period  # NaN until the period is measured
-        published = None
         if t < self._t_newest - skew:  # older than this instant: a late frame (False for NaN)
             self._late_run += 1
             if self._late_run <= CLOCK_BACK_FRAMES:
@@ -151,6 +172,19 @@ class FixtureCycle:
                 return None
             self._clock_went_back(t)
         self._late_run = 0
+        since, window = t - self._t[leg], REPEAT * self._period  # a repeat comes at once, not a period later
+        if (since == 0.0 or since <= window) and data == self._data[leg] or self._ahead.repeats(leg, data, t, window):
+            self.counters["repeated_frames"] += 1  # the same frame again (a gateway's repeat)
+            return None
+        published = None
+        current = self._t_first if self._n_fresh else self._t_newest
+        for frame in self._ahead.offer(leg, data, t, skew, self._t_newest, current):
+            published = self._take(*frame, skew) or published
+        return published
+
+    def _take(self, leg: int, data: bytes | bytearray, t: float, skew: float) -> PoseRecord | None:
+        """Add a frame that is neither late, a repeat nor ahead to the set (see :meth:`on_frame`)."""
+        published = None
         if self._n_fresh:
             repeat = self._fresh[leg]
             if t - self._t_first > skew or (repeat and not t - self._t[leg] <= skew):
@@ -166,15 +200,15 @@ class FixtureCycle:
         else:
             self._bad[leg], self._readings[leg] = True, math.nan
         dt = t - self._t[leg]
-        if 0.0 < dt <= self._staleness:  # the median ignores missed frames and bunched arrivals
-            if len(self._intervals) < 63:
+        if 0.0 < dt <= self._staleness:  # the lower quartile ignores missed frames (up to 3 in 4 intervals)
+            if len(self._intervals) < INTERVALS:
                 self._intervals.append(dt)
             else:
-                self._intervals[self._n_frames % 63] = dt
+                self._intervals[self._n_frames % INTERVALS] = dt
             self._n_frames += 1
             if self._n_frames % 32 == 8:
-                self._period = sorted(self._intervals)[len(self._intervals) // 2]
-        self._t[leg] = t
+                self._period = sorted(self._intervals)[len(self._intervals) // 4]
+        self._t[leg], self._data[leg] = t, data
         if t > self._t_newest:
             self._t_newest = t
         if not self._n_fresh:
@@ -196,6 +230,7 @@ class FixtureCycle:
         log.warning("fixture %s: frame times went back %.3g s: following the bus clock", self.cfg.name, back)
         self._t_newest, self._t_set, self._t = t, math.nan, [min(tk, t) for tk in self._t]
         self._fresh, self._n_fresh = [False] * 6, 0
+        self._ahead.clear()
         self._lost += round(self._late_run / 6)  # the sets whose frames were taken for late ones
         self._late.clear()
         self.lock.restart_clock(t)
@@ -208,7 +243,8 @@ class FixtureCycle:
         self._n_fresh = 0
         self._lost += 1
         self.counters["incomplete_sets"] += 1
-        silent = [k for k in missing if t - self._t[k] > self.cfg.staleness and k not in self._late]
+        quiet = self._late | self._ahead.legs  # legs that sent, late or ahead: not silent
+        silent = [k for k in missing if t - self._t[k] > self.cfg.staleness and k not in quiet]
         if silent:
             return self._failure(t, "silent_leg", self._set_flags([f"silent:leg{k + 1}" for k in silent]))
         status = "duplicate_frame" if self._duplicate else "incomplete"
@@ -222,6 +258,10 @@ class FixtureCycle:
         if self._late:
             flags += [f"late_frame:leg{k + 1}" for k in sorted(self._late)]
             self._late.clear()
+        if self._ahead.legs:
+            flags += [f"ahead:leg{k + 1}" for k in sorted(self._ahead.legs)]
+            self._ahead.legs.clear()
+            self.counters["ahead_frames"] = self._ahead.frames
         return flags
 
     def check_silence(self, now: float) -> PoseRecord | None:
@@ -263,6 +303,8 @@ class FixtureCycle:
         if dt > 0.0 and self._period > 0.0:  # (False for NaN)
             steps = max(steps, round(dt / self._period))
         self._instant += steps
+        if dt < SAME_STAMP:  # this set has the stamp of the previous one: a gateway stamped the burst once
+            self._batched = self._instant
         self._lost, self._t_set = 0, t
         if self.alarm.requested and self.alarm.take() is not None:  # acknowledged: readings taken as they are
             self.steps.reset()
@@ -312,6 +354,9 @@ class FixtureCycle:
         status = {"ok": "ok", "flagged": "flagged", "failed": "not_converged"}[outcome.status]
         if self.steps.pending and "jump" not in flags:  # a jump that may be a step: not ok until it is known
             flags.append("jump")
+            status = "flagged" if status == "ok" else status
+        if self._instant - self._batched <= BATCH_MEMORY:  # t is the burst's stamp, not this instant's time
+            flags.append("batched_stamps")
             status = "flagged" if status == "ok" else status
         if status == "ok" and self.lock.drift:
             status = "drift"

@@ -8,7 +8,7 @@
   farther than ``drift_limit`` from the reference is a ``drift`` alarm (the plate creeps while
   the brakes are on).
 
-Stuck legs: :mod:`~hexapod_model.service.cycle.stuck`; steps: :mod:`~hexapod_model.service.cycle.steps`.
+Stuck legs: :mod:`~hexapod_model.service.cycle.stuck`; steps: :mod:`~hexapod_model.tracking.steps`.
 """
 
 from __future__ import annotations

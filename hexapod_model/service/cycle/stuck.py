@@ -6,7 +6,8 @@ predicts a change of more than ``sigmas`` times the reading noise.
 
 from __future__ import annotations
 
-GAP_INSTANTS = 3  # sampling instants without a set after which a leg's speed estimate restarts
+from ...tracking.steps import GAP_INSTANTS  # sampling instants without a set after which a leg's speed restarts
+
 REPEATS = 3  # a count repeated this many sets after it first came can be stuck (fewer happen as a leg stops)
 
 

@@ -22,11 +22,12 @@ class ServiceView(Protocol):
     Attributes:
         config: the service's configuration (HTTP token, store path).
         cycles: the fixtures' cycles by name (empty until the service is ready).
-        writer: the store's writer thread (None until ready): its ``error``.
+        writer: the store's writer thread (None until ready): its ``error`` and ``dropped`` rows.
         changeover: targets, recipes and guidance (None until ready).
         health_sections: more ``/health`` sections by name, each a callable returning a dict.
         frames: frames read from the bus for a fixture since the start.
         unknown_frames: frames read whose id no fixture uses (and error or remote frames).
+        lag: seconds between a frame's bus stamp and its handling, at the last check.
     """
 
     config: ServiceConfig
@@ -36,6 +37,7 @@ class ServiceView(Protocol):
     health_sections: dict[str, Callable[[], dict]]
     frames: int
     unknown_frames: int
+    lag: float
 
     @property
     def ready(self) -> bool:

@@ -35,6 +35,10 @@ FAULTS = (
     "late_frame",
     "duplicate_id",
     "held_brake",
+    "lost_sets",
+    "repeated_frames",
+    "ahead_stamp",
+    "gateway_burst",
 )
 
 
@@ -51,12 +55,16 @@ class Fault:
         legs: affected legs (0-based).
         start: seconds after the simulation starts.
         duration: seconds (a ``spike`` affects the first set at or after ``start`` only).
-        probability: chance that a frame is lost (``dropped_frames``).
+        probability: chance that a frame is lost (``dropped_frames``) or a whole set (``lost_sets``).
         size: reading offset (m) of a ``spike``, a ``step`` (an encoder that slipped, for
             ``duration``) or the second sender's frame of a ``duplicate_id`` (sent on the leg's
             CAN id just before the genuine frame).
         sets: a ``late_frame`` leg sends its frame of this many sets earlier, with that set's
-            timestamp, last in the set, instead of the current one.
+            timestamp, last in the set, instead of the current one; ``repeated_frames``: every
+            frame is sent this many times in a row, stamp and all (a gateway's repeats);
+            ``gateway_burst``: this many sets are held, then sent in order with the stamp of the
+            last frame (a gateway that batches and stamps a burst once).
+        seconds: an ``ahead_stamp`` leg's frames carry stamps this much later (s) than its set's.
     """
 
     kind: str
@@ -66,6 +74,7 @@ class Fault:
     probability: float = 1.0
     size: float = 0.0
     sets: int = 1
+    seconds: float = 0.0
 
     def active(self, t: float) -> bool:
         """True while the fault acts at simulation time ``t`` (s)."""
@@ -242,15 +251,19 @@ def _changeover(t: Table) -> ChangeoverScript:
 def _fault(t: Table) -> Fault:
     kind = t.text("kind", choices=FAULTS)
     leg = t.take("leg", 0)
-    legs = tuple(range(6)) if leg == 0 and kind == "dropped_frames" else (t.integer("leg", lo=1, hi=6) - 1,)
+    every = kind in ("lost_sets", "repeated_frames", "gateway_burst") or (leg == 0 and kind == "dropped_frames")
+    legs = tuple(range(6)) if every else (t.integer("leg", lo=1, hi=6) - 1,)
     fault = Fault(
         kind=kind,
         legs=legs,
         start=t.number("start", 0.0, 0.0, 1e6),
         duration=t.number("duration", {"spike": 0.0, "step": 1e6, "held_brake": 1e6}.get(kind, 1.0), 0.0, 1e6),
-        probability=t.number("probability", 0.2, 0.0, 1.0) if kind == "dropped_frames" else 1.0,
+        probability=t.number("probability", 0.2, 0.0, 1.0) if kind in ("dropped_frames", "lost_sets") else 1.0,
         size=t.number("size", 0.002, -0.5, 0.5) if kind in ("spike", "step", "duplicate_id") else 0.0,
-        sets=t.integer("sets", 1, 1, 1000) if kind == "late_frame" else 1,
+        sets=t.integer("sets", {"late_frame": 1, "repeated_frames": 10, "gateway_burst": 5}.get(kind, 1), 1, 1000)
+        if kind in ("late_frame", "repeated_frames", "gateway_burst")
+        else 1,
+        seconds=t.number("seconds", 0.05, -10.0, 10.0) if kind == "ahead_stamp" else 0.0,
     )
     t.finish()
     return fault

@@ -84,6 +84,11 @@ class _Encoders:
         self.past: deque[list[can.Message | None]] = deque(maxlen=1001)
         self.late: dict[int, int] = {}
         self.duplicate: dict[int, float] = {}
+        self.ahead: dict[int, float] = {}  # leg -> seconds its stamps run ahead (ahead_stamp)
+        self.repeats = 1  # times each frame is sent (repeated_frames)
+        self.burst = 0  # sets a gateway holds before sending them with one stamp (gateway_burst)
+        self.held: list[can.Message] = []
+        self.held_sets = 0
 
     def pose(self) -> np.ndarray:
         n = len(self.sim.poses)
@@ -143,6 +148,7 @@ class _Encoders:
         err, warn, drop = [False] * 6, [False] * 6, [False] * 6
         self.late = {}  # leg -> sets: send that old frame last instead (late_frame)
         self.duplicate = {}  # leg -> reading of a second sender (duplicate_id)
+        self.ahead, self.repeats, self.burst = {}, 1, 0
         active = []
         for i, f in enumerate(self.sim.faults):
             if f.kind == "spike":
@@ -175,6 +181,14 @@ class _Encoders:
                     self.late[k] = f.sets
                 elif f.kind == "duplicate_id":
                     self.duplicate[k] = float(r[k] + f.size)
+                elif f.kind == "ahead_stamp":
+                    self.ahead[k] = f.seconds
+                elif f.kind == "repeated_frames":
+                    self.repeats = f.sets
+                elif f.kind == "gateway_burst":
+                    self.burst = f.sets
+            if f.kind == "lost_sets" and self.rng.random() < f.probability:
+                drop = [True] * 6
         msgs: list[can.Message | None] = []
         for k, leg in enumerate(self.cfg.legs):
             try:
@@ -241,7 +255,7 @@ class Simulator:
             msgs = [None] * 6
         for k, m in enumerate(msgs):
             if m is not None and stamp is not None:
-                m.timestamp = stamp + k * FRAME_TIME
+                m.timestamp = stamp + k * FRAME_TIME + enc.ahead.get(k, 0.0)
         enc.past.append(list(msgs))
         order: list[can.Message | None] = []
         for k, m in enumerate(msgs):
@@ -259,9 +273,17 @@ class Simulator:
             if beat:
                 enc.next_beat = t_sim + enc.cfg.canopen.heartbeat
             order[:0] = master_frames(enc.cfg.canopen, None if stamp is None else stamp - FRAME_TIME, beat)
-        for m in order:
-            if m is not None:
-                self.bus.send(m)
+        out = [m for m in order if m is not None for _ in range(enc.repeats)]
+        if enc.burst > 1 or enc.held:  # a gateway: the burst goes out at once, stamped with its last frame
+            enc.held += out
+            enc.held_sets += 1
+            out = []
+            if enc.burst <= 1 or enc.held_sets >= enc.burst:
+                out, enc.held, enc.held_sets = enc.held, [], 0
+                for m in out:
+                    m.timestamp = out[-1].timestamp
+        for m in out:
+            self.bus.send(m)
         if stamp is not None:
             t_first, t_last = stamp, stamp + 5 * FRAME_TIME
         else:

@@ -36,7 +36,8 @@ class StoreWriter:
     def __init__(self, store: Store, flush_interval: float = 0.5, max_pending: int = MAX_PENDING):
         self.store, self.flush_interval = store, flush_interval
         self.error: str | None = None
-        self.dropped = 0  # sample rows dropped because the log was full
+        #: sample rows lost, since the start: the log was full, or a store error failed their batch
+        self.dropped = 0
         self._rows: deque[tuple] = deque()  # append / popleft are atomic: no lock on the cycle's path
         self._max = max_pending
         self._locks: queue.SimpleQueue = queue.SimpleQueue()
@@ -86,6 +87,7 @@ class StoreWriter:
             for event, done in locks:
                 if not self._write(partial(self.store.add_lock, event, pending), done):
                     self._retry.append((event, done))  # tried again at the next batch: stored once it can be
+                    self.dropped += len(pending)  # the rows go with the failed transaction
                 pending = []  # committed with the lock (or dropped with it on a store error)
             if pending and not self._write(partial(self.store.add_samples, pending)):
                 self.dropped += len(pending)
@@ -103,7 +105,12 @@ class StoreWriter:
             self.error = error
             return False
         if self.error is not None:
-            log.warning("store %s: writing again (%d locks waited)", self.store.path, len(self._retry))
+            log.warning(
+                "store %s: writing again (%d locks waited; %d sample rows lost since the start)",
+                self.store.path,
+                len(self._retry),
+                self.dropped,
+            )
             self.error = None
         if done is not None and result is not None:
             done(result)

@@ -1,4 +1,8 @@
-"""Steps: legs whose reading jumped and stayed there (a slipped encoder, swapped legs), not a spike."""
+"""Steps: legs whose reading jumped and stayed there (a slipped encoder, swapped legs), not a spike.
+
+Used by the fixture service's cycle (which latches them) and by ``hexapod track --readings``
+(:func:`~hexapod_model.studies.track.track_log`, which flags every later row).
+"""
 
 from __future__ import annotations
 
@@ -6,8 +10,7 @@ import math
 
 import numpy as np
 
-from .stuck import GAP_INSTANTS
-
+GAP_INSTANTS = 3  # sampling instants without a set after which a leg's trend restarts
 STEP_SIGMAS = 5.0  # a step estimate beyond this many of its sigmas is a step (StepDetector)
 
 

@@ -1,0 +1,85 @@
+"""The bus as the field has it, through FixtureService on the virtual bus: no false latch, no wrong name."""
+
+from __future__ import annotations
+
+import time
+
+import can
+import pytest
+
+from hexapod_model.service import FixtureService, Simulator
+
+from ..conftest import hexapod
+from .helpers import service_config, sim_config
+
+
+def serve(tmp_path, faults, seconds=4.0):
+    """Run the service with one simulated fixture (100 Hz, trajectory A); the records and the cycle."""
+    config = service_config(tmp_path)
+    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A", "faults": faults}])
+    records = []
+    hexa = hexapod("reference")
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    service = FixtureService(config, hexapods={"left": hexa}, http=False)
+    service.subscribe(records.append)
+    try:
+        service.start()
+        simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
+        simulator.run(seconds)
+        time.sleep(0.2)
+        cycle = service.cycles["left"]
+    finally:
+        service.stop()
+        bus.shutdown()
+    return records, cycle
+
+
+@pytest.mark.parametrize(
+    "fault",
+    [
+        {"kind": "lost_sets", "probability": 0.3, "start": 0.3, "duration": 60},
+        {"kind": "repeated_frames", "sets": 10, "start": 0.3, "duration": 60},
+    ],
+)
+def test_lost_sets_and_repeated_frames_latch_nothing(tmp_path, fault):
+    records, cycle = serve(tmp_path, [fault])
+    assert cycle.fault is None, cycle.fault
+    assert sum(r.status == "ok" for r in records) > 150
+    if fault["kind"] == "repeated_frames":
+        assert cycle.counters["repeated_frames"] > 9 * 6 * 150
+
+
+def test_a_leg_stamped_50_ms_ahead_is_the_one_named_and_no_record_runs_ahead(tmp_path):
+    records, cycle = serve(tmp_path, [{"kind": "ahead_stamp", "leg": 4, "seconds": 0.05, "start": 1.0, "duration": 60}])
+    assert cycle.fault is None, cycle.fault
+    times = [r.t for r in records]
+    assert all(b >= a for a, b in zip(times, times[1:])), "record times ran backwards"
+    later = [r for r in records if r.t >= records[0].t + 1.2]
+    assert later and not any(r.status == "ok" for r in later)
+    for r in later:
+        if r.status == "silent_leg" and len(r.flags) == 6:  # the simulator's thread stalled: every leg was silent
+            continue
+        assert {f.split(":")[1] for f in r.flags if ":leg" in f} == {"leg4"}, r.flags
+    assert cycle.counters["ahead_frames"] > 100
+
+
+def test_a_batching_gateway_gives_no_wrong_ok_through_the_service(tmp_path):
+    config = service_config(tmp_path)
+    fault = {"kind": "gateway_burst", "sets": 5, "start": 0.0, "duration": 60}
+    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A", "faults": [fault]}])
+    records = []
+    hexa = hexapod("reference")
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    service = FixtureService(config, hexapods={"left": hexa}, http=False)
+    service.subscribe(records.append)
+    try:
+        service.start()
+        simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
+        simulator.run(3.0)
+        time.sleep(0.2)
+    finally:
+        service.stop()
+        bus.shutdown()
+    assert len(records) > 100
+    assert not any(r.status == "ok" for r in records), [r.flags for r in records if r.status == "ok"][:3]
+    assert sum("batched_stamps" in r.flags for r in records) > 100
