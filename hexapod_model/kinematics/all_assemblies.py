@@ -40,6 +40,7 @@ from ..description.geometry import HexapodGeometry, LegGeometry
 from ..description.model import ClosedLoopModel
 from ..exceptions import GeometryError, WorkspaceError
 from ..lie import pose_distance, rpy_to_matrix
+from .body_check import BodyCheck
 from .newton.solver import NewtonSolver, Solution
 from .three_six import ThreeSixFK
 
@@ -47,6 +48,8 @@ SAME = 5e-7  # times the base radius (1e-7 m on the presets): two poses closer t
 SAMPLE_ANGLE = np.radians(40.0)  # rad: roll, pitch, yaw range of the multi-start search's poses
 DEFAULT_STARTS = 64  # starts of the multi-start search besides home
 MARGIN = 3.0  # a result competes with the assemblies within this many times its distance from the start
+#: what an assembly must lie within to compete (the last three with the body check on)
+LIMITS = "the stroke and joint limits, the cones, the collision-free set and the envelope"
 WARM_CHECK = 5e-3  # times the base radius (1 mm on the presets): a warm start farther in a reading is checked
 
 
@@ -90,6 +93,8 @@ class PoseSolver(Protocol):
     default_tol: float
     #: joint ids held by direct kinematics
     held_forward: tuple[int, ...]
+    #: the cones, collision and envelope check (None: off)
+    body: BodyCheck | None
 
     @property
     def home_pose(self) -> np.ndarray:
@@ -186,10 +191,12 @@ class AssemblyFinder:
             poses = self._search(readings, starts, seed)
             method, complete = f"multi-start ({starts} starts)", False
         inside: list[Solution] = []
+        body = self.hexa.body
         for T in poses:
-            sol = self.hexa.inverse(T, check=False)
+            sol = self.hexa.inverse(T, check=False)  # cone_limit or collision when the body check is on
             if sol.converged and np.max(np.abs(sol.lengths - readings)) <= 5e-9 * self.length:
-                inside.append(sol)
+                if body is None or body.within_envelope(sol.pose):
+                    inside.append(sol)
         ref = self.hexa.home_pose if reference is None else reference
         inside.sort(key=lambda s: pose_distance(ref, s.pose, self.length))
         return Assemblies(tuple(inside), len(poses) - len(inside), complete, method)
@@ -237,11 +244,16 @@ def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: o
     found = finder.find(readings, reference)
     within, length = found.solutions, finder.length
     same = SAME * length
+    body = hexa.body
+    if sol.status == "converged" and body is not None and not body.acceptable(sol):
+        if not within:
+            return sol  # no assembly the machine can take: the connected one, with its flags
+        sol = _replace(sol, "not_found", sol.message, ())  # beyond a cone, in collision or outside the envelope
     if not within:
         if found.outside == 0:
             why = "the resultant polynomial of the 3-6 platform has no real root for these readings"
             return _replace(sol, "no_assembly", f"no real assembly: {why}", ("not_closed",) if not sol.closed else ())
-        msg = f"all {found.outside} real assemblies for these readings lie outside the stroke or joint limits"
+        msg = f"all {found.outside} real assemblies for these readings lie outside {LIMITS}"
         return _replace(sol, "out_of_limits", msg, sol.flags if sol.status == "out_of_limits" else ("not_closed",))
     if sol.status == "converged":
         d = pose_distance(reference, sol.pose, length)
@@ -253,12 +265,12 @@ def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: o
         first = []
         if len(within) == 1:  # Newton missed it or could not certify it; it is the only one within the limits
             only = within[0]
-            msg = "the only assembly within the stroke and joint limits (resultant polynomial of the 3-6 platform)"
+            msg = f"the only assembly within {LIMITS} (resultant polynomial of the 3-6 platform)"
             return Solution(only.pose, only.q, only.lengths, "converged", sol.iterations, 0.0, only.jacobian, msg)
     ordered = first + [s for s in within if all(pose_distance(s.pose, f.pose, length) > same for f in first)]
     start = "home" if cold else "the guess"
     msg = (
-        f"{len(ordered)} assemblies within the stroke and joint limits fit these readings (resultant polynomial "
+        f"{len(ordered)} assemblies within {LIMITS} fit these readings (resultant polynomial "
         f"of the 3-6 platform), another as near {start} as {MARGIN:g} times the nearest; "
         + (f"the one connected to {start} is first" if first else f"none is certified as connected to {start}")
     )

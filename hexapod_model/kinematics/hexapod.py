@@ -25,6 +25,7 @@ from ..exceptions import InputError
 from . import batch, hybrid
 from .all_assemblies import DEFAULT_STARTS, Assemblies
 from .batch import BatchResult
+from .body_check import BodyCheck
 from .certificate import NEAR_SINGULAR_FACTOR
 from .engine import DEFAULT_MAX_ITER, HOME_CONDITION_LIMIT, SolveEngine
 from .input_checks import LIMIT_SLACK, MAX_TOL, POSE_TOLERANCE, check_pose, check_vector
@@ -59,13 +60,26 @@ class Hexapod:
     numba-compiled ones (:mod:`~hexapod_model.kinematics.newton.kernel_sets`): the same answers, several
     times slower per solve, but no numba import (~1 s, 130 MB) nor first compilation (~20 s).
 
+    ``check_body`` (default True; settable later as :attr:`check_body`) judges every answer
+    against the joint cones and the collision bodies (:mod:`~hexapod_model.kinematics.body_check`):
+    inverse and hybrid kinematics return ``cone_limit`` or ``collision``, direct kinematics
+    flags them. ``False`` skips the check (a warm forward solve then costs no clearance query)
+    and the envelope's say in the choice between assemblies.
+
     The solves run on :attr:`engine` (:class:`~hexapod_model.kinematics.engine.SolveEngine`):
     the per-thread solvers, the limits and the encoder model, for code that builds on them.
     """
 
-    def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None, *, compiled: bool = True):
+    def __init__(
+        self,
+        model: ClosedLoopModel,
+        geometry: HexapodGeometry | None = None,
+        *,
+        compiled: bool = True,
+        check_body: bool = True,
+    ):
         #: the solve engine: solvers, limits, the encoder model, how outcomes become answers
-        self.engine = engine = SolveEngine(model, geometry, compiled=compiled)
+        self.engine = engine = SolveEngine(model, geometry, compiled=compiled, check_body=check_body)
         self.closed_loop = model
         #: whether the solves run the numba-compiled kernels
         self.compiled = engine.compiled
@@ -89,6 +103,21 @@ class Hexapod:
         self.base_radius, self.scale = engine.base_radius, engine.scale
         #: the closure residual a solve stops at by default (m, rad): ``DEFAULT_TOL * scale``
         self.default_tol = engine.default_tol
+
+    @property
+    def check_body(self) -> bool:
+        """Whether answers are judged against the cones and collision bodies (see the class doc)."""
+        return self.engine.body is not None
+
+    @check_body.setter
+    def check_body(self, on: bool) -> None:
+        engine = self.engine
+        if not isinstance(on, bool):
+            raise InputError("check_body", on, "expected True or False")
+        if on and engine.body is None:
+            engine.body = BodyCheck(self.closed_loop, self.geometry, self.compiled)
+        elif not on:
+            engine.body = None
 
     # ----- construction -----
     @classmethod
@@ -212,7 +241,8 @@ class Hexapod:
                 # converged certified within the limits, not near a singularity: engine.attempted()'s Solution
                 q, pose, jac, it, res, _ = done
                 readings = q[engine.prismatic_q]  # lengths_of(q) without an encoder model
-                return new_solution(pose, q, readings, "converged", it, res, jac, "", (), (), int(solver.sign))
+                sol = new_solution(pose, q, readings, "converged", it, res, jac, "", (), (), int(solver.sign))
+                return sol if engine.body is None else engine.body.judged(sol, True)
             held = engine.solver(engine.held_forward)
             return engine.attempted(held, done, lengths, lengths, start, tol, max_iter, sign, guess, check, False)
         return engine.forward(lengths, guess, tol, max_iter, check, fast)
