@@ -17,7 +17,7 @@ import tomllib
 from pathlib import Path
 
 from hexapod_model import Hexapod
-from hexapod_model.kinematics.rotations import rpy_to_matrix, xyz_rpy_to_pose
+from hexapod_model.lie import rpy_to_matrix, xyz_rpy_to_pose
 from hexapod_model.planning import FixtureCell, Move, plan_changeover
 
 ROOT = Path(__file__).resolve().parents[1]

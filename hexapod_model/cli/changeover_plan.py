@@ -79,7 +79,7 @@ def _starts(args: argparse.Namespace, config, names: list[str], hexapods: dict) 
     """``fixture -> 4x4 start pose``: home, the running service's poses or the stored lock poses."""
     import numpy as np
 
-    from ..kinematics.rotations import quaternion_to_matrix
+    from ..lie import quaternion_to_matrix
 
     if args.from_home:
         return {n: hexapods[n].home_pose for n in names}

@@ -14,7 +14,7 @@ import pytest
 import hexapod_model as hm
 from hexapod_model.cli.main import main
 from hexapod_model.kinematics.cones import check_cones
-from hexapod_model.kinematics.rotations import xyz_rpy_to_pose
+from hexapod_model.lie import xyz_rpy_to_pose
 
 ROOT = Path(__file__).resolve().parents[2]
 THICK = ROOT / "docs" / "geometries" / "thick_legs.toml"

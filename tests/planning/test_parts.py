@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from hexapod_model.extras import MissingExtraError
-from hexapod_model.kinematics.rotations import xyz_rpy_to_pose
+from hexapod_model.lie import xyz_rpy_to_pose
 from hexapod_model.planning import Blocked, carry, robot
 from hexapod_model.planning.order import EXACT_UP_TO, best_order
 from hexapod_model.planning.timing import line, line_duration

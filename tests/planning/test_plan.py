@@ -28,7 +28,7 @@ pytest.importorskip("toppra", reason="toppra is not installed: pip install 'hexa
 pytest.importorskip("coal", reason="coal is not installed: pip install 'hexapod_model[plan]'")
 
 from hexapod_model.cli.main import main  # noqa: E402
-from hexapod_model.kinematics.rotations import xyz_rpy_to_pose  # noqa: E402
+from hexapod_model.lie import xyz_rpy_to_pose  # noqa: E402
 from hexapod_model.planning import PHASES, Plan  # noqa: E402
 from hexapod_model.planning.robot import Arm  # noqa: E402
 from hexapod_model.planning.writers import csv_header, read_plan  # noqa: E402

@@ -9,7 +9,7 @@ import pinocchio as pin
 
 from hexapod_model.cli import plan_view
 from hexapod_model.cli.main import main
-from hexapod_model.kinematics.rotations import matrix_to_quaternion, xyz_rpy_to_pose
+from hexapod_model.lie import matrix_to_quaternion, xyz_rpy_to_pose
 from hexapod_model.planning.writers import read_plan
 from hexapod_model.service.store import LockEvent, Store
 from hexapod_model.service.targets import recipe_from_json
