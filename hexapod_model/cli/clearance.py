@@ -8,8 +8,8 @@ import json
 import numpy as np
 
 from ..files import atomic_write_text, check_output_path
-from ..kinematics.input_checks import check_vector
 from ..kinematics.cones import check_cones
+from ..kinematics.input_checks import check_vector
 from ..lie import xyz_rpy_to_pose
 from ._common import add_hexapod_argument, hexapod_of
 

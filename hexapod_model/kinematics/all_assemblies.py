@@ -7,25 +7,32 @@ answers it globally:
 * **3-6 hexapods** (legs meeting in pairs at three platform points, e.g. preset ``3-6``): the
   resultant polynomial of :mod:`.three_six` gives *every* real assembly (at most 16, 1-2 ms);
   the set is complete (``complete``). :meth:`.hexapod.Hexapod.forward` uses it by itself
-  (:func:`review`): a result (cold, or warm with a reading more than ``WARM_CHECK`` base radii from the
-  guess's) stays ``converged`` only when no other assembly within the stroke and joint limits
-  lies within ``MARGIN`` times its distance from the start (home or the guess; poses compared
-  by :func:`hexapod_model.lie.pose_distance`, rotations times the base radius); otherwise it is
-  ``ambiguous_assembly`` with all of them as candidates, the connected one first. Readings the
+  (:func:`review`). Only the assemblies within the stroke and joint limits, and, with the body
+  check on (:mod:`.body_check`), within the joint cones, the collision-free set and the operating
+  envelope, compete. A cold result stays ``converged`` only when it is the one such assembly;
+  a warm one with a reading more than ``WARM_CHECK`` base radii from the guess's, when no other
+  lies within ``MARGIN`` times its distance from the guess (poses compared by
+  :func:`hexapod_model.lie.pose_distance`, rotations times the base radius); otherwise it is
+  ``ambiguous_assembly`` with all of them as candidates, the connected one first. A connected
+  result beyond a cone, in collision or outside the envelope does not compete: the one
+  assembly that does is returned (several: ``ambiguous_assembly``; none: the connected result
+  with its flags). Readings the
   polynomial has no real root for are ``no_assembly``; when Newton found nothing or could not
   follow the path from home, the one assembly within the limits is returned as ``converged``
   (several: ``ambiguous_assembly``). Warm starts closer than ``WARM_CHECK`` base radii (a
   tracker's samples) keep the connected assembly unchecked. Every distance here is relative to
   the base radius, so a hexapod scaled by any factor gets the same answers. (At home's readings the ``3-6`` preset has
-  four assemblies within its limits: home and three tilted by about 85 deg, 60 mm lower.)
+  four assemblies within its stroke and joint limits: home and three tilted by about 85 deg, 60 mm
+  lower, beyond its 45 deg ball-joint cones.)
 * **other hexapods**: a multi-start search: plain Newton from home and from ``starts``
   configurations of random poses (translation within the largest stroke, roll, pitch and yaw
   within ``SAMPLE_ANGLE``); every distinct closed configuration it reaches. It finds what its
   starts lead to and **proves nothing** about the assemblies it did not reach (``complete`` is
   False): more starts find more of them, at ~30 us a start.
 
-Each assembly is checked against the stroke and joint limits by inverse kinematics of its
-pose (the leg joints of an offset-Cardan leg follow from the pose); those outside are counted.
+Each assembly is checked against the stroke and joint limits (and the body check's cones,
+collisions and envelope) by inverse kinematics of its pose (the leg joints of an offset-Cardan
+leg follow from the pose); those outside are counted.
 """
 
 from __future__ import annotations
@@ -258,8 +265,8 @@ def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: o
     if sol.status == "converged":
         d = pose_distance(reference, sol.pose, length)
         rivals = [s for s in within if pose_distance(s.pose, sol.pose, length) > same]
-        if not any(pose_distance(reference, s.pose, length) <= MARGIN * d for s in rivals):
-            return sol  # clearly the assembly nearest the start
+        if not rivals or not cold and not any(pose_distance(reference, s.pose, length) <= MARGIN * d for s in rivals):
+            return sol  # the only assembly (cold), clearly the one nearest the guess (warm)
         first = [sol]
     else:
         first = []
@@ -271,7 +278,7 @@ def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: o
     start = "home" if cold else "the guess"
     msg = (
         f"{len(ordered)} assemblies within {LIMITS} fit these readings (resultant polynomial "
-        f"of the 3-6 platform), another as near {start} as {MARGIN:g} times the nearest; "
+        f"of the 3-6 platform){'' if cold else f', another as near {start} as {MARGIN:g} times the nearest'}; "
         + (f"the one connected to {start} is first" if first else f"none is certified as connected to {start}")
     )
     if sol.status == "ambiguous_assembly":

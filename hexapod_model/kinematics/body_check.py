@@ -36,7 +36,7 @@ from ..description.geometry import HexapodGeometry
 from ..description.model import ClosedLoopModel
 from ..exceptions import UrdfError
 from ..lie import matrix_to_rpy
-from .cones import ConeAngles, cone_angles, cone_limits
+from .cones import ConeAngles, ConeGeometry, cone_limits
 from .newton.solver import Solution
 
 if TYPE_CHECKING:
@@ -62,6 +62,8 @@ class BodyCheck:
         #: (6, 2) cone half-angles (rad, ``inf``: none)
         self.limits = cone_limits(geometry)
         self.has_cones = bool(np.isfinite(self.limits).any())
+        self._cones = ConeGeometry(clm) if self.has_cones else None
+        self._local = threading.local()
         #: operating box half-widths (x, y, z [m], roll, pitch, yaw [rad]) about home, or None
         self.envelope = None if geometry is None else geometry.envelope
         self._home = clm.home.homogeneous.copy()
@@ -86,8 +88,11 @@ class BodyCheck:
     def violations(self, q: np.ndarray) -> list[tuple[str, str]]:
         """``(status, message)`` of each limit configuration ``q`` violates: ``cone_limit``, ``collision``."""
         out = []
-        if self.has_cones:
-            cones = ConeAngles(cone_angles(self.clm, q), self.limits)
+        if self._cones is not None:
+            data = getattr(self._local, "data", None)
+            if data is None:
+                data = self._local.data = self.clm.model.createData()
+            cones = ConeAngles(self._cones.angles(q, data), self.limits)
             if not cones.within:
                 out.append(("cone_limit", cones.message()))
         query = self.query()

@@ -160,7 +160,8 @@ class SolveEngine(JointSpace):
             sol = self.body.judged(sol, forward)
             status, msg = sol.status, sol.message
         if check and status != "converged":
-            raise ERRORS.get(status, ConvergenceError)(sol, f"{status}: {msg}")
+            text = msg if msg.startswith(f"{status}:") else f"{status}: {msg}"  # the body check's names it
+            raise ERRORS.get(status, ConvergenceError)(sol, text)
         return sol
 
     def finish(

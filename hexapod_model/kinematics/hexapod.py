@@ -60,8 +60,9 @@ class Hexapod:
     numba-compiled ones (:mod:`~hexapod_model.kinematics.newton.kernel_sets`): the same answers, several
     times slower per solve, but no numba import (~1 s, 130 MB) nor first compilation (~20 s).
 
-    ``check_body`` (default True; settable later as :attr:`check_body`) judges every answer
-    against the joint cones and the collision bodies (:mod:`~hexapod_model.kinematics.body_check`):
+    ``check_body`` (default True; every constructor takes it, and :attr:`check_body` may be set
+    later) judges every answer against the joint cones and the collision bodies
+    (:mod:`~hexapod_model.kinematics.body_check`):
     inverse and hybrid kinematics return ``cone_limit`` or ``collision``, direct kinematics
     flags them. ``False`` skips the check (a warm forward solve then costs no clearance query)
     and the envelope's say in the choice between assemblies.
@@ -121,39 +122,39 @@ class Hexapod:
 
     # ----- construction -----
     @classmethod
-    def from_urdf(cls, path: str | Path, *, compiled: bool = True) -> Hexapod:
+    def from_urdf(cls, path: str | Path, *, compiled: bool = True, check_body: bool = True) -> Hexapod:
         """Load a URDF file, or a preset when ``path`` is a preset name (see ``PRESETS``)."""
         if str(path) in PRESETS:
-            return cls.from_preset(str(path), compiled=compiled)
-        return cls(ClosedLoopModel.from_file(path), compiled=compiled)
+            return cls.from_preset(str(path), compiled=compiled, check_body=check_body)
+        return cls(ClosedLoopModel.from_file(path), compiled=compiled, check_body=check_body)
 
     @classmethod
-    def load(cls, spec: str | Path, *, compiled: bool = True) -> Hexapod:
+    def load(cls, spec: str | Path, *, compiled: bool = True, check_body: bool = True) -> Hexapod:
         """A preset name, or a URDF, geometry (``.toml``, ``.yaml``, ``.yml``, ``.json``) or MJCF (``.xml``) file.
 
         This is what every ``hexapod`` sub-command does with its HEXAPOD argument.
         """
         if str(spec).lower().endswith(GEOMETRY_SUFFIXES):
-            return cls.from_geometry(load_geometry(spec), compiled=compiled)
+            return cls.from_geometry(load_geometry(spec), compiled=compiled, check_body=check_body)
         if str(spec).lower().endswith(MJCF_SUFFIXES):
-            return cls.from_mjcf(spec, compiled=compiled)
-        return cls.from_urdf(spec, compiled=compiled)
+            return cls.from_mjcf(spec, compiled=compiled, check_body=check_body)
+        return cls.from_urdf(spec, compiled=compiled, check_body=check_body)
 
     @classmethod
-    def from_mjcf(cls, path: str | Path, *, compiled: bool = True) -> Hexapod:
+    def from_mjcf(cls, path: str | Path, *, compiled: bool = True, check_body: bool = True) -> Hexapod:
         """Load an MJCF file (``hexapod mjcf``, docs/mjcf.md) through Pinocchio's MJCF parser and constraint models."""
-        return cls(load_mjcf(path), compiled=compiled)
+        return cls(load_mjcf(path), compiled=compiled, check_body=check_body)
 
     @classmethod
-    def from_preset(cls, name: str = "reference", *, compiled: bool = True) -> Hexapod:
+    def from_preset(cls, name: str = "reference", *, compiled: bool = True, check_body: bool = True) -> Hexapod:
         """One of the bundled geometries: ``reference``, ``intersecting``, ``spherical``, ``3-6``, ``guideway``."""
-        return cls.from_geometry(get_preset(name), compiled=compiled)
+        return cls.from_geometry(get_preset(name), compiled=compiled, check_body=check_body)
 
     @classmethod
-    def from_geometry(cls, geometry: HexapodGeometry, *, compiled: bool = True) -> Hexapod:
+    def from_geometry(cls, geometry: HexapodGeometry, *, compiled: bool = True, check_body: bool = True) -> Hexapod:
         """Generate the URDF of ``geometry`` in memory and load it."""
         clm = ClosedLoopModel(geometry_to_urdf(geometry), f"<geometry {geometry.name}>")
-        return cls(clm, geometry, compiled=compiled)
+        return cls(clm, geometry, compiled=compiled, check_body=check_body)
 
     # ----- conversions -----
     @property

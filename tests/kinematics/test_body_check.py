@@ -159,3 +159,20 @@ def test_the_envelope_decides_between_assemblies():
             assert all(boxed.engine.body.within_envelope(P) for P in b.candidates)
         decided += a.status == "ambiguous_assembly" and b.status == "converged"
     assert decided > 0
+
+
+def test_the_tracker_flags_a_path_through_a_collision(thick):
+    from hexapod_model.tracking.tracker import Tracker
+
+    hexa = hm.Hexapod.load(THICK)  # compiled: the tracker's warm path
+    yaws = np.linspace(30.0, 85.0, 111)
+    poses = [xyz_rpy_to_pose([0.0, 0.0, 0.40, 0.0, 0.0, y]) for y in yaws]
+    inside = [thick.clearance(T).collision for T in poses]
+    assert not inside[0] and inside[-1]
+    tracker = Tracker(hexa, "none", initial=hexa.inverse(poses[0]))
+    flagged = []
+    for T in poses:
+        r = tracker.step(hexa.inverse(T, check=False).lengths)
+        assert not r.failed
+        flagged.append("collision" in r.flags)
+    assert flagged == inside
