@@ -176,3 +176,10 @@ def test_the_tracker_flags_a_path_through_a_collision(thick):
         assert not r.failed
         flagged.append("collision" in r.flags)
     assert flagged == inside
+
+
+def test_legs_sharing_a_base_joint_are_not_a_collision():
+    """Jakobović and Jelenković's 3-3 model: two legs meet at each base and each platform point."""
+    hexa = hm.Hexapod.load(ROOT / "docs" / "geometries" / "seed002_model1.toml", compiled=False)
+    assert not hexa.clearance(hexa.q_home).collision
+    assert hexa.inverse(hexa.home_pose, check=False).status == "converged"
