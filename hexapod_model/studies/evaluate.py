@@ -204,7 +204,13 @@ def run_evaluation(
             for f in ckpt.glob("slice_*.npz"):
                 d = np.load(f)
                 done[int(d["index"])] = SliceResult(
-                    int(d["index"]), d["inside"], d["kappa"], d["sigma_min"], d["abs_det"], d["worst"], d["inside_limits"]
+                    int(d["index"]),
+                    d["inside"],
+                    d["kappa"],
+                    d["sigma_min"],
+                    d["abs_det"],
+                    d["worst"],
+                    d["inside_limits"],
                 )
         else:
             for f in ckpt.glob("slice_*.npz"):
