@@ -1,13 +1,14 @@
 """Workspace for a cone of tool orientations and its kinematic figures (Jakobović and Jelenković (2002) §II-III).
 
-A platform position ``x`` (tool point = platform origin, Jakobović and Jelenković's ``l_tool = 0``) belongs to
-the workspace when the inverse kinematics succeeds within the stroke and Cardan limits
+A platform position ``x`` (tool point = platform origin, Jakobović and Jelenković's ``l_tool = 0``)
+belongs to the workspace when the inverse kinematics succeeds within the stroke and Cardan limits
 (``status == "converged"``: also free of collision and within the joint cones when the hexapod
-checks its body, :mod:`~hexapod_model.kinematics.body_check`) for EVERY orientation of a cone (Jakobović and Jelenković (2002) Fig. 4): the tool axis
-(platform z) upright and tilted by ``cone_deg`` towards ``cone_samples`` equally spaced
-azimuths, with no rotation about the tool axis. For ``spherical`` and ``guideway`` legs, whose
-platform ball joint has no limit in the model, the leg must also stay within ``cardan_limit``
-of its home direction as seen from the platform (the paper's joint cone ``phi_max``).
+checks its body, :mod:`~hexapod_model.kinematics.body_check`) for EVERY orientation of a cone
+(Jakobović and Jelenković (2002) Fig. 4): the tool axis (platform z) upright and tilted by
+``cone_deg`` towards ``cone_samples`` equally spaced azimuths, with no rotation about the tool
+axis. For ``spherical`` and ``guideway`` legs, whose platform ball joint has no limit in the
+model, the leg must also stay within ``cardan_limit`` of its home direction as seen from the
+platform (the paper's joint cone ``phi_max``).
 
 At each workspace point the three figures of :mod:`hexapod_model.jacobian` (condition number,
 sigma_min, |det J|) are averaged over the orientations; their workspace averages are
