@@ -144,8 +144,16 @@ def evaluate_hexapod(hexa: Hexapod, settings: Settings = Settings(), spec: str =
 def _save_slice(ckpt: Path, r: SliceResult) -> None:
     buf = io.BytesIO()  # atomic: an interrupted write must not leave a broken slice
     limits = r.inside if r.inside_limits is None else r.inside_limits
-    arrays = {"inside": r.inside, "kappa": r.kappa, "sigma_min": r.sigma_min, "abs_det": r.abs_det, "worst": r.worst}
-    np.savez_compressed(buf, index=r.index, inside_limits=limits, **arrays)
+    np.savez_compressed(
+        buf,
+        index=r.index,
+        inside=r.inside,
+        kappa=r.kappa,
+        sigma_min=r.sigma_min,
+        abs_det=r.abs_det,
+        worst=r.worst,
+        inside_limits=limits,
+    )
     atomic_write_bytes(ckpt / f"slice_{r.index:03d}.npz", buf.getvalue())
 
 
