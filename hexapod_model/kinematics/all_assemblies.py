@@ -10,8 +10,9 @@ answers it globally:
   (:func:`review`). Only the assemblies within the stroke and joint limits, and, with the body
   check on (:mod:`.body_check`), within the joint cones, the collision-free set and the operating
   envelope, compete. A cold result stays ``converged`` only when it is the one such assembly;
-  a warm one with a reading more than ``WARM_CHECK`` base radii from the guess's, when no other
-  lies within ``MARGIN`` times its distance from the guess (poses compared by
+  a warm one with a reading more than ``WARM_CHECK`` base radii from the guess's (or a cold one
+  with the body check off, where the stroke and joint limits alone rarely decide), when no other
+  lies within ``MARGIN`` times its distance from the start (poses compared by
   :func:`hexapod_model.lie.pose_distance`, rotations times the base radius); otherwise it is
   ``ambiguous_assembly`` with all of them as candidates, the connected one first. A connected
   result beyond a cone, in collision or outside the envelope does not compete: the one
@@ -265,8 +266,9 @@ def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: o
     if sol.status == "converged":
         d = pose_distance(reference, sol.pose, length)
         rivals = [s for s in within if pose_distance(s.pose, sol.pose, length) > same]
-        if not rivals or not cold and not any(pose_distance(reference, s.pose, length) <= MARGIN * d for s in rivals):
-            return sol  # the only assembly (cold), clearly the one nearest the guess (warm)
+        strict = cold and body is not None  # the machine's limits decide a cold answer, not a distance
+        if not rivals or not strict and not any(pose_distance(reference, s.pose, length) <= MARGIN * d for s in rivals):
+            return sol  # the only assembly, or (warm, or the body check off) clearly the one nearest the start
         first = [sol]
     else:
         first = []
@@ -278,7 +280,7 @@ def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: o
     start = "home" if cold else "the guess"
     msg = (
         f"{len(ordered)} assemblies within {LIMITS} fit these readings (resultant polynomial "
-        f"of the 3-6 platform){'' if cold else f', another as near {start} as {MARGIN:g} times the nearest'}; "
+        f"of the 3-6 platform){'' if cold and body else f', another as near {start} as {MARGIN:g} times the nearest'}; "
         + (f"the one connected to {start} is first" if first else f"none is certified as connected to {start}")
     )
     if sol.status == "ambiguous_assembly":
