@@ -156,7 +156,9 @@ def probe_extent(hexa: Hexapod, step: float, max_steps: int = 400) -> np.ndarray
     """Box around home reachable along the axes.
 
     (3, 2) box (m, base frame) around home reachable along +-x, +-y, +-z with the platform
-    upright, found by marching outward in ``step`` increments; used to size the grid.
+    upright, found by marching outward in ``step`` increments; used to size the grid. Within
+    the stroke and joint limits alone (a pose beyond a cone or in collision still extends the
+    box), so that the grid, and the limits-only count on it, do not depend on the body check.
     """
     home = hexa.home_pose
     box = np.tile(home[:3, 3][:, None], (1, 2)).astype(float)
@@ -166,7 +168,7 @@ def probe_extent(hexa: Hexapod, step: float, max_steps: int = 400) -> np.ndarray
             for n in range(1, max_steps + 1):
                 T[axis, 3] = home[axis, 3] + sign * n * step
                 sol = hexa.inverse(T, guess=sol, check=False)
-                if sol.status != "converged":
+                if sol.status not in BODY_OK:
                     break
                 box[axis, side] = T[axis, 3]
     return box
