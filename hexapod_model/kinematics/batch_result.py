@@ -16,7 +16,7 @@ import numpy as np
 
 from ..exceptions import InputError
 from ..lie import quaternion_to_matrix
-from .body_check import BodyCheck
+from .body_check import BodyCheck, message_of
 from .certificate import NEAR_SINGULAR_FACTOR
 from .engine import SolveEngine
 from .input_checks import failure_status
@@ -192,7 +192,7 @@ def _judge_rows(
             continue
         found = body.violations(Q[k])
         if found:
-            msg = "; ".join(m for _, m in found)
+            msg = message_of(found, forward)
             messages[k] = f"{messages[k]}; {msg}" if messages[k] else msg
             if forward:
                 flags[k] = flags[k] + tuple(name for name, _ in found)

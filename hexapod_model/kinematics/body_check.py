@@ -46,6 +46,13 @@ if TYPE_CHECKING:
 BODY_STATUSES = ("cone_limit", "collision")
 
 
+def message_of(found: list[tuple[str, str]], forward: bool) -> str:
+    """The message of :meth:`BodyCheck.violations`: each names its flag; a status's own name is left to the status."""
+    first, *rest = found
+    head = first[1] if forward else first[1].removeprefix(f"{first[0]}: ")
+    return "; ".join([head, *(m for _, m in rest)])
+
+
 class BodyCheck:
     """Cones, clearance and envelope of one loaded hexapod (see the module doc).
 
@@ -112,7 +119,7 @@ class BodyCheck:
         found = self.violations(sol.q)
         if not found:
             return sol
-        msg = "; ".join(m for _, m in found)
+        msg = message_of(found, forward)
         msg = f"{sol.message}; {msg}" if sol.message else msg
         if forward:
             return replace(sol, flags=sol.flags + tuple(k for k, _ in found if k not in sol.flags), message=msg)

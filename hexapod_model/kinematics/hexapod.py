@@ -367,7 +367,8 @@ class Hexapod:
             poses: (N, 4, 4) base -> platform transforms, or (N, 7) rows ``x, y, z, qx, qy, qz, qw``
                 (metres; the quaternion of norm 1 within 1e-6).
             guess: where every row starts (default home).
-            warm: start each row from the last row that converged instead.
+            warm: start each row from the last row that converged instead (a row refused as
+                ``cone_limit`` or ``collision`` counts: its configuration closes within the limits).
             tol: closure residual to reach.
             max_iter: Newton step limit per row.
 
@@ -391,6 +392,6 @@ class Hexapod:
         return self.closed_loop.closure_errors(np.asarray(q, dtype=float))
 
 
-def load_hexapod(spec: str | Path, *, compiled: bool = True) -> Hexapod:
+def load_hexapod(spec: str | Path, *, compiled: bool = True, check_body: bool = True) -> Hexapod:
     """:meth:`Hexapod.load`: a preset name, URDF file or geometry file as a :class:`Hexapod`."""
-    return Hexapod.load(spec, compiled=compiled)
+    return Hexapod.load(spec, compiled=compiled, check_body=check_body)
