@@ -5,7 +5,8 @@
 
 For every preset (default all), ``N`` random poses of the box (home +- ``translation`` m,
 roll/pitch/yaw +- ``angle`` deg; default 10,000 poses, +-100 mm / +-40 deg) are drawn; those
-whose inverse kinematics is within the stroke and joint limits give leg readings. Each set of
+whose inverse kinematics is ``converged`` (within the stroke and joint limits, the joint cones
+and free of collision: the body check is on, docs/solver.md) give leg readings. Each set of
 readings is solved cold (from home) and warm (from the configuration of the pose moved by
 ``warm-offset`` m in a random direction) and classified:
 

@@ -5,7 +5,8 @@ beta = 0 put the two anchors of a pair at the same point (3-3 layouts); model 2'
 the radii of the guideway ends (the paper's r11, r12) and r_b2 the platform joint radius; legs of base pair k go
 to the platform points at 120k +- 60 deg; phi_max = 45 deg is the Cardan angle limit; the home
 pose is mid-stroke (model 1) / sliders at mid-rail (model 2); the tool length l_alat = 0 puts the
-tool point at the platform origin.
+tool point at the platform origin. The paper counts a point only without "collision between
+struts" but gives no strut size: 30 mm struts (``STRUT_RADIUS``) in 34 mm joint housings.
 
 Usage: python scripts/make_seed002_geometries.py [OUTDIR]
 """
@@ -23,6 +24,9 @@ from hexapod_model.description.geometry import HexapodGeometry, LegGeometry
 from hexapod_model.kinematics.hexapod import Hexapod
 
 UNIT = 0.01  # metres per paper unit
+#: m: the struts' collision radius and the joint housings' (the paper states no strut size): 30 mm
+#: struts in 34 mm housings keep model 2's paired struts, 35 mm apart on their guideways, clear at home
+STRUT_RADIUS, HOUSING_RADIUS = 0.015, 0.017
 
 
 def _circle(r: float, deg: float, z: float = 0.0) -> tuple[float, float, float]:
@@ -51,6 +55,8 @@ def model1() -> HexapodGeometry:
         legs=tuple(legs),
         home_height=h * UNIT,
         cardan_limit=math.radians(45.0),
+        leg_radius=STRUT_RADIUS,
+        housing_radius=HOUSING_RADIUS,
         description="Jakobović and Jelenković's Table I model 1: 3-3 platform, struts 45-85 cm, r1 50 cm, r2 25 cm",
     )
 
@@ -90,6 +96,8 @@ def model2() -> HexapodGeometry:
         legs=tuple(LegGeometry(**leg) for leg in legs),
         home_height=heights[0] * UNIT,
         cardan_limit=math.radians(45.0),
+        leg_radius=STRUT_RADIUS,
+        housing_radius=HOUSING_RADIUS,
         description="Jakobović and Jelenković's Table I model 2: 70 cm struts on guideways r 75->10 cm, platform 30 cm",
     )
 
@@ -109,6 +117,8 @@ def to_toml(g: HexapodGeometry, header: str) -> str:
         f'description = "{g.description}"',
         f"home_height = {num(g.home_height)}",
         f"cardan_limit_deg = {num(math.degrees(g.cardan_limit))}",
+        f"leg_radius = {num(g.leg_radius)}  # m, the paper states no strut size (docs/evaluate.md)",
+        f"housing_radius = {num(g.housing_radius)}",
     ]
     for leg in g.legs:
         lines += [

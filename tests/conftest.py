@@ -37,6 +37,12 @@ def hexapod(name: str) -> hm.Hexapod:
     return hm.Hexapod.from_preset(name)
 
 
+@functools.cache
+def limits_only(name: str) -> hm.Hexapod:
+    """Cached Hexapod of preset ``name`` without the body check: the stroke and joint limits alone decide."""
+    return hm.Hexapod.from_preset(name, check_body=False)
+
+
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?|\b(?:nan|inf)\b")
 PATH_TOL = 1e-12  # m and rad: two code paths of one solve (compiled, NumPy, one call, batch) agree to this
 

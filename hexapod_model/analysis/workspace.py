@@ -1,12 +1,14 @@
 """Workspace for a cone of tool orientations and its kinematic figures (Jakobović and Jelenković (2002) §II-III).
 
-A platform position ``x`` (tool point = platform origin, Jakobović and Jelenković's ``l_tool = 0``) belongs to
-the workspace when the inverse kinematics succeeds within the stroke and Cardan limits
-(``status == "converged"``) for EVERY orientation of a cone (Jakobović and Jelenković (2002) Fig. 4): the tool axis
-(platform z) upright and tilted by ``cone_deg`` towards ``cone_samples`` equally spaced
-azimuths, with no rotation about the tool axis. For ``spherical`` and ``guideway`` legs, whose
-platform ball joint has no limit in the model, the leg must also stay within ``cardan_limit``
-of its home direction as seen from the platform (the paper's joint cone ``phi_max``).
+A platform position ``x`` (tool point = platform origin, Jakobović and Jelenković's ``l_tool = 0``)
+belongs to the workspace when the inverse kinematics succeeds within the stroke and Cardan limits
+(``status == "converged"``: also free of collision and within the joint cones when the hexapod
+checks its body, :mod:`~hexapod_model.kinematics.body_check`) for EVERY orientation of a cone
+(Jakobović and Jelenković (2002) Fig. 4): the tool axis (platform z) upright and tilted by
+``cone_deg`` towards ``cone_samples`` equally spaced azimuths, with no rotation about the tool
+axis. For ``spherical`` and ``guideway`` legs, whose platform ball joint has no limit in the
+model, the leg must also stay within ``cardan_limit`` of its home direction as seen from the
+platform (the paper's joint cone ``phi_max``).
 
 At each workspace point the three figures of :mod:`hexapod_model.analysis.jacobian` (condition number,
 sigma_min, |det J|) are averaged over the orientations; their workspace averages are
@@ -27,6 +29,8 @@ from ..kinematics.newton.solver import Solution
 from .jacobian import evaluate_jacobian, leg_jacobian
 from .statics import force_per_unit_wrench, stiffness_of
 
+#: inverse-kinematics statuses within the stroke and joint limits (the last two: the body check's)
+BODY_OK = ("converged", "cone_limit", "collision")
 #: the per-point worst cases over the orientations that :class:`SliceResult` keeps, in ``worst`` order
 WORST = (
     "kappa_max",
@@ -86,6 +90,9 @@ class SliceResult:
     origin (:func:`~hexapod_model.analysis.statics.force_per_unit_wrench`), smallest translational
     (N/m) and rotational (N m/rad) stiffness of the locked fixture per N/m of leg stiffness
     (:func:`~hexapod_model.analysis.statics.stiffness_of`; it scales with a common leg stiffness).
+    ``inside`` counts a point only when every orientation is also free of collision and within
+    the joint cones (the hexapod's body check); ``inside_limits`` (same shape) the points within
+    the stroke and joint limits alone, whatever the body: the difference is what the body removes.
     """
 
     index: int
@@ -94,6 +101,7 @@ class SliceResult:
     sigma_min: np.ndarray
     abs_det: np.ndarray
     worst: np.ndarray
+    inside_limits: np.ndarray | None = None
 
 
 def compute_slice(
@@ -102,6 +110,7 @@ def compute_slice(
     """Test every (x, y) of the slice at height ``z`` (m, base frame) for all ``rotations``."""
     ny, nx = len(ys), len(xs)
     inside = np.zeros((ny, nx), dtype=bool)
+    inside_limits = np.zeros((ny, nx), dtype=bool)
     figs = np.full((3, ny, nx), np.nan)
     worst = np.full((len(WORST), ny, nx), np.nan)
     guesses: list[Solution | None] = [None] * len(rotations)
@@ -113,15 +122,18 @@ def compute_slice(
             for k, R in enumerate(rotations):
                 T[:3, :3] = R
                 sol = hexa.inverse(T, guess=guesses[k], check=False)
-                if sol.status != "converged" and guesses[k] is not None:
+                if sol.status not in BODY_OK and guesses[k] is not None:
                     sol = hexa.inverse(T, check=False)  # retry from home: the warm start may mislead
-                if sol.status == "converged":
+                if sol.status in BODY_OK:
                     guesses[k] = sol
-                if sol.status != "converged" or not platform_cone_ok(hexa, sol.q, sol.pose):
+                if sol.status not in BODY_OK or not platform_cone_ok(hexa, sol.q, sol.pose):
                     break
                 sols.append(sol)
             if len(sols) != len(rotations):
                 continue
+            inside_limits[iy, ix] = True
+            if any(sol.status != "converged" for sol in sols):
+                continue  # in collision or beyond a cone at some orientation
             inside[iy, ix] = True
             Js = [leg_jacobian(hexa, s.q) for s in sols]
             ev = [evaluate_jacobian(J, length_unit) for J in Js]
@@ -137,14 +149,16 @@ def compute_slice(
                 min(k.translational for k in stiff),
                 min(k.rotational for k in stiff),
             )
-    return SliceResult(index, inside, figs[0], figs[1], figs[2], worst)
+    return SliceResult(index, inside, figs[0], figs[1], figs[2], worst, inside_limits)
 
 
 def probe_extent(hexa: Hexapod, step: float, max_steps: int = 400) -> np.ndarray:
     """Box around home reachable along the axes.
 
     (3, 2) box (m, base frame) around home reachable along +-x, +-y, +-z with the platform
-    upright, found by marching outward in ``step`` increments; used to size the grid.
+    upright, found by marching outward in ``step`` increments; used to size the grid. Within
+    the stroke and joint limits alone (a pose beyond a cone or in collision still extends the
+    box), so that the grid, and the limits-only count on it, do not depend on the body check.
     """
     home = hexa.home_pose
     box = np.tile(home[:3, 3][:, None], (1, 2)).astype(float)
@@ -154,7 +168,7 @@ def probe_extent(hexa: Hexapod, step: float, max_steps: int = 400) -> np.ndarray
             for n in range(1, max_steps + 1):
                 T[axis, 3] = home[axis, 3] + sign * n * step
                 sol = hexa.inverse(T, guess=sol, check=False)
-                if sol.status != "converged":
+                if sol.status not in BODY_OK:
                     break
                 box[axis, side] = T[axis, 3]
     return box

@@ -27,6 +27,11 @@ def add_hexapod_argument(p: argparse.ArgumentParser, optional: bool = False) -> 
         )
     else:
         p.add_argument("hexapod", metavar="HEXAPOD", help=HEXAPOD_HELP)
+    p.add_argument(
+        "--no-body-check",
+        action="store_true",
+        help="solve without judging the joint cones and collision bodies (docs/solver.md)",
+    )
 
 
 def hexapod_of(args: argparse.Namespace, compiled: bool = True) -> Hexapod:
@@ -34,7 +39,7 @@ def hexapod_of(args: argparse.Namespace, compiled: bool = True) -> Hexapod:
 
     ``compiled=False``: solved with the NumPy kernels (no numba start-up; see :func:`compiled_for_long`).
     """
-    return load_hexapod(args.hexapod, compiled=compiled)
+    return load_hexapod(args.hexapod, compiled=compiled, check_body=not getattr(args, "no_body_check", False))
 
 
 def compiled_for_long(hexa: Hexapod, chunks: Iterator[T]) -> tuple[Hexapod, Iterator[T]]:
@@ -47,7 +52,7 @@ def compiled_for_long(hexa: Hexapod, chunks: Iterator[T]) -> tuple[Hexapod, Iter
     """
     head = list(itertools.islice(chunks, 2))
     if len(head) > 1 and not hexa.compiled:
-        hexa = Hexapod(hexa.closed_loop, hexa.geometry, compiled=True)
+        hexa = Hexapod(hexa.closed_loop, hexa.geometry, compiled=True, check_body=hexa.check_body)
     return hexa, itertools.chain(head, chunks)
 
 

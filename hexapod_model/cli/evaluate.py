@@ -85,6 +85,8 @@ def format_report(r: dict) -> str:
         f"hexapod {r['hexapod']}: workspace for a {r['cone_deg']:g} deg cone ({r['orientations']} orientations), "
         f"grid {r['grid']['nx']}x{r['grid']['ny']}x{r['grid']['nz']}, cell {r['cell_m'] * 1e3:.4g} mm",
         f"  Jacobian figures with lengths in units of {u:g} m (dl = J [v; w], base frame)",
+        "  inside: within the stroke and joint limits, the joint cones and free of collision (no strut"
+        " touches another, a housing or a plate); limits only: without the cones and collisions",
         f"{'':24s}{'ours':>14s}{'paper':>12s}",
     ]
     p = r["paper"] or {}
@@ -92,6 +94,8 @@ def format_report(r: dict) -> str:
         ("volume (cm^3)", r["volume_paper_units3"], p.get("volume")),
         ("volume (m^3)", r["volume_m3"], None),
         ("points inside", r["points_inside"], None),
+        ("  limits only (cm^3)", r["volume_limits_paper_units3"], None),
+        ("  limits only (points)", r["points_inside_limits"], None),
         ("mean kappa", r["average"]["kappa"], p.get("kappa")),
         ("mean sigma_min", r["average"]["sigma_min"], p.get("sigma_min")),
         ("mean |det J|", r["average"]["abs_det"], p.get("abs_det")),

@@ -11,8 +11,9 @@ of names:
 * a plate and the body of a leg nearest to it along the leg's chain (the joint housing that
   sits on the plate): the first link with a body from the base, the last one towards the
   closure;
-* two legs whose closures meet the platform at the same point (a shared joint, as in the 3-6
-  sensor): all pairs between their bodies.
+* two legs whose closures meet the platform at the same point, or whose first joints sit at the
+  same base point (a shared joint, as in the 3-6 sensor or a 3-3 platform): all pairs between
+  their bodies.
 """
 
 from __future__ import annotations
@@ -63,16 +64,21 @@ def _owner(clm: ClosedLoopModel, joint: int) -> int:
 
 
 def _shared_anchors(clm: ClosedLoopModel) -> set[tuple[int, int]]:
-    """Pairs of legs whose closure anchors coincide at home (one joint shared by two legs)."""
+    """Pairs of legs whose closure anchors, or first joints, coincide at home (one joint shared by two legs)."""
     m = clm.model
     data = m.createData()
     pin.framesForwardKinematics(m, data, clm.q_home)
-    points = [data.oMf[leg.anchor_frame].translation.copy() for leg in clm.legs]
-    return {
-        (a, b)
-        for a, b in itertools.combinations(range(len(points)), 2)
-        if np.linalg.norm(points[a] - points[b]) < SHARED_JOINT
-    }
+    out = set()
+    for points in (
+        [data.oMf[leg.anchor_frame].translation.copy() for leg in clm.legs],
+        [data.oMi[leg.joints[0]].translation.copy() for leg in clm.legs],
+    ):
+        out |= {
+            (a, b)
+            for a, b in itertools.combinations(range(len(points)), 2)
+            if np.linalg.norm(points[a] - points[b]) < SHARED_JOINT
+        }
+    return out
 
 
 def collision_model(clm: ClosedLoopModel) -> CollisionModel:

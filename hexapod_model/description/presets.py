@@ -13,7 +13,10 @@ ends (their 70 deg per-axis limits combine to 69 deg at most in the test box); t
 of the 3-6 sensor and the guideway model take 45 deg, the tilt that high-angle ball joints sold
 for parallel mechanisms reach (standard rod-end and ball-socket joints allow 15-30 deg); the
 ``spherical`` preset keeps the textbook's ideal ball joint (no cone: its test box needs 68 deg).
-Collision bodies take the defaults: 20 mm leg radius, 25 mm joint housings, 20 mm plates.
+Collision bodies take the defaults: 20 mm leg radius, 25 mm joint housings, 20 mm plates;
+but the guideway model's neighbouring struts of different pairs cross 0.3 mm apart at home (the
+paper's idealised line struts), so its struts take a 0.1 mm radius: its home pose is free of
+collision and a strut passing through another is still caught.
 """
 
 from __future__ import annotations
@@ -63,6 +66,10 @@ def symmetric_legs(
                 )
             )
     return tuple(legs)
+
+
+#: m: the guideway model's strut radius (its struts cross 0.3 mm apart at home; see the module doc)
+GUIDEWAY_STRUT_RADIUS = 1e-4
 
 
 def reference() -> HexapodGeometry:
@@ -196,6 +203,7 @@ def guideway() -> HexapodGeometry:
         home_height=0.50,
         cardan_limit=60 * DEG,
         platform_cone=45 * DEG,
+        leg_radius=GUIDEWAY_STRUT_RADIUS,
         description="Jakobović and Jelenković's model 2: fixed struts on sliding guideways (slider = measured joint)",
     )
 

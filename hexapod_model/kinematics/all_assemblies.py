@@ -7,25 +7,33 @@ answers it globally:
 * **3-6 hexapods** (legs meeting in pairs at three platform points, e.g. preset ``3-6``): the
   resultant polynomial of :mod:`.three_six` gives *every* real assembly (at most 16, 1-2 ms);
   the set is complete (``complete``). :meth:`.hexapod.Hexapod.forward` uses it by itself
-  (:func:`review`): a result (cold, or warm with a reading more than ``WARM_CHECK`` base radii from the
-  guess's) stays ``converged`` only when no other assembly within the stroke and joint limits
-  lies within ``MARGIN`` times its distance from the start (home or the guess; poses compared
-  by :func:`hexapod_model.lie.pose_distance`, rotations times the base radius); otherwise it is
-  ``ambiguous_assembly`` with all of them as candidates, the connected one first. Readings the
+  (:func:`review`). Only the assemblies within the stroke and joint limits, and, with the body
+  check on (:mod:`.body_check`), within the joint cones, the collision-free set and the operating
+  envelope, compete. A cold result stays ``converged`` only when it is the one such assembly;
+  a warm one with a reading more than ``WARM_CHECK`` base radii from the guess's (or a cold one
+  with the body check off, where the stroke and joint limits alone rarely decide), when no other
+  lies within ``MARGIN`` times its distance from the start (poses compared by
+  :func:`hexapod_model.lie.pose_distance`, rotations times the base radius); otherwise it is
+  ``ambiguous_assembly`` with all of them as candidates, the connected one first. A connected
+  result beyond a cone, in collision or outside the envelope does not compete: the one
+  assembly that does is returned (several: ``ambiguous_assembly``; none: the connected result
+  with its flags). Readings the
   polynomial has no real root for are ``no_assembly``; when Newton found nothing or could not
   follow the path from home, the one assembly within the limits is returned as ``converged``
   (several: ``ambiguous_assembly``). Warm starts closer than ``WARM_CHECK`` base radii (a
   tracker's samples) keep the connected assembly unchecked. Every distance here is relative to
   the base radius, so a hexapod scaled by any factor gets the same answers. (At home's readings the ``3-6`` preset has
-  four assemblies within its limits: home and three tilted by about 85 deg, 60 mm lower.)
+  four assemblies within its stroke and joint limits: home and three tilted by about 85 deg, 60 mm
+  lower, beyond its 45 deg ball-joint cones.)
 * **other hexapods**: a multi-start search: plain Newton from home and from ``starts``
   configurations of random poses (translation within the largest stroke, roll, pitch and yaw
   within ``SAMPLE_ANGLE``); every distinct closed configuration it reaches. It finds what its
   starts lead to and **proves nothing** about the assemblies it did not reach (``complete`` is
   False): more starts find more of them, at ~30 us a start.
 
-Each assembly is checked against the stroke and joint limits by inverse kinematics of its
-pose (the leg joints of an offset-Cardan leg follow from the pose); those outside are counted.
+Each assembly is checked against the stroke and joint limits (and the body check's cones,
+collisions and envelope) by inverse kinematics of its pose (the leg joints of an offset-Cardan
+leg follow from the pose); those outside are counted.
 """
 
 from __future__ import annotations
@@ -40,6 +48,7 @@ from ..description.geometry import HexapodGeometry, LegGeometry
 from ..description.model import ClosedLoopModel
 from ..exceptions import GeometryError, WorkspaceError
 from ..lie import pose_distance, rpy_to_matrix
+from .body_check import BodyCheck
 from .newton.solver import NewtonSolver, Solution
 from .noise_assemblies import noise_assemblies
 from .three_six import ThreeSixFK
@@ -48,6 +57,8 @@ SAME = 5e-7  # times the base radius (1e-7 m on the presets): two poses closer t
 SAMPLE_ANGLE = np.radians(40.0)  # rad: roll, pitch, yaw range of the multi-start search's poses
 DEFAULT_STARTS = 64  # starts of the multi-start search besides home
 MARGIN = 3.0  # a result competes with the assemblies within this many times its distance from the start
+#: what an assembly must lie within to compete (the last three with the body check on)
+LIMITS = "the stroke and joint limits, the cones, the collision-free set and the envelope"
 WARM_CHECK = 5e-3  # times the base radius (1 mm on the presets): a warm start farther in a reading is checked
 
 
@@ -95,6 +106,8 @@ class PoseSolver(Protocol):
     default_tol: float
     #: joint ids held by direct kinematics
     held_forward: tuple[int, ...]
+    #: the cones, collision and envelope check (None: off)
+    body: BodyCheck | None
 
     @property
     def home_pose(self) -> np.ndarray:
@@ -193,10 +206,12 @@ class AssemblyFinder:
             poses = self._search(readings, starts, seed)
             method, complete, near = f"multi-start ({starts} starts)", False, []
         inside: list[Solution] = []
+        body = self.hexa.body
         for T in poses:
-            sol = self.hexa.inverse(T, check=False)
+            sol = self.hexa.inverse(T, check=False)  # cone_limit or collision when the body check is on
             if sol.converged and np.max(np.abs(sol.lengths - readings)) <= 5e-9 * self.length:
-                inside.append(sol)
+                if body is None or body.within_envelope(sol.pose):
+                    inside.append(sol)
         ref = self.hexa.home_pose if reference is None else reference
         inside.sort(key=lambda s: pose_distance(ref, s.pose, self.length))
         near = sorted((s for s in near if s.converged), key=lambda s: pose_distance(ref, s.pose, self.length))
@@ -245,29 +260,35 @@ def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: o
     found = finder.find(readings, reference)
     within, length = found.solutions + found.near, finder.length
     same = SAME * length
+    body = hexa.body
+    if sol.status == "converged" and body is not None and not body.acceptable(sol):
+        if not within:
+            return sol  # no assembly the machine can take: the connected one, with its flags
+        sol = _replace(sol, "not_found", sol.message, ())  # beyond a cone, in collision or outside the envelope
     if not within:
         if found.outside == 0:
             why = "the resultant polynomial of the 3-6 platform has no real root for these readings"
             return _replace(sol, "no_assembly", f"no real assembly: {why}", ("not_closed",) if not sol.closed else ())
-        msg = f"all {found.outside} real assemblies for these readings lie outside the stroke or joint limits"
+        msg = f"all {found.outside} real assemblies for these readings lie outside {LIMITS}"
         return _replace(sol, "out_of_limits", msg, sol.flags if sol.status == "out_of_limits" else ("not_closed",))
     if sol.status == "converged":
         d = pose_distance(reference, sol.pose, length)
         rivals = [s for s in within if pose_distance(s.pose, sol.pose, length) > same]
-        if not any(pose_distance(reference, s.pose, length) <= MARGIN * d for s in rivals):
-            return sol  # clearly the assembly nearest the start
+        strict = cold and body is not None  # the machine's limits decide a cold answer, not a distance
+        if not rivals or not strict and not any(pose_distance(reference, s.pose, length) <= MARGIN * d for s in rivals):
+            return sol  # the only assembly, or (warm, or the body check off) clearly the one nearest the start
         first = [sol]
     else:
         first = []
         if len(within) == 1:  # Newton missed it or could not certify it; it is the only one within the limits
             only = within[0]
-            msg = "the only assembly within the stroke and joint limits (resultant polynomial of the 3-6 platform)"
+            msg = f"the only assembly within {LIMITS} (resultant polynomial of the 3-6 platform)"
             return Solution(only.pose, only.q, only.lengths, "converged", sol.iterations, 0.0, only.jacobian, msg)
     ordered = first + [s for s in within if all(pose_distance(s.pose, f.pose, length) > same for f in first)]
     start = "home" if cold else "the guess"
     msg = (
-        f"{len(ordered)} assemblies within the stroke and joint limits fit these readings (resultant polynomial "
-        f"of the 3-6 platform), another as near {start} as {MARGIN:g} times the nearest; "
+        f"{len(ordered)} assemblies within {LIMITS} fit these readings (resultant polynomial "
+        f"of the 3-6 platform){'' if cold and body else f', another as near {start} as {MARGIN:g} times the nearest'}; "
         + (f"the one connected to {start} is first" if first else f"none is certified as connected to {start}")
     )
     if sol.status == "ambiguous_assembly":

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..exceptions import InputError
 from ..lie import quaternion_to_matrix
+from .body_check import BodyCheck, message_of
 from .certificate import NEAR_SINGULAR_FACTOR
 from .engine import SolveEngine
 from .input_checks import failure_status
@@ -166,9 +167,34 @@ def batch_result(
     for j, sol in fallback.items():
         Q[j], poses[j], iterations[j], residuals[j] = sol.q, sol.pose, sol.iterations, sol.residual
         status[j], messages[j], flags[j], signs[j] = sol.status, sol.message, sol.flags, sol.det_sign
+    if engine.body is not None:
+        _judge_rows(engine.body, Q, status, messages, flags, set(fallback), forward)
     failed = status.index != 0
     lengths = engine.readings_of(Q[:, engine.closed_loop.prismatic_q])  # row by row as readings_of(Q[ok][:, pq])
     if failed.any():  # a boolean assignment costs tens of microseconds even when it selects nothing
         poses[failed] = np.nan
         lengths[failed] = np.nan
     return BatchResult(poses, lengths, Q, status.column(), iterations, residuals, tuple(messages), tuple(flags), signs)
+
+
+def _judge_rows(
+    body: BodyCheck,
+    Q: np.ndarray,
+    status: _Statuses,
+    messages: list[str],
+    flags: list[tuple[str, ...]],
+    judged: set[int],
+    forward: bool,
+) -> None:
+    """The body check of each converged row not in ``judged``: a flag (``forward``) or the status, as per row."""
+    for k in np.flatnonzero(status.index == 0):
+        if int(k) in judged:
+            continue
+        found = body.violations(Q[k])
+        if found:
+            msg = message_of(found, forward)
+            messages[k] = f"{messages[k]}; {msg}" if messages[k] else msg
+            if forward:
+                flags[k] = flags[k] + tuple(name for name, _ in found)
+            else:
+                status[k] = found[0][0]

@@ -202,7 +202,7 @@ def clearance(hexapod: _Solves, q_or_pose: ArrayLike) -> Clearance:
     arr = np.asarray(q_or_pose, dtype=float)
     if arr.shape == (4, 4):
         sol = hexapod.inverse(arr, check=False)
-        if sol.status not in ("converged", "out_of_limits"):
+        if sol.status not in ("converged", "out_of_limits", "cone_limit", "collision"):
             raise InputError("pose", sol.status, "its inverse solve gave no configuration to measure")
         arr = sol.q
     elif arr.shape != (hexapod.nq,):

@@ -67,40 +67,59 @@ def _revolutes(clm: ClosedLoopModel, joints: tuple[int, ...]) -> list[int]:
     return [j for j in joints if clm.model.joints[j].shortname().startswith("JointModelR")]
 
 
+class ConeGeometry:
+    """What :func:`cone_angles` needs of a model, prepared once (a check on every solve reuses it).
+
+    ``angles(q, data)`` takes a Pinocchio ``data`` of the model as a buffer (one per thread).
+    """
+
+    def __init__(self, clm: ClosedLoopModel):
+        m = clm.model
+        self.clm = clm
+        base, platform, ball, second, tips = [], [], [], [], []
+        for k, leg in enumerate(clm.legs):
+            rev = _revolutes(clm, leg.joints)
+            base.append([m.joints[j].idx_q for j in rev[:2]])
+            if len(leg.joints) >= 2 and leg.joints[-1] in rev and leg.joints[-2] in rev and len(rev) >= 4:
+                platform.append((k, [m.joints[j].idx_q for j in leg.joints[-2:]]))
+            else:
+                ball.append(k)
+                second.append(rev[1])
+                tips.append(leg.tip_frame)
+        self.base = np.array(base, dtype=np.int64)  # (6, 2) q indices of the base Cardan angles
+        self.platform = platform  # (leg, [q indices]) of the platform Cardan joints
+        self.ball, self.second, self.tips = ball, second, tips
+        self.home = self._directions(clm.q_home, m.createData()) if ball else np.zeros((0, 3))
+
+    def _directions(self, q: np.ndarray, data: pin.Data) -> np.ndarray:
+        """(n_ball, 3) unit leg axes of the ball-jointed legs in the platform frame."""
+        m = self.clm.model
+        pin.forwardKinematics(m, data, q)
+        R = data.oMi[self.clm.platform_joint].rotation
+        d = np.array([pin.updateFramePlacement(m, data, f).translation for f in self.tips])
+        d -= np.array([data.oMi[j].translation for j in self.second])
+        d = d @ R  # R^T d per row
+        return d / np.sqrt(np.einsum("ij,ij->i", d, d))[:, None]
+
+    def angles(self, q: np.ndarray, data: pin.Data) -> np.ndarray:
+        """(6, 2) the base and platform joint deflections (rad) of configuration ``q``."""
+        out = np.empty((6, 2))
+        c = np.cos(q[self.base])
+        out[:, 0] = np.arccos(np.minimum(1.0, c[:, 0] * c[:, 1]))
+        for k, idx in self.platform:
+            b1, b2 = np.cos(q[idx])
+            out[k, 1] = np.arccos(min(1.0, b1 * b2))
+        if self.ball:
+            now, home = self._directions(q, data), self.home
+            cross = np.cross(now, home)
+            sin, cos = np.sqrt(np.einsum("ij,ij->i", cross, cross)), np.einsum("ij,ij->i", now, home)
+            out[self.ball, 1] = np.arctan2(sin, cos)
+        return out
+
+
 def cone_angles(clm: ClosedLoopModel, q: np.ndarray) -> np.ndarray:
     """(6, 2) the base and platform joint deflections (rad) of configuration ``q`` (see the module doc)."""
-    m = clm.model
-    out = np.empty((6, 2))
-    ball: list[int] = []
-    for k, leg in enumerate(clm.legs):
-        rev = _revolutes(clm, leg.joints)
-        a1, a2 = (q[m.joints[j].idx_q] for j in rev[:2])
-        out[k, 0] = np.arccos(min(1.0, np.cos(a1) * np.cos(a2)))
-        if len(leg.joints) >= 2 and leg.joints[-1] in rev and leg.joints[-2] in rev and len(rev) >= 4:
-            b1, b2 = (q[m.joints[j].idx_q] for j in leg.joints[-2:])
-            out[k, 1] = np.arccos(min(1.0, np.cos(b1) * np.cos(b2)))
-        else:
-            ball.append(k)
-    if ball:
-        now, home = _leg_directions(clm, q), _leg_directions(clm, clm.q_home)
-        for k in ball:
-            out[k, 1] = np.arctan2(np.linalg.norm(np.cross(now[k], home[k])), float(now[k] @ home[k]))
-    return out
-
-
-def _leg_directions(clm: ClosedLoopModel, q: np.ndarray) -> list[np.ndarray]:
-    """Unit leg axes in the platform frame: from the second base revolute's frame to the leg tip."""
-    m = clm.model
-    data = m.createData()
-    pin.forwardKinematics(m, data, q)
-    pin.updateFramePlacements(m, data)
-    R = data.oMi[clm.platform_joint].rotation
-    out = []
-    for leg in clm.legs:
-        second = _revolutes(clm, leg.joints)[1]
-        d = data.oMf[leg.tip_frame].translation - data.oMi[second].translation
-        out.append(R.T @ (d / np.linalg.norm(d)))
-    return out
+    return ConeGeometry(clm).angles(np.asarray(q, dtype=float), clm.model.createData())
 
 
 def cone_limits(geometry: HexapodGeometry | None) -> np.ndarray:

@@ -21,6 +21,7 @@ from ..description.model import ClosedLoopModel
 from ..exceptions import AssemblyError, ConvergenceError, SingularityError, WorkspaceError
 from . import certificate
 from .all_assemblies import AssemblyFinder, review
+from .body_check import BodyCheck
 from .certificate import Outcome
 from .input_checks import LIMIT_SLACK, MAX_TOL, check_home_conditioning, check_max_iter, check_tolerance, failure_status
 from .joint_space import JointSpace
@@ -41,6 +42,8 @@ ERRORS = {
     "ambiguous_assembly": AssemblyError,
     "uncertified": AssemblyError,
     "no_assembly": WorkspaceError,
+    "cone_limit": WorkspaceError,
+    "collision": WorkspaceError,
 }
 
 
@@ -51,13 +54,24 @@ class SolveEngine(JointSpace):
         model: the loaded closed-loop model.
         geometry: the geometry it was generated from, if any (the 3-6 resultant uses it).
         compiled: solve with the numba-compiled kernels (else the NumPy ones).
+        check_body: judge every answer against the joint cones and the collision bodies
+            (:mod:`.body_check`; :attr:`body` is None without it).
 
     One engine may be shared by threads: :meth:`solver` gives each thread solvers of its own.
     Lengths are metres, angles radians, poses 4x4 base -> platform transforms.
     """
 
-    def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None, *, compiled: bool = True):
+    def __init__(
+        self,
+        model: ClosedLoopModel,
+        geometry: HexapodGeometry | None = None,
+        *,
+        compiled: bool = True,
+        check_body: bool = True,
+    ):
         super().__init__(model, geometry, compiled=compiled)
+        #: the cones, collision and envelope check of the answers (:mod:`.body_check`), None when off
+        self.body: BodyCheck | None = BodyCheck(model, geometry, compiled) if check_body else None
         #: the calling thread's state: ``.solvers`` {held joints: solver}, ``.staged`` the warm forward's solver
         self.local = threading.local()
         #: joint ids held by direct kinematics (the prismatic joints) and by inverse kinematics (the platform)
@@ -108,12 +122,14 @@ class SolveEngine(JointSpace):
         pose: np.ndarray | None = None,
         bad: int | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
+        forward: bool = False,
     ) -> Solution:
         """The :class:`Solution` of a solve's outcome: the joint-limit check, the pose, the readings.
 
         ``pose`` and ``bad`` (the first joint outside its limits, -1 if none) when the caller
         has them already (the compiled first attempt of direct kinematics); ``max_iter`` the
-        caller's step limit (:func:`.input_checks.failure_status` names a stalled solve).
+        caller's step limit (:func:`.input_checks.failure_status` names a stalled solve);
+        ``forward``: a direct-kinematics answer (the body check flags it, else sets its status).
         Raises the status's error when ``check`` and the status is not ``converged``.
         """
         q, status, it, res, jac, msg = out[:6]
@@ -141,8 +157,12 @@ class SolveEngine(JointSpace):
             poses,
             out.det_sign,
         )
+        if self.body is not None:
+            sol = self.body.judged(sol, forward)
+            status, msg = sol.status, sol.message
         if check and status != "converged":
-            raise ERRORS.get(status, ConvergenceError)(sol, f"{status}: {msg}")
+            text = msg if msg.startswith(f"{status}:") else f"{status}: {msg}"  # the body check's names it
+            raise ERRORS.get(status, ConvergenceError)(sol, text)
         return sol
 
     def finish(
@@ -155,7 +175,7 @@ class SolveEngine(JointSpace):
             max_iter = check_max_iter(max_iter)
         if forward:
             out = certificate.solve_forward(solver, q0, forward[0], tol, max_iter, *forward[1:])
-            return self.solution(out, check, max_iter=max_iter)
+            return self.solution(out, check, max_iter=max_iter, forward=True)
         one_call = solver.one_call
         if one_call is not None:  # inverse kinematics: the solve, pose and limit check in one compiled call
             done = one_call.run_checked(q0, tol, max_iter)
@@ -223,7 +243,8 @@ class SolveEngine(JointSpace):
         """
         if len(done) == 6:
             q, pose, jac, it, res, bad = done
-            sol = self.solution(certificate.certified_outcome(solver, q, jac, it, res), check and not review, pose, bad)
+            outcome = certificate.certified_outcome(solver, q, jac, it, res)
+            sol = self.solution(outcome, check and not review, pose, bad, forward=True)
         else:
             forward = (joints, sign, guess is not None, done)
             sol = self.finish(solver, start.copy(), tol, max_iter, check and not review, forward)

@@ -26,6 +26,7 @@ from ..exceptions import InputError
 from . import batch, hybrid
 from .all_assemblies import DEFAULT_STARTS, Assemblies
 from .batch import BatchResult
+from .body_check import BodyCheck
 from .certificate import NEAR_SINGULAR_FACTOR
 from .consistency import DEFAULT_ALPHA
 from .engine import DEFAULT_MAX_ITER, HOME_CONDITION_LIMIT, SolveEngine
@@ -62,13 +63,27 @@ class Hexapod:
     numba-compiled ones (:mod:`~hexapod_model.kinematics.newton.kernel_sets`): the same answers, several
     times slower per solve, but no numba import (~1 s, 130 MB) nor first compilation (~20 s).
 
+    ``check_body`` (default True; every constructor takes it, and :attr:`check_body` may be set
+    later) judges every answer against the joint cones and the collision bodies
+    (:mod:`~hexapod_model.kinematics.body_check`):
+    inverse and hybrid kinematics return ``cone_limit`` or ``collision``, direct kinematics
+    flags them. ``False`` skips the check (a warm forward solve then costs no clearance query)
+    and the envelope's say in the choice between assemblies.
+
     The solves run on :attr:`engine` (:class:`~hexapod_model.kinematics.engine.SolveEngine`):
     the per-thread solvers, the limits and the encoder model, for code that builds on them.
     """
 
-    def __init__(self, model: ClosedLoopModel, geometry: HexapodGeometry | None = None, *, compiled: bool = True):
+    def __init__(
+        self,
+        model: ClosedLoopModel,
+        geometry: HexapodGeometry | None = None,
+        *,
+        compiled: bool = True,
+        check_body: bool = True,
+    ):
         #: the solve engine: solvers, limits, the encoder model, how outcomes become answers
-        self.engine = engine = SolveEngine(model, geometry, compiled=compiled)
+        self.engine = engine = SolveEngine(model, geometry, compiled=compiled, check_body=check_body)
         self.closed_loop = model
         #: whether the solves run the numba-compiled kernels
         self.compiled = engine.compiled
@@ -105,45 +120,60 @@ class Hexapod:
         #: the names of the readings :meth:`forward` takes, in their order
         self.reading_names = ("leg1", "leg2", "leg3", "leg4", "leg5", "leg6") if layout is None else layout.names
 
+    @property
+    def check_body(self) -> bool:
+        """Whether answers are judged against the cones and collision bodies (see the class doc)."""
+        return self.engine.body is not None
+
+    @check_body.setter
+    def check_body(self, on: bool) -> None:
+        engine = self.engine
+        if not isinstance(on, bool):
+            raise InputError("check_body", on, "expected True or False")
+        if on and engine.body is None:
+            engine.body = BodyCheck(self.closed_loop, self.geometry, self.compiled)
+        elif not on:
+            engine.body = None
+
     # ----- construction -----
     @classmethod
-    def from_urdf(cls, path: str | Path, *, compiled: bool = True) -> Hexapod:
+    def from_urdf(cls, path: str | Path, *, compiled: bool = True, check_body: bool = True) -> Hexapod:
         """Load a URDF file, or a preset when ``path`` is a preset name (see ``PRESETS``)."""
         if str(path) in PRESETS:
-            return cls.from_preset(str(path), compiled=compiled)
-        return cls(ClosedLoopModel.from_file(path), compiled=compiled)
+            return cls.from_preset(str(path), compiled=compiled, check_body=check_body)
+        return cls(ClosedLoopModel.from_file(path), compiled=compiled, check_body=check_body)
 
     @classmethod
-    def load(cls, spec: str | Path, *, compiled: bool = True) -> Hexapod:
+    def load(cls, spec: str | Path, *, compiled: bool = True, check_body: bool = True) -> Hexapod:
         """A preset name, or a URDF, geometry (``.toml``, ``.yaml``, ``.yml``, ``.json``) or MJCF (``.xml``) file.
 
         This is what every ``hexapod`` sub-command does with its HEXAPOD argument.
         """
         if str(spec).lower().endswith(GEOMETRY_SUFFIXES):
-            return cls.from_geometry(load_geometry(spec), compiled=compiled)
+            return cls.from_geometry(load_geometry(spec), compiled=compiled, check_body=check_body)
         if str(spec).lower().endswith(MJCF_SUFFIXES):
-            return cls.from_mjcf(spec, compiled=compiled)
-        return cls.from_urdf(spec, compiled=compiled)
+            return cls.from_mjcf(spec, compiled=compiled, check_body=check_body)
+        return cls.from_urdf(spec, compiled=compiled, check_body=check_body)
 
     @classmethod
-    def from_mjcf(cls, path: str | Path, *, compiled: bool = True) -> Hexapod:
+    def from_mjcf(cls, path: str | Path, *, compiled: bool = True, check_body: bool = True) -> Hexapod:
         """Load an MJCF file (``hexapod mjcf``, docs/mjcf.md) through Pinocchio's MJCF parser and constraint models."""
-        return cls(load_mjcf(path), compiled=compiled)
+        return cls(load_mjcf(path), compiled=compiled, check_body=check_body)
 
     @classmethod
-    def from_preset(cls, name: str = "reference", *, compiled: bool = True) -> Hexapod:
+    def from_preset(cls, name: str = "reference", *, compiled: bool = True, check_body: bool = True) -> Hexapod:
         """One of the bundled geometries (``PRESETS``).
 
         ``reference``, ``intersecting``, ``spherical``, ``3-6``, ``guideway``; with redundant
         sensors ``reference7`` and ``reference_tilt``.
         """
-        return cls.from_geometry(get_preset(name), compiled=compiled)
+        return cls.from_geometry(get_preset(name), compiled=compiled, check_body=check_body)
 
     @classmethod
-    def from_geometry(cls, geometry: HexapodGeometry, *, compiled: bool = True) -> Hexapod:
+    def from_geometry(cls, geometry: HexapodGeometry, *, compiled: bool = True, check_body: bool = True) -> Hexapod:
         """Generate the URDF of ``geometry`` in memory and load it."""
         clm = ClosedLoopModel(geometry_to_urdf(geometry), f"<geometry {geometry.name}>")
-        return cls(clm, geometry, compiled=compiled)
+        return cls(clm, geometry, compiled=compiled, check_body=check_body)
 
     # ----- conversions -----
     @property
@@ -243,7 +273,8 @@ class Hexapod:
                 # converged certified within the limits, not near a singularity: engine.attempted()'s Solution
                 q, pose, jac, it, res, _ = done
                 readings = q[engine.prismatic_q]  # lengths_of(q) without an encoder model
-                return new_solution(pose, q, readings, "converged", it, res, jac, "", (), (), int(solver.sign))
+                sol = new_solution(pose, q, readings, "converged", it, res, jac, "", (), (), int(solver.sign))
+                return sol if engine.body is None else engine.body.judged(sol, True)
             held = engine.solver(engine.held_forward)
             return engine.attempted(held, done, lengths, lengths, start, tol, max_iter, sign, guess, check, False)
         return engine.forward(lengths, guess, tol, max_iter, check, fast)
@@ -377,7 +408,8 @@ class Hexapod:
             poses: (N, 4, 4) base -> platform transforms, or (N, 7) rows ``x, y, z, qx, qy, qz, qw``
                 (metres; the quaternion of norm 1 within 1e-6).
             guess: where every row starts (default home).
-            warm: start each row from the last row that converged instead.
+            warm: start each row from the last row that converged instead (a row refused as
+                ``cone_limit`` or ``collision`` counts: its configuration closes within the limits).
             tol: closure residual to reach.
             max_iter: Newton step limit per row.
 
@@ -415,6 +447,6 @@ class Hexapod:
         return self.closed_loop.closure_errors(np.asarray(q, dtype=float))
 
 
-def load_hexapod(spec: str | Path, *, compiled: bool = True) -> Hexapod:
+def load_hexapod(spec: str | Path, *, compiled: bool = True, check_body: bool = True) -> Hexapod:
     """:meth:`Hexapod.load`: a preset name, URDF file or geometry file as a :class:`Hexapod`."""
-    return Hexapod.load(spec, compiled=compiled)
+    return Hexapod.load(spec, compiled=compiled, check_body=check_body)

@@ -79,7 +79,7 @@ def make_grid(hexa: Hexapod, grid: int) -> tuple[np.ndarray, np.ndarray, np.ndar
 #: Hexapods loaded by this process's tasks, by spec (a Dask worker keeps them between tasks)
 _LOADED: dict[tuple[str, str | None], Hexapod] = {}
 #: version of the checkpoint's slice files (meta.json): a change starts afresh
-CHECKPOINT_VERSION = 2
+CHECKPOINT_VERSION = 3
 
 
 def hexapod_payload(spec: str) -> tuple[str, str | None]:
@@ -143,8 +143,16 @@ def evaluate_hexapod(hexa: Hexapod, settings: Settings = Settings(), spec: str =
 
 def _save_slice(ckpt: Path, r: SliceResult) -> None:
     buf = io.BytesIO()  # atomic: an interrupted write must not leave a broken slice
+    limits = r.inside if r.inside_limits is None else r.inside_limits
     np.savez_compressed(
-        buf, index=r.index, inside=r.inside, kappa=r.kappa, sigma_min=r.sigma_min, abs_det=r.abs_det, worst=r.worst
+        buf,
+        index=r.index,
+        inside=r.inside,
+        kappa=r.kappa,
+        sigma_min=r.sigma_min,
+        abs_det=r.abs_det,
+        worst=r.worst,
+        inside_limits=limits,
     )
     atomic_write_bytes(ckpt / f"slice_{r.index:03d}.npz", buf.getvalue())
 
@@ -204,7 +212,13 @@ def run_evaluation(
             for f in ckpt.glob("slice_*.npz"):
                 d = np.load(f)
                 done[int(d["index"])] = SliceResult(
-                    int(d["index"]), d["inside"], d["kappa"], d["sigma_min"], d["abs_det"], d["worst"]
+                    int(d["index"]),
+                    d["inside"],
+                    d["kappa"],
+                    d["sigma_min"],
+                    d["abs_det"],
+                    d["worst"],
+                    d["inside_limits"],
                 )
         else:
             for f in ckpt.glob("slice_*.npz"):
@@ -254,6 +268,7 @@ def summarise(
     figs = {name: np.array([getattr(s, name) for s in stack]) for name in ("kappa", "sigma_min", "abs_det")}
     worst = np.array([s.worst for s in stack])  # (nz, 5, ny, nx)
     n_in = int(inside.sum())
+    n_limits = int(sum(int((s.inside if s.inside_limits is None else s.inside_limits).sum()) for s in stack))
     home = kinematic_evaluation(hexa, hexa.q_home, unit)
     g = hexa.geometry
     report = {
@@ -275,6 +290,10 @@ def summarise(
         "resumed_slices": resumed,
         "volume_m3": n_in * cell**3,
         "volume_paper_units3": n_in * (cell / PAPER_UNIT) ** 3,
+        "points_inside_limits": n_limits,
+        "volume_limits_m3": n_limits * cell**3,
+        "volume_limits_paper_units3": n_limits * (cell / PAPER_UNIT) ** 3,
+        "body_checked": hexa.check_body,
         "average": {k: (float(np.nanmean(v[inside])) if n_in else float("nan")) for k, v in figs.items()},
         "worst": {
             name: (float(np.min(worst[:, i][inside]) if "_min" in name else np.max(worst[:, i][inside])))

@@ -29,10 +29,12 @@ from ..kinematics.hexapod import Hexapod
 from .evaluate import Settings, evaluate_hexapod
 from .sweep_spec import SweepSpec, apply_parameters
 
-RESULT_VERSION = 1
-#: the table's figures: the workspace, its worst cases (:data:`~hexapod_model.analysis.workspace.WORST`), home
+RESULT_VERSION = 2
+#: the table's figures: the workspace (collision-free, within the cones; ``volume_limits_m3``: within the
+#: stroke and joint limits alone), its worst cases (:data:`~hexapod_model.analysis.workspace.WORST`), home
 METRICS = (
     "volume_m3",
+    "volume_limits_m3",
     "points_inside",
     "kappa_mean",
     *WORST,
@@ -111,6 +113,7 @@ def evaluate_candidate(
         "status": "ok",
         "reason": "",
         "volume_m3": float(r["volume_m3"]),
+        "volume_limits_m3": float(r["volume_limits_m3"]),
         "points_inside": r["points_inside"],
         "kappa_mean": r["average"]["kappa"],
         **worst,

@@ -10,7 +10,8 @@ Every sample is then checked (statistics in :mod:`~hexapod_model.tracking.readin
 its readings against the motion model (``jump``, ``stuck``), its pose against the motion
 model's pose plus the reading innovation mapped through the inverse of the eliminated 6x6
 Jacobian (``branch_uncertain``), and its configuration (``near_singular``, ``out_of_limits``,
-``imprecise``). A sample with ``jump``, ``stuck`` or ``branch_uncertain``, or whose solve
+``cone_limit`` and ``collision`` (the solve's body-check flags: a path through the machine's
+body), ``imprecise``). A sample with ``jump``, ``stuck`` or ``branch_uncertain``, or whose solve
 failed, is *untrusted*: it never enters the history. After more than ``max_gap`` untrusted
 samples the history is reset: the next sample with no stuck leg is solved by continuation
 (readings moved in steps of at most ``continuation_step``) from the last trusted
@@ -389,6 +390,7 @@ class Tracker(PassageMixin):
             self._uncertified = self._uncertified or (trusted is None and self._resolver is None)
         if sol.status == "out_of_limits":
             flags.append("out_of_limits")
+        flags += [f for f in ("cone_limit", "collision") if f in sol.flags]  # a path through the machine's body
         noise = s.noise
         sig_t, sig_r = noise * sens.translation, noise * sens.rotation
         if s.max_sigma_factor is not None and not math.hypot(sig_t, self.length * sig_r) <= s.max_sigma_factor * noise:

@@ -20,7 +20,17 @@ PREDICTORS = ("none", "eq22", "eq23", "eq24")
 _COEFFS = {"none": (0.0, 0.0), "eq22": (-1.0, 0.0), "eq23": (0.0, -0.5), "eq24": (0.5, -0.75)}
 
 #: every flag a sample can carry, in the order they are checked
-FLAGS = ("jump", "stuck", "branch_uncertain", "settling", "near_singular", "out_of_limits", "imprecise")
+FLAGS = (
+    "jump",
+    "stuck",
+    "branch_uncertain",
+    "settling",
+    "near_singular",
+    "out_of_limits",
+    "cone_limit",
+    "collision",
+    "imprecise",
+)
 #: statuses of a sample without a pose (``status`` is ``ok`` otherwise)
 FAILED_STATUSES = ("invalid_input", "max_iterations", "not_found", "singular", "out_of_limits")
 #: solve statuses that give the tracker a closed configuration (``uncertified``: flagged

@@ -22,6 +22,7 @@ from hexapod_model.io.tables import (
     pose_input_columns,
     poses_from_table,
 )
+from hexapod_model.kinematics.body_check import BODY_STATUSES
 from hexapod_model.studies.bench import trajectory_readings
 
 from ..conftest import PATH_TOL, hexapod
@@ -53,6 +54,8 @@ def per_row(hexa: hm.Hexapod, path, kind: str) -> tuple[str, int, str]:
                 status = "invalid_input" if sol is None else sol.status
                 values = np.full(len(header) - 4, np.nan)
                 tail = [status, 0, float("nan")] if sol is None else [status, sol.iterations, float(sol.residual)]
+                if sol is not None and sol.status in BODY_STATUSES:
+                    guess = sol  # the batch's warm start: a closed configuration within the limits
                 if sol is not None and sol.converged:
                     guess = sol
                     values = pose_columns(sol.pose[None])[0] if kind == "fk" else sol.lengths

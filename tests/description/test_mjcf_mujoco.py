@@ -17,7 +17,7 @@ from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.description.mjcf import EQUALITY_SOLIMP, EQUALITY_SOLREF, geometry_to_mjcf, urdf_to_mjcf
 from hexapod_model.description.mjcf_loader import load_mjcf_text, mujoco_qpos, q_of_mujoco_qpos
 
-from ..conftest import PRESET_NAMES, hexapod
+from ..conftest import PRESET_NAMES, limits_only
 from .test_mjcf import _rotated_home_urdf
 
 mujoco = pytest.importorskip("mujoco", reason="MuJoCo is a test dependency: pip install -e '.[test]'")
@@ -49,7 +49,7 @@ def violations_at(m, hexa: hm.Hexapod, q: np.ndarray) -> list[np.ndarray]:
 
 @pytest.mark.parametrize("name", PRESET_NAMES)
 def test_mujoco_equalities_hold_on_solved_configurations(name):
-    hexa, m = hexapod(name), mj_model(name)
+    hexa, m = limits_only(name), mj_model(name)
     assert (
         m.neq == 6
         and list(m.eq_type)
@@ -84,7 +84,7 @@ def test_mujoco_equalities_on_an_unclosed_configuration(name):
     ``weld``: position of the tip minus the anchor (world frame, m), then the vector part of the
     quaternion of ``R_anchor^T R_tip`` (w >= 0); ``connect``: the position rows only.
     """
-    hexa, m = hexapod(name), mj_model(name)
+    hexa, m = limits_only(name), mj_model(name)
     q = hexa.q_home.copy()
     leg = hexa.closed_loop.legs[2]
     for j in leg.joints:
@@ -117,7 +117,7 @@ def settle(m, d, max_time: float = 5.0) -> None:
 @pytest.mark.parametrize("name", PRESET_NAMES)
 def test_mujoco_simulation_settles_where_forward_says(name):
     """No gravity, the actuators at the readings of random poses: at rest, the platform is at ``forward``."""
-    hexa = hexapod(name)
+    hexa = limits_only(name)
     m = mujoco.MjModel.from_xml_string(geometry_to_mjcf(hm.get_preset(name), actuated=True))
     m.opt.gravity[:] = 0.0
     poses = box_poses(hexa.home_pose, 3, seed=31, translation=0.03, angle_deg=15.0)

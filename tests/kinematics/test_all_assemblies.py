@@ -11,7 +11,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.lie import pose_distance
 
-from ..conftest import hexapod
+from ..conftest import hexapod, limits_only
 
 ROOT = Path(__file__).resolve().parents[2]
 SAME = 1e-6  # m, rotations times 0.2 m
@@ -24,7 +24,7 @@ def _has(poses, T) -> bool:
 def test_cold_results_another_assembly_also_fits_are_ambiguous_with_every_assembly():
     """Readings 0.1 % short of a fold (+-100 mm / +-40 deg): the assembly connected to home and the
     one that produced the readings are 3 to 4 mm apart; the first was returned converged."""
-    hexa = hexapod("3-6")
+    hexa = limits_only("3-6")
     poses = box_poses(hexa.home_pose, 600, seed=0, translation=0.1, angle_deg=40)
     for i in (13, 544):
         readings = hexa.inverse(poses[i]).lengths
@@ -42,7 +42,7 @@ def test_cold_results_another_assembly_also_fits_are_ambiguous_with_every_assemb
 def test_blocked_paths_list_every_assembly_within_the_limits():
     """+-150 mm / +-60 deg: the readings path from home meets a fold; two of Newton's candidate lists
     missed the assembly a tracker reaches."""
-    hexa = hexapod("3-6")
+    hexa = limits_only("3-6")
     poses = box_poses(hexa.home_pose, 400, seed=1, translation=0.15, angle_deg=60)
     for i in (83, 244, 250, 335):
         readings = hexa.inverse(poses[i]).lengths
@@ -57,13 +57,21 @@ def test_blocked_paths_list_every_assembly_within_the_limits():
 
 
 def test_a_cold_result_clearly_nearest_home_stays_converged():
-    hexa = hexapod("3-6")
+    hexa = limits_only("3-6")
     every = hexa.assemblies(np.zeros(6))
     assert every.complete and len(every.solutions) == 4  # home and three tilted by ~85 deg
     sol = hexa.forward(np.zeros(6))
     assert sol.converged and pose_distance(sol.pose, hexa.home_pose, 0.2) < 1e-12
     T = box_poses(hexa.home_pose, 1, seed=5, translation=0.01, angle_deg=3)[0]
     assert pose_distance(hexa.forward(hexa.inverse(T).lengths).pose, T, 0.2) < 1e-9
+
+
+def test_the_cones_leave_home_the_only_assembly_of_home_readings():
+    """The three assemblies tilted by ~85 deg need 85-90 deg of ball-joint deflection: beyond the 45 deg cone."""
+    hexa = hexapod("3-6")
+    every = hexa.assemblies(np.zeros(6))
+    assert len(every.solutions) == 1 and every.outside == limits_only("3-6").assemblies(np.zeros(6)).outside + 3
+    assert pose_distance(every.solutions[0].pose, hexa.home_pose, 0.2) < 1e-12
 
 
 def test_readings_without_any_real_assembly_are_no_assembly():
@@ -85,7 +93,7 @@ def test_readings_without_any_real_assembly_are_no_assembly():
 def test_warm_starts_20_mm_away_with_the_truth_as_near_are_ambiguous():
     """Warm starts 20 mm from the generating pose whose connected assembly is another one, about as
     far from the guess (a fold between them): returned converged before."""
-    hexa = hexapod("3-6")
+    hexa = limits_only("3-6")
     rng = np.random.default_rng(1)
     checked = 0
     for i, T in enumerate(box_poses(hexa.home_pose, 1500, 0, 0.1, 40.0)):
@@ -125,7 +133,7 @@ def test_a_3_6_hexapod_loaded_from_a_file_checks_every_assembly_as_the_preset_do
     geometry = hm.get_preset("3-6")
     path = tmp_path / f"sensor.{'urdf' if kind == 'urdf' else 'xml'}"
     path.write_text(geometry_to_urdf(geometry) if kind == "urdf" else geometry_to_mjcf(geometry))
-    loaded, preset = hm.Hexapod.load(path, compiled=False), hexapod("3-6")
+    loaded, preset = hm.Hexapod.load(path, compiled=False, check_body=False), limits_only("3-6")
     assert loaded.geometry is None
     poses = box_poses(preset.home_pose, 600, seed=0, translation=0.1, angle_deg=40)
     readings = preset.inverse(poses[13]).lengths
@@ -163,7 +171,7 @@ def test_a_blocked_path_lists_the_assembly_a_tracker_reaches_past_the_fold(name,
     """Beyond the box (+-100 mm / +-40 deg) on presets without a resultant: the readings path from
     home is blocked; a tracker fed that path crosses it and ends on an assembly, which must be
     among the candidates (so is the generating pose)."""
-    hexa = hexapod(name)
+    hexa = limits_only(name)
     T = box_poses(hexa.home_pose, 4000, seed=7, translation=0.1, angle_deg=40)[index]
     readings = hexa.inverse(T).lengths
     sol = hexa.forward(readings, check=False)

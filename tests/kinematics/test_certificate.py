@@ -16,7 +16,7 @@ from hexapod_model.kinematics.newton.solver import NewtonSolver
 from hexapod_model.lie import rpy_to_matrix
 from hexapod_model.tracking.tracker import characteristic_length, pose_distance
 
-from ..conftest import PRESET_NAMES, hexapod
+from ..conftest import PRESET_NAMES, hexapod, limits_only
 
 
 @functools.cache
@@ -53,7 +53,7 @@ def _ok(sol) -> bool:
 
 @pytest.mark.parametrize("name", PRESET_NAMES)
 def test_schur_sign_and_condition_bound_against_dense_linear_algebra(name):
-    hexa = hexapod(name)
+    hexa = limits_only(name)  # poses beyond the cones too: the linear algebra does not care
     solver = _fk(hexa)
     rng = np.random.default_rng(5)
     legs = hexa.closed_loop.limited_q()
@@ -83,7 +83,7 @@ def test_cold_readings_whose_path_from_home_is_blocked_are_ambiguous():
     """+-150 mm / +-60 deg on the 3-6 preset: the straight readings path from home meets a fold
     (checked by a dense reference continuation). The plain solve returned the pose as converged.
     (The path's own verdict: without the resultant's every assembly, tests/kinematics/test_all_assemblies.py.)"""
-    hexa = hm.Hexapod.from_preset("3-6")
+    hexa = hm.Hexapod.from_preset("3-6", check_body=False)  # the stroke and joint limits alone
     hexa.engine.finder.exact = None  # Newton's readings path alone
     poses = box_poses(hexa.home_pose, 400, seed=1, translation=0.15, angle_deg=60)
     for i in (83, 244, 250, 335):
@@ -99,10 +99,10 @@ def test_cold_readings_whose_path_from_home_is_blocked_are_ambiguous():
         assert len(err.value.result.candidates) == len(sol.candidates)
 
 
-def test_cold_readings_next_to_a_fold_are_not_returned_as_ok():
+def test_cold_readings_next_to_a_fold_are_not_returned_as_ok():  # the stroke and joint limits alone
     """Readings 0.1 % short of a fold: the connected assembly and the one that produced the
     readings are 3 to 4 mm apart. The plain solve returned the former as converged."""
-    hexa = hexapod("3-6")
+    hexa = limits_only("3-6")
     poses = box_poses(hexa.home_pose, 600, seed=0, translation=0.1, angle_deg=40)
     for i in (13, 544):
         sol = hexa.forward(hexa.inverse(poses[i]).lengths, check=False)
@@ -111,7 +111,7 @@ def test_cold_readings_next_to_a_fold_are_not_returned_as_ok():
 
 
 def test_warm_starts_2_mm_away_that_land_on_another_assembly_say_so():
-    hexa = hexapod("3-6")
+    hexa = limits_only("3-6")  # the stroke and joint limits alone
     poses = box_poses(hexa.home_pose, 5000, seed=0, translation=0.1, angle_deg=40)
     directions = np.random.default_rng(1).normal(size=(5000, 3))
     for i in (1288, 3862):

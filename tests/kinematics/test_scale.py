@@ -37,7 +37,7 @@ FACTORS = [0.05, 10.0, 1 / 16, 8.0]  # the issue's sizes, and two whose length s
 
 
 def scaled(geometry: hm.HexapodGeometry, factor: float) -> hm.HexapodGeometry:
-    """``geometry`` with every length multiplied by ``factor`` (angles unchanged)."""
+    """``geometry`` with every length (its body's too) multiplied by ``factor`` (angles unchanged)."""
     d = geometry.to_dict()
     for key in ("home_height", "base_offset", "platform_offset"):
         d[key] *= factor
@@ -47,6 +47,14 @@ def scaled(geometry: hm.HexapodGeometry, factor: float) -> hm.HexapodGeometry:
         for key in ("base_offset", "platform_offset", "encoder_zero"):
             if key in leg:
                 leg[key] *= factor
+    for key in ("leg_radius", "housing_radius", "plate_thickness", "min_clearance"):  # the body, too
+        d[key] = getattr(geometry, key) * factor
+    for key in ("base_plate_radius", "platform_plate_radius"):
+        if getattr(geometry, key) is not None:
+            d[key] = getattr(geometry, key) * factor
+    for leg in d["legs"]:
+        if "leg_radius" in leg:
+            leg["leg_radius"] *= factor
     d["name"] = f"{geometry.name}_scaled"
     return geometry_from_dict(d)
 

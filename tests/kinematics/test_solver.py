@@ -11,6 +11,7 @@ import pytest
 import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
 from hexapod_model.description.model import ClosedLoopModel
+from hexapod_model.kinematics.body_check import BODY_STATUSES
 from hexapod_model.kinematics.newton.solver import NewtonSolver
 from hexapod_model.lie import pose_distance, rotation_angle
 
@@ -56,7 +57,10 @@ def test_round_trip_pose_lengths_pose_on_1000_box_poses(name):
     worst_p = worst_r = worst_l = 0.0
     steps = []
     for T in poses:
-        back = hexa.inverse(T)  # whole box is inside the limits of every preset
+        back = hexa.inverse(T, check=False)  # the whole box is inside the stroke and joint limits of every preset
+        assert back.status == "converged" or back.status in BODY_STATUSES and name in ("3-6", "guideway")
+        if back.status != "converged":  # 3-6: a corner beyond the 45 deg cones; guideway: two struts cross
+            continue
         sol = hexa.forward(back.lengths, check=False)  # cold start from home, certified
         if sol.status == "ambiguous_assembly":  # 3-6: another assembly within the limits about as near home
             assert name == "3-6" and any(pose_distance(P, T, 0.2) < 1e-9 for P in sol.candidates)
@@ -220,7 +224,7 @@ def test_cold_starts_far_from_home_converge_or_say_why():
         if sol.converged:
             np.testing.assert_allclose(sol.pose, T, atol=1e-9)
             assert np.abs(hexa.forward(sol.lengths).pose - T).max() < 1e-9
-    assert statuses <= {"converged", "out_of_limits"} and "converged" in statuses
+    assert statuses <= {"converged", "out_of_limits", *BODY_STATUSES} and "converged" in statuses
 
 
 def test_pinocchio_habits():

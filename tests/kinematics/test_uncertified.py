@@ -17,7 +17,7 @@ import pytest
 import hexapod_model as hm
 from hexapod_model.tracking.types import POSED_STATUSES
 
-from ..conftest import hexapod
+from ..conftest import hexapod, limits_only
 
 CASES = Path(__file__).parents[1] / "data" / "three_six_fold.json"
 
@@ -30,7 +30,8 @@ def _cases() -> list[dict]:
 @pytest.mark.parametrize("compiled", [True, False])
 @pytest.mark.parametrize("k", [0, 1])
 def test_a_warm_result_across_a_fold_is_uncertified_not_converged(k, compiled):
-    hexa = hexapod("3-6") if compiled else hm.Hexapod.from_preset("3-6", compiled=False)
+    # the stroke and joint limits alone: the fold lies beyond the cones
+    hexa = limits_only("3-6") if compiled else hm.Hexapod.from_preset("3-6", compiled=False, check_body=False)
     case = _cases()[k]
     start, readings = np.array(case["start_q"]), np.array(case["readings_m"])
     for guess in (start, hexa.forward(hexa.lengths_of(start), guess=start, check=False)):

@@ -105,9 +105,14 @@ def test_example_sweep_on_two_workers_matches_evaluate_and_resumes(scheduler, tm
     s = spec.settings
     for r in rows:
         assert r["status"] == "ok", r["reason"]
-        assert float(r["volume_m3"]) > 0 and float(r["force_per_force_max"]) > 0
-        assert float(r["sigma_min_min"]) <= float(r["sigma_max_max"])
-        assert float(r["stiffness_translational_min"]) > 0
+        assert float(r["volume_limits_m3"]) > 0
+        if float(r["platform_radius"]) < 0.13:  # neighbouring 25 mm platform housings overlap at home
+            assert float(r["volume_m3"]) == 0.0 and int(r["points_inside"]) == 0
+        else:
+            assert 0 < float(r["volume_m3"]) <= float(r["volume_limits_m3"])
+            assert float(r["force_per_force_max"]) > 0
+            assert float(r["sigma_min_min"]) <= float(r["sigma_max_max"])
+            assert float(r["stiffness_translational_min"]) > 0
         js = tmp_path / f"{r['id']}.json"
         argv = ["evaluate", r["geometry"], "--grid", str(s.grid), "--cone-deg", str(s.cone_deg)]
         argv += ["--cone-samples", str(s.cone_samples), "--scheduler", scheduler, "--json", str(js)]

@@ -10,6 +10,7 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.analysis.trajectories import trajectory_poses
+from hexapod_model.kinematics.body_check import BODY_STATUSES
 from hexapod_model.studies.track import true_readings
 from hexapod_model.tracking.tracker import Tracker, characteristic_length, pose_distance
 
@@ -97,7 +98,11 @@ def test_reading_noise_raises_no_latched_false_alarms(noise):
     assert alarms <= 0.001 * len(res)
     sigma = np.array([np.hypot(r.sigma_translation, 0.25 * r.sigma_rotation) for r in res])
     good = np.array([r.ok for r in res])
-    assert good.mean() > 0.7 and np.all(err[good] <= 5.0 * sigma[good])
+    # at 8x the trajectory passes legs through each other: those samples are rightly flagged
+    hexa = hexapod("reference")
+    poses, _ = trajectory_b("reference", 8)
+    reachable = np.array([hexa.inverse(T, check=False).status not in BODY_STATUSES for T in poses])
+    assert good[reachable].mean() > 0.7 and np.all(err[good] <= 5.0 * sigma[good])
     # the stated uncertainty is the propagated noise: errors scale with it
     assert 0.5 < np.sqrt(np.mean((err[good] / sigma[good]) ** 2)) < 1.5
 

@@ -45,6 +45,8 @@ STATUSES = (
     "no_assembly",
     "singular",
     "out_of_limits",
+    "cone_limit",
+    "collision",
     "invalid_input",
     "inconsistent_readings",
 )
@@ -109,7 +111,9 @@ class Solution:
         message: human-readable detail when ``status != "converged"`` or a flag is set.
         flags: ``("near_singular",)`` for a direct-kinematics result close to a singularity
             (another assembly may be close; the CLI writes the flag instead of ``ok``); always
-            with status ``uncertified``. ``("not_closed",)`` for an ``out_of_limits`` result whose
+            with status ``uncertified``. ``"cone_limit"`` / ``"collision"`` on a direct-kinematics
+            result beyond a joint cone or in collision (the message names the joint or pair;
+            :mod:`~hexapod_model.kinematics.body_check`). ``("not_closed",)`` for an ``out_of_limits`` result whose
             iteration stopped outside the limits before closing the loops (``q`` closes nothing).
         candidates: with status ``ambiguous_assembly``, the (4, 4) poses of the assemblies
             found (``pose`` is the first).

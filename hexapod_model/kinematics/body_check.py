@@ -1,0 +1,142 @@
+"""The body check of a solve's answer: joint cones, collisions and the operating envelope.
+
+A configuration that closes the loops within the stroke and joint limits may still be one the
+machine cannot reach: a joint beyond its cone (:mod:`.cones`), two bodies closer than the
+geometry's ``min_clearance`` (:mod:`.clearance`). :class:`BodyCheck` judges the answer of every
+path that returns a pose:
+
+* **inverse and hybrid kinematics** (a commanded pose or joint set): status ``cone_limit`` or
+  ``collision`` instead of ``converged`` (the first found, cones first; the message names the
+  joint, or the pair and the distance);
+* **direct kinematics** (a measured pose: the platform is there): the status stays, the flags
+  ``cone_limit`` / ``collision`` say what the pose violates and the message names it.
+
+The **operating envelope** (``HexapodGeometry.envelope``: half-widths ``x, y, z`` (m) and
+``roll, pitch, yaw`` (rad) of a box about the home pose; the translation in the base frame,
+the angles those of :func:`hexapod_model.lie.matrix_to_rpy` of ``R_home^T R``) says where the
+platform works. It does not judge a single answer: it decides between assemblies
+(:mod:`.all_assemblies`), where only the assemblies within the limits, the cones, the
+collision-free set and the envelope compete.
+
+The check costs a cone evaluation (a few microseconds) and a clearance query (45-85 us);
+``Hexapod.check_body = False`` skips it (docs/solver.md): the warm forward path then costs
+what it did without it. A model without collision bodies (a URDF written without them) has
+no collision check; a geometry without cones no cone check.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..description.geometry import HexapodGeometry
+from ..description.model import ClosedLoopModel
+from ..exceptions import UrdfError
+from ..lie import matrix_to_rpy
+from .cones import ConeAngles, ConeGeometry, cone_limits
+from .newton.solver import Solution
+
+if TYPE_CHECKING:
+    from .clearance import ClearanceQuery
+
+#: the statuses (inverse, hybrid) and flags (direct kinematics) of the body check
+BODY_STATUSES = ("cone_limit", "collision")
+
+
+def message_of(found: list[tuple[str, str]], forward: bool) -> str:
+    """The message of :meth:`BodyCheck.violations`: each names its flag; a status's own name is left to the status."""
+    first, *rest = found
+    head = first[1] if forward else first[1].removeprefix(f"{first[0]}: ")
+    return "; ".join([head, *(m for _, m in rest)])
+
+
+class BodyCheck:
+    """Cones, clearance and envelope of one loaded hexapod (see the module doc).
+
+    Args:
+        clm: the loaded hexapod.
+        geometry: its geometry (cones, ``min_clearance``, envelope), if any.
+        compiled: run the compiled clearance kernel.
+    """
+
+    def __init__(self, clm: ClosedLoopModel, geometry: HexapodGeometry | None, compiled: bool = True):
+        self.clm = clm
+        self.geometry = geometry
+        self.compiled = compiled
+        #: (6, 2) cone half-angles (rad, ``inf``: none)
+        self.limits = cone_limits(geometry)
+        self.has_cones = bool(np.isfinite(self.limits).any())
+        self._cones = ConeGeometry(clm) if self.has_cones else None
+        self._local = threading.local()
+        #: operating box half-widths (x, y, z [m], roll, pitch, yaw [rad]) about home, or None
+        self.envelope = None if geometry is None else geometry.envelope
+        self._home = clm.home.homogeneous.copy()
+        self._query: ClearanceQuery | None = None
+        self._no_bodies = False
+        self._lock = threading.Lock()
+
+    def query(self) -> ClearanceQuery | None:
+        """The clearance query, built at the first call; None for a model without collision bodies."""
+        if self._query is None and not self._no_bodies:
+            from .clearance import ClearanceQuery  # coal loads with the first check
+
+            with self._lock:
+                if self._query is None and not self._no_bodies:
+                    bound = 0.0 if self.geometry is None else self.geometry.min_clearance
+                    try:
+                        self._query = ClearanceQuery(self.clm, bound, self.compiled)
+                    except UrdfError:
+                        self._no_bodies = True
+        return self._query
+
+    def violations(self, q: np.ndarray) -> list[tuple[str, str]]:
+        """``(status, message)`` of each limit configuration ``q`` violates: ``cone_limit``, ``collision``."""
+        out = []
+        if self._cones is not None:
+            data = getattr(self._local, "data", None)
+            if data is None:
+                data = self._local.data = self.clm.model.createData()
+            cones = ConeAngles(self._cones.angles(q, data), self.limits)
+            if not cones.within:
+                out.append(("cone_limit", cones.message()))
+        query = self.query()
+        if query is not None:
+            c = query(q)
+            if c.collision:
+                out.append(("collision", c.message()))
+        return out
+
+    def judged(self, sol: Solution, forward: bool) -> Solution:
+        """``sol`` with the body check's status (``forward`` False) or flags (True); unchanged if it passes.
+
+        Only a ``converged`` answer is checked (the others carry no pose to vouch for).
+        """
+        if sol.status != "converged":
+            return sol
+        found = self.violations(sol.q)
+        if not found:
+            return sol
+        msg = message_of(found, forward)
+        msg = f"{sol.message}; {msg}" if sol.message else msg
+        if forward:
+            return replace(sol, flags=sol.flags + tuple(k for k, _ in found if k not in sol.flags), message=msg)
+        return replace(sol, status=found[0][0], message=msg)
+
+    def offset(self, pose: np.ndarray) -> np.ndarray:
+        """(6,) ``x, y, z`` (m, base frame) and ``roll, pitch, yaw`` (rad) of ``pose`` from home."""
+        pose = np.asarray(pose, dtype=float)
+        rpy = matrix_to_rpy(self._home[:3, :3].T @ pose[:3, :3])
+        return np.concatenate([pose[:3, 3] - self._home[:3, 3], rpy])
+
+    def within_envelope(self, pose: np.ndarray) -> bool:
+        """Whether ``pose`` (4x4, base frame, m) lies in the operating envelope (True without one)."""
+        if self.envelope is None:
+            return True
+        return bool(np.all(np.abs(self.offset(pose)) <= np.asarray(self.envelope)))
+
+    def acceptable(self, sol: Solution) -> bool:
+        """Whether a converged answer lies within the cones, the collision-free set and the envelope."""
+        return not any(f in BODY_STATUSES for f in sol.flags) and self.within_envelope(sol.pose)
