@@ -3,7 +3,8 @@
 * :mod:`.carry`: the plate's checked SE(3) path (stroke, Cardan limits, singularity margin);
 * :mod:`.robot`: the UR10 of example-robot-data, its IK branch and singularities;
 * :mod:`.clearance`: the arm against the hexapods' bounding cylinders (coal);
-* :mod:`.timing`: the time parametrisation (trapezoids and toppra);
+* :mod:`.timing`: the time parametrisation (trapezoids, the carry's jerk-limited S-curve);
+* :mod:`.scurve`: the S-curve and the plate jerk the service's tracker tolerates;
 * :mod:`.order`: the visiting order;
 * :mod:`.model`: the :class:`Plan` and ``plan.json``; :mod:`.writers`: CSV and JSON files;
 * :mod:`.visit`: one fixture's part (:class:`Move`, :class:`Settings`);

@@ -19,6 +19,7 @@ from .blocked import Blocked
 from .carry import CarryPath, carry_path
 from .model import FixtureCell
 from .robot import Q_READY, Arm, branch, singularity_margins
+from .scurve import DEFAULT_CARRY_JERK
 from .timing import Timed, carry_timing
 
 APPROACH_HEIGHT = 0.15  # m: the flange's stand-off above the coupling, along its -z
@@ -34,15 +35,19 @@ class Move:
         hexapod: its kinematics.
         carry_speed: largest speed (m/s) of the platform's origin while carried.
         carry_rate: largest angular speed (rad/s) of the platform while carried.
+        carry_jerk: largest jerk (m/s^3) of the platform's origin and of each leg's reading
+            while carried (default :data:`~hexapod_model.planning.scurve.DEFAULT_CARRY_JERK`,
+            what the service's tracker of a 50 Hz plate tolerates).
     """
 
     cell: FixtureCell
     hexapod: Hexapod
     carry_speed: float = 0.05
     carry_rate: float = math.radians(10.0)
+    carry_jerk: float = DEFAULT_CARRY_JERK
 
     def __post_init__(self) -> None:
-        for name in ("carry_speed", "carry_rate"):
+        for name in ("carry_speed", "carry_rate", "carry_jerk"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0.0):
                 raise InputError(name, v, "expected a number above 0")
@@ -153,5 +158,6 @@ def visit(arm: Arm, move: Move, settings: Settings, home: np.ndarray) -> Visit:
     )
     xi = path.twist
     plate_time = max(np.linalg.norm(xi[:3]) / move.carry_speed, np.linalg.norm(xi[3:]) / move.carry_rate)
-    carry = carry_timing(qs, float(plate_time), arm.velocity, arm.acceleration)
+    plate = np.hstack([path.poses[:, :3, 3], path.readings])
+    carry = carry_timing(qs, float(plate_time), arm.velocity, arm.acceleration, plate, move.carry_jerk)
     return Visit(move, path, carry, pre_start, pre_target, sm.min(axis=0))
