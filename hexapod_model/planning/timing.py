@@ -77,16 +77,15 @@ def line(qa: np.ndarray, qb: np.ndarray, vmax: np.ndarray, amax: np.ndarray) -> 
     return Timed(t, q, sd[:, None] * dq, sdd[:, None] * dq, np.full(t.size, -1))
 
 
-def carry_timing(
+def carry_curve(
     qs: np.ndarray, plate_time: float, vmax: np.ndarray, amax: np.ndarray, plate: np.ndarray, jerk: float
-) -> Timed:
-    """Time the carry's joint samples ``qs`` ((n, 6), n >= 3, equal steps of the geodesic) on an S-curve.
+) -> SCurve:
+    """The S-curve of the carry's path parameter over its samples ``qs`` ((n, 6), n >= 3, equal steps).
 
-    The path parameter follows :class:`~hexapod_model.planning.scurve.SCurve`; its rate,
-    acceleration and jerk bounds are the largest under which the joints keep their velocity and
-    acceleration limits and every watched coordinate of the plate its jerk limit, each at
-    :data:`LIMIT_SCALE` (the derivatives along the path are those of cubic splines through the
-    samples).
+    Its rate, acceleration and jerk bounds are the largest under which the joints keep their
+    velocity and acceleration limits and every watched coordinate of the plate its jerk limit,
+    each at :data:`LIMIT_SCALE` (the derivatives along the path are those of cubic splines
+    through the samples).
 
     Args:
         qs: the arm's joints at the path samples (rad).
@@ -100,8 +99,7 @@ def carry_timing(
     """
     from scipy.interpolate import CubicSpline
 
-    n = len(qs)
-    ss = np.linspace(0.0, 1.0, n)
+    ss = np.linspace(0.0, 1.0, len(qs))
     path = CubicSpline(ss, qs)
     d1, d2 = np.abs(path(ss, 1)).max(axis=0), np.abs(path(ss, 2)).max(axis=0)
     curve = CubicSpline(ss, plate)
@@ -120,9 +118,28 @@ def carry_timing(
     if budget <= 0.0:  # the plate's path curves too much for its jerk at this rate: slower
         v = min(v, (0.25 * LIMIT_SCALE * jerk / max(p3, 1e-12)) ** (1.0 / 3.0))
         budget = LIMIT_SCALE * jerk - 3.0 * p2 * v * a - p3 * v**3
-    curve_s = SCurve(v, a, budget / max(p1, 1e-12))
-    t = curve_s.times(ss)
-    _, sd, sdd, _ = curve_s(t)
-    qd = path(ss, 1) * sd[:, None]
-    qdd = path(ss, 1) * sdd[:, None] + path(ss, 2) * sd[:, None] ** 2
-    return Timed(t, qs.copy(), qd, qdd, np.arange(n))
+    return SCurve(v, a, budget / max(p1, 1e-12))
+
+
+def refine(curve: SCurve, s: np.ndarray, max_dt: float) -> np.ndarray:
+    """The path parameters ``s`` and more, so that ``curve`` passes two neighbours at most ``max_dt`` (s) apart."""
+    t = curve.times(s)
+    extra = [np.linspace(t[k], t[k + 1], math.ceil((t[k + 1] - t[k]) / max_dt) + 1)[1:-1] for k in range(len(t) - 1)]
+    more = curve(np.concatenate(extra) if extra else np.zeros(0))[0]
+    return np.union1d(s, more[(more > 0.0) & (more < 1.0)])
+
+
+def carry_timing(qs: np.ndarray, s: np.ndarray, curve: SCurve) -> Timed:
+    """The carry's joint samples ``qs`` ((n, 6), at path parameters ``s``) timed on ``curve``.
+
+    ``qd`` and ``qdd`` are the path's derivatives (a cubic spline through the samples) times
+    the curve's rate and acceleration.
+    """
+    from scipy.interpolate import CubicSpline
+
+    path = CubicSpline(s, qs)
+    t = curve.times(s)
+    _, sd, sdd, _ = curve(t)
+    qd = path(s, 1) * sd[:, None]
+    qdd = path(s, 1) * sdd[:, None] + path(s, 2) * sd[:, None] ** 2
+    return Timed(t, qs.copy(), qd, qdd, np.arange(len(s)))

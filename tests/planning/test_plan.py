@@ -32,6 +32,7 @@ from hexapod_model.lie import xyz_rpy_to_pose  # noqa: E402
 from hexapod_model.planning import PHASES, Plan  # noqa: E402
 from hexapod_model.planning.robot import Arm  # noqa: E402
 from hexapod_model.planning.scurve import DEFAULT_CARRY_JERK  # noqa: E402
+from hexapod_model.planning.visit import MAX_POINT_DT  # noqa: E402
 from hexapod_model.planning.writers import csv_header, read_plan  # noqa: E402
 
 from ..conftest import hexapod  # noqa: E402
@@ -132,6 +133,7 @@ def test_the_carried_plate_accelerates_within_its_jerk_limit(planned):
         assert np.all(np.abs(np.diff(acc, axis=0)) <= jerks[name] * (t[3:] - t[:-3])[:, None] * (1 + 1e-6))
         assert np.all(np.abs(acc[0]) <= jerks[name] * (t[2] - t[0]) * (1 + 1e-6))
         assert np.all(np.abs(acc[-1]) <= jerks[name] * (t[-1] - t[-3]) * (1 + 1e-6))
+        assert np.diff(t).max() <= MAX_POINT_DT * (1 + 1e-9)  # dense enough in time for a player to interpolate
 
 
 def test_the_json_and_the_csv(planned):
