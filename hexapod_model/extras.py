@@ -10,7 +10,7 @@ what needs them:
 * ``service``: python-can (and the web server's packages), ``hexapod serve``, ``fixture``, ``live``;
 * ``fieldbus``: canopen and cantools, the CANopen (EDS/DCF) and DBC encoder protocols of ``hexapod serve``;
 * ``sweep``: Dask ``distributed``, ``hexapod sweep`` and ``hexapod evaluate``'s tasks;
-* ``plan``: example-robot-data, toppra and coal, ``hexapod changeover plan`` and :mod:`hexapod_model.planning`;
+* ``plan``: example-robot-data and coal, ``hexapod changeover plan`` and :mod:`hexapod_model.planning`;
 * ``all``: every one of them.
 
 A command whose extra is missing stops with one line naming the ``pip install`` that brings it
@@ -44,7 +44,7 @@ MODULES = {
     "service": ("can", "starlette", "uvicorn"),
     "fieldbus": ("canopen", "cantools"),
     "sweep": ("distributed",),
-    "plan": ("toppra", "coal"),
+    "plan": ("coal",),
 }
 
 

@@ -42,6 +42,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--carry-speed", type=float, default=50.0, metavar="MM_S", help="plate speed while carried (default 50)"
     )
     a.add_argument("--carry-rate", type=float, default=10.0, metavar="DEG_S", help="plate rotation rate (default 10)")
+    a.add_argument(
+        "--carry-jerk",
+        type=float,
+        metavar="M_S3",
+        help="plate and leg jerk while carried (default 0.3: what the tracker of a 50 Hz plate tolerates)",
+    )
     a.add_argument("--min-singularity-margin", type=float, default=0.2, help="the hexapod's, 1 at home (default 0.2)")
     a.add_argument("--min-clearance", type=float, default=20.0, metavar="MM", help="arm to hexapods (default 20)")
     a.set_defaults(func=run_plan)
@@ -125,9 +131,11 @@ def run_plan(args: argparse.Namespace) -> int:
 
     require_extra("plan")
     from ..planning import Blocked, FixtureCell, Move, Settings, plan_changeover
+    from ..planning.scurve import DEFAULT_CARRY_JERK
     from ..planning.writers import write_plan_csv, write_plan_json
 
     speed, rate = _positive("--carry-speed", args.carry_speed), _positive("--carry-rate", args.carry_rate)
+    jerk = DEFAULT_CARRY_JERK if args.carry_jerk is None else _positive("--carry-jerk", args.carry_jerk)
     settings = Settings(
         min_singularity_margin=_positive("--min-singularity-margin", args.min_singularity_margin),
         min_clearance=_positive("--min-clearance", args.min_clearance) * 1e-3,
@@ -154,7 +162,7 @@ def run_plan(args: argparse.Namespace) -> int:
     for n in names:
         f = config.fixture(n)
         cell = FixtureCell(n, f.hexapod, f.cell.base_in_robot, f.cell.coupling, starts[n], targets[n])  # type: ignore[union-attr]
-        moves.append(Move(cell, hexapods[n], speed * 1e-3, math.radians(rate)))
+        moves.append(Move(cell, hexapods[n], speed * 1e-3, math.radians(rate), jerk))
     try:
         plan = plan_changeover(moves, settings)
     except Blocked as exc:

@@ -78,9 +78,23 @@ def lower_bound(values: np.ndarray, s: np.ndarray) -> np.ndarray:
 
 
 def carry_path(
-    hexa: Hexapod, start: np.ndarray, target: np.ndarray, fixture: str, min_singularity_margin: float
+    hexa: Hexapod,
+    start: np.ndarray,
+    target: np.ndarray,
+    fixture: str,
+    min_singularity_margin: float,
+    s: np.ndarray | None = None,
 ) -> CarryPath:
     """Sample and check the carry from ``start`` to ``target`` (4x4 platform poses, m, base frame).
+
+    Args:
+        hexa: the hexapod.
+        start: the platform's start pose (4x4, m, base frame).
+        target: its target pose.
+        fixture: the fixture's name (for the messages).
+        min_singularity_margin: the singularity margin kept along the path (1 at home).
+        s: the path parameters to sample (increasing from 0 to 1, at least as dense as the
+            default; default: equal steps of at most ``STEP``).
 
     Raises:
         Blocked: a leg leaves its stroke, a Cardan angle its limit, or the singularity margin
@@ -88,7 +102,13 @@ def carry_path(
             the leg or joint.
     """
     xi, n = geodesic(start, target)
-    s = np.linspace(0.0, 1.0, n + 1)
+    if s is None:
+        s = np.linspace(0.0, 1.0, n + 1)
+    else:
+        s = np.asarray(s, dtype=float)
+        if s[0] != 0.0 or s[-1] != 1.0 or np.any(np.diff(s) <= 0.0) or np.diff(s).max() > 1.0 / n * (1 + 1e-9):
+            raise ValueError("the carry's samples must rise from 0 to 1, at most a default step apart")
+        n = len(s) - 1
     clm = hexa.closed_loop
     limited = clm.limited_q()
     lo, hi = clm.lower[limited], clm.upper[limited]

@@ -91,7 +91,7 @@ def plan_changeover(moves: list[Move], settings: Settings | None = None) -> Plan
     Raises:
         Blocked: no valid path: which constraint blocks it, for which fixture, how far along.
         InputError: no fixture to move.
-        MissingExtraError: example-robot-data, toppra or coal are missing (the ``plan`` extra).
+        MissingExtraError: example-robot-data or coal is missing (the ``plan`` extra).
     """
     from ..exceptions import InputError
 
@@ -174,6 +174,7 @@ def plan_changeover(moves: list[Move], settings: Settings | None = None) -> Plan
         "velocity_limits": [float(x) for x in arm.velocity],
         "carry_speed_mm_s": {m.cell.name: m.carry_speed * 1e3 for m in moves},
         "carry_rate_deg_s": {m.cell.name: math.degrees(m.carry_rate) for m in moves},
+        "carry_jerk_m_s3": {m.cell.name: m.carry_jerk for m in moves},
         "dwell_s": settings.dwell,
     }
     return Plan(

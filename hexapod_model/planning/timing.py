@@ -3,12 +3,13 @@
 * A free-space move (approach, retract) is a straight line in joint space, from rest to rest,
   with all joints synchronised on one trapezoidal velocity profile of the path parameter: the
   time-optimal profile of that line under per-joint velocity and acceleration boxes.
-* A carry follows the sampled joint path of the plate's geodesic; toppra (time-optimal path
-  parametrisation by reachability analysis) times it at the samples under the joints'
-  velocity and acceleration limits and the plate's speed limits (translation of the platform
-  origin, rotation), from rest to rest. The profile has constant path acceleration between
-  samples; limits are applied at ``LIMIT_SCALE`` of their value so that the interpolation
-  between samples stays within them.
+* A carry follows the sampled joint path of the plate's geodesic on a jerk-limited S-curve of
+  its path parameter (:mod:`.scurve`), from rest to rest: the plate's acceleration ramps up
+  and down, never steps (a step is what the service's tracker takes for a discontinuity).
+  The rate, acceleration and jerk of the parameter are bounded by the joints' velocity and
+  acceleration limits, the plate's speed limits (translation of the platform origin,
+  rotation) and the plate's jerk limit; limits are applied at ``LIMIT_SCALE`` of their value
+  so that the interpolation between samples stays within them.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..extras import require
+from .scurve import SCurve
 
 LIMIT_SCALE = 0.98  # the share of a limit the timing uses
 SAMPLE_DT = 0.05  # s between the points of a free-space move
@@ -76,8 +77,15 @@ def line(qa: np.ndarray, qb: np.ndarray, vmax: np.ndarray, amax: np.ndarray) -> 
     return Timed(t, q, sd[:, None] * dq, sdd[:, None] * dq, np.full(t.size, -1))
 
 
-def carry_timing(qs: np.ndarray, plate_time: float, vmax: np.ndarray, amax: np.ndarray) -> Timed:
-    """Time the carry's joint samples ``qs`` ((n, 6), n >= 3, equal steps of the geodesic) with toppra.
+def carry_curve(
+    qs: np.ndarray, plate_time: float, vmax: np.ndarray, amax: np.ndarray, plate: np.ndarray, jerk: float
+) -> SCurve:
+    """The S-curve of the carry's path parameter over its samples ``qs`` ((n, 6), n >= 3, equal steps).
+
+    Its rate, acceleration and jerk bounds are the largest under which the joints keep their
+    velocity and acceleration limits and every watched coordinate of the plate its jerk limit,
+    each at :data:`LIMIT_SCALE` (the derivatives along the path are those of cubic splines
+    through the samples).
 
     Args:
         qs: the arm's joints at the path samples (rad).
@@ -85,33 +93,53 @@ def carry_timing(qs: np.ndarray, plate_time: float, vmax: np.ndarray, amax: np.n
             parameter may not advance faster than ``1 / plate_time`` per second.
         vmax: joint velocity limits (rad/s).
         amax: joint acceleration limits (rad/s^2).
+        plate: (n, 9) the plate at the samples: its origin (m, base frame) and the six leg
+            readings (m), whose jerk is limited (the origin's by the norm of its vector).
+        jerk: the plate's jerk limit (m/s^3).
     """
-    require("toppra", "plan", "the carry's time parametrisation")
-    import toppra
-    import toppra.algorithm
-    import toppra.constraint
+    from scipy.interpolate import CubicSpline
 
-    toppra.setup_logging("WARNING")
-    n = len(qs)
-    ss = np.linspace(0.0, max(plate_time, 1e-6), n)
-    way = np.hstack([qs, ss[:, None]])
-    path = toppra.SplineInterpolator(ss, way)
-    vel = np.r_[LIMIT_SCALE * vmax, 1.0]
-    acc = np.r_[LIMIT_SCALE * amax, 1e6]
-    constraints = [
-        toppra.constraint.JointVelocityConstraint(np.vstack([-vel, vel]).T),
-        toppra.constraint.JointAccelerationConstraint(np.vstack([-acc, acc]).T),
-    ]
-    algorithm = toppra.algorithm.TOPPRA(constraints, path, gridpoints=ss, parametrizer="ParametrizeConstAccel")
-    sd = algorithm.compute_parameterization(0.0, 0.0)[1]
-    if sd is None or not np.all(np.isfinite(sd)):
-        raise ValueError("toppra found no parametrisation of the carry")
-    ds = np.diff(ss)
-    dt = 2.0 * ds / np.maximum(sd[:-1] + sd[1:], 1e-12)
-    t = np.r_[0.0, np.cumsum(dt)]
-    acc_s = np.r_[(sd[1:] ** 2 - sd[:-1] ** 2) / (2.0 * ds), 0.0]
-    acc_s[-1] = acc_s[-2]
-    d1, d2 = path(ss, 1)[:, :6], path(ss, 2)[:, :6]
-    qd = d1 * sd[:, None]
-    qdd = d1 * acc_s[:, None] + d2 * sd[:, None] ** 2
-    return Timed(t, qs.copy(), qd, qdd, np.arange(n))
+    ss = np.linspace(0.0, 1.0, len(qs))
+    path = CubicSpline(ss, qs)
+    d1, d2 = np.abs(path(ss, 1)).max(axis=0), np.abs(path(ss, 2)).max(axis=0)
+    curve = CubicSpline(ss, plate)
+
+    def size(d: np.ndarray) -> float:
+        return float(max(np.linalg.norm(d[:, :3], axis=1).max(), np.abs(d[:, 3:]).max()))
+
+    p1, p2, p3 = (size(curve(ss, k)) for k in (1, 2, 3))
+    vel, acc = LIMIT_SCALE * vmax, LIMIT_SCALE * amax
+    v = 1.0 / max(plate_time, 1e-6)
+    v = min(v, float(np.min(vel / np.maximum(d1, 1e-12))))
+    v = min(v, float(np.min(np.sqrt(0.5 * acc / np.maximum(d2, 1e-12)))))  # half the budget for the curvature
+    a = float(np.min((acc - d2 * v * v) / np.maximum(d1, 1e-12)))
+    a = min(a, math.sqrt(0.5 * LIMIT_SCALE * jerk / max(3.0 * p2 * v, 1e-12)))  # 3 p2 v a within half the jerk
+    budget = LIMIT_SCALE * jerk - 3.0 * p2 * v * a - p3 * v**3
+    if budget <= 0.0:  # the plate's path curves too much for its jerk at this rate: slower
+        v = min(v, (0.25 * LIMIT_SCALE * jerk / max(p3, 1e-12)) ** (1.0 / 3.0))
+        budget = LIMIT_SCALE * jerk - 3.0 * p2 * v * a - p3 * v**3
+    return SCurve(v, a, budget / max(p1, 1e-12))
+
+
+def refine(curve: SCurve, s: np.ndarray, max_dt: float) -> np.ndarray:
+    """The path parameters ``s`` and more, so that ``curve`` passes two neighbours at most ``max_dt`` (s) apart."""
+    t = curve.times(s)
+    extra = [np.linspace(t[k], t[k + 1], math.ceil((t[k + 1] - t[k]) / max_dt) + 1)[1:-1] for k in range(len(t) - 1)]
+    more = curve(np.concatenate(extra) if extra else np.zeros(0))[0]
+    return np.union1d(s, more[(more > 0.0) & (more < 1.0)])
+
+
+def carry_timing(qs: np.ndarray, s: np.ndarray, curve: SCurve) -> Timed:
+    """The carry's joint samples ``qs`` ((n, 6), at path parameters ``s``) timed on ``curve``.
+
+    ``qd`` and ``qdd`` are the path's derivatives (a cubic spline through the samples) times
+    the curve's rate and acceleration.
+    """
+    from scipy.interpolate import CubicSpline
+
+    path = CubicSpline(s, qs)
+    t = curve.times(s)
+    _, sd, sdd, _ = curve(t)
+    qd = path(s, 1) * sd[:, None]
+    qdd = path(s, 1) * sdd[:, None] + path(s, 2) * sd[:, None] ** 2
+    return Timed(t, qs.copy(), qd, qdd, np.arange(len(s)))

@@ -19,10 +19,12 @@ from .blocked import Blocked
 from .carry import CarryPath, carry_path
 from .model import FixtureCell
 from .robot import Q_READY, Arm, branch, singularity_margins
-from .timing import Timed, carry_timing
+from .scurve import DEFAULT_CARRY_JERK
+from .timing import Timed, carry_curve, carry_timing, refine
 
 APPROACH_HEIGHT = 0.15  # m: the flange's stand-off above the coupling, along its -z
 MAX_JOINT_STEP = 0.05  # rad: an arm joint moving more between two carry samples is a branch change
+MAX_POINT_DT = 0.02  # s: the carry's points are at most this far apart in time (the slow ends of the S-curve)
 
 
 @dataclass(frozen=True)
@@ -34,15 +36,19 @@ class Move:
         hexapod: its kinematics.
         carry_speed: largest speed (m/s) of the platform's origin while carried.
         carry_rate: largest angular speed (rad/s) of the platform while carried.
+        carry_jerk: largest jerk (m/s^3) of the platform's origin and of each leg's reading
+            while carried (default :data:`~hexapod_model.planning.scurve.DEFAULT_CARRY_JERK`,
+            what the service's tracker of a 50 Hz plate tolerates).
     """
 
     cell: FixtureCell
     hexapod: Hexapod
     carry_speed: float = 0.05
     carry_rate: float = math.radians(10.0)
+    carry_jerk: float = DEFAULT_CARRY_JERK
 
     def __post_init__(self) -> None:
-        for name in ("carry_speed", "carry_rate"):
+        for name in ("carry_speed", "carry_rate", "carry_jerk"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0.0):
                 raise InputError(name, v, "expected a number above 0")
@@ -120,6 +126,19 @@ def _seed(arm: Arm, flange: np.ndarray, start: np.ndarray) -> np.ndarray:
     return q
 
 
+def _carried_joints(arm: Arm, name: str, path: CarryPath, flanges: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The arm's joints (rad) at each flange pose of the carry, IK continued from ``q`` on its branch."""
+    qs = np.empty((len(flanges), 6))
+    first = branch(q)
+    for k, F in enumerate(flanges):
+        q_new = _reach(arm, name, float(path.s[k]), "the coupling while carrying", F, q)
+        step = float(np.abs(q_new - q).max())
+        if step > MAX_JOINT_STEP or branch(q_new) != first:
+            raise Blocked(name, float(path.s[k]), f"the UR10 changes its IK branch (joint step {step:.3f} rad)")
+        qs[k] = q = q_new
+    return qs
+
+
 def visit(arm: Arm, move: Move, settings: Settings, home: np.ndarray) -> Visit:
     """Plan ``move``'s carry and the arm's joints along it, starting the IK from ``home`` (rad).
 
@@ -133,14 +152,16 @@ def visit(arm: Arm, move: Move, settings: Settings, home: np.ndarray) -> Visit:
     pre = _shift(flanges[0], -APPROACH_HEIGHT)
     pre_start = _reach(arm, name, 0.0, "the stand-off above the coupling at the start pose", pre, _seed(arm, pre, home))
     q = _reach(arm, name, 0.0, "the coupling at the start pose", flanges[0], pre_start)
-    qs = np.empty((len(flanges), 6))
-    first = branch(q)
-    for k, F in enumerate(flanges):
-        q_new = _reach(arm, name, float(path.s[k]), "the coupling while carrying", F, q)
-        step = float(np.abs(q_new - q).max())
-        if step > MAX_JOINT_STEP or branch(q_new) != first:
-            raise Blocked(name, float(path.s[k]), f"the UR10 changes its IK branch (joint step {step:.3f} rad)")
-        qs[k] = q = q_new
+    qs = _carried_joints(arm, name, path, flanges, q)
+    xi = path.twist
+    plate_time = max(np.linalg.norm(xi[:3]) / move.carry_speed, np.linalg.norm(xi[3:]) / move.carry_rate)
+    plate = np.hstack([path.poses[:, :3, 3], path.readings])
+    curve = carry_curve(qs, float(plate_time), arm.velocity, arm.acceleration, plate, move.carry_jerk)
+    s = refine(curve, path.s, MAX_POINT_DT)
+    if len(s) > len(path.s):  # the points as dense in time as a player's interpolation needs
+        path = carry_path(move.hexapod, c.start, c.target, name, settings.min_singularity_margin, s)
+        flanges = c.base_in_robot @ path.poses @ c.coupling
+        qs = _carried_joints(arm, name, path, flanges, q)
     sm = np.array([singularity_margins(q) for q in qs])
     limits = np.array([settings.min_wrist, settings.min_elbow, settings.min_shoulder])
     bad = np.argwhere(sm < limits)
@@ -151,7 +172,5 @@ def visit(arm: Arm, move: Move, settings: Settings, home: np.ndarray) -> Visit:
     pre_target = _reach(
         arm, name, 1.0, "the stand-off above the coupling at the target", _shift(flanges[-1], -APPROACH_HEIGHT), qs[-1]
     )
-    xi = path.twist
-    plate_time = max(np.linalg.norm(xi[:3]) / move.carry_speed, np.linalg.norm(xi[3:]) / move.carry_rate)
-    carry = carry_timing(qs, float(plate_time), arm.velocity, arm.acceleration)
+    carry = carry_timing(qs, path.s, curve)
     return Visit(move, path, carry, pre_start, pre_target, sm.min(axis=0))

@@ -24,13 +24,15 @@ try:
     importlib.metadata.distribution("example-robot-data")
 except importlib.metadata.PackageNotFoundError:
     pytest.skip("example-robot-data is not installed: pip install 'hexapod_model[plan]'", allow_module_level=True)
-pytest.importorskip("toppra", reason="toppra is not installed: pip install 'hexapod_model[plan]'")
+pytest.importorskip("coal", reason="coal is not installed: pip install 'hexapod_model[plan]'")
 pytest.importorskip("coal", reason="coal is not installed: pip install 'hexapod_model[plan]'")
 
 from hexapod_model.cli.main import main  # noqa: E402
 from hexapod_model.lie import xyz_rpy_to_pose  # noqa: E402
 from hexapod_model.planning import PHASES, Plan  # noqa: E402
 from hexapod_model.planning.robot import Arm  # noqa: E402
+from hexapod_model.planning.scurve import DEFAULT_CARRY_JERK  # noqa: E402
+from hexapod_model.planning.visit import MAX_POINT_DT  # noqa: E402
 from hexapod_model.planning.writers import csv_header, read_plan  # noqa: E402
 
 from ..conftest import hexapod  # noqa: E402
@@ -109,6 +111,29 @@ def test_the_timing_keeps_the_velocity_limits_and_the_phases_in_order(planned):
         assert seen == list(PHASES)
     assert np.all(plan.qd[0] == 0) and np.all(plan.qd[-1] == 0)
     np.testing.assert_array_equal(plan.q[0], plan.q[-1])  # back at the arm's start
+
+
+def _second_differences(t: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``2 x[t_k, t_k+1, t_k+2]``: each is the second derivative somewhere in ``[t_k, t_k+2]``."""
+    v = np.diff(x, axis=0) / np.diff(t)[:, None]
+    return 2.0 * np.diff(v, axis=0) / (t[2:] - t[:-2])[:, None]
+
+
+def test_the_carried_plate_accelerates_within_its_jerk_limit(planned):
+    _, plan, doc = planned
+    jerks = doc["summary"]["settings"]["carry_jerk_m_s3"]
+    assert jerks == {"left": DEFAULT_CARRY_JERK, "right": DEFAULT_CARRY_JERK}
+    for name in plan.order:
+        rows = [k for k in range(len(plan.t)) if plan.phase[k] == "carry" and plan.fixture[k] == name]
+        t = plan.t[rows]
+        watched = np.hstack([plan.platform_pose[rows][:, :3], plan.readings[rows]])  # origin (m), legs (m)
+        acc = _second_differences(t, watched)
+        # a jerk within J moves the second derivative by at most J * (t_k+3 - t_k) between two of them,
+        # and from rest (zero acceleration at t_0) by at most J * (t_2 - t_0) for the first
+        assert np.all(np.abs(np.diff(acc, axis=0)) <= jerks[name] * (t[3:] - t[:-3])[:, None] * (1 + 1e-6))
+        assert np.all(np.abs(acc[0]) <= jerks[name] * (t[2] - t[0]) * (1 + 1e-6))
+        assert np.all(np.abs(acc[-1]) <= jerks[name] * (t[-1] - t[-3]) * (1 + 1e-6))
+        assert np.diff(t).max() <= MAX_POINT_DT * (1 + 1e-9)  # dense enough in time for a player to interpolate
 
 
 def test_the_json_and_the_csv(planned):
