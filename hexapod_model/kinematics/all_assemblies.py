@@ -17,8 +17,9 @@ answers it globally:
   (several: ``ambiguous_assembly``). Warm starts closer than ``WARM_CHECK`` base radii (a
   tracker's samples) keep the connected assembly unchecked; a warm ``out_of_limits``, however
   near, is settled by every assembly (``settle``: near a singularity the path from the guess may
-  end past a limit while another assembly, the only one within the limits, is the platform's). Every distance here is relative to
-  the base radius, so a hexapod scaled by any factor gets the same answers. (At home's readings the ``3-6`` preset has
+  end past a limit while another assembly, the only one within the limits, is the platform's).
+  Every distance here is relative to the base radius, so a hexapod scaled by any factor gets the
+  same answers. (At home's readings the ``3-6`` preset has
   four assemblies within its limits: home and three tilted by about 85 deg, 60 mm lower.)
 * **other hexapods**: a multi-start search: plain Newton from home and from ``starts``
   configurations of random poses (translation within the largest stroke, roll, pitch and yaw
