@@ -54,6 +54,7 @@ from .values import vec3 as _vec3
 JOINT_TYPES = ("cardan", "spherical", "guideway")
 MAX_AXIS_TILT_DEG = 10.0  # largest angle between a fixed Cardan axis and the plane perpendicular to the leg
 ENCODER_SCALE_LIMIT = 0.5  # |encoder_scale| bound (a relative scale error of the reading)
+ENCODER_RESOLUTION_LIMIT = 1e-3  # m, the coarsest encoder count accepted
 
 
 @dataclass(frozen=True)
@@ -144,6 +145,9 @@ class HexapodGeometry:
         inclinometer: a two-axis platform inclinometer (readings ``tilt_x``, ``tilt_y``), or ``None``.
         encoder_sigma: standard deviation of every leg encoder's reading (m); weighs the
             readings of a hexapod with redundant sensors.
+        encoder_resolution: the leg encoders' count (m of reading; 0, the default: continuous
+            readings). The stream tracker takes it as its ``resolution`` unless told otherwise
+            (:class:`~hexapod_model.tracking.reading_tests.TrackerSettings`).
     """
 
     name: str
@@ -168,6 +172,7 @@ class HexapodGeometry:
     measuring_legs: tuple[MeasuringLeg, ...] = ()
     inclinometer: Inclinometer | None = None
     encoder_sigma: float = DEFAULT_ENCODER_SIGMA
+    encoder_resolution: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name.replace("-", "_").replace("_", "a").isalnum():
@@ -205,6 +210,8 @@ class HexapodGeometry:
                     f"measuring_legs[{k}].platform_anchor", m.platform_anchor, "coincides with its base anchor at home"
                 )
         object.__setattr__(self, "encoder_sigma", _number("encoder_sigma", self.encoder_sigma, 0.0, 1.0, open_lo=True))
+        resolution = _number("encoder_resolution", self.encoder_resolution, 0.0, ENCODER_RESOLUTION_LIMIT)
+        object.__setattr__(self, "encoder_resolution", resolution)
 
         self._check_scale()
 
@@ -321,7 +328,7 @@ class HexapodGeometry:
         """Plain dict (the file format of :func:`geometry_from_dict`).
 
         Leg fields left at their default (``None``, a zero encoder model) are omitted, and so
-        are the body fields at their defaults.
+        are the body fields at their defaults and a zero ``encoder_resolution``.
         """
         out: dict[str, Any] = {}
         defaults = {f.name: f.default for f in fields(LegGeometry)}
@@ -330,6 +337,8 @@ class HexapodGeometry:
             if f.name in ("measuring_legs", "inclinometer"):
                 continue
             if f.name == "encoder_sigma" and not self.redundant:
+                continue
+            if f.name == "encoder_resolution" and v == 0.0:
                 continue
             if f.name == "legs":
                 v = [

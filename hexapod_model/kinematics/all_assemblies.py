@@ -21,10 +21,13 @@ answers it globally:
   polynomial has no real root for are ``no_assembly``; when Newton found nothing or could not
   follow the path from home, the one assembly within the limits is returned as ``converged``
   (several: ``ambiguous_assembly``). Warm starts closer than ``WARM_CHECK`` base radii (a
-  tracker's samples) keep the connected assembly unchecked. Every distance here is relative to
-  the base radius, so a hexapod scaled by any factor gets the same answers. (At home's readings the ``3-6`` preset has
-  four assemblies within its stroke and joint limits: home and three tilted by about 85 deg, 60 mm
-  lower, beyond its 45 deg ball-joint cones.)
+  tracker's samples) keep the connected assembly unchecked; a warm ``out_of_limits``, however
+  near, is settled by every assembly (``settle``: near a singularity the path from the guess may
+  end past a limit while another assembly, the only one within the limits, is the platform's).
+  Every distance here is relative to the base radius, so a hexapod scaled by any factor gets the
+  same answers. (At home's readings the ``3-6`` preset has four assemblies within its stroke and
+  joint limits: home and three tilted by about 85 deg, 60 mm lower, beyond its 45 deg ball-joint
+  cones.)
 * **other hexapods**: a multi-start search: plain Newton from home and from ``starts``
   configurations of random poses (translation within the largest stroke, roll, pitch and yaw
   within ``SAMPLE_ANGLE``); every distinct closed configuration it reaches. It finds what its
@@ -246,15 +249,23 @@ class AssemblyFinder:
         return found
 
 
-def review(finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: object) -> Solution:
-    """A 3-6 hexapod's direct-kinematics result checked against every assembly (see the module doc)."""
+def review(
+    finder: AssemblyFinder, sol: Solution, readings: np.ndarray, guess: object, *, settle: bool = False
+) -> Solution:
+    """A 3-6 hexapod's direct-kinematics result checked against every assembly (see the module doc).
+
+    ``settle``: a warm failure (``sol`` not ``converged``) is judged too, however near the
+    guess: its status is then the global answer's (the solve engine settles a warm workspace
+    verdict so).
+    """
     if finder.exact is None or sol.status == "invalid_input":
         return sol
     hexa, cold = finder.hexa, guess is None
-    if not cold and sol.status != "converged":
+    if not cold and sol.status != "converged" and not settle:
         return sol  # warm failures keep their own status (the tracker judges its passages)
     q_guess = None if cold else np.asarray(getattr(guess, "q", guess), dtype=float)
-    if q_guess is not None and np.max(np.abs(hexa.lengths_of(q_guess) - readings)) <= WARM_CHECK * finder.length:
+    near = q_guess is not None and np.max(np.abs(hexa.lengths_of(q_guess) - readings)) <= WARM_CHECK * finder.length
+    if near and not settle:
         return sol
     reference = hexa.home_pose if q_guess is None else hexa.pose_of(q_guess)
     found = finder.find(readings, reference)

@@ -186,9 +186,14 @@ class SolveEngine(JointSpace):
     def reviewed(self, sol: Solution, lengths: np.ndarray, guess: object, check: bool) -> Solution:
         """A 3-6 hexapod's result checked against every assembly (:func:`.all_assemblies.review`).
 
+        A warm ``out_of_limits`` is only the verdict of the assembly the path from the guess
+        reached (near a singularity, perhaps not even the connected one): every assembly
+        settles it, so readings whose one assembly within the limits is another get that
+        assembly, as a cold solve does, not a false workspace verdict.
         Raised when ``check`` and the reviewed status is not ``converged``.
         """
-        sol = review(self.finder, sol, lengths, guess)
+        settle = guess is not None and sol.status == "out_of_limits"
+        sol = review(self.finder, sol, lengths, guess, settle=settle)
         if check and sol.status != "converged":
             raise ERRORS.get(sol.status, ConvergenceError)(sol, f"{sol.status}: {sol.message}")
         return sol

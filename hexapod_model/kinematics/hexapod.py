@@ -119,6 +119,8 @@ class Hexapod:
         self.redundancy = None if layout is None else RedundantSensing(engine, layout)
         #: the names of the readings :meth:`forward` takes, in their order
         self.reading_names = ("leg1", "leg2", "leg3", "leg4", "leg5", "leg6") if layout is None else layout.names
+        #: the leg encoders' count (m of reading) from the geometry; 0: continuous or not known
+        self.encoder_resolution = 0.0 if geometry is None else geometry.encoder_resolution
 
     @property
     def check_body(self) -> bool:

@@ -24,6 +24,7 @@ assembly (:mod:`~hexapod_model.tracking.passage`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections import deque
@@ -84,7 +85,8 @@ class Tracker(PassageMixin):
         length: m per rad in pose distances and condition numbers (default
             :func:`characteristic_length`).
         settings: a :class:`TrackerSettings`; keyword ``options`` replace its fields
-            (``noise=50e-6``, ``recover=False``, ...).
+            (``noise=50e-6``, ``recover=False``, ...). A ``resolution`` left at 0 (not given
+            as an option) becomes the hexapod's :attr:`~.hexapod.Hexapod.encoder_resolution`.
         sensitivity: the evaluator of ``hexa`` to use, with ``length`` (default: one of its own).
             Its buffers only hold what one step computes, so trackers stepped one after another
             on one thread may share one (its Pinocchio data is ~3 MB); never trackers stepped on
@@ -115,7 +117,10 @@ class Tracker(PassageMixin):
             raise InputError("hexapod", hexa.closed_loop.source, why)
         tol = 100.0 * hexa.default_tol if tol is None else tol
         self.hexa, self.predictor, self.tol, self.max_iter = hexa, predictor, tol, max_iter
-        self.settings = s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
+        s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
+        if s.resolution == 0.0 and hexa.encoder_resolution > 0.0 and "resolution" not in options:
+            s = dataclasses.replace(s, resolution=hexa.encoder_resolution)  # the geometry's encoder count
+        self.settings = s
         self.length = characteristic_length(hexa) if length is None else float(length)
         self._motion = MotionModel()
         if sensitivity is not None and (sensitivity.hexa is not hexa or sensitivity.length != self.length):
