@@ -217,7 +217,8 @@ class AssemblyFinder:
                     inside.append(sol)
         ref = self.hexa.home_pose if reference is None else reference
         inside.sort(key=lambda s: pose_distance(ref, s.pose, self.length))
-        near = sorted((s for s in near if s.converged), key=lambda s: pose_distance(ref, s.pose, self.length))
+        near = [s for s in near if s.converged and (body is None or body.within_envelope(s.pose))]  # as ``inside``
+        near.sort(key=lambda s: pose_distance(ref, s.pose, self.length))
         return Assemblies(tuple(inside), len(poses) - len(inside), complete, method, tuple(near))
 
     def _search(self, readings: np.ndarray, starts: int, seed: int) -> list[np.ndarray]:

@@ -26,13 +26,14 @@ pose, flagged ``estimate``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pinocchio as pin
 
 from ..description.sensor_layout import SensorLayout
 from ..exceptions import ConvergenceError, InconsistentReadingsError, InputError, LimitError, SolverError
+from .body_check import BODY_STATUSES
 from .consistency import DEFAULT_ALPHA, Consistency, consistency, threshold
 from .engine import ERRORS, SolveEngine
 from .input_checks import LIMIT_SLACK, check_max_iter, check_tolerance, check_vector
@@ -94,7 +95,7 @@ class RedundantSensing:
             SolverError: the pose's inverse kinematics does not converge (outside the workspace).
         """
         sol = self.engine.inverse(pose, guess, tol, max_iter, False)
-        if not sol.converged:
+        if not sol.converged and sol.status not in BODY_STATUSES:  # cones and collisions: judged on the result
             raise ConvergenceError(sol, f"{sol.status}: inverse kinematics of a least-squares pose: {sol.message}")
         return np.concatenate([sol.lengths, self.extra_readings(pose)]), sol
 
@@ -199,7 +200,12 @@ class RedundantSensing:
             return self._raise_or(self._wrap(ik, z, "max_iterations", msg, (), None, pose, it, six.det_sign), check)
         test = consistency(self.names, A, r, self.sigmas, alpha)
         if test.consistent:
-            return self._wrap(ik, z, "converged", "", (), test, pose, six.iterations + it, six.det_sign)
+            sol = self._wrap(ik, z, "converged", "", (), test, pose, six.iterations + it, six.det_sign)
+            body = self.engine.body
+            if body is not None:  # the cone and collision flags, as in forward
+                judged = body.judged(sol, True)
+                sol = replace(sol, flags=judged.flags, message=judged.message)
+            return sol
         flags: tuple[str, ...] = ()
         if test.isolated is not None:  # the pose from the others: a flagged estimate
             keep = np.array([n != test.isolated for n in self.names])

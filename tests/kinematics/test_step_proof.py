@@ -10,7 +10,7 @@ import pytest
 
 import hexapod_model as hm
 
-from ..conftest import hexapod
+from ..conftest import limits_only as hexapod  # the cones would rule out the fold poses these cases are about
 
 DATA = Path(__file__).parents[1] / "data"
 
@@ -19,7 +19,7 @@ DATA = Path(__file__).parents[1] / "data"
 def test_a_warm_step_to_another_assembly_near_a_fold_is_not_converged(compiled):
     # tests/data/three_six_warm_wrong.json: from a guess 2 mm / 1 deg from the truth, the warm solve
     # returned converged (flagged near_singular) at another assembly 1.1 mm / 1.1 deg away
-    hexa = hexapod("3-6") if compiled else hm.Hexapod.from_preset("3-6", compiled=False)
+    hexa = hexapod("3-6") if compiled else hm.Hexapod.from_preset("3-6", compiled=False, check_body=False)
     case = json.loads((DATA / "three_six_warm_wrong.json").read_text())
     guess = hexa.inverse(np.array(case["guess_pose"]))
     sol = hexa.forward(np.array(case["readings_m"]), guess, check=False)
