@@ -6,13 +6,27 @@ import argparse
 import itertools
 import sys
 from collections.abc import Iterable, Iterator
-from typing import Any, TypeVar
+from typing import Any, Protocol, TypeVar
 
 from ..description.presets import DEFAULT_PRESET
 from ..kinematics.hexapod import Hexapod, load_hexapod
 
 T = TypeVar("T")
 HEXAPOD_HELP = "preset name, URDF file, geometry file (.toml/.yaml/.json) or MJCF file (.xml)"
+
+
+POSE_METAVAR = ("X", "Y", "Z", "ROLL", "PITCH", "YAW")
+
+
+class ArgumentAdder(Protocol):
+    """A parser or an argument group: what takes ``add_argument``."""
+
+    def add_argument(self, *names: str, **options: Any) -> argparse.Action: ...  # noqa: D102
+
+
+def add_pose_argument(p: ArgumentAdder, help: str) -> None:
+    """``--pose X Y Z ROLL PITCH YAW``: a platform pose in metres (base frame) and degrees."""
+    p.add_argument("--pose", nargs=6, type=float, metavar=POSE_METAVAR, help=help)
 
 
 def add_hexapod_argument(p: argparse.ArgumentParser, optional: bool = False) -> None:

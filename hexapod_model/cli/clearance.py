@@ -11,7 +11,7 @@ from ..files import atomic_write_text, check_output_path
 from ..kinematics.cones import check_cones
 from ..kinematics.input_checks import check_vector
 from ..lie import xyz_rpy_to_pose
-from ._common import add_hexapod_argument, hexapod_of
+from ._common import add_hexapod_argument, add_pose_argument, hexapod_of
 
 DESCRIPTION = """\
 The clearance of a pose: the smallest distance between two collision bodies of the hexapod's
@@ -26,13 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "clearance", help="smallest distance between two bodies at a pose, joint cones", description=DESCRIPTION
     )
     add_hexapod_argument(p)
-    p.add_argument(
-        "--pose",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
-        help="platform pose: position (m, base frame) and roll, pitch, yaw (deg) (default: home)",
-    )
+    add_pose_argument(p, "platform pose: position (m, base frame) and roll, pitch, yaw (deg) (default: home)")
     p.add_argument("--json", metavar="FILE", help="also write the figures as JSON")
     p.set_defaults(func=run)
 

@@ -13,7 +13,7 @@ from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
 from ..kinematics.input_checks import check_vector
 from ..lie import xyz_rpy_to_pose
-from ._common import add_hexapod_argument, hexapod_of
+from ._common import add_hexapod_argument, add_pose_argument, hexapod_of
 
 DESCRIPTION = """\
 Axial force in each leg of the locked fixture (what its brake holds) and the moments its offset
@@ -28,13 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "statics", help="leg (brake) forces and Cardan moments under a platform wrench", description=DESCRIPTION
     )
     add_hexapod_argument(p)
-    p.add_argument(
-        "--pose",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
-        help="platform pose: position (m, base frame) and roll, pitch, yaw (deg) (default: home)",
-    )
+    add_pose_argument(p, "platform pose: position (m, base frame) and roll, pitch, yaw (deg) (default: home)")
     p.add_argument(
         "--wrench",
         nargs=6,

@@ -14,20 +14,14 @@ from ..files import check_output_path
 from ..io.tables import LENGTH_COLUMNS, open_table, pose_input_columns, poses_from_table
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
-from ._common import add_hexapod_argument, hexapod_of
+from ._common import add_hexapod_argument, add_pose_argument, hexapod_of
 
 
 def _pose_options(p: argparse.ArgumentParser) -> None:
     add_hexapod_argument(p, optional=True)
     g = p.add_mutually_exclusive_group()
     g.add_argument("--lengths", nargs=6, type=float, metavar="L", help="six leg readings (m, zero at home): solve FK")
-    g.add_argument(
-        "--pose",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
-        help="platform pose as `hexapod fk` writes it: metres and degrees, R = Rz(yaw) Ry(pitch) Rx(roll)",
-    )
+    add_pose_argument(g, "platform pose as `hexapod fk` writes it: metres and degrees, R = Rz(yaw) Ry(pitch) Rx(roll)")
     p.add_argument(
         "--cell",
         action="store_true",
