@@ -18,7 +18,10 @@ configuration, and the next ``settle_samples`` samples, unchecked, are flagged `
 (also at the start and after :meth:`Tracker.reset`). Each sample carries its 1-sigma pose
 uncertainty propagated from the reading noise and its condition number. A passage near a
 singularity (two assemblies meet) is ``branch_uncertain`` until the readings single out one
-assembly (:mod:`~hexapod_model.tracking.passage`).
+assembly (:mod:`~hexapod_model.tracking.passage`). A warm solve the solver returns
+``uncertified`` (near a fold, its Krawczyk proof refused) is ``branch_uncertain`` unless the
+branch check found its pose consistent with the motion model and its condition number is under
+``cond_limit``: the motion model then vouches for the assembly.
 """
 
 from __future__ import annotations
