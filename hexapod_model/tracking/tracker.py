@@ -19,7 +19,10 @@ configuration, and the next ``settle_samples`` samples, unchecked, are flagged `
 (also at the start and after :meth:`Tracker.reset`). Each sample carries its 1-sigma pose
 uncertainty propagated from the reading noise and its condition number. A passage near a
 singularity (two assemblies meet) is ``branch_uncertain`` until the readings single out one
-assembly (:mod:`~hexapod_model.tracking.passage`).
+assembly (:mod:`~hexapod_model.tracking.passage`). A warm solve the solver returns
+``uncertified`` (near a fold, its Krawczyk proof refused) is ``branch_uncertain`` unless the
+branch check found its pose consistent with the motion model and its condition number is under
+``cond_limit``: the motion model then vouches for the assembly.
 """
 
 from __future__ import annotations
@@ -253,6 +256,7 @@ class Tracker(PassageMixin):
                 self._open(latch=False)  # no assembly near the prediction: readings past a fold?
             return self._failure(l, sol.status, sol.message, tuple(flags), legs, t0, sol)
         sens = self._sens.evaluate_solved(sol.q)  # from the solve's own Jacobians
+        consistent = False
         if checked and not suspect and not self._lost:
             sol, sens, consistent = self._branch_check(sol, sens, l, lhat, w, spread)
             if not consistent:
@@ -263,7 +267,12 @@ class Tracker(PassageMixin):
             open_ = False  # no passage open, none to open (the first test of _passage)
         else:
             sol, sens, open_ = self._passage(sol, sens, l, bool(legs) or self._lost)
-        uncertified = sol.status == "uncertified"  # the solver could not certify the assembly
+        # the solver could not certify the assembly from the guess alone (a warm step near a
+        # fold, its Krawczyk proof refused); the branch check's motion model vouches for it when
+        # the pose is consistent with it and the condition number is under the tracker's limit
+        # (the other assembly is then farther than the check's bound: passages judge the rest)
+        vouched = consistent and not open_ and sens.condition_number <= self.cond_limit
+        uncertified = sol.status == "uncertified" and not vouched
         if (self._lost or self._uncertified or open_ or uncertified) and "branch_uncertain" not in flags:
             flags.append("branch_uncertain")
         if not checked and m <= s.max_gap + 1:
