@@ -70,13 +70,8 @@ def assert_same_model(a: hm.Hexapod, b: hm.Hexapod) -> None:
 
 def worst_disagreement(name: str, n: int, seed: int) -> tuple[int, dict[str, float]]:
     """IK and FK of ``n`` random box poses through the URDF and the MJCF path: solves, worst gaps."""
-<<<<<<< HEAD
     urdf, mjcf = limits_only(name), mjcf_hexapod(name)  # the kinematics: the MJCF carries no cones
-    worst = dict.fromkeys(("ik lengths", "ik q", "fk pose", "fk q", "candidates"), 0.0)
-=======
-    urdf, mjcf = hexapod(name), mjcf_hexapod(name)
     worst = dict.fromkeys(("ik lengths", "ik q", "fk pose", "fk q", "candidates", "near closure"), 0.0)
->>>>>>> regress
     solved = 0
     for T in box_poses(urdf.home_pose, n, seed=seed):
         a, b = urdf.inverse(T, check=False), mjcf.inverse(T, check=False)
