@@ -1,4 +1,4 @@
-"""The stream tracker under injected faults (issue 9): each measured fault of the old tracker
+"""The stream tracker under injected faults: each measured fault of the old tracker
 has a test here, on a quick subset of trajectory B (benchmarks/tracker_faults.py runs all)."""
 
 from __future__ import annotations
