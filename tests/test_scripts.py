@@ -182,7 +182,7 @@ def test_robustness_benchmark_classifies_every_solve(tmp_path):
             "3-6",
             "guideway",
             "--poses",
-            "150",
+            "400",  # the 45 deg cones leave about a third of 3-6's box within its limits: over 100 of 400
             "--json",
             str(tmp_path / "r.json"),
         ],
