@@ -50,6 +50,14 @@ def dotted_paths(text: str) -> set[str]:
     return set(re.findall(r"\bhexapod_model(?:\.[A-Za-z_]\w*)++(?!`? logger)", text))
 
 
+def _module_file_exists(dotted: str) -> bool:
+    """Whether ``dotted`` names a module file (found without running it)."""
+    try:
+        return importlib.util.find_spec(dotted) is not None
+    except (ImportError, ValueError):  # a parent is not a package
+        return False
+
+
 def resolves(dotted: str) -> bool:
     """Whether ``dotted`` is an importable module, or an attribute reached from the longest one."""
     parts = dotted.split(".")
@@ -57,6 +65,8 @@ def resolves(dotted: str) -> bool:
         try:
             obj = importlib.import_module(".".join(parts[:k]))
         except ImportError:
+            if k == len(parts) and _module_file_exists(dotted):
+                return True  # a module that imports an extra's package (e.g. the ros extra's cyclonedds)
             continue
         try:
             for name in parts[k:]:

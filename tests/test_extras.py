@@ -63,6 +63,7 @@ def test_without_example_robot_data_the_cell_tests_skip_with_the_hint(tmp_path):
     root = Path(__file__).resolve().parent.parent
     (tmp_path / "hide_cell.py").write_text(_HIDE_CELL)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(root), os.environ.get("PYTHONPATH", "")])}
+    env.pop("PYTEST_ADDOPTS", None)  # a session of its own: not the outer run's options (its coverage floor)
     out = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "hide_cell", "-p", "no:cacheprovider", "-rs",
          "tests/viz/test_view.py", "-k", "cell_ik or unreachable"],
