@@ -44,6 +44,7 @@ def test_needs_redundant_sensors():
 
 
 def test_cli_hook_prints_the_table_and_writes_the_figure(tmp_path, capsys):
+    pytest.importorskip("matplotlib", reason="the figure needs the plots extra: pip install -e '.[plots]'")
     png = tmp_path / "mdb.png"
     assert main(["evaluate", "reference_tilt", "--detectability", str(png)]) == 0
     out = capsys.readouterr().out
