@@ -92,3 +92,15 @@ def stream_bar(desc: str, unit: str = "row") -> Any:
 def note(command: str, text: str) -> None:
     """One line on stderr, prefixed with the command."""
     print(f"hexapod {command}: {text}", file=sys.stderr)
+
+
+def serve_until_interrupted() -> None:
+    """Keep a meshcat view served until Ctrl-C (``hexapod view``, ``view --plan``)."""
+    import time
+
+    print("serving; press Ctrl-C to stop", file=sys.stderr)
+    try:
+        while True:
+            time.sleep(1.0)
+    except KeyboardInterrupt:
+        pass

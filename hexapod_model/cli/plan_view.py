@@ -9,6 +9,7 @@ from pathlib import Path
 
 from ..extras import require_extra
 from ..files import check_output_path
+from ._common import serve_until_interrupted
 
 
 def run_view_plan(args: argparse.Namespace) -> int:
@@ -32,12 +33,7 @@ def run_view_plan(args: argparse.Namespace) -> int:
             scene.show(k)
         print(f"played {plan.total_time:.2f} s of {', '.join(plan.order)}", file=sys.stderr)
         if not args.once:
-            print("serving; press Ctrl-C to stop", file=sys.stderr)
-            try:
-                while True:
-                    time.sleep(1.0)
-            except KeyboardInterrupt:
-                pass
+            serve_until_interrupted()
     finally:
         stop_visualizer(vis)
     return 0

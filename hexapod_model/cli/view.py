@@ -14,7 +14,7 @@ from ..files import check_output_path
 from ..io.tables import LENGTH_COLUMNS, open_table, pose_input_columns, poses_from_table
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
-from ._common import add_hexapod_argument, add_pose_argument, hexapod_of
+from ._common import add_hexapod_argument, add_pose_argument, hexapod_of, serve_until_interrupted
 
 
 def _pose_options(p: argparse.ArgumentParser) -> None:
@@ -135,12 +135,7 @@ def _serve(args: argparse.Namespace, vis) -> int:
             time.sleep(1.0 / args.rate)
         print(f"played {len(frames)} frames", file=sys.stderr)
     if not args.once:
-        print("serving; press Ctrl-C to stop", file=sys.stderr)
-        try:
-            while True:
-                time.sleep(1.0)
-        except KeyboardInterrupt:
-            pass
+        serve_until_interrupted()
     return 0
 
 
