@@ -116,12 +116,12 @@ def test_a_target_or_recipe_in_collision_is_422_naming_the_pair_over_http_and_fr
         # the command line: one line naming the pair, nothing stored
         pose = [str(TWIST[k]) for k in ("x", "y", "z", "roll", "pitch", "yaw")]
         capsys.readouterr()
-        assert main(["fixture", "target", str(cfg), "right", "--pose", *pose, "--url", url]) != 0
+        assert main(["fixture", "target", str(cfg), "right", "--pose", *pose, "--url", url]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "422" in err and f"{truth.pair[0]}" in err and "in collision" in err
         recipe = tmp_path / "twist.json"
         recipe.write_text(json.dumps({"targets": {"right": {"pose": TWIST, "tolerance": TOL}}}))
-        assert main(["fixture", "recipe", str(cfg), "twist", "--set", str(recipe), "--url", url]) != 0
+        assert main(["fixture", "recipe", str(cfg), "twist", "--set", str(recipe), "--url", url]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "targets.right.pose" in err and "in collision" in err
         code, target = call(address, "GET", "/fixtures/right/target")
