@@ -51,15 +51,18 @@ def test_the_dashboard_shows_the_clearance_and_highlights_a_collision(tmp_path):
             assert time.monotonic() < deadline, service.record("right")
             time.sleep(0.05)
         host, port = service.address
-        dom = render(f"http://{host}:{port}/#token={TOKEN}", tmp_path / "profile")
-        want = guidance(service.address, "right")
+        for _ in range(3):  # a page dumped while a starved simulator left the legs silent shows no pose: again
+            dom = render(f"http://{host}:{port}/#token={TOKEN}", tmp_path / "profile")
+            want = guidance(service.address, "right")
+            page = Fields()
+            page.feed(dom)
+            shown = page.found
+            if shown.get(("right", "clearance.collision"), ["", ""])[1] and want["clearance"] is not None:
+                break
     finally:
         simulator.stop()
         service.stop()
         bus.shutdown()
-    page = Fields()
-    page.feed(dom)
-    shown = page.found
     now, target = want["clearance"], want["target_clearance"]
     assert now["collision"] is True and target["collision"] is False
     assert shown[("right", "clearance.collision")][1] == "true"
