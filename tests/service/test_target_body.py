@@ -193,3 +193,18 @@ def test_a_model_without_collision_bodies_has_no_clearance_and_its_targets_are_s
     hexa = hm.Hexapod.load(urdf)
     target = target_from_json(body(FREE), "right", hexa, "anna", 1.0)
     assert target.clearance is None
+
+
+def test_a_hexapod_whose_solves_skip_the_body_check_still_has_its_targets_checked():
+    unchecked = hm.Hexapod.load(THICK, check_body=False)
+    assert unchecked.inverse(parse_pose(TWIST)).converged  # the solve alone accepts it
+    with pytest.raises(TargetError) as info:
+        target_from_json(body(TWIST), "right", unchecked, "anna", 1.0)
+    assert_names_the_collision(info.value, unchecked, TWIST, "pose")
+    free = hm.Hexapod.from_preset("reference", check_body=False)
+    T = _beyond_cone(free)
+    xyz, rpy = T[:3, 3], np.degrees(matrix_to_rpy(T[:3, :3]))
+    pose = dict(zip(("x", "y", "z", "roll", "pitch", "yaw"), map(float, [*xyz, *rpy])))
+    with pytest.raises(TargetError, match="beyond a joint cone") as cone:
+        target_from_json(body(pose), "right", free, "anna", 1.0)
+    assert cone.value.details["limit"] == "cone_limit"

@@ -101,10 +101,21 @@ def cone_limit(hexa: Hexapod, sol: Solution) -> Refusal:
 
 
 def body_refusal(hexa: Hexapod, sol: Solution) -> Refusal | None:
-    """The refusal of an inverse solve the body check refused (status ``collision`` or ``cone_limit``), else None."""
-    if sol.status == "collision":
+    """The refusal of an inverse solve the body check refused (status ``collision`` or ``cone_limit``), else None.
+
+    A ``converged`` solve of a hexapod whose solves skip the body check (``check_body = False``)
+    is checked here, cones first as the solver does: a target is never set unchecked.
+    """
+    status = sol.status
+    if status == "converged" and not hexa.check_body:
+        clear = clearance_of(hexa, sol.q)
+        if not check_cones(hexa.closed_loop, hexa.geometry, sol.q).within:
+            status = "cone_limit"
+        elif clear is not None and clear["collision"]:
+            status = "collision"
+    if status == "collision":
         return collision(hexa, sol)
-    if sol.status == "cone_limit":
+    if status == "cone_limit":
         return cone_limit(hexa, sol)
     return None
 

@@ -229,7 +229,7 @@ def reachable(hexa: Hexapod, pose: np.ndarray, where: str, fixture: str) -> tupl
             raise TargetError(where, pose_json(pose), reason, refusal.details) from None
         message = str(exc).split(": ", 1)[-1] if str(exc).startswith("out_of_limits") else str(exc)
         raise TargetError(where, pose_json(pose), f"outside the workspace of fixture {fixture!r}: {message}") from None
-    refusal = outside_envelope(hexa, pose)
+    refusal = body_refusal(hexa, sol) or outside_envelope(hexa, pose)
     if refusal is not None:
         raise TargetError(where, pose_json(pose), f"fixture {fixture!r} {refusal.reason}", refusal.details)
     return np.array(sol.lengths, dtype=float), clearance_of(hexa, sol.q)
