@@ -60,9 +60,14 @@ def _positive(name: str, value: float) -> float:
 
 
 def _targets(args: argparse.Namespace, config, hexapods: dict) -> dict:
-    """``fixture -> 4x4 target`` from the recipe, the recipe file or the stored current targets."""
+    """``fixture -> 4x4 target`` from the recipe, the recipe file or the stored current targets.
+
+    Each is checked as the service checks a target (stored ones too: the geometry may have
+    changed since): a ``TargetError`` names one outside the workspace, in collision, beyond a
+    joint cone or outside the operating envelope.
+    """
     from ..service.store import Store
-    from ..service.targets.target import recipe_from_json
+    from ..service.targets.target import reachable, recipe_from_json
     from .changeover import read_recipe
 
     if args.recipe_file:
@@ -78,7 +83,11 @@ def _targets(args: argparse.Namespace, config, hexapods: dict) -> dict:
                 )
             recipe = recipe_from_json(recipes[args.recipe][0], args.recipe, hexapods, "plan", time.time())
             return {k: t.pose for k, t in recipe.targets.items()}
-        return {k: t.pose for k, t in store.targets.current_targets().items()}
+        current = store.targets.current_targets()
+    for k, t in current.items():
+        if k in hexapods:
+            reachable(hexapods[k], t.pose, f"stored target {t.id} of {k}", k)
+    return {k: t.pose for k, t in current.items()}
 
 
 def _starts(args: argparse.Namespace, config, names: list[str], hexapods: dict) -> dict:

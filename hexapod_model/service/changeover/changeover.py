@@ -30,7 +30,9 @@ from ...exceptions import HexapodError
 from ...kinematics.hexapod import Hexapod
 from ..config.settings import NAME_PATTERN
 from ..cycle.fixture_cycle import FixtureCycle
+from ..record.pose_record import PoseRecord
 from ..store.fixture_store import Store
+from ..targets.body_limits import clearance_of
 from ..targets.guidance import guidance
 from ..targets.target import Recipe, Target, TargetError, reachable, recipe_from_json, target_from_json
 from .plan_monitor import PlanMonitor
@@ -71,16 +73,19 @@ class Changeover:
         self._active = self.store.active()  # (name, set_by, set_at) of the active recipe, kept here
         #: the changeover plan being played and watched (its progress in :meth:`overview`), or None
         self.monitor: PlanMonitor | None = None
+        #: each fixture's latest record and the clearance of its pose (measured once per record)
+        self._clearance: dict[str, tuple[PoseRecord | None, dict[str, Any] | None]] = {}
         for name, row in self.store.current_targets().items():
             if name not in cycles:
                 continue  # a fixture no longer configured: its rows stay in the store
             try:
-                readings = reachable(hexapods[name], row.pose, "pose", name)
+                readings, clearance = reachable(hexapods[name], row.pose, "pose", name)
             except TargetError as exc:
                 self.problems[name] = f"stored target {row.id} not used: {exc}"
                 log.error("fixture %s: %s", name, self.problems[name])
                 continue
-            self._install(Target(name, row.pose, row.tolerance, readings, row.set_by, row.set_at, row.recipe, row.id))
+            by, at = row.set_by, row.set_at
+            self._install(Target(name, row.pose, row.tolerance, readings, by, at, row.recipe, row.id, clearance))
 
     def _install(self, target: Target | None, name: str | None = None) -> None:
         name = name or (target.fixture if target is not None else "")
@@ -182,7 +187,16 @@ class Changeover:
         extra: dict[str, Any] = {"active_recipe": None if active is None else active[0]}
         if name in self.problems:
             extra["target_problem"] = self.problems[name]
-        return guidance(self.cycles[name].last, self._targets.get(name), extra)
+        rec = self.cycles[name].last
+        return guidance(rec, self._targets.get(name), extra, self._clearance_of(name, rec))
+
+    def _clearance_of(self, name: str, rec: PoseRecord) -> dict[str, Any] | None:
+        """The clearance of the record's pose (:func:`~..targets.body_limits.clearance_of`), once per record."""
+        seen, value = self._clearance.get(name, (None, None))
+        if seen is not rec:
+            value = clearance_of(self.hexapods[name], rec.q)
+            self._clearance[name] = (rec, value)
+        return value
 
     def overview(self) -> dict[str, Any]:
         """Every fixture's guidance, the active recipe and a playing plan's progress: what the dashboard shows."""

@@ -2,12 +2,13 @@
 
 Writes need the bearer token (``401`` without it) and name who made them: the optional ``by``
 of the body (or the ``X-Operator`` header: a person's name) and the peer's address. Bad bodies are ``422`` with
-one line naming the field (``{"error": ..., "field": ...}``); unknown fixtures and recipes
-``404``.
+one line naming the field (``{"error": ..., "field": ...}``; a target the machine's body refuses
+adds ``limit`` and its figures: ``docs/changeover.md``); unknown fixtures and recipes ``404``.
 
 * ``PUT /fixtures/NAME/target`` ``{"pose": {...}, "tolerance": {...}}`` -> ``{"target": ...}``;
   ``DELETE`` clears it (``{"cleared": true | false}``); ``GET`` -> ``{"target": ... | null}``
-* ``GET /fixtures/NAME/guidance`` -> deviation, per-leg changes, ``in_tolerance`` (``docs/changeover.md``)
+* ``GET /fixtures/NAME/guidance`` -> deviation, per-leg changes, ``in_tolerance``, the clearance of the
+  pose and of the target (``docs/changeover.md``)
 * ``PUT /recipes/NAME`` ``{"targets": {fixture: target}}``; ``POST /recipes/NAME/activate``;
   ``GET /recipes`` -> every recipe and the active one
 * ``GET /`` the dashboard, ``GET /dashboard/FILE`` its assets, ``GET /events`` the server-sent
@@ -66,7 +67,7 @@ async def _call(request: Request, work: Callable[[Changeover], Any]) -> Response
     try:
         result = await run_in_threadpool(work, changeover)
     except TargetError as exc:
-        return error_response(422, str(exc), field=exc.field)
+        return error_response(422, str(exc), field=exc.field, **exc.details)
     except UnknownError as exc:
         return error_response(404, str(exc))
     return json_response(result)

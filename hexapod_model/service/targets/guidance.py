@@ -66,12 +66,25 @@ def legs(readings: list[float | None], target: Target) -> list[dict[str, Any]]:
     return out
 
 
-def guidance(rec: PoseRecord, target: Target | None, extra: dict[str, Any] | None = None) -> dict[str, Any]:
+def guidance(
+    rec: PoseRecord,
+    target: Target | None,
+    extra: dict[str, Any] | None = None,
+    clearance: dict[str, Any] | None = None,
+) -> dict[str, Any]:
     """The guidance of one fixture from its latest record and its target (``None``: no target set).
 
     Keys: ``fixture``, ``t``, ``status``, ``state``, ``stored``, ``flags``, ``pose``, ``sigma``,
     ``pose_in_robot`` (the record's), ``target`` (as stored, or ``None``), ``deviation`` (``None`` without a pose or a
-    target), ``legs`` (``[]`` without a target), ``in_tolerance``; ``extra`` is merged in.
+    target), ``legs`` (``[]`` without a target), ``in_tolerance``, ``clearance`` (the record's pose) and
+    ``target_clearance`` (the target's): ``{"distance_mm", "pair", "min_clearance_mm", "collision"}``
+    (:func:`.body_limits.clearance_json`) or ``None``; ``extra`` is merged in.
+
+    Args:
+        rec: the fixture's latest record.
+        target: its target, or ``None``.
+        extra: keys to add.
+        clearance: the clearance of the record's pose (``None``: no pose, or no collision bodies).
     """
     out: dict[str, Any] = {
         "fixture": rec.fixture,
@@ -85,8 +98,10 @@ def guidance(rec: PoseRecord, target: Target | None, extra: dict[str, Any] | Non
         "pose_in_robot": rec.pose_in_robot,
     }
     out.update({"target": None, "deviation": None, "legs": [], "in_tolerance": False})
+    out.update({"clearance": clearance, "target_clearance": None})
     if target is not None:
         out["target"] = target.to_json()
+        out["target_clearance"] = target.clearance
         out["legs"] = legs(rec.readings if len(rec.readings) == 6 else [None] * 6, target)
         if rec.transform is not None:
             dev = deviation(rec.transform, target.pose)

@@ -11,7 +11,9 @@ fixtures: the set-up of one workpiece. The JSON form (HTTP and the store)::
 
 Every field is checked (:class:`TargetError` names the field, the value and what is expected, on
 one line), and a target is solved by inverse kinematics when it is set: a pose outside the
-workspace is refused with the leg (or Cardan joint) and the limit it breaks.
+workspace is refused with the leg (or Cardan joint) and the limit it breaks; a pose the machine's
+body refuses (two bodies in collision, a joint beyond its cone, outside the operating envelope:
+:mod:`.body_limits`) with the pair, the joint or the axis, and :attr:`TargetError.details`.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import numpy as np
 from ...exceptions import HexapodError, brief_repr
 from ...kinematics.hexapod import Hexapod
 from ...lie import matrix_to_quaternion, matrix_to_rpy, quaternion_to_matrix, rpy_to_matrix
+from .body_limits import body_refusal, clearance_of, outside_envelope
 
 RPY_KEYS = ("x", "y", "z", "roll", "pitch", "yaw")
 QUATERNION_KEYS = ("x", "y", "z", "qx", "qy", "qz", "qw")
@@ -40,10 +43,13 @@ class TargetError(HexapodError, ValueError):
         field: dotted name of the field (``"targets.left.pose.z"``).
         value: the value found there (``None`` when missing).
         reason: what is expected.
+        details: JSON details of a refusal by the machine's body (``limit`` and its figures,
+            :mod:`.body_limits`); empty for the other errors.
     """
 
-    def __init__(self, field: str, value: Any, reason: str):
+    def __init__(self, field: str, value: Any, reason: str, details: dict[str, Any] | None = None):
         self.field, self.value, self.reason = field, value, reason
+        self.details: dict[str, Any] = dict(details or {})
         super().__init__(f"field {field!r} = {brief_repr(value, 80)}: {' '.join(str(reason).split())}")
 
 
@@ -72,6 +78,8 @@ class Target:
         set_at: when (s, Unix time).
         recipe: the recipe it came from (``None``: set on its own).
         id: row id once stored.
+        clearance: the pose's clearance (:func:`.body_limits.clearance_json`: mm and the pair),
+            ``None`` for a model without collision bodies.
     """
 
     fixture: str
@@ -82,6 +90,7 @@ class Target:
     set_at: float
     recipe: str | None = None
     id: int | None = None
+    clearance: dict[str, Any] | None = field(default=None, compare=False)
 
     def to_json(self, brief: bool = False) -> dict[str, Any]:
         """JSON: ``pose`` (m, deg and quaternion), ``tolerance``, ``recipe``, ``set_by``, ``set_at``, ``id``.
@@ -202,14 +211,28 @@ def parse_tolerance(data: Any, where: str = "tolerance") -> Tolerance:
     return Tolerance(mm * 1e-3, math.radians(deg))
 
 
-def reachable(hexa: Hexapod, pose: np.ndarray, where: str, fixture: str) -> np.ndarray:
-    """The leg readings (m) of ``pose`` by inverse kinematics; :class:`TargetError` outside the workspace."""
+def reachable(hexa: Hexapod, pose: np.ndarray, where: str, fixture: str) -> tuple[np.ndarray, dict[str, Any] | None]:
+    """The leg readings (m) of ``pose`` by inverse kinematics and its clearance (:func:`.body_limits.clearance_of`).
+
+    Raises:
+        TargetError: ``pose`` outside the workspace (the leg or joint and the limit), or refused by
+            the machine's body: in collision, beyond a joint cone or outside the operating
+            envelope (:mod:`.body_limits`; the figures in :attr:`TargetError.details`).
+    """
     try:
         sol = hexa.inverse(pose)
     except HexapodError as exc:
+        result = getattr(exc, "result", None)
+        refusal = None if result is None else body_refusal(hexa, result)
+        if refusal is not None:
+            reason = f"fixture {fixture!r} {refusal.reason}"
+            raise TargetError(where, pose_json(pose), reason, refusal.details) from None
         message = str(exc).split(": ", 1)[-1] if str(exc).startswith("out_of_limits") else str(exc)
         raise TargetError(where, pose_json(pose), f"outside the workspace of fixture {fixture!r}: {message}") from None
-    return np.array(sol.lengths, dtype=float)
+    refusal = body_refusal(hexa, sol) or outside_envelope(hexa, pose)
+    if refusal is not None:
+        raise TargetError(where, pose_json(pose), f"fixture {fixture!r} {refusal.reason}", refusal.details)
+    return np.array(sol.lengths, dtype=float), clearance_of(hexa, sol.q)
 
 
 def target_from_json(
@@ -230,8 +253,8 @@ def target_from_json(
         raise TargetError(_join(where, "tolerance"), None, "missing (required: translation_mm, rotation_deg)")
     pose = parse_pose(data["pose"], _join(where, "pose"))
     tolerance = parse_tolerance(data["tolerance"], _join(where, "tolerance"))
-    readings = reachable(hexa, pose, _join(where, "pose"), fixture)
-    return Target(fixture, pose, tolerance, readings, set_by, set_at, recipe)
+    readings, clearance = reachable(hexa, pose, _join(where, "pose"), fixture)
+    return Target(fixture, pose, tolerance, readings, set_by, set_at, recipe, clearance=clearance)
 
 
 def recipe_from_json(data: Any, name: str, hexapods: dict[str, Hexapod], set_by: str, set_at: float) -> Recipe:

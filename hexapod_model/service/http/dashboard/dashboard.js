@@ -1,5 +1,5 @@
 // The fixtures' dashboard: reads the service's server-sent events (GET /events) and renders every
-// fixture's state, pose, target, deviation, per-leg changes and flags. No build step, no external
+// fixture's state, pose, target, deviation, per-leg changes, clearance and flags. No build step, no external
 // resource. The bearer token (when the service needs one) comes from the page's #token=... and is
 // kept in this tab's sessionStorage; it is sent as an Authorization header, never in a URL.
 // "In tolerance" is green only for a locked fixture whose ok pose is in tolerance: a plate that
@@ -83,6 +83,26 @@ function poseTable(name, rows) {
     table.appendChild(tr);
   }
   return table;
+}
+
+// the clearance of the pose and of the target: the smallest distance between two bodies (mm) and the
+// pair; a collision (below min_clearance) is highlighted
+function clearances(name, g) {
+  const box = el("div", { class: "section detail clearance" });
+  for (const [label, key, c] of [["clearance", "clearance", g.clearance], ["target", "target_clearance", g.target_clearance]]) {
+    const part = el("span", { class: "part" + (c && c.collision ? " collision" : ""), "data-fixture": name, "data-field": key + ".collision", "data-value": c ? String(c.collision) : "" });
+    part.appendChild(document.createTextNode(label + " "));
+    part.appendChild(value(name, key + ".distance_mm", c ? c.distance_mm : null, 3));
+    part.appendChild(document.createTextNode(" mm"));
+    if (c) {
+      const pair = c.pair.join(" \u2013 ");
+      part.appendChild(document.createTextNode(" ("));
+      part.appendChild(el("span", { "data-fixture": name, "data-field": key + ".pair", "data-value": c.pair.join(",") }, pair));
+      part.appendChild(document.createTextNode(")" + (c.collision ? " collision" : "")));
+    }
+    box.appendChild(part);
+  }
+  return box;
 }
 
 function legBars(name, legs) {
@@ -188,6 +208,7 @@ function card(g) {
   const pose = el("div", { class: "section pose" });
   pose.appendChild(poseTable(name, [["pose", "pose", g.pose], ["target", "target", target]]));
   c.appendChild(pose);
+  c.appendChild(clearances(name, g));
   const flags = el("div", { class: "section flags", "data-fixture": name, "data-field": "flags" }, g.flags.join(", "));
   c.appendChild(flags);
   if (g.target_problem) c.appendChild(el("div", { class: "flags" }, g.target_problem));
