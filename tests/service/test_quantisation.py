@@ -32,8 +32,9 @@ def test_hexapod_serve_simulated_at_rest_with_5um_counts_publishes_no_stuck(tmp_
         tmp_path,
         '[[fixtures]]\nname = "left"\nrate = 100.0\nnoise = 2e-6\nhold = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]\n',
     )
-    assert main(["serve", str(cfg), "--simulate", str(sim), "--jsonl", "--duration", "4"]) == 0
+    assert main(["serve", str(cfg), "--simulate", str(sim), "--jsonl", "--duration", "6"]) == 0
     records = [json.loads(line) for line in capsys.readouterr().out.splitlines() if line.startswith("{")]
     moving = [r for r in records if r["status"] in ("ok", "flagged", "stuck_leg")]
+    # 600 sets at 100 Hz: at least 200 (a third) even when a loaded machine starves the simulator
     assert len(moving) >= 200
     assert not [r for r in records if any(f.startswith("stuck") for f in r["flags"])]
