@@ -215,6 +215,9 @@ _LOCK = threading.Lock()
 
 def query_of(hexapod: _Solves) -> ClearanceQuery:
     """The hexapod's :class:`ClearanceQuery`, built at the first call (the bound from its geometry, 0 without one)."""
+    query = _QUERIES.get(hexapod)  # a dict read needs no lock; building one does
+    if query is not None:
+        return query
     with _LOCK:
         query = _QUERIES.get(hexapod)
         if query is None:
@@ -241,6 +244,6 @@ def clearance(hexapod: _Solves, q_or_pose: ArrayLike) -> Clearance:
         arr = sol.q
     elif arr.shape != (hexapod.nq,):
         raise InputError("q_or_pose", arr.shape, f"expected a configuration of {hexapod.nq} values or a 4x4 pose")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise InputError("q_or_pose", q_or_pose, "values must be finite")
     return query_of(hexapod)(arr)
