@@ -141,3 +141,22 @@ def test_body_check_verdicts_match_the_separate_checks():
             assert ("collision" in found) == c.collision
             if c.collision:
                 assert found["collision"] == c.message()
+
+
+def test_one_query_shared_by_threads():
+    """Each thread works in arrays of its own: answers under concurrency equal the sequential ones, bit for bit."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    hexa = hm.Hexapod.load(THICK, check_body=False)
+    query = query_of(hexa)
+    poses = box_poses(hexa.home_pose, 40, 6, translation=0.05, angle_deg=40)
+    qs = [hexa.inverse(pose, check=False).q for pose in poses]
+    expected = [(c.distance, c.pair, c.points.tobytes()) for c in map(query, qs)]
+
+    def run(offset: int) -> list:
+        order = qs[offset:] + qs[:offset]
+        return [(c.distance, c.pair, c.points.tobytes()) for c in map(query, order * 5)]
+
+    with ThreadPoolExecutor(4) as pool:
+        for offset, got in zip(range(4), pool.map(run, range(4))):
+            assert got == (expected[offset:] + expected[:offset]) * 5
