@@ -92,7 +92,7 @@ class ConeGeometry:
         self.home = self._directions(clm.q_home, m.createData()) if ball else np.zeros((0, 3))
 
     def kernel_rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """What the body kernel (:func:`~.clearance_kernel.cones`) reads of the joints.
+        """What the body kernel (:func:`~.placement_kernel.cones`) reads of the joints.
 
         Returns:
             ``cardan`` (n, 3) the two angles' q indices and the slot (leg * 2 + end) of each
