@@ -145,7 +145,7 @@ def nearest(ints, floats, work, out, bound):
     for i in range(ncap):  # capsules and spheres first (in pair order): their exact distances bound the plates'
         k = ints[ORDER, i]
         a, b = ints[FIRST, k], ints[SECOND, k]
-        reach = best + floats[REACH, k] - PRUNE_MARGIN
+        reach = best + floats[REACH, k] + PRUNE_MARGIN
         u0 = work[nj + a, 0, 3] - work[nj + b, 0, 3]
         u1 = work[nj + a, 1, 3] - work[nj + b, 1, 3]
         u2 = work[nj + a, 2, 3] - work[nj + b, 2, 3]
