@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike
 from ..description.collision import CollisionModel, collision_model
 from ..description.geometry import HexapodGeometry
 from ..description.model import ClosedLoopModel
-from ..exceptions import InputError
+from ..exceptions import InputError, UrdfError
 from . import clearance_kernel as kernel
 from .body_tables import kernel_tables
 from .cones import ConeGeometry
@@ -93,7 +93,7 @@ class ClearanceQuery:
     else unless it reports a pair (its :class:`Clearance`) or sends one to coal.
 
     Args:
-        clm: the loaded hexapod (made from a URDF with collision bodies).
+        clm: the loaded hexapod (made from a URDF with collision bodies, two at least).
         min_clearance: the collision bound (m).
         compiled: run the fast query compiled by numba (else the same kernel in Python).
         cones: the joints' cone geometry, for :meth:`check` (None: no cone angles).
@@ -114,6 +114,8 @@ class ClearanceQuery:
         self.compiled = bool(compiled)
         g = self.collision.geometry
         self.pairs = tuple((self.collision.names[p.first], self.collision.names[p.second]) for p in g.collisionPairs)
+        if not self.pairs:
+            raise UrdfError(clm.source, "<collision>", "no pair of collision bodies to measure")
         self.tables = kernel_tables(self.model, g, cones, limits)
         self.with_cones = cones is not None
         self._kernel = kernel.compiled_measure() if self.compiled else kernel.measure

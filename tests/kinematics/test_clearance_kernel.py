@@ -160,3 +160,22 @@ def test_one_query_shared_by_threads():
     with ThreadPoolExecutor(4) as pool:
         for offset, got in zip(range(4), pool.map(run, range(4))):
             assert got == (expected[offset:] + expected[:offset]) * 5
+
+
+def test_a_single_collision_body_is_named():
+    """A URDF with one collision body has no pair to measure: one line, and the solves skip the collision check."""
+    import re
+
+    from hexapod_model.description.model import ClosedLoopModel
+
+    text = (ROOT / "urdf" / "reference.urdf").read_text()
+    bodies = re.findall(r"\s*<collision .*?</collision>", text, flags=re.S)
+    one = re.sub(r"\s*<collision_checking>.*?</collision_checking>", "", text, flags=re.S)
+    for body in bodies[1:]:
+        one = one.replace(body, "", 1)
+    assert one.count("<collision ") == 1
+    hexa = hm.Hexapod(ClosedLoopModel(one, "one.urdf"), compiled=False)
+    with pytest.raises(hm.UrdfError, match="no pair of collision bodies") as err:
+        hexa.clearance(hexa.q_home)
+    assert "one.urdf" in str(err.value) and "\n" not in str(err.value)
+    assert hexa.inverse(hexa.home_pose).converged
