@@ -18,7 +18,8 @@ platform works. It does not judge a single answer: it decides between assemblies
 (:mod:`.all_assemblies`), where only the assemblies within the limits, the cones, the
 collision-free set and the envelope compete.
 
-The check costs a cone evaluation (a few microseconds) and a clearance query (45-85 us);
+The check is one compiled call (:meth:`.clearance.ClearanceQuery.check`: the placements, the
+cone angles and the pairs closer than ``min_clearance``), about 5 us on the reference preset;
 ``Hexapod.check_body = False`` skips it (docs/solver.md): the warm forward path then costs
 what it did without it. A model without collision bodies (a URDF written without them) has
 no collision check; a geometry without cones no cone check.
@@ -40,7 +41,7 @@ from .cones import ConeAngles, ConeGeometry, cone_limits
 from .newton.solver import Solution
 
 if TYPE_CHECKING:
-    from .clearance import ClearanceQuery
+    from .clearance import Clearance, ClearanceQuery
 
 #: the statuses (inverse, hybrid) and flags (direct kinematics) of the body check
 BODY_STATUSES = ("cone_limit", "collision")
@@ -87,26 +88,38 @@ class BodyCheck:
                 if self._query is None and not self._no_bodies:
                     bound = 0.0 if self.geometry is None else self.geometry.min_clearance
                     try:
-                        self._query = ClearanceQuery(self.clm, bound, self.compiled)
+                        self._query = ClearanceQuery(self.clm, bound, self.compiled, self._cones, self.limits)
                     except UrdfError:
                         self._no_bodies = True
         return self._query
 
     def violations(self, q: np.ndarray) -> list[tuple[str, str]]:
-        """``(status, message)`` of each limit configuration ``q`` violates: ``cone_limit``, ``collision``."""
+        """``(status, message)`` of each limit configuration ``q`` violates: ``cone_limit``, ``collision``.
+
+        One kernel call (:meth:`.clearance.ClearanceQuery.check`) takes the cone angles and the
+        pairs closer than ``min_clearance``; the NumPy cones of :mod:`.cones` serve a model without
+        collision bodies.
+        """
         out = []
-        if self._cones is not None:
-            data = getattr(self._local, "data", None)
-            if data is None:
-                data = self._local.data = self.clm.model.createData()
-            cones = ConeAngles(self._cones.angles(q, data), self.limits)
-            if not cones.within:
-                out.append(("cone_limit", cones.message()))
         query = self.query()
-        if query is not None:
-            c = query(q)
-            if c.collision:
-                out.append(("collision", c.message()))
+        if query is None:
+            if self._cones is not None:
+                data = getattr(self._local, "data", None)
+                if data is None:
+                    data = self._local.data = self.clm.model.createData()
+                cones = ConeAngles(self._cones.angles(q, data), self.limits)
+                if not cones.within:
+                    out.append(("cone_limit", cones.message()))
+            return out
+        return self._found(*query.check(q))
+
+    def _found(self, c: Clearance | None, angles: np.ndarray | None) -> list[tuple[str, str]]:
+        """:meth:`violations` of a :meth:`.clearance.ClearanceQuery.check` answer."""
+        out = []
+        if angles is not None:
+            out.append(("cone_limit", ConeAngles(angles, self.limits).message()))
+        if c is not None:
+            out.append(("collision", c.message()))
         return out
 
     def judged(self, sol: Solution, forward: bool) -> Solution:
@@ -116,7 +129,14 @@ class BodyCheck:
         """
         if sol.status != "converged":
             return sol
-        found = self.violations(sol.q)
+        query = self._query
+        if query is None:
+            found = self.violations(sol.q)
+        else:  # the hot path: one kernel call, nothing built when the answer passes
+            c, angles = query.check(sol.q)
+            if c is None and angles is None:
+                return sol
+            found = self._found(c, angles)
         if not found:
             return sol
         msg = message_of(found, forward)

@@ -4,10 +4,16 @@ The bodies are the ``<collision>`` elements of the hexapod's URDF
 (:mod:`~hexapod_model.description.urdf_collision`), loaded as a Pinocchio ``GeometryModel``
 with the pairs that touch by construction left out
 (:mod:`~hexapod_model.description.collision`). A query places the bodies and measures every pair
-(:mod:`~hexapod_model.kinematics.clearance_kernel`: capsules and spheres exactly, the plates by
-coal where a bound cannot rule them out; :meth:`ClearanceQuery.all_pairs` runs coal's
-distance on every pair): the distance (m, negative when two bodies overlap: minus the penetration depth),
-the pair's names and the two witness points (base frame, m).
+in one compiled call (:mod:`~hexapod_model.kinematics.clearance_kernel`: capsules, spheres and
+capsules against plates exactly; coal only for a body that enters a plate, where the depth
+needs its EPA, and two plates a bound cannot keep apart): the distance (m, negative when two
+bodies overlap: minus the penetration depth), the pair's names and the two witness points (base
+frame, m). :meth:`ClearanceQuery.all_pairs` runs coal's distance on every pair (at
+``GJK_TOLERANCE``); the query agrees with it to 1e-9 m.
+
+:meth:`ClearanceQuery.check` is the body check's call (:mod:`.body_check`): the same kernel with
+the geometry's ``min_clearance`` as the bound, so that only the pairs a cheap bound cannot keep
+beyond it are measured, and the joints' cone angles in the same call.
 
 A pose whose clearance is below the geometry's ``min_clearance`` is in ``collision``
 (:attr:`Clearance.collision`).
@@ -20,7 +26,6 @@ import weakref
 from dataclasses import dataclass
 from typing import Protocol
 
-import coal
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
@@ -30,7 +35,15 @@ from ..description.geometry import HexapodGeometry
 from ..description.model import ClosedLoopModel
 from ..exceptions import InputError, UrdfError
 from . import clearance_kernel as kernel
+from .body_tables import kernel_tables
+from .cones import ConeGeometry
 from .newton.solver import Solution
+from .placement_kernel import FLAGS, POINTS
+
+#: coal's GJK tolerance for the distances it measures here (its default, 1e-6, leaves up to
+#: 1.2 um on a capsule near a plate's rim; this one agrees with the exact distance to 1e-11 m)
+GJK_TOLERANCE = 1e-12
+GJK_MAX_ITERATIONS = 1000
 
 
 @dataclass(frozen=True)
@@ -76,48 +89,108 @@ class Clearance:
 class ClearanceQuery:
     """Clearance queries on one hexapod model; one object may be shared by threads.
 
+    Each thread gets work arrays of its own at its first query; a query allocates nothing
+    else unless it reports a pair (its :class:`Clearance`) or sends one to coal.
+
     Args:
-        clm: the loaded hexapod (made from a URDF with collision bodies).
+        clm: the loaded hexapod (made from a URDF with collision bodies, two at least).
         min_clearance: the collision bound (m).
         compiled: run the fast query compiled by numba (else the same kernel in Python).
+        cones: the joints' cone geometry, for :meth:`check` (None: no cone angles).
+        limits: (6, 2) the cone half-angles (rad; ``inf``: none), with ``cones``.
     """
 
-    def __init__(self, clm: ClosedLoopModel, min_clearance: float = 0.0, compiled: bool = True):
+    def __init__(
+        self,
+        clm: ClosedLoopModel,
+        min_clearance: float = 0.0,
+        compiled: bool = True,
+        cones: ConeGeometry | None = None,
+        limits: np.ndarray | None = None,
+    ):
         self.model = clm.model
         self.collision: CollisionModel = collision_model(clm)
         self.min_clearance = float(min_clearance)
         self.compiled = bool(compiled)
         g = self.collision.geometry
         self.pairs = tuple((self.collision.names[p.first], self.collision.names[p.second]) for p in g.collisionPairs)
-        self._arrays = _kernel_arrays(self.model, g)
+        if not self.pairs:
+            raise UrdfError(clm.source, "<collision>", "no pair of collision bodies to measure")
+        self.tables = kernel_tables(self.model, g, cones, limits)
+        self.with_cones = cones is not None
+        self._kernel = kernel.compiled_measure() if self.compiled else kernel.measure
+        self._nj = self.model.njoints
         self._local = threading.local()
 
     def _buffers(self) -> tuple[pin.Data, pin.GeometryData]:
         buf = getattr(self._local, "buffers", None)
         if buf is None:
             gd = pin.GeometryData(self.collision.geometry)
+            for request in gd.distanceRequests:
+                request.gjk_tolerance = GJK_TOLERANCE
+                request.gjk_max_iterations = GJK_MAX_ITERATIONS
             buf = self._local.buffers = (self.model.createData(), gd)
         return buf
+
+    def _work(self) -> tuple[np.ndarray, np.ndarray]:
+        work = getattr(self._local, "work", None)
+        if work is None:
+            ng, npairs = len(self.collision.names), len(self.pairs)
+            work = self._local.work = (
+                np.zeros((self._nj + 2 * ng + 2, 4, 4)),
+                np.zeros(FLAGS + npairs + self._nj),
+            )
+        return work
+
+    def check(self, q: np.ndarray) -> tuple[Clearance | None, np.ndarray | None]:
+        """The body check of configuration ``q`` (float64, contiguous) in one kernel call: collision and cones.
+
+        Returns:
+            ``(clearance, angles)``: the :class:`Clearance` when ``q`` is in collision (else
+            None), and the (6, 2) cone angles (rad) when a joint lies beyond its cone (else
+            None; always None without ``cones``).
+        """
+        work = getattr(self._local, "work", None) or self._work()
+        ints, floats, frames = self.tables
+        found = self._kernel(q, ints, floats, frames, work[0], work[1], self.min_clearance, self.with_cones)
+        if found[1] < 0 and not found[2] and found[3]:  # nothing closer than min_clearance, every cone kept
+            return None, None
+        c = self._answer(q, found, *work)
+        angles = None if found[3] else work[1][:12].reshape(6, 2).copy()
+        return (c if c is not None and c.collision else None), angles
 
     def __call__(self, q: np.ndarray) -> Clearance:
         """The clearance of configuration ``q`` (``nq`` values, as a solve's ``Solution.q``).
 
-        The fast kernel (:mod:`~hexapod_model.kinematics.clearance_kernel`); coal measures the
-        plate pairs it cannot rule out.
+        The kernel (:mod:`~hexapod_model.kinematics.clearance_kernel`); coal measures the
+        overlaps of a body and a plate.
         """
-        fn = kernel.compiled_nearest_pair() if self.compiled else kernel.nearest_pair
-        best, k, points, placements, candidates = fn(np.ascontiguousarray(q, dtype=float), *self._arrays)
-        if np.any(candidates):
+        work, out = self._work()
+        q = np.ascontiguousarray(q, dtype=float)
+        found = self._kernel(q, *self.tables, work, out, np.inf, False)
+        c = self._answer(q, found, work, out)
+        assert c is not None  # every pair is measured against an infinite bound
+        return c
+
+    def _answer(self, q: np.ndarray, found: tuple, work: np.ndarray, out: np.ndarray) -> Clearance | None:
+        """The :class:`Clearance` of a kernel call ``found``, with coal on the pairs it flagged; None if none."""
+        best, k, flagged = found[0], found[1], found[2]
+        if k < 0 and not flagged:
+            return None
+        points = out[POINTS:FLAGS].reshape(2, 3).copy()
+        if flagged:
             _, gdata = self._buffers()
             geometry = self.collision.geometry
-            for c in np.flatnonzero(candidates):
+            for c in np.flatnonzero(out[FLAGS : FLAGS + len(self.pairs)]):
                 pair = geometry.collisionPairs[int(c)]
                 for g in (pair.first, pair.second):
-                    gdata.oMg[g] = pin.SE3(placements[g])
+                    gdata.oMg[g] = pin.SE3(work[self._nj + g])
                 r = pin.computeDistance(geometry, gdata, int(c))
                 if r.min_distance < best:
                     best, k = r.min_distance, int(c)
                     points = np.array([r.getNearestPoint1(), r.getNearestPoint2()])
+            if k < 0:
+                return None
         return Clearance(float(best), self.pairs[k], points, self.min_clearance)
 
     def all_pairs(self, q: np.ndarray) -> np.ndarray:
@@ -125,43 +198,6 @@ class ClearanceQuery:
         data, gdata = self._buffers()
         pin.computeDistances(self.model, data, self.collision.geometry, gdata, q)
         return np.fromiter((r.min_distance for r in gdata.distanceResults), float, len(gdata.distanceResults))
-
-
-def _kernel_arrays(model: pin.Model, geometry: pin.GeometryModel) -> tuple[np.ndarray, ...]:
-    """The model's joint tree and bodies as the arrays :func:`~.clearance_kernel.nearest_pair` takes."""
-    nj = model.njoints
-    kind = np.zeros(nj, dtype=np.int64)
-    axis = np.zeros((nj, 3))
-    data = model.createData()
-    q0 = pin.neutral(model)
-    for j in range(1, nj):
-        name = model.joints[j].shortname()
-        if name == "JointModelFreeFlyer":
-            kind[j] = kernel.FREE
-            continue
-        J = pin.computeJointJacobian(model, data, q0, j)[:, model.joints[j].idx_v]  # local frame: (v, w)
-        kind[j] = kernel.REVOLUTE if np.linalg.norm(J[3:]) > 0.5 else kernel.PRISMATIC
-        axis[j] = J[3:] if kind[j] == kernel.REVOLUTE else J[:3]
-    parent = np.array(model.parents, dtype=np.int64)
-    placement = np.array([M.homogeneous for M in model.jointPlacements])
-    idx_q = np.array([max(model.joints[j].idx_q, 0) for j in range(nj)], dtype=np.int64)
-    objects = geometry.geometryObjects
-    body_joint = np.array([o.parentJoint for o in objects], dtype=np.int64)
-    body_placement = np.array([o.placement.homogeneous for o in objects])
-    half, radius, shape = np.zeros(len(objects)), np.zeros(len(objects)), np.zeros(len(objects), dtype=np.int64)
-    for g, o in enumerate(objects):
-        shape_ = o.geometry
-        if isinstance(shape_, coal.Capsule):
-            half[g], radius[g] = shape_.halfLength, shape_.radius
-        elif isinstance(shape_, coal.Sphere):
-            radius[g] = shape_.radius
-        elif isinstance(shape_, coal.Cylinder):
-            half[g], radius[g], shape[g] = shape_.halfLength, shape_.radius, kernel.DISC
-        else:
-            raise UrdfError("<collision>", o.name, "the clearance query handles capsules, spheres and cylinders")
-    first = np.array([p.first for p in geometry.collisionPairs], dtype=np.int64)
-    second = np.array([p.second for p in geometry.collisionPairs], dtype=np.int64)
-    return parent, placement, kind, axis, idx_q, body_joint, body_placement, half, radius, shape, first, second
 
 
 class _Solves(Protocol):
@@ -181,6 +217,9 @@ _LOCK = threading.Lock()
 
 def query_of(hexapod: _Solves) -> ClearanceQuery:
     """The hexapod's :class:`ClearanceQuery`, built at the first call (the bound from its geometry, 0 without one)."""
+    query = _QUERIES.get(hexapod)  # a dict read needs no lock; building one does
+    if query is not None:
+        return query
     with _LOCK:
         query = _QUERIES.get(hexapod)
         if query is None:
@@ -207,6 +246,6 @@ def clearance(hexapod: _Solves, q_or_pose: ArrayLike) -> Clearance:
         arr = sol.q
     elif arr.shape != (hexapod.nq,):
         raise InputError("q_or_pose", arr.shape, f"expected a configuration of {hexapod.nq} values or a 4x4 pose")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise InputError("q_or_pose", q_or_pose, "values must be finite")
     return query_of(hexapod)(arr)

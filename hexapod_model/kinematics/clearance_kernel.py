@@ -1,77 +1,48 @@
-"""The fast clearance query: body placements and capsule distances in one kernel (numba or NumPy).
+"""The distance half of the body kernel: exact body distances, one call with the placements (numba or NumPy).
 
 Coal's distance on every pair of a hexapod's ~26 bodies costs several warm forward solves (its
-per-pair set-up dominates). Here one kernel places every joint of the model's tree from ``q``
-(the joint placements, axes and kinds read off the Pinocchio model), places the bodies, and
-measures each pair of capsules and spheres (a sphere is a capsule of zero length) exactly by the
-distance of their segments (Ericson, *Real-Time Collision Detection*, 5.1.9). A pair with a plate
-(a disc) gets a lower bound only (the distance of the other body's capsule to the plate's
-slab); the few pairs whose bound is below the smallest exact distance go to coal. The answer is
-coal's to rounding (the tests hold it to 1e-9 m).
+per-pair set-up dominates). :func:`measure` places the bodies and takes the cone angles
+(:mod:`.placement_kernel`), then :func:`nearest` measures the pairs:
+
+* capsules and spheres (a sphere is a capsule of zero length) exactly by the distance of their
+  segments (Ericson, *Real-Time Collision Detection*, 5.1.9);
+* a capsule against a plate (a solid cylinder) exactly: the distance of a point to the cylinder
+  is convex along the capsule's segment, so its minimum is found by bisection on the sign of
+  its derivative, stopped when the bracket times the segment's length is below ``DISC_TOL``
+  (the distance is then within that of the minimum); a segment that enters the plate (an
+  overlap: its depth needs coal's EPA) and two plates that a bound cannot keep apart are flagged
+  for coal;
+* a pair is skipped when a lower bound (bounding spheres, or the plate's slab and axis) is at
+  least the smallest distance found so far, which starts at the caller's ``bound``: with the
+  geometry's ``min_clearance`` a clear pose measures almost no pair exactly, and with ``inf``
+  the kernel gives the smallest distance of all. Skipping never changes the answer.
+
+The tables (:func:`~hexapod_model.kinematics.body_tables.kernel_tables`) are read-only; the work
+arrays are the caller's (one per thread), so a call allocates nothing.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-FREE, REVOLUTE, PRISMATIC = 0, 1, 2
-CAPSULE, DISC = 0, 1
+from . import placement_kernel as placement
+from .placement_kernel import DISC, FIRST, FLAGS, HALF, ORDER, POINTS, RADIUS, REACH, SECOND, SHAPE, SIZES
+
 EPS = 1e-300
+#: the capsule-to-plate bisection stops when its bracket times the segment length is below this (m)
+DISC_TOL = 1e-13
+#: a lower bound skips a pair only when it exceeds the smallest distance so far by this (m): rounding
+PRUNE_MARGIN = 1e-9
 
 
-def _compose(A, B, out) -> None:
-    """``out = A @ B`` for rigid 4x4 transforms (last row 0 0 0 1), without allocation."""
-    for r in range(3):
-        a0, a1, a2 = A[r, 0], A[r, 1], A[r, 2]
-        for c in range(4):
-            out[r, c] = a0 * B[0, c] + a1 * B[1, c] + a2 * B[2, c]
-        out[r, 3] += A[r, 3]
-    out[3, 0] = out[3, 1] = out[3, 2] = 0.0
-    out[3, 3] = 1.0
-
-
-def _local(kind, axis, q, i, out) -> None:
-    """The joint's own motion at ``q`` as a rigid transform ``out``."""
-    out[:] = 0.0
-    out[0, 0] = out[1, 1] = out[2, 2] = out[3, 3] = 1.0
-    if kind == FREE:
-        x, y, z, w = q[i + 3], q[i + 4], q[i + 5], q[i + 6]
-        out[0, 0], out[0, 1], out[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
-        out[1, 0], out[1, 1], out[1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
-        out[2, 0], out[2, 1], out[2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
-        out[0, 3], out[1, 3], out[2, 3] = q[i], q[i + 1], q[i + 2]
-    elif kind == REVOLUTE:
-        c, s = np.cos(q[i]), np.sin(q[i])
-        x, y, z = axis[0], axis[1], axis[2]
-        C = 1.0 - c
-        out[0, 0], out[0, 1], out[0, 2] = c + x * x * C, x * y * C - z * s, x * z * C + y * s
-        out[1, 0], out[1, 1], out[1, 2] = y * x * C + z * s, c + y * y * C, y * z * C - x * s
-        out[2, 0], out[2, 1], out[2, 2] = z * x * C - y * s, z * y * C + x * s, c + z * z * C
-    else:
-        out[0, 3], out[1, 3], out[2, 3] = axis[0] * q[i], axis[1] * q[i], axis[2] * q[i]
-
-
-def place_joints(q, parent, placement, kind, axis, idx_q, out) -> None:
-    """World placements ``out`` (njoints, 4, 4) of every joint at ``q`` (parents precede children)."""
-    out[0] = np.eye(4)
-    local = np.empty((4, 4))
-    tmp = np.empty((4, 4))
-    for j in range(1, parent.shape[0]):
-        _local(kind[j], axis[j], q, idx_q[j], local)
-        _compose(placement[j], local, tmp)
-        _compose(out[parent[j]], tmp, out[j])
-
-
-def _closest(p1, q1, p2, q2):
-    """Parameters ``s``, ``t`` of the closest points of segments ``p1 q1`` and ``p2 q2`` (3-vectors)."""
-    a = e = f = c = b = 0.0
-    for m in range(3):
-        d1, d2, r = q1[m] - p1[m], q2[m] - p2[m], p1[m] - p2[m]
-        a += d1 * d1
-        e += d2 * d2
-        f += d2 * r
-        c += d1 * r
-        b += d1 * d2
+def _closest(a0, a1, a2, b0, b1, b2, c0, c1, c2, d0, d1, d2):
+    """Parameters ``s``, ``t`` of the closest points of the segments ``a b`` and ``c d`` (coordinates)."""
+    u0, u1, u2, v0, v1, v2, r0, r1, r2 = b0 - a0, b1 - a1, b2 - a2, d0 - c0, d1 - c1, d2 - c2, a0 - c0, a1 - c1, a2 - c2
+    a = u0 * u0 + u1 * u1 + u2 * u2
+    e = v0 * v0 + v1 * v1 + v2 * v2
+    f = v0 * r0 + v1 * r1 + v2 * r2
+    c = u0 * r0 + u1 * r1 + u2 * r2
+    b = u0 * v0 + u1 * v1 + u2 * v2
     if a <= EPS and e <= EPS:
         return 0.0, 0.0
     if a <= EPS:
@@ -88,100 +59,190 @@ def _closest(p1, q1, p2, q2):
     return s, t
 
 
-def nearest_pair(
-    q, parent, placement, kind, axis, idx_q, body_joint, body_placement, half, radius, shape, first, second
-):
-    """The smallest exact capsule distance and its pair, and the plate pairs coal must still measure.
+def _in_plate(M, S):
+    """Segment ``S`` (2, 3+) in the frame of the plate placed at ``M``: its start ``u`` and direction ``v``."""
+    u0 = M[0, 0] * (S[0, 0] - M[0, 3]) + M[1, 0] * (S[0, 1] - M[1, 3]) + M[2, 0] * (S[0, 2] - M[2, 3])
+    u1 = M[0, 1] * (S[0, 0] - M[0, 3]) + M[1, 1] * (S[0, 1] - M[1, 3]) + M[2, 1] * (S[0, 2] - M[2, 3])
+    u2 = M[0, 2] * (S[0, 0] - M[0, 3]) + M[1, 2] * (S[0, 1] - M[1, 3]) + M[2, 2] * (S[0, 2] - M[2, 3])
+    v0 = M[0, 0] * (S[1, 0] - M[0, 3]) + M[1, 0] * (S[1, 1] - M[1, 3]) + M[2, 0] * (S[1, 2] - M[2, 3]) - u0
+    v1 = M[0, 1] * (S[1, 0] - M[0, 3]) + M[1, 1] * (S[1, 1] - M[1, 3]) + M[2, 1] * (S[1, 2] - M[2, 3]) - u1
+    v2 = M[0, 2] * (S[1, 0] - M[0, 3]) + M[1, 2] * (S[1, 1] - M[1, 3]) + M[2, 2] * (S[1, 2] - M[2, 3]) - u2
+    return u0, u1, u2, v0, v1, v2
+
+
+def _off_cylinder(u0, u1, u2, v0, v1, v2, t, R, h):
+    """Point ``u + t v`` (plate frame) minus its nearest point of the solid cylinder (radius R, half-height h)."""
+    x, y, z = u0 + t * v0, u1 + t * v1, u2 + t * v2
+    r = np.sqrt(x * x + y * y)
+    s = 1.0 - R / r if r > R else 0.0
+    return x * s, y * s, z - min(max(z, -h), h)
+
+
+def _disc(M, S, R, h, radius, best):
+    """A capsule (segment ``S``, ``radius``) against a plate (placement ``M``, radius R, half-height h).
+
+    Returns ``(distance, t, kind)``: ``kind`` 0 when a lower bound is at least ``best`` (the
+    distance is that bound), 1 exact (``t`` the segment parameter of the nearest point), 2 the
+    segment enters the plate (an overlap whose depth coal measures).
+    """
+    u0, u1, u2, v0, v1, v2 = _in_plate(M, S)
+    z0, z1 = u2, u2 + v2
+    slab = max(min(z0, z1) - h, -h - max(z0, z1), 0.0)
+    s, t = _closest(u0, u1, u2, u0 + v0, u1 + v1, u2 + v2, 0.0, 0.0, -h, 0.0, 0.0, h)  # against the plate's axis
+    x, y, z = u0 + s * v0, u1 + s * v1, u2 + s * v2 - (t * 2.0 * h - h)
+    low = max(slab, np.sqrt(x * x + y * y + z * z) - R) - radius
+    if low - PRUNE_MARGIN >= best:
+        return low, 0.0, 0
+    length = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    lo, hi = 0.0, 1.0
+    e0, e1, e2 = _off_cylinder(u0, u1, u2, v0, v1, v2, 0.0, R, h)
+    if e0 == 0.0 and e1 == 0.0 and e2 == 0.0:
+        return -radius, 0.0, 2
+    if length * length <= EPS or e0 * v0 + e1 * v1 + e2 * v2 >= 0.0:
+        hi = 0.0
+    else:
+        e0, e1, e2 = _off_cylinder(u0, u1, u2, v0, v1, v2, 1.0, R, h)
+        if e0 * v0 + e1 * v1 + e2 * v2 <= 0.0:
+            lo = 1.0
+        while (hi - lo) * length > DISC_TOL:
+            mid = 0.5 * (lo + hi)
+            e0, e1, e2 = _off_cylinder(u0, u1, u2, v0, v1, v2, mid, R, h)
+            if e0 == 0.0 and e1 == 0.0 and e2 == 0.0:
+                return -radius, mid, 2
+            if e0 * v0 + e1 * v1 + e2 * v2 > 0.0:
+                hi = mid
+            else:
+                lo = mid
+    t = 0.5 * (lo + hi)
+    e0, e1, e2 = _off_cylinder(u0, u1, u2, v0, v1, v2, t, R, h)
+    if e0 == 0.0 and e1 == 0.0 and e2 == 0.0:
+        return -radius, t, 2
+    return np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) - radius, t, 1
+
+
+def _slabs(A, B, floats, a, b):
+    """A lower bound (m) of the distance of plates ``a`` (placement ``A``) and ``b`` (``B``): ``a``'s slab."""
+    c = A[0, 2] * B[0, 2] + A[1, 2] * B[1, 2] + A[2, 2] * B[2, 2]  # cosine of the two axes
+    reach = abs(c) * floats[HALF, b] + floats[RADIUS, b] * np.sqrt(
+        max(0.0, 1.0 - c * c)
+    )  # b's half-extent along a's axis
+    z = A[0, 2] * (B[0, 3] - A[0, 3]) + A[1, 2] * (B[1, 3] - A[1, 3]) + A[2, 2] * (B[2, 3] - A[2, 3])
+    return abs(z) - reach - floats[HALF, a] - PRUNE_MARGIN
+
+
+def nearest(ints, floats, work, out, bound):
+    """The smallest distance below ``bound`` (m) of the pairs of the bodies placed in ``work`` (:func:`place`).
 
     Returns:
-        ``(distance, pair index, witness points (2, 3), body placements (ng, 4, 4),
-        candidates)``: ``candidates`` a boolean per pair, true for the plate pairs whose
-        lower bound lies below ``distance``.
+        ``(distance, pair index, flagged)``: ``distance`` ``bound`` and the index -1 when no
+        pair measured lies below it; the witness points (base frame, m) in
+        ``out[POINTS:POINTS + 6]``; ``flagged`` pairs for coal (``out[FLAGS + k]`` 1.0).
     """
-    oMi = np.empty((parent.shape[0], 4, 4))
-    place_joints(q, parent, placement, kind, axis, idx_q, oMi)
-    ng = body_joint.shape[0]
-    M = np.empty((ng, 4, 4))
-    seg = np.empty((ng, 2, 3))
-    for g in range(ng):
-        _compose(oMi[body_joint[g]], body_placement[g], M[g])
-        for m in range(3):
-            seg[g, 0, m] = M[g, m, 3] - half[g] * M[g, m, 2]
-            seg[g, 1, m] = M[g, m, 3] + half[g] * M[g, m, 2]
-    npairs = first.shape[0]
-    best, best_k, best_s, best_t = np.inf, -1, 0.0, 0.0
-    for k in range(npairs):
-        a, b = first[k], second[k]
-        if shape[a] == DISC or shape[b] == DISC:
+    nj, ng, npairs = ints[SIZES, 0], ints[SIZES, 1], ints[SIZES, 2]
+    seg = nj + ng
+    best, best_k, best_s, best_t = bound, -1, 0.0, 0.0
+    flagged, ncap = 0, ints[SIZES, 6]
+    for i in range(ncap):  # capsules and spheres first (in pair order): their exact distances bound the plates'
+        k = ints[ORDER, i]
+        a, b = ints[FIRST, k], ints[SECOND, k]
+        reach = best + floats[REACH, k] + PRUNE_MARGIN
+        u0 = work[nj + a, 0, 3] - work[nj + b, 0, 3]
+        u1 = work[nj + a, 1, 3] - work[nj + b, 1, 3]
+        u2 = work[nj + a, 2, 3] - work[nj + b, 2, 3]
+        if reach <= 0.0 or u0 * u0 + u1 * u1 + u2 * u2 >= reach * reach:  # bounding spheres at least ``best`` apart
             continue
-        s, t = _closest(seg[a, 0], seg[a, 1], seg[b, 0], seg[b, 1])
+        A, B = work[seg + a], work[seg + b]
+        s, t = _closest(
+            A[0, 0], A[0, 1], A[0, 2], A[1, 0], A[1, 1], A[1, 2], B[0, 0], B[0, 1], B[0, 2], B[1, 0], B[1, 1], B[1, 2]
+        )
         dd = 0.0
         for m in range(3):
-            u = seg[b, 0, m] + t * (seg[b, 1, m] - seg[b, 0, m]) - seg[a, 0, m] - s * (seg[a, 1, m] - seg[a, 0, m])
+            u = B[0, m] + t * (B[1, m] - B[0, m]) - A[0, m] - s * (A[1, m] - A[0, m])
             dd += u * u
-        d = np.sqrt(dd) - radius[a] - radius[b]
+        d = np.sqrt(dd) - floats[RADIUS, a] - floats[RADIUS, b]
         if d < best:
             best, best_k, best_s, best_t = d, k, s, t
-    points = np.zeros((2, 3))
     if best_k >= 0:
-        a, b = first[best_k], second[best_k]
-        ca = seg[a, 0] + best_s * (seg[a, 1] - seg[a, 0])
-        cb = seg[b, 0] + best_t * (seg[b, 1] - seg[b, 0])
-        u = cb - ca
-        dist = np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
-        points[0], points[1] = ca, cb
-        if dist > 0.0:
-            points[0] = ca + radius[a] / dist * u
-            points[1] = cb - radius[b] / dist * u
-    bounds = np.full(npairs, np.inf)
-    for k in range(npairs):
-        a, b = first[k], second[k]
-        if shape[a] != DISC and shape[b] != DISC:
-            continue
-        disc, other = (a, b) if shape[a] == DISC else (b, a)
-        h = half[disc]
-        s0 = s1 = r0 = r1 = 0.0
+        a, b = ints[FIRST, best_k], ints[SECOND, best_k]
+        Sa, Sb = work[seg + a], work[seg + b]
+        dd = 0.0
         for m in range(3):
-            n, centre = M[disc, m, 2], M[disc, m, 3]
-            s0 += n * (seg[other, 0, m] - centre)
-            s1 += n * (seg[other, 1, m] - centre)
-        for m in range(3):  # squared radial distances of the two ends from the disc's axis
-            n, centre = M[disc, m, 2], M[disc, m, 3]
-            r0 += (seg[other, 0, m] - centre - s0 * n) ** 2
-            r1 += (seg[other, 1, m] - centre - s1 * n) ** 2
-        side = 1.0 if s0 > h and s1 > h else (-1.0 if s0 < -h and s1 < -h else 0.0)
-        if side == 0.0:
-            bounds[k] = -np.inf
+            out[POINTS + m] = Sa[0, m] + best_s * (Sa[1, m] - Sa[0, m])
+            out[POINTS + 3 + m] = Sb[0, m] + best_t * (Sb[1, m] - Sb[0, m])
+            dd += (out[POINTS + 3 + m] - out[POINTS + m]) ** 2
+        dist = np.sqrt(dd)
+        if dist > 0.0:
+            ra, rb = floats[RADIUS, a] / dist, floats[RADIUS, b] / dist
+            for m in range(3):
+                u = out[POINTS + 3 + m] - out[POINTS + m]
+                out[POINTS + m] += ra * u
+                out[POINTS + 3 + m] -= rb * u
+    for i in range(ncap, npairs):
+        k = ints[ORDER, i]
+        a, b = ints[FIRST, k], ints[SECOND, k]
+        out[FLAGS + k] = 0.0
+        if ints[SHAPE, a] == DISC and ints[SHAPE, b] == DISC:  # two plates: either one's slab, else coal
+            if (
+                max(_slabs(work[nj + a], work[nj + b], floats, a, b), _slabs(work[nj + b], work[nj + a], floats, b, a))
+                < best
+            ):
+                out[FLAGS + k] = 1.0
+                flagged += 1
             continue
-        low = 0 if side * s0 <= side * s1 else 1
-        height = min(side * s0, side * s1)
-        bound = height - h - radius[other]
-        if max(r0, r1) <= radius[disc] ** 2:  # the whole segment faces the disc: the bound is its distance
-            bounds[k] = np.inf
-            if bound < best:
-                best, best_k = bound, k
-                for m in range(3):
-                    n = side * M[disc, m, 2]
-                    end = seg[other, low, m]
-                    pc, pd = end - radius[other] * n, end - (height - h) * n
-                    points[0, m], points[1, m] = (pd, pc) if disc == a else (pc, pd)
-        else:
-            bounds[k] = bound
-    candidates = bounds < best
-    return best, best_k, points, M, candidates
+        disc, other = (a, b) if ints[SHAPE, a] == DISC else (b, a)
+        z0 = z1 = 0.0  # the slab's bound first: the heights of the segment's ends over the plate's mid-plane
+        for m in range(3):
+            z0 += work[nj + disc, m, 2] * (work[seg + other, 0, m] - work[nj + disc, m, 3])
+            z1 += work[nj + disc, m, 2] * (work[seg + other, 1, m] - work[nj + disc, m, 3])
+        h = floats[HALF, disc]
+        if max(min(z0, z1) - h, -h - max(z0, z1)) - floats[RADIUS, other] - PRUNE_MARGIN >= best:
+            continue
+        M, S = work[nj + disc], work[seg + other]
+        d, t, kind = _disc(M, S, floats[RADIUS, disc], floats[HALF, disc], floats[RADIUS, other], best)
+        if kind == 2:
+            out[FLAGS + k] = 1.0
+            flagged += 1
+        elif kind == 1 and d < best:
+            best, best_k = d, k
+            u0, u1, u2, v0, v1, v2 = _in_plate(M, S)
+            e0, e1, e2 = _off_cylinder(u0, u1, u2, v0, v1, v2, t, floats[RADIUS, disc], floats[HALF, disc])
+            off = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            w = floats[RADIUS, other] / off if off > 0.0 else 0.0
+            pc, pd = (POINTS + 3, POINTS) if disc == a else (POINTS, POINTS + 3)
+            for m in range(3):
+                x = S[0, m] + t * (S[1, m] - S[0, m])  # the segment's nearest point, base frame
+                e = M[m, 0] * e0 + M[m, 1] * e1 + M[m, 2] * e2  # from the plate's nearest point to it
+                out[pd + m] = x - e
+                out[pc + m] = x - w * e
+    return best, best_k, flagged
+
+
+def measure(q, ints, floats, frames, work, out, bound, with_cones):
+    """The body check of ``q``: :func:`.placement_kernel.place`, its ``cones`` when ``with_cones``, :func:`nearest`.
+
+    Returns:
+        ``(distance, pair index, flagged, within)``: :func:`nearest`'s, and whether every
+        joint lies within its cone (True without ``with_cones``).
+    """
+    placement.place(q, ints, floats, frames, work, out)
+    within = placement.cones(ints, floats, work, out) if with_cones else True
+    best, k, flagged = nearest(ints, floats, work, out, bound)
+    return best, k, flagged, within
 
 
 _COMPILED: dict[str, object] = {}
 
 
-def compiled_nearest_pair():
-    """:func:`nearest_pair` compiled by numba (imported, and compiled once per machine, at the first call)."""
-    fn = _COMPILED.get("nearest_pair")
+def compiled_measure():
+    """:func:`measure` compiled by numba (imported, and compiled once per machine, at the first call)."""
+    fn = _COMPILED.get("measure")
     if fn is None:
         from numba import njit
 
+        for name in ("_compose", "_local", "_shifted", "_turn", "place", "cones"):  # the placement half first
+            setattr(placement, name, njit(cache=True)(getattr(placement, name)))
         g = globals()
-        for name in ("_compose", "_local", "place_joints", "_closest"):
+        for name in ("_closest", "_in_plate", "_off_cylinder", "_disc", "_slabs", "nearest"):
             g[name] = njit(cache=True)(g[name])
-        fn = _COMPILED["nearest_pair"] = njit(cache=True)(nearest_pair)
+        fn = _COMPILED["measure"] = njit(cache=True)(measure)
     return fn

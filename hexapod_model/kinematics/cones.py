@@ -91,6 +91,27 @@ class ConeGeometry:
         self.ball, self.second, self.tips = ball, second, tips
         self.home = self._directions(clm.q_home, m.createData()) if ball else np.zeros((0, 3))
 
+    def kernel_rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """What the body kernel (:func:`~.placement_kernel.cones`) reads of the joints.
+
+        Returns:
+            ``cardan`` (n, 3) the two angles' q indices and the slot (leg * 2 + end) of each
+            Cardan joint; ``ball`` (n, 3) the slot, the second base revolute's joint id and the
+            tip frame's joint id of each ball-jointed leg; ``tips`` (n, 3) each tip frame's
+            position in its joint's frame (m); ``home`` (n, 3) the home leg axes (platform frame).
+        """
+        m = self.clm.model
+        cardan = [(int(a), int(b), 2 * k) for k, (a, b) in enumerate(self.base)]
+        cardan += [(int(idx[0]), int(idx[1]), 2 * k + 1) for k, idx in self.platform]
+        ball = [(2 * k + 1, j, m.frames[f].parentJoint) for k, j, f in zip(self.ball, self.second, self.tips)]
+        tips = np.array([m.frames[f].placement.translation for f in self.tips]).reshape(-1, 3)
+        return (
+            np.array(cardan, dtype=np.int64).reshape(-1, 3),
+            np.array(ball, dtype=np.int64).reshape(-1, 3),
+            tips,
+            self.home.reshape(-1, 3),
+        )
+
     def _directions(self, q: np.ndarray, data: pin.Data) -> np.ndarray:
         """(n_ball, 3) unit leg axes of the ball-jointed legs in the platform frame."""
         m = self.clm.model
