@@ -97,6 +97,12 @@ class Tracker(PassageMixin):
 
     A tracker keeps per-stream state and its own solver buffers: one tracker per stream and
     thread (the :class:`Hexapod` may be shared).
+
+    A hexapod with redundant sensors (:mod:`hexapod_model.kinematics.redundant`) is tracked on
+    its six legs' readings (:meth:`step` takes those six): the motion model, the checks and the
+    certified six-leg solve are the same. Its extra readings are solved from the tracked
+    configuration by :meth:`hexapod_model.Hexapod.forward` (``guess=result.solution``), which
+    adds their least-squares pose and consistency test (the fixture service does so).
     """
 
     def __init__(
@@ -114,10 +120,6 @@ class Tracker(PassageMixin):
     ):
         if predictor not in PREDICTORS:
             raise InputError("predictor", predictor, f"choose one of {PREDICTORS}")
-        if hexa.redundancy is not None:  # its forward() takes more than six readings
-            names = ", ".join(hexa.reading_names)
-            why = f"has redundant sensors ({names}); the tracker takes six readings: solve them with Hexapod.forward"
-            raise InputError("hexapod", hexa.closed_loop.source, why)
         tol = 100.0 * hexa.default_tol if tol is None else tol
         self.hexa, self.predictor, self.tol, self.max_iter = hexa, predictor, tol, max_iter
         s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
@@ -300,6 +302,8 @@ class Tracker(PassageMixin):
 
     def _solve(self, l: np.ndarray, guess: np.ndarray) -> Solution:
         try:
+            if self.hexa.redundancy is not None:  # the six legs' solve of a hexapod with redundant sensors
+                return self.hexa.engine.forward(l, guess, self.tol, self.max_iter, False, False)
             return self.hexa.forward(l, guess=guess, tol=self.tol, max_iter=self.max_iter, check=False)
         except HexapodError as exc:  # a reading outside the stroke
             q = self._last_q

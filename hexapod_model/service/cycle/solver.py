@@ -16,6 +16,14 @@ judge every sample against the configured reading noise; see docs/evaluate.md).
   ``rotation`` that of the rotation-vector block (rad). ``margin`` is ``cond(home) / cond(here)``
   of the 6x6 map with rotations scaled by the characteristic length: 1 at home, towards 0 at a
   singularity.
+* A hexapod with redundant sensors (measuring legs, an inclinometer:
+  :mod:`hexapod_model.kinematics.redundant`) takes every reading, legs first. The tracker's
+  compiled step follows the six legs (its motion model, jump, stuck and branch checks); then
+  :meth:`hexapod_model.Hexapod.forward` solves all the readings from the tracked configuration:
+  the outcome's pose is their weighted least-squares pose, and a set failing the consistency
+  test is ``inconsistent`` (flags ``inconsistent_readings`` and ``isolated:NAME`` when the data
+  name the faulty reading, whose exclusion gives the pose, else ``suspects:N`` and no pose). The
+  uncertainty stays the six legs' (an upper bound: more readings only shrink it).
 """
 
 from __future__ import annotations
@@ -26,8 +34,10 @@ from typing import NamedTuple
 import numpy as np
 
 from ...analysis.sensitivity import SensitivityEvaluator
+from ...exceptions import HexapodError
 from ...kinematics.hexapod import Hexapod
 from ...kinematics.newton.solver import Solution
+from ...kinematics.redundant import RedundantSolution
 from ...tracking.tracker import Tracker, characteristic_length
 
 _UNREADABLE = np.full(6, np.nan)
@@ -55,7 +65,8 @@ class SolveOutcome(NamedTuple):
     Attributes:
         pose: 4x4 base -> platform (m), or ``None`` when the solve failed.
         q: the configuration of the solution (``None`` when failed).
-        status: ``ok`` (no flag), ``flagged`` (a pose, see ``flags``) or ``failed``.
+        status: ``ok`` (no flag), ``flagged`` (a pose, see ``flags``), ``failed`` or
+            ``inconsistent`` (redundant readings failing their consistency test).
         flags: tracker flags (``jump``, ``stuck``, ``branch_uncertain``, ``settling``,
             ``near_singular``, ``out_of_limits``, ``imprecise``) and, for a failed solve, the
             failure's name.
@@ -153,14 +164,47 @@ class PoseSolver:
             for _ in range(min(instant - self._instant - 1, self.tracker.settings.max_gap + 1)):
                 self.tracker.step(_UNREADABLE)
         self._instant = instant
-        r = self.tracker.step(readings)
+        redundant = self.hexa.redundancy is not None
+        r = self.tracker.step(readings[:6] if redundant else readings)
         if r.failed:
             flags = (*r.flags, r.status)
             return SolveOutcome(None, None, "failed", flags, r.iterations, None, _since(t0), r.legs)
         u = Uncertainty(r.sigma_translation, r.sigma_rotation, r.singularity_margin)
         status = "flagged" if r.flags else "ok"
         sol = r.solution
+        if redundant:
+            return self._redundant(readings, sol, r.flags, u, t0, r.legs)
         return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, time.perf_counter() - t0, r.legs)
+
+    def _redundant(
+        self,
+        readings: np.ndarray,
+        tracked: Solution,
+        flags: tuple[str, ...],
+        u: Uncertainty,
+        t0: float,
+        legs: tuple[int, ...],
+    ) -> SolveOutcome:
+        """Every reading solved from the tracked configuration (module doc)."""
+        try:
+            sol = self.hexa.forward(readings, guess=tracked, tol=self.tracker.tol, check=False)
+        except HexapodError as exc:  # a reading outside its stroke: the cycle checks them first
+            return SolveOutcome(None, None, "failed", (*flags, type(exc).__name__), 0, None, _since(t0), legs)
+        test = sol.consistency if isinstance(sol, RedundantSolution) else None
+        if sol.status == "inconsistent_readings" and test is not None:
+            named = () if test.isolated is None else (f"isolated:{test.isolated}",)
+            why = named or (f"suspects:{len(test.suspects)}",)
+            extra = ("inconsistent_readings", *why)
+            if test.isolated is None or "estimate" not in sol.flags:  # no pose the data vouch for
+                return SolveOutcome(
+                    None, None, "inconsistent", (*flags, *extra), sol.iterations, None, _since(t0), legs
+                )
+            outcome = (*flags, *extra, "estimate")
+            return SolveOutcome(sol.pose, sol.q, "inconsistent", outcome, sol.iterations, u, _since(t0), legs)
+        if sol.status != "converged":
+            return SolveOutcome(None, None, "failed", (*flags, sol.status), sol.iterations, None, _since(t0), legs)
+        status = "flagged" if flags else "ok"
+        return SolveOutcome(sol.pose, sol.q, status, flags, sol.iterations, u, _since(t0), legs)
 
 
 def _since(t0: float) -> float:
@@ -176,6 +220,7 @@ def warm_up(hexa: Hexapod, noise: float, predictor: str = "eq22", samples: int =
     """
     solver = PoseSolver(hexa, max(noise, 1e-6), predictor)
     ramp = np.linspace(0.0, 1e-4, samples)
+    extra = np.zeros(len(hexa.reading_names) - 6)  # redundant sensors: their home readings (a consistency test fails)
     for k, step in enumerate(ramp):
-        solver.step(np.full(6, step), k)
+        solver.step(np.concatenate([np.full(6, step), extra]), k)
     solver.uncertainty(hexa.q_home)
