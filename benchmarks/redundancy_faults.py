@@ -22,7 +22,7 @@ rate over that many fault-free samples, with its 99 % binomial interval, against
 
 ``--service``: the same question asked of ``hexapod serve`` (:func:`service_faults`): a
 :class:`~hexapod_model.service.FixtureService` on a virtual bus, fed by the
-:class:`~hexapod_model.service.Simulator` playing trajectory A (scale 10 mm, 100 sets/s, the
+:class:`~hexapod_model.service.Simulator` playing trajectory A (scale 2 mm, 100 sets/s, the
 geometry's noise) with leg 3 faulty from the start: ``offset 0.1`` / ``offset 0.3`` (mm),
 ``creep`` (1 um per set), ``late 1`` / ``late 3`` (its readings 1 or 3 sets old with fresh
 stamps), ``intruder`` (a device on its CAN id replaying its readings of 100 sets before). Per
@@ -127,6 +127,7 @@ SERVICE_CASES = {  # the simulator's fault on leg 3 (sim.toml's [[fixtures.fault
     "intruder": {"kind": "intruder", "sets": 100},
 }
 SERVICE_RATE = 100.0  # sets per second
+SERVICE_SCALE = 0.002  # m per unit of trajectory A: legs up to about 0.06 m/s
 IN_FLIGHT = 3  # sets sent ahead of the service's records
 
 
@@ -171,7 +172,8 @@ def _service_case(name: str, hexa: Hexapod, legs: int, sigma: float, fault: dict
     }
     config = config_from_dict(data, "faults.toml", folder)
     tilt = hexa.redundancy.layout.tilt_sigma if "tilt_x" in hexa.reading_names else 2e-5
-    sim_fixture = {"name": "f", "rate": SERVICE_RATE, "trajectory": "A", "noise": sigma, "tilt_noise": tilt}
+    sim_fixture = {"name": "f", "rate": SERVICE_RATE, "trajectory": "A", "scale": SERVICE_SCALE}
+    sim_fixture |= {"noise": sigma, "tilt_noise": tilt}
     sim_fixture["faults"] = [{**fault, "leg": LEG + 1, "start": 0.0}]
     sim = simulation_from_dict({"seed": 7, "fixtures": [sim_fixture]}, config)
     records: list = []

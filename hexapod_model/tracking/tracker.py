@@ -40,6 +40,7 @@ from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
 from ..lie import pose_distance
+from .extra_readings import step_with_extra_readings
 from .kernels import branch_residual, reading_checks
 from .passage import PassageMixin
 from .reading_tests import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
@@ -98,11 +99,10 @@ class Tracker(PassageMixin):
     A tracker keeps per-stream state and its own solver buffers: one tracker per stream and
     thread (the :class:`Hexapod` may be shared).
 
-    A hexapod with redundant sensors (:mod:`hexapod_model.kinematics.redundant`) is tracked on
-    its six legs' readings (:meth:`step` takes those six): the motion model, the checks and the
-    certified six-leg solve are the same. Its extra readings are solved from the tracked
-    configuration by :meth:`hexapod_model.Hexapod.forward` (``guess=result.solution``), which
-    adds their least-squares pose and consistency test (the fixture service does so).
+    A hexapod with redundant sensors (:mod:`hexapod_model.kinematics.redundant`): :meth:`step`
+    takes all its readings; the six legs are tracked as above, then every reading is solved
+    from that configuration (:mod:`~hexapod_model.tracking.extra_readings`: the least-squares
+    pose, ``inconsistent_readings`` when they fail the consistency test).
     """
 
     def __init__(
@@ -205,8 +205,16 @@ class Tracker(PassageMixin):
     def step(self, lengths) -> TrackResult:
         """Solve and check one sample (readings in m, leg order).
 
+        A hexapod with redundant sensors takes all its readings, in the order of its
+        ``reading_names`` (m for legs, rad for tilts): :mod:`~hexapod_model.tracking.extra_readings`.
         Never raises on bad readings or a failed solve: see ``status`` and ``flags``.
         """
+        if self.hexa.redundancy is not None:
+            return step_with_extra_readings(self.hexa, lengths, self._step, self.tol, self.max_iter)
+        return self._step(lengths)
+
+    def _step(self, lengths) -> TrackResult:
+        """:meth:`step` of six leg readings."""
         t0 = time.perf_counter()
         s = self.settings
         self._k += 1  # every sample, readable or not, is one period: ages are counted from here

@@ -168,3 +168,56 @@ def test_the_service_gives_no_wrong_ok_with_a_seventh_leg_for_faults_above_the_d
         assert c["wrong_ok_above"] == 0, (case, c)
     # the large offset: every set flagged, none ok
     assert seven["cases"]["offset 0.3"]["ok"] == 0
+
+
+def test_the_inclinometer_frame_is_routed_to_its_cycle_after_the_legs(tmp_path):
+    from hexapod_model.service.cycle.routes import frame_routes
+
+    config = service_config(tmp_path, [fixture("reference_tilt", SEVEN[:6], **TILT)])
+    cycle = type("Cycle", (), {"on_frame": None})()
+    routes = frame_routes(config, {"left": cycle})  # type: ignore[dict-item]
+    assert routes[False][0x1A0][0] is cycle and routes[False][0x1A0][2] == 6
+    assert [routes[False][i][2] for i in SEVEN[:6]] == list(range(6))
+
+
+@pytest.mark.slow
+def test_the_service_routes_the_inclinometer_frame_and_health_and_log_name_the_leg(tmp_path, caplog):
+    import time
+
+    import can
+
+    from hexapod_model.service import FixtureService
+
+    config = service_config(tmp_path, [fixture("reference_tilt", SEVEN[:6], **TILT)])
+    fault = {"kind": "step", "leg": 3, "size": 3e-4, "start": 0.3}
+    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A", "noise": 1e-6, "faults": [fault]}])
+    hexa = hexapod("reference_tilt")
+    records = []
+    service = FixtureService(config, hexapods={"left": hexa})
+    service.subscribe(records.append)
+    caplog.set_level("INFO", logger="hexapod_model.service")
+    service.start()
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    try:
+        simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
+        wall = time.time()
+        for k in range(50):
+            simulator.send_set(0, k / 100, wall + k / 100, stall_check=False)
+            end = time.monotonic() + 10.0
+            while len(records) < k - 2 and time.monotonic() < end:
+                time.sleep(0.002)
+        end = time.monotonic() + 10.0
+        while not (records and records[-1].t >= wall + 0.49) and time.monotonic() < end:
+            time.sleep(0.01)
+        health = service.health()
+    finally:
+        bus.shutdown()
+        service.stop()
+    before = [r for r in records if wall <= r.t < wall + 0.3 and r.status != "no_data"]
+    after = [r for r in records if wall + 0.3 <= r.t < wall + 0.5]  # then silence: the simulator stopped
+    assert before and all(r.status in ("ok", "flagged") for r in before)  # every frame, the inclinometer's too
+    assert after and all(r.status == "inconsistent_readings" and "isolated:leg3" in r.flags for r in after)
+    fixture_health = health["fixtures"]["left"]
+    assert "isolated:leg3" in fixture_health["flags"] and fixture_health["counters"]["inconsistent_sets"] == len(after)
+    assert any("inconsistent_readings" in p and "isolated:leg3" in p for p in health["problems"])
+    assert any("inconsistent readings (isolated:leg3)" in m for m in caplog.messages)

@@ -17,13 +17,13 @@ judge every sample against the configured reading noise; see docs/evaluate.md).
   of the 6x6 map with rotations scaled by the characteristic length: 1 at home, towards 0 at a
   singularity.
 * A hexapod with redundant sensors (measuring legs, an inclinometer:
-  :mod:`hexapod_model.kinematics.redundant`) takes every reading, legs first. The tracker's
-  compiled step follows the six legs (its motion model, jump, stuck and branch checks); then
-  :meth:`hexapod_model.Hexapod.forward` solves all the readings from the tracked configuration:
-  the outcome's pose is their weighted least-squares pose, and a set failing the consistency
-  test is ``inconsistent`` (flags ``inconsistent_readings`` and ``isolated:NAME`` when the data
-  name the faulty reading, whose exclusion gives the pose, else ``suspects:N`` and no pose). The
-  uncertainty stays the six legs' (an upper bound: more readings only shrink it).
+  :mod:`hexapod_model.kinematics.redundant`) takes every reading, legs first; the tracker tracks
+  the six legs and solves all of them (:mod:`hexapod_model.tracking.extra_readings`): the
+  outcome's pose is their weighted least-squares pose, and a set failing the consistency test
+  is ``inconsistent`` (flags ``inconsistent_readings`` and ``isolated:NAME`` when the data name
+  the faulty reading, whose exclusion gives the pose, flagged ``estimate``; else
+  ``suspects:N`` and no pose). The uncertainty stays the six legs' (an upper bound: more
+  readings only shrink it).
 """
 
 from __future__ import annotations
@@ -34,13 +34,10 @@ from typing import NamedTuple
 import numpy as np
 
 from ...analysis.sensitivity import SensitivityEvaluator
-from ...exceptions import HexapodError
 from ...kinematics.hexapod import Hexapod
 from ...kinematics.newton.solver import Solution
 from ...kinematics.redundant import RedundantSolution
 from ...tracking.tracker import Tracker, characteristic_length
-
-_UNREADABLE = np.full(6, np.nan)
 
 
 class Uncertainty(NamedTuple):
@@ -128,6 +125,7 @@ class PoseSolver:
             sensitivity=sensitivity,
         )
         self._sens = sensitivity  # for poses outside the stream, between two steps
+        self._unreadable = np.full(len(hexa.reading_names), np.nan)  # an instant without a solved set
         self._instant: int | None = None  # of the last set given to the tracker
 
     def propagation(self, q: np.ndarray) -> np.ndarray:
@@ -162,49 +160,31 @@ class PoseSolver:
         if instant is not None and self._instant is not None:
             # beyond max_gap + 1 the tracker re-anchors anyway: more unreadable samples change nothing
             for _ in range(min(instant - self._instant - 1, self.tracker.settings.max_gap + 1)):
-                self.tracker.step(_UNREADABLE)
+                self.tracker.step(self._unreadable)
         self._instant = instant
-        redundant = self.hexa.redundancy is not None
-        r = self.tracker.step(readings[:6] if redundant else readings)
+        r = self.tracker.step(readings)
         if r.failed:
             flags = (*r.flags, r.status)
             return SolveOutcome(None, None, "failed", flags, r.iterations, None, _since(t0), r.legs)
         u = Uncertainty(r.sigma_translation, r.sigma_rotation, r.singularity_margin)
-        status = "flagged" if r.flags else "ok"
         sol = r.solution
-        if redundant:
-            return self._redundant(readings, sol, r.flags, u, t0, r.legs)
+        if "inconsistent_readings" in r.flags:
+            return _inconsistent(sol, r.flags, u, t0, r.legs)
+        status = "flagged" if r.flags else "ok"
         return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, time.perf_counter() - t0, r.legs)
 
-    def _redundant(
-        self,
-        readings: np.ndarray,
-        tracked: Solution,
-        flags: tuple[str, ...],
-        u: Uncertainty,
-        t0: float,
-        legs: tuple[int, ...],
-    ) -> SolveOutcome:
-        """Every reading solved from the tracked configuration (module doc)."""
-        try:
-            sol = self.hexa.forward(readings, guess=tracked, tol=self.tracker.tol, check=False)
-        except HexapodError as exc:  # a reading outside its stroke: the cycle checks them first
-            return SolveOutcome(None, None, "failed", (*flags, type(exc).__name__), 0, None, _since(t0), legs)
-        test = sol.consistency if isinstance(sol, RedundantSolution) else None
-        if sol.status == "inconsistent_readings" and test is not None:
-            named = () if test.isolated is None else (f"isolated:{test.isolated}",)
-            why = named or (f"suspects:{len(test.suspects)}",)
-            extra = ("inconsistent_readings", *why)
-            if test.isolated is None or "estimate" not in sol.flags:  # no pose the data vouch for
-                return SolveOutcome(
-                    None, None, "inconsistent", (*flags, *extra), sol.iterations, None, _since(t0), legs
-                )
-            outcome = (*flags, *extra, "estimate")
-            return SolveOutcome(sol.pose, sol.q, "inconsistent", outcome, sol.iterations, u, _since(t0), legs)
-        if sol.status != "converged":
-            return SolveOutcome(None, None, "failed", (*flags, sol.status), sol.iterations, None, _since(t0), legs)
-        status = "flagged" if flags else "ok"
-        return SolveOutcome(sol.pose, sol.q, status, flags, sol.iterations, u, _since(t0), legs)
+
+def _inconsistent(
+    sol: Solution, flags: tuple[str, ...], u: Uncertainty, t0: float, legs: tuple[int, ...]
+) -> SolveOutcome:
+    """Readings failing their consistency test: the named reading and the others' estimate, or no pose."""
+    test = sol.consistency if isinstance(sol, RedundantSolution) else None
+    named = () if test is None or test.isolated is None else (f"isolated:{test.isolated}",)
+    why = named or (f"suspects:{0 if test is None else len(test.suspects)}",)
+    if not named or "estimate" not in sol.flags:  # no pose the data vouch for
+        return SolveOutcome(None, None, "inconsistent", (*flags, *why), sol.iterations, None, _since(t0), legs)
+    out = (*flags, *why, "estimate")
+    return SolveOutcome(sol.pose, sol.q, "inconsistent", out, sol.iterations, u, _since(t0), legs)
 
 
 def _since(t0: float) -> float:

@@ -65,7 +65,9 @@ class Fault:
         legs: affected readings (0-based, the hexapod's reading order: the legs, then ``tilt_x``,
             ``tilt_y``).
         start: seconds after the simulation starts.
-        duration: seconds (a ``spike`` affects the first set at or after ``start`` only).
+        duration: seconds (a ``spike`` affects the first set at or after ``start`` only; a
+            ``step``, ``held_brake``, ``late_reading``, ``creep`` and ``intruder`` last to the end
+            unless given, the others 1 s).
         probability: chance that a frame is lost (``dropped_frames``) or a whole set (``lost_sets``).
         size: reading offset (m, rad for a tilt) of a ``spike``, a ``step`` (an encoder that
             slipped, for ``duration``), an ``intruder``'s frames or the second sender's frame of a
@@ -264,6 +266,7 @@ def _changeover(t: Table) -> ChangeoverScript:
     return script
 
 
+UNTIL_THE_END = {"spike": 0.0, "step": 1e6, "held_brake": 1e6, "late_reading": 1e6, "creep": 1e6, "intruder": 1e6}
 SETS = {"late_frame": 1, "repeated_frames": 10, "gateway_burst": 5, "late_reading": 1, "intruder": 100}
 
 
@@ -287,7 +290,7 @@ def _fault(t: Table, hexa) -> Fault:
         kind=kind,
         legs=legs,
         start=t.number("start", 0.0, 0.0, 1e6),
-        duration=t.number("duration", {"spike": 0.0, "step": 1e6, "held_brake": 1e6}.get(kind, 1.0), 0.0, 1e6),
+        duration=t.number("duration", UNTIL_THE_END.get(kind, 1.0), 0.0, 1e6),
         probability=t.number("probability", 0.2, 0.0, 1.0) if kind in ("dropped_frames", "lost_sets") else 1.0,
         size=t.number("size", {"creep": 1e-4, "intruder": 0.0}.get(kind, 0.002), -0.5, 0.5)
         if kind in ("spike", "step", "duplicate_id", "creep", "intruder")
