@@ -1,23 +1,27 @@
 """One fixture's cycle: encoder frames in, one record per sampling instant out.
 
-A **reading set** holds one frame of each leg from one sampling instant: every frame within
-``max_skew`` (default: 3/4 of the measured frame period) of the set's first, whatever the
-arrival order. A frame older than the newest seen by more than that is *late* and never joins a
-set (``late_frame:legN`` in the next record); a second frame on one leg's id within the instant
-fails the set (``duplicate_frame``, ``duplicate:legN``: two senders on one id); a frame of a
-newer instant closes an unfinished set, published as ``incomplete`` (``missing:legN``) or, when a
-missing leg's newest frame is older than ``staleness``, ``silent_leg``; a leg whose stamps run
-ahead of the others' is dropped and named (``ahead:legN``, :mod:`~hexapod_model.service.cycle.ahead`),
-and an exact repeat of a frame is dropped and counted. So every instant ends in
-a record, and a set never mixes two instants. A set with a bad frame, an error bit, a reading
-outside the stroke or a stuck leg is published with that status and **no pose**; a solved set
-is ``ok`` only when the tracker (through :class:`~hexapod_model.service.cycle.solver.PoseSolver`)
-raised no flag, no leg of a locked fixture moved and no fault waits for an acknowledgement
+A **reading set** holds one frame of each leg (and of the inclinometer of a hexapod with
+redundant sensors, whose measuring legs count as legs ``leg7``, ...) from one sampling instant:
+every frame within ``max_skew`` (default: 3/4 of the measured frame period) of the set's first,
+whatever the arrival order. A frame older than the newest seen by more than that is *late* and
+never joins a set (``late_frame:legN`` in the next record); a second frame on one leg's id
+within the instant fails the set (``duplicate_frame``, ``duplicate:legN``: two senders on one
+id); a frame of a newer instant closes an unfinished set, published as ``incomplete``
+(``missing:legN``) or, when a missing leg's newest frame is older than ``staleness``,
+``silent_leg``; a leg whose stamps run ahead of the others' is dropped and named
+(``ahead:legN``, :mod:`~hexapod_model.service.cycle.ahead`), and an exact repeat of a frame is
+dropped and counted. So every instant ends in a record, and a set never mixes two instants. A
+set with a bad frame, an error bit, a reading outside the stroke or a stuck leg is published
+with that status and **no pose**; a solved set is ``ok`` only when the tracker (through
+:class:`~hexapod_model.service.cycle.solver.PoseSolver`) raised no flag, no leg of a locked
+fixture moved and no fault waits for an acknowledgement
 (:mod:`~hexapod_model.service.cycle.alarms`).
 
 Status values: ``ok``, ``no_data`` (nothing received yet), ``incomplete``, ``duplicate_frame``,
 ``silent_leg``, ``bad_frame``, ``encoder_error``, ``out_of_stroke``, ``stuck_leg``,
 ``leg_moved`` (one or two legs of a locked fixture left the band: no pose), ``not_converged``,
+``inconsistent_readings`` (redundant sensors whose readings fail the consistency test: the
+others' estimate when the data name the faulty reading, ``isolated:NAME``, else no pose),
 ``flagged``, ``drift`` (a locked fixture's averaged readings moved: a pose, named legs),
 ``unacknowledged_fault`` (a pose, but a latched fault waits). Flags name the leg
 (``encoder_error:leg3``) or the tracker's doubt (``jump``, ``branch_uncertain``,
