@@ -221,3 +221,32 @@ def test_the_service_routes_the_inclinometer_frame_and_health_and_log_name_the_l
     assert "isolated:leg3" in fixture_health["flags"] and fixture_health["counters"]["inconsistent_sets"] == len(after)
     assert any("inconsistent_readings" in p and "isolated:leg3" in p for p in health["problems"])
     assert any("inconsistent readings (isolated:leg3)" in m for m in caplog.messages)
+
+
+@pytest.mark.parametrize(
+    ("fault", "expected"),
+    [
+        ({"kind": "late_reading", "sets": 3}, lambda z, k, t: z[k - 3]),
+        ({"kind": "creep", "size": 1e-4}, lambda z, k, t: z[k] + 1e-4 * t),
+        ({"kind": "intruder", "sets": 5, "size": 2e-5}, lambda z, k, t: z[k - 5] + 2e-5),
+        ({"kind": "step", "size": 1e-4}, lambda z, k, t: z[k] + 1e-4),
+    ],
+)
+def test_the_faults_six_readings_cannot_reveal_act_on_the_frames_to_the_end(tmp_path, fault, expected):
+    config = service_config(tmp_path, [fixture("reference7", SEVEN)])
+    sim = sim_config(
+        config,
+        [{"name": "left", "rate": 100.0, "trajectory": "A", "noise": 0.0, "faults": [{**fault, "leg": 7}]}],
+    )
+    bus = CollectingBus()
+    simulator = Simulator(config, sim, bus, hexapods={"left": hexapod("reference7")})  # type: ignore[arg-type]
+    leg7 = config.fixture("left").legs[6]
+    truth, sent = [], []
+    for k in range(250):  # 2.5 s: beyond the 1 s other faults last by default
+        bus.sent.clear()
+        truth.append(simulator.send_set(0, k / 100, stamp=1e9 + k / 100, stall_check=False).readings[6])
+        frame = next(m for m in bus.sent if m.arbitration_id == leg7.can_id)
+        assert frame.timestamp == pytest.approx(1e9 + k / 100 + 6 * 130e-6, abs=1e-9)  # stamped now
+        sent.append(leg7.reading(leg7.layout.unpack(frame.data)[0]))
+    for k in range(10, 250):
+        assert abs(sent[k] - expected(truth, k, k / 100)) <= 0.51e-7, k  # to the count
