@@ -25,7 +25,8 @@ rate over that many fault-free samples, with its 99 % binomial interval, against
 :class:`~hexapod_model.service.Simulator` playing trajectory A (scale 2 mm, 100 sets/s, the
 geometry's noise) with leg 3 faulty from the start: ``offset 0.1`` / ``offset 0.3`` (mm),
 ``creep`` (1 um per set), ``late 1`` / ``late 3`` (its readings 1 or 3 sets old with fresh
-stamps), ``intruder`` (a device on its CAN id replaying its readings of 100 sets before). Per
+stamps), ``intruder`` (a device on its CAN id replaying its readings of 100 sets before), and
+``clean`` (no fault: its inconsistent sets are false alarms, at the stated rate 1e-3). Per
 case: records ``ok``, "wrong ok" (an ``ok`` pose more than 10 um or 50 urad off the truth),
 "wrong ok above" (of those, the sets whose fault exceeds twice the leg's minimal detectable
 bias at that pose: with redundant sensors these must be 0), and the records
@@ -118,7 +119,8 @@ def run(name: str, samples: int, clean: int, rate: float) -> dict:
     return out
 
 
-SERVICE_CASES = {  # the simulator's fault on leg 3 (sim.toml's [[fixtures.faults]]), from the start
+SERVICE_CASES: dict[str, dict | None] = {  # the simulator's fault on leg 3 (sim.toml's [[fixtures.faults]])
+    "clean": None,  # no fault: its inconsistent sets are false alarms (stated rate 1e-3)
     "offset 0.1": {"kind": "step", "size": 1e-4},
     "offset 0.3": {"kind": "step", "size": 3e-4},
     "creep": {"kind": "creep", "size": 1e-4},  # m/s: 1 um per set at 100 sets/s
@@ -131,8 +133,10 @@ SERVICE_SCALE = 0.002  # m per unit of trajectory A: legs up to about 0.06 m/s
 IN_FLIGHT = 3  # sets sent ahead of the service's records
 
 
-def _fault_bias(case: dict, truth: list, k: int) -> float:
+def _fault_bias(case: dict | None, truth: list, k: int) -> float:
     """The fault's size on leg 3's reading of set ``k`` (m), from the true readings."""
+    if case is None:
+        return 0.0
     kind, z = case["kind"], truth[k].readings[LEG]
     if kind == "step":
         return abs(case["size"])
@@ -154,7 +158,9 @@ def service_faults(name: str, samples: int, cases: tuple[str, ...] = tuple(SERVI
     return out
 
 
-def _service_case(name: str, hexa: Hexapod, legs: int, sigma: float, fault: dict, samples: int, folder: Path) -> dict:
+def _service_case(
+    name: str, hexa: Hexapod, legs: int, sigma: float, fault: dict | None, samples: int, folder: Path
+) -> dict:
     fixture = {
         "name": "f",
         "hexapod": name,
@@ -174,7 +180,7 @@ def _service_case(name: str, hexa: Hexapod, legs: int, sigma: float, fault: dict
     tilt = hexa.redundancy.layout.tilt_sigma if "tilt_x" in hexa.reading_names else 2e-5
     sim_fixture = {"name": "f", "rate": SERVICE_RATE, "trajectory": "A", "scale": SERVICE_SCALE}
     sim_fixture |= {"noise": sigma, "tilt_noise": tilt}
-    sim_fixture["faults"] = [{**fault, "leg": LEG + 1, "start": 0.0}]
+    sim_fixture["faults"] = [] if fault is None else [{**fault, "leg": LEG + 1, "start": 0.0}]
     sim = simulation_from_dict({"seed": 7, "fixtures": [sim_fixture]}, config)
     records: list = []
     service = FixtureService(config, hexapods={"f": hexa})
