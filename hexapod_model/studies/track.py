@@ -96,15 +96,20 @@ class TrackingRun:
 def true_readings(hexa: Hexapod, poses: np.ndarray) -> tuple[np.ndarray, dict]:
     """Readings of the true poses.
 
-    Readings (n, 6) of the true poses by warm-started inverse kinematics (``check=False``),
-    and the count of each IK status (``out_of_limits`` = a Cardan angle or the stroke exceeded).
+    Readings (n, m) of the true poses by warm-started inverse kinematics (``check=False``),
+    with the redundant sensors' readings of a hexapod that has them (``m`` its
+    ``reading_names``), and the count of each IK status (``out_of_limits`` = a Cardan angle or
+    the stroke exceeded).
     """
-    sol, out = None, np.empty((len(poses), 6))
+    extra = hexa.redundancy
+    sol, out = None, np.empty((len(poses), len(hexa.reading_names)))
     counts: dict[str, int] = {}
     for k, T in enumerate(poses):
         sol = hexa.inverse(T, guess=sol, check=False)
         counts[sol.status] = counts.get(sol.status, 0) + 1
-        out[k] = sol.lengths
+        out[k, :6] = sol.lengths
+        if extra is not None:
+            out[k, 6:] = extra.extra_readings(T)
     return out, counts
 
 
@@ -188,6 +193,10 @@ def track_log(
     acknowledges it; an audit has no one to, so it stays to the end).
     """
     times = np.asarray(times, dtype=float)
+    names = hexa.reading_names
+    if np.shape(readings)[-1] != len(names):
+        why = f"expected {len(names)} readings a row ({', '.join(names)}) for this hexapod"
+        raise InputError("readings", f"{np.shape(readings)[-1]} columns", why)
     if times.size > 1 and not np.all(np.diff(times) > 0):
         k = int(np.flatnonzero(~(np.diff(times) > 0))[0])
         raise InputError("t", float(times[k + 1]), f"row {k + 2}: times must increase strictly")

@@ -40,6 +40,7 @@ from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
 from ..lie import pose_distance
+from .extra_readings import step_with_extra_readings
 from .kernels import branch_residual, reading_checks
 from .passage import PassageMixin
 from .reading_tests import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
@@ -97,6 +98,11 @@ class Tracker(PassageMixin):
 
     A tracker keeps per-stream state and its own solver buffers: one tracker per stream and
     thread (the :class:`Hexapod` may be shared).
+
+    A hexapod with redundant sensors (:mod:`hexapod_model.kinematics.redundant`): :meth:`step`
+    takes all its readings; the six legs are tracked as above, then every reading is solved
+    from that configuration (:mod:`~hexapod_model.tracking.extra_readings`: the least-squares
+    pose, ``inconsistent_readings`` when they fail the consistency test).
     """
 
     def __init__(
@@ -114,10 +120,6 @@ class Tracker(PassageMixin):
     ):
         if predictor not in PREDICTORS:
             raise InputError("predictor", predictor, f"choose one of {PREDICTORS}")
-        if hexa.redundancy is not None:  # its forward() takes more than six readings
-            names = ", ".join(hexa.reading_names)
-            why = f"has redundant sensors ({names}); the tracker takes six readings: solve them with Hexapod.forward"
-            raise InputError("hexapod", hexa.closed_loop.source, why)
         tol = 100.0 * hexa.default_tol if tol is None else tol
         self.hexa, self.predictor, self.tol, self.max_iter = hexa, predictor, tol, max_iter
         s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
@@ -203,8 +205,16 @@ class Tracker(PassageMixin):
     def step(self, lengths) -> TrackResult:
         """Solve and check one sample (readings in m, leg order).
 
+        A hexapod with redundant sensors takes all its readings, in the order of its
+        ``reading_names`` (m for legs, rad for tilts): :mod:`~hexapod_model.tracking.extra_readings`.
         Never raises on bad readings or a failed solve: see ``status`` and ``flags``.
         """
+        if self.hexa.redundancy is not None:
+            return step_with_extra_readings(self.hexa, lengths, self._step, self.tol, self.max_iter)
+        return self._step(lengths)
+
+    def _step(self, lengths) -> TrackResult:
+        """:meth:`step` of six leg readings."""
         t0 = time.perf_counter()
         s = self.settings
         self._k += 1  # every sample, readable or not, is one period: ages are counted from here
@@ -300,6 +310,8 @@ class Tracker(PassageMixin):
 
     def _solve(self, l: np.ndarray, guess: np.ndarray) -> Solution:
         try:
+            if self.hexa.redundancy is not None:  # the six legs' solve of a hexapod with redundant sensors
+                return self.hexa.engine.forward(l, guess, self.tol, self.max_iter, False, False)
             return self.hexa.forward(l, guess=guess, tol=self.tol, max_iter=self.max_iter, check=False)
         except HexapodError as exc:  # a reading outside the stroke
             q = self._last_q

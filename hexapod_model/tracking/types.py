@@ -30,6 +30,7 @@ FLAGS = (
     "cone_limit",
     "collision",
     "imprecise",
+    "inconsistent_readings",  # redundant sensors: the readings fail their consistency test
 )
 #: statuses of a sample without a pose (``status`` is ``ok`` otherwise)
 FAILED_STATUSES = ("invalid_input", "max_iterations", "not_found", "singular", "out_of_limits")

@@ -179,13 +179,6 @@ def test_batch_solve_refuses_redundant_readings():
         hexa.forward_batch(np.zeros((3, 6)))
 
 
-def test_tracker_refuses_redundant_readings():
-    from hexapod_model.tracking.tracker import Tracker
-
-    with pytest.raises(hm.InputError, match="redundant sensors .*the tracker takes six readings"):
-        Tracker(hexapod("reference_tilt"))
-
-
 def test_gross_faults_are_inconsistent_not_a_solver_failure():
     hexa = hexapod("reference7")
     z = readings(hexa, hexa.home_pose)

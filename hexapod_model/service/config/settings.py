@@ -28,10 +28,13 @@ from .codec import FrameLayout, LegCodec
 from .fieldbus import PROTOCOLS, CanopenEncoders, canopen_layout, dbc_layout
 from .ros import RosConfig, ros_config
 from .table import Table
+from .tilt import TiltCodec, tilt_codec
 from .token import read_token
 
 INTERFACES = tuple(sorted(can.interfaces.VALID_INTERFACES))
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9_.-]+$")  # fixture names appear in URLs
+MAX_LEGS = 12  # the six legs and up to six measuring legs
+COUNTS = dict(enumerate("zero one two three four five six seven eight nine ten eleven twelve".split()))
 
 
 @dataclass(frozen=True)
@@ -89,12 +92,13 @@ class HttpConfig:
 
 @dataclass(frozen=True)
 class FixtureConfig:
-    """One hexapod fixture and its six encoders.
+    """One hexapod fixture and its encoders: the six legs', its measuring legs' and its inclinometer's.
 
     Attributes:
         name: URL-safe name (``/fixtures/NAME/pose``).
         hexapod: preset name or path of a URDF or geometry file.
-        legs: one :class:`LegCodec` per leg, leg order (CAN id, layout, home count).
+        legs: one :class:`LegCodec` per leg, leg order (CAN id, layout, home count): the six
+            legs, then the hexapod's measuring legs (``leg7``, ...), as many as it declares.
         noise: 1-sigma reading noise of an encoder (m): the source of the record's ``sigma``.
         staleness: a reading older than this (s) is not used; a leg silent longer is reported.
         lock_time: readings steady for this long (s) -> ``locked``.
@@ -122,6 +126,8 @@ class FixtureConfig:
         protocol: the encoders' protocol, ``raw``, ``dbc`` or ``canopen``
             (:mod:`~hexapod_model.service.config.fieldbus`).
         canopen: the CANopen encoders' SYNC, EMCY and heartbeat (``protocol = "canopen"``), else None.
+        inclinometer: the platform inclinometer's frame (``[fixtures.inclinometer]``), for a hexapod
+            that declares one, else None.
     """
 
     name: str
@@ -145,14 +151,49 @@ class FixtureConfig:
     cell: Cell | None = field(default=None, compare=False)
     protocol: str = "raw"
     canopen: CanopenEncoders | None = None
+    inclinometer: TiltCodec | None = None
 
     def load_hexapod(self) -> Hexapod:
-        """The fixture's :class:`Hexapod`; a file that cannot be read is a :class:`ConfigError`."""
+        """The fixture's :class:`Hexapod`; a file that cannot be read is a :class:`ConfigError`.
+
+        Raises:
+            ConfigError: the file cannot be read, or the configured encoders are not the
+                hexapod's readings (:meth:`check_sensors`).
+        """
         try:
-            return Hexapod.load(self.hexapod)
+            hexa = Hexapod.load(self.hexapod)
         except (HexapodError, OSError) as exc:
             reason = f"cannot load the hexapod: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}"
             raise ConfigError(f"fixtures[{self.index}].hexapod", self.hexapod, reason, self.source) from None
+        self.check_sensors(hexa)
+        return hexa
+
+    def check_sensors(self, hexa: Hexapod) -> None:
+        """Refuse encoders that are not ``hexa``'s readings: one CAN id per leg, an inclinometer frame iff it has one.
+
+        Raises:
+            ConfigError: naming ``can_ids`` (legs) or ``inclinometer``, the hexapod's readings and the count found.
+        """
+        names = hexa.reading_names
+        legs = [n for n in names if n.startswith("leg")]
+        tilt = "tilt_x" in names
+        where = f"fixtures[{self.index}]"
+        if len(self.legs) != len(legs):
+            reason = f"expected {len(legs)} CAN ids: the hexapod {self.hexapod} reads {', '.join(names)}"
+            raise ConfigError(f"{where}.can_ids", [hex(leg.can_id) for leg in self.legs], reason, self.source)
+        if tilt != (self.inclinometer is not None):
+            reason = (
+                f"the hexapod {self.hexapod} has an inclinometer (tilt_x, tilt_y): configure its frame"
+                if tilt
+                else f"the hexapod {self.hexapod} has no inclinometer"
+            )
+            value = None if self.inclinometer is None else hex(self.inclinometer.can_id)
+            raise ConfigError(f"{where}.inclinometer", value, reason, self.source)
+
+    @property
+    def channels(self) -> int:
+        """Encoder frames of one reading set: one per leg, one for the inclinometer."""
+        return len(self.legs) + (self.inclinometer is not None)
 
 
 @dataclass(frozen=True)
@@ -318,17 +359,18 @@ def _fixture(t: Table, index: int, folder: Path) -> FixtureConfig:
     extended = t.boolean("extended_id", False)
     id_max = 0x1FFFFFFF if extended else 0x7FF
     ids = t.take("can_ids")
-    if not isinstance(ids, list) or len(ids) != 6:
-        raise t.error("can_ids", ids, "expected six CAN ids, leg order")
+    if not isinstance(ids, list) or not 6 <= len(ids) <= MAX_LEGS:
+        raise t.error("can_ids", ids, f"expected 6 to {MAX_LEGS} CAN ids, leg order (the six legs, then leg7, ...)")
+    n = len(ids)
     sub = Table({f"can_ids[{k}]": v for k, v in enumerate(ids)}, t.where, t.source)
-    can_ids = [sub.integer(f"can_ids[{k}]", lo=0, hi=id_max) for k in range(6)]
+    can_ids = [sub.integer(f"can_ids[{k}]", lo=0, hi=id_max) for k in range(n)]
     homes = t.take("home_counts", 0)
     if isinstance(homes, int) and not isinstance(homes, bool):
-        homes = [homes] * 6
-    if not isinstance(homes, list) or len(homes) != 6:
-        raise t.error("home_counts", homes, "expected one integer or six (leg order)")
+        homes = [homes] * n
+    if not isinstance(homes, list) or len(homes) != n:
+        raise t.error("home_counts", homes, f"expected one integer or {COUNTS[n]}, one per CAN id (leg order)")
     sub = Table({f"home_counts[{k}]": v for k, v in enumerate(homes)}, t.where, t.source)
-    home_counts = [sub.integer(f"home_counts[{k}]", lo=-(2**63), hi=2**64) for k in range(6)]
+    home_counts = [sub.integer(f"home_counts[{k}]", lo=-(2**63), hi=2**64) for k in range(n)]
     encoder = t.table("encoder", {})
     protocol = encoder.text("protocol", "raw", PROTOCOLS)
     canopen = None
@@ -340,6 +382,11 @@ def _fixture(t: Table, index: int, folder: Path) -> FixtureConfig:
         layout, canopen = canopen_layout(encoder, folder, can_ids)
     else:
         layout = FrameLayout.from_table(encoder)
+    inclinometer = None
+    if "inclinometer" in t.data:
+        if protocol == "canopen":
+            raise t.error("inclinometer", t.data["inclinometer"], "not read with protocol = 'canopen' (raw or dbc)")
+        inclinometer = tilt_codec(t.table("inclinometer"), id_max, extended)
     lo, hi = layout.count_range
     for k, c in enumerate(home_counts):
         if not lo <= c <= hi:
@@ -368,6 +415,7 @@ def _fixture(t: Table, index: int, folder: Path) -> FixtureConfig:
         cell=cell_from_table(t.table("cell")) if "cell" in t.data else None,
         protocol=protocol,
         canopen=canopen,
+        inclinometer=inclinometer,
     )
     if cfg.drift_limit >= cfg.steady_band:
         raise t.error("drift_limit", cfg.drift_limit, f"must be below steady_band = {cfg.steady_band:g} m")
@@ -389,6 +437,12 @@ def _check_unique(fixtures: tuple[FixtureConfig, ...], source: str) -> None:
             key = (leg.can_id, leg.extended_id)
             if key in ids:
                 raise ConfigError(here, hex(leg.can_id), f"duplicate CAN id: also {ids[key]} (one bus)", source)
+            ids[key] = here
+        if f.inclinometer is not None:
+            here = f"fixtures[{f.index}].inclinometer.can_id"
+            key = (f.inclinometer.can_id, f.inclinometer.extended_id)
+            if key in ids:
+                raise ConfigError(here, hex(key[0]), f"duplicate CAN id: also {ids[key]} (one bus)", source)
             ids[key] = here
         if f.canopen is not None:  # EMCY and heartbeat ids: the SYNC is shared by every CANopen fixture
             for can_id in f.canopen.ids()[1:]:

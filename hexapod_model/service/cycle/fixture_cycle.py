@@ -1,23 +1,27 @@
 """One fixture's cycle: encoder frames in, one record per sampling instant out.
 
-A **reading set** holds one frame of each leg from one sampling instant: every frame within
-``max_skew`` (default: 3/4 of the measured frame period) of the set's first, whatever the
-arrival order. A frame older than the newest seen by more than that is *late* and never joins a
-set (``late_frame:legN`` in the next record); a second frame on one leg's id within the instant
-fails the set (``duplicate_frame``, ``duplicate:legN``: two senders on one id); a frame of a
-newer instant closes an unfinished set, published as ``incomplete`` (``missing:legN``) or, when a
-missing leg's newest frame is older than ``staleness``, ``silent_leg``; a leg whose stamps run
-ahead of the others' is dropped and named (``ahead:legN``, :mod:`~hexapod_model.service.cycle.ahead`),
-and an exact repeat of a frame is dropped and counted. So every instant ends in
-a record, and a set never mixes two instants. A set with a bad frame, an error bit, a reading
-outside the stroke or a stuck leg is published with that status and **no pose**; a solved set
-is ``ok`` only when the tracker (through :class:`~hexapod_model.service.cycle.solver.PoseSolver`)
-raised no flag, no leg of a locked fixture moved and no fault waits for an acknowledgement
+A **reading set** holds one frame of each leg (and of the inclinometer of a hexapod with
+redundant sensors, whose measuring legs count as legs ``leg7``, ...) from one sampling instant:
+every frame within ``max_skew`` (default: 3/4 of the measured frame period) of the set's first,
+whatever the arrival order. A frame older than the newest seen by more than that is *late* and
+never joins a set (``late_frame:legN`` in the next record); a second frame on one leg's id
+within the instant fails the set (``duplicate_frame``, ``duplicate:legN``: two senders on one
+id); a frame of a newer instant closes an unfinished set, published as ``incomplete``
+(``missing:legN``) or, when a missing leg's newest frame is older than ``staleness``,
+``silent_leg``; a leg whose stamps run ahead of the others' is dropped and named
+(``ahead:legN``, :mod:`~hexapod_model.service.cycle.ahead`), and an exact repeat of a frame is
+dropped and counted. So every instant ends in a record, and a set never mixes two instants. A
+set with a bad frame, an error bit, a reading outside the stroke or a stuck leg is published
+with that status and **no pose**; a solved set is ``ok`` only when the tracker (through
+:class:`~hexapod_model.service.cycle.solver.PoseSolver`) raised no flag, no leg of a locked
+fixture moved and no fault waits for an acknowledgement
 (:mod:`~hexapod_model.service.cycle.alarms`).
 
 Status values: ``ok``, ``no_data`` (nothing received yet), ``incomplete``, ``duplicate_frame``,
 ``silent_leg``, ``bad_frame``, ``encoder_error``, ``out_of_stroke``, ``stuck_leg``,
 ``leg_moved`` (one or two legs of a locked fixture left the band: no pose), ``not_converged``,
+``inconsistent_readings`` (redundant sensors whose readings fail the consistency test: the
+others' estimate when the data name the faulty reading, ``isolated:NAME``, else no pose),
 ``flagged``, ``drift`` (a locked fixture's averaged readings moved: a pose, named legs),
 ``unacknowledged_fault`` (a pose, but a latched fault waits). Flags name the leg
 (``encoder_error:leg3``) or the tracker's doubt (``jump``, ``branch_uncertain``,
@@ -57,6 +61,7 @@ from .stuck import StuckDetector
 
 log = logging.getLogger(__name__)
 _POSE_STATUSES = ("ok", "flagged", "drift")
+STATUS_OF = {"ok": "ok", "flagged": "flagged", "failed": "not_converged", "inconsistent": "inconsistent_readings"}
 CLOCK_BACK_FRAMES = 12  # late frames in a row (two sets, no frame on time): the bus's clock went back
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
 SAME_STAMP = 1e-6  # s: two sets stamped closer than this cannot be told apart in time (a batching gateway)
@@ -91,13 +96,20 @@ class FixtureCycle:
         self.layout = cfg.legs[0].layout
         self._unpack, self._min_length = self.layout.unpack, self.layout.length
         self._metres_per_count = self.layout.metres_per_count
-        self._lo, self._hi = hexa.stroke[:, 0].tolist(), hexa.stroke[:, 1].tolist()
+        cfg.check_sensors(hexa)
+        # channels: one frame of each per set; the legs' (six, then measuring legs), then the inclinometer's
+        n, self._n_legs, self._tilt = cfg.channels, len(cfg.legs), cfg.inclinometer
+        self._n = n
+        self._names = [f"leg{k + 1}" for k in range(self._n_legs)] + ["inclinometer"] * (n - self._n_legs)
+        stroke = hexa.stroke if hexa.redundancy is None else np.vstack([hexa.stroke, hexa.redundancy.layout.stroke])
+        self._lo, self._hi = stroke[:, 0].tolist(), stroke[:, 1].tolist()
         self._home = [leg.home_count for leg in cfg.legs]
-        self._t = [-math.inf] * 6  # receipt time of each leg's newest frame (lists: faster than arrays here)
-        self._readings = [math.nan] * 6
-        self._data: list[bytes | bytearray] = [b""] * 6  # each leg's newest frame (a repeat of it is dropped)
-        self._counts = [0] * 6
-        self._err, self._warn, self._bad, self._fresh = [False] * 6, [False] * 6, [False] * 6, [False] * 6
+        self._t = [-math.inf] * n  # receipt time of each channel's newest frame (lists: faster than arrays here)
+        self._readings = [math.nan] * len(hexa.reading_names)  # the legs', then tilt_x and tilt_y
+        self._data: list[bytes | bytearray] = [b""] * n  # each channel's newest frame (a repeat of it is dropped)
+        self._counts = [0] * n
+        self._err, self._warn, self._bad, self._fresh = [False] * n, [False] * n, [False] * n, [False] * n
+        self.inconsistent_since: float | None = None  # t of the first set of a run of inconsistent ones
         self._n_fresh = 0
         self._max_skew, self._staleness = cfg.max_skew, cfg.staleness  # read per frame (the config is frozen)
         self.lock = LockDetector(cfg.lock_time, cfg.steady_band, cfg.drift_limit, cfg.unlock_samples)
@@ -120,6 +132,7 @@ class FixtureCycle:
             "incomplete_sets": 0,
             "repeated_frames": 0,
             "ahead_frames": 0,
+            "inconsistent_sets": 0,
         }
         self._ahead = AheadCheck()
         self.alarm = FaultLatch(cfg.name)
@@ -193,7 +206,9 @@ class FixtureCycle:
                 self.counters["duplicate_frames"] += 1
                 self._duplicate.add(leg)
                 return None
-        if len(data) >= self._min_length:  # codec.decode's check, without its exception on the hot path
+        if leg >= self._n_legs:  # the inclinometer's frame: two angles
+            self._tilt_frame(leg, data)
+        elif len(data) >= self._min_length:  # codec.decode's check, without its exception on the hot path
             count, self._err[leg], self._warn[leg] = self._unpack(data)
             self._counts[leg], self._bad[leg] = count, False
             self._readings[leg] = (count - self._home[leg]) * self._metres_per_count
@@ -215,8 +230,8 @@ class FixtureCycle:
             self._t_first = t
         self._fresh[leg] = True
         self._n_fresh += 1
-        if self._n_fresh == 6:
-            self._fresh = [False] * 6
+        if self._n_fresh == self._n:
+            self._fresh = [False] * self._n
             self._n_fresh = 0
             if self._duplicate:
                 self._lost += 1
@@ -224,42 +239,52 @@ class FixtureCycle:
             return self._complete(self._t_newest)
         return published
 
+    def _tilt_frame(self, channel: int, data: bytes | bytearray) -> None:
+        """Decode the inclinometer's frame into the last two readings (a short one is a bad frame)."""
+        tilt = self._tilt
+        assert tilt is not None
+        if len(data) >= tilt.length:
+            x, y, self._err[channel], self._warn[channel] = tilt.readings(data)
+            self._readings[-2], self._readings[-1], self._bad[channel] = x, y, False
+        else:
+            self._bad[channel], self._readings[-2], self._readings[-1] = True, math.nan, math.nan
+
     def _clock_went_back(self, t: float) -> None:
         """Frames keep coming older than the newest one: the bus's clock was set back; follow it."""
         back = self._t_newest - t
         log.warning("fixture %s: frame times went back %.3g s: following the bus clock", self.cfg.name, back)
         self._t_newest, self._t_set, self._t = t, math.nan, [min(tk, t) for tk in self._t]
-        self._fresh, self._n_fresh = [False] * 6, 0
+        self._fresh, self._n_fresh = [False] * self._n, 0
         self._ahead.clear()
-        self._lost += round(self._late_run / 6)  # the sets whose frames were taken for late ones
+        self._lost += round(self._late_run / self._n)  # the sets whose frames were taken for late ones
         self._late.clear()
         self.lock.restart_clock(t)
 
     def _close_incomplete(self) -> PoseRecord:
         """Publish the unfinished set: ``silent_leg`` when a missing leg is stale, else what went wrong."""
         t = self._t_newest
-        missing = [k for k in range(6) if not self._fresh[k]]
-        self._fresh = [False] * 6
+        missing = [k for k in range(self._n) if not self._fresh[k]]
+        self._fresh = [False] * self._n
         self._n_fresh = 0
         self._lost += 1
         self.counters["incomplete_sets"] += 1
         quiet = self._late | self._ahead.legs  # legs that sent, late or ahead: not silent
         silent = [k for k in missing if t - self._t[k] > self.cfg.staleness and k not in quiet]
         if silent:
-            return self._failure(t, "silent_leg", self._set_flags([f"silent:leg{k + 1}" for k in silent]))
+            return self._failure(t, "silent_leg", self._set_flags([f"silent:{self._names[k]}" for k in silent]))
         status = "duplicate_frame" if self._duplicate else "incomplete"
-        return self._failure(t, status, self._set_flags([f"missing:leg{k + 1}" for k in missing]))
+        return self._failure(t, status, self._set_flags([f"missing:{self._names[k]}" for k in missing]))
 
     def _set_flags(self, flags: list[str]) -> list[str]:
         """``flags`` plus the set's duplicate and late frames (then forgotten)."""
         if self._duplicate:
-            flags += [f"duplicate:leg{k + 1}" for k in sorted(self._duplicate)]
+            flags += [f"duplicate:{self._names[k]}" for k in sorted(self._duplicate)]
             self._duplicate.clear()
         if self._late:
-            flags += [f"late_frame:leg{k + 1}" for k in sorted(self._late)]
+            flags += [f"late_frame:{self._names[k]}" for k in sorted(self._late)]
             self._late.clear()
         if self._ahead.legs:
-            flags += [f"ahead:leg{k + 1}" for k in sorted(self._ahead.legs)]
+            flags += [f"ahead:{self._names[k]}" for k in sorted(self._ahead.legs)]
             self._ahead.legs.clear()
             self.counters["ahead_frames"] = self._ahead.frames
         return flags
@@ -268,10 +293,10 @@ class FixtureCycle:
         """Publish ``silent_leg`` when nothing was published for ``staleness`` and a leg is silent."""
         if now - self.last.t <= self.cfg.staleness:
             return None
-        silent = [k for k in range(6) if now - self._t[k] > self.cfg.staleness]
+        silent = [k for k in range(self._n) if now - self._t[k] > self.cfg.staleness]
         if not silent:
             return None
-        return self._failure(now, "silent_leg", [f"silent:leg{k + 1}" for k in silent])
+        return self._failure(now, "silent_leg", [f"silent:{self._names[k]}" for k in silent])
 
     def lock_stored(self, episode: int, event: LockEvent) -> None:
         """Called (from the store's thread) once ``event`` of lock ``episode`` is committed."""
@@ -306,10 +331,12 @@ class FixtureCycle:
         if dt < SAME_STAMP:  # this set has the stamp of the previous one: a gateway stamped the burst once
             self._batched = self._instant
         self._lost, self._t_set = 0, t
+        # the braked legs' readings: the lock, stuck and step detectors watch the six legs
+        six = self._readings if self._n == 6 else self._readings[:6]
         if self.alarm.requested and self.alarm.take() is not None:  # acknowledged: readings taken as they are
             self.steps.reset()
             if self.lock.state == "locked":
-                self.lock.release(t, self._readings)
+                self.lock.release(t, six)
                 self._episode += 1
         r = np.array(self._readings)
         for status, bad, name in (
@@ -317,21 +344,22 @@ class FixtureCycle:
             ("encoder_error", self._err, "encoder_error"),
         ):
             if any(bad):
-                return self._failure(t, status, self._set_flags([f"{name}:leg{k + 1}" for k in range(6) if bad[k]]))
-        out = [k for k in range(6) if not self._lo[k] <= self._readings[k] <= self._hi[k]]
+                flags = [f"{name}:{self._names[k]}" for k in range(self._n) if bad[k]]
+                return self._failure(t, status, self._set_flags(flags))
+        out = [k for k in range(len(self._lo)) if not self._lo[k] <= self._readings[k] <= self._hi[k]]
         if out:
             return self._failure(t, "out_of_stroke", self._set_flags([f"out_of_stroke:leg{k + 1}" for k in out]))
-        stuck = self.stuck.update(self._instant, self._counts, self._readings)
+        stuck = self.stuck.update(self._instant, self._counts[:6], six)
         if stuck:
             return self._failure(t, "stuck_leg", self._set_flags([f"stuck:leg{k + 1}" for k in stuck]))
         was_locked = self.lock.state == "locked"
-        ready = self.lock.update(t, self._readings)
+        ready = self.lock.update(t, six)
         if was_locked and self.lock.state != "locked":
             self._episode += 1
             log.info("fixture %s: moving (lock released)", self.cfg.name)
         outcome = self.solver.step(r, self._instant)
         jumped = outcome.legs if "jump" in outcome.flags else ()
-        stepped = self.steps.update(self._instant, self._readings, jumped)
+        stepped = self.steps.update(self._instant, six, jumped)
         if stepped:  # on a locked fixture a leg moved alone: brake slip or encoder, six readings cannot tell
             self.alarm.latch("moved_while_locked" if was_locked else "discontinuity", stepped, t)
         if self.lock.slipped:
@@ -351,7 +379,8 @@ class FixtureCycle:
             if len(self.lock.drift_legs) < MOTION_LEGS:
                 self.alarm.latch("moved_while_locked", self.lock.drift_legs, t)
             flags += [f"drift:leg{k + 1}" for k in self.lock.drift_legs]
-        status = {"ok": "ok", "flagged": "flagged", "failed": "not_converged"}[outcome.status]
+        status = STATUS_OF[outcome.status]
+        self._note_inconsistent(t, status, flags)
         if self.steps.pending and "jump" not in flags:  # a jump that may be a step: not ok until it is known
             flags.append("jump")
             status = "flagged" if status == "ok" else status
@@ -384,11 +413,29 @@ class FixtureCycle:
             self._episode += 1
             self._stored_episode = self._episode
 
+    def _note_inconsistent(self, t: float, status: str, flags: list[str]) -> None:
+        """Count inconsistent sets; log the first of a run (naming the reading when the data do) and its end."""
+        if status == "inconsistent_readings":
+            self.counters["inconsistent_sets"] += 1
+            if self.inconsistent_since is None:
+                self.inconsistent_since = t
+                named = [f for f in flags if f.startswith("isolated:")]
+                log.warning(
+                    "fixture %s: inconsistent readings%s: no ok pose until they agree again",
+                    self.cfg.name,
+                    f" ({named[0]})" if named else " (the faulty reading is not named)",
+                )
+        elif self.inconsistent_since is not None:
+            log.info("fixture %s: readings consistent again after %.3g s", self.cfg.name, t - self.inconsistent_since)
+            self.inconsistent_since = None
+
     def _take_lock(self, t: float, outcome: SolveOutcome) -> None:
         mean = self.lock.run_mean
-        sol = self.solver.solve_once(mean, outcome.q)  # type: ignore[arg-type]
+        # redundant sensors have no brake: the lock pose is solved from the legs' mean and their latest readings
+        every = mean if self._n == 6 else np.concatenate([mean, self._readings[6:]])
+        sol = self.solver.solve_once(every, outcome.q)  # type: ignore[arg-type]
         if sol.status != "converged":
-            self.lock.restart(t, np.array(self._readings))
+            self.lock.restart(t, np.array(self._readings[:6]))
             return
         quat = _quaternion(sol.pose[:3, :3])
         status = "ok" if self.fault is None else self.fault.stored_status()  # the lock carries a waiting fault
@@ -413,7 +460,9 @@ class FixtureCycle:
             self._new_lock_stored = False
             self._advisory -= {"moved_while_off", "stored_geometry_changed"}
         if any(self._warn):
-            flags.extend(f"encoder_warning:leg{k + 1}" for k in range(6) if self._warn[k] and not self._err[k])
+            flags.extend(
+                f"encoder_warning:{self._names[k]}" for k in range(self._n) if self._warn[k] and not self._err[k]
+            )
         if self._advisory:
             flags.extend(sorted(self._advisory))
         if self.fault is not None:  # nothing is ok until the fault is acknowledged
@@ -432,7 +481,7 @@ class FixtureCycle:
                 flags.append("near_singular")
             if self._in_robot is not None:
                 in_robot = self._in_robot.record(outcome.pose, outcome.q, sigma)
-        old, readings = t - self.cfg.staleness, self._readings
+        old, readings = t - self.cfg.staleness, self._readings if self._n == 6 else self._readings[:6]
         total = sum(readings)  # NaN when a reading is (readings are finite otherwise)
         if total == total and min(self._t) >= old:  # every reading fresh: the common case
             fresh: list[float | None] = list(readings)

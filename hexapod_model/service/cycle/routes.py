@@ -1,6 +1,6 @@
 """Which handler reads a frame: the service's table from (extended flag, CAN id) to a fixture's cycle.
 
-A leg's frames go to its cycle's
+A leg's frames (and an inclinometer's) go to its cycle's
 :meth:`~hexapod_model.service.cycle.fixture_cycle.FixtureCycle.on_frame`; a CANopen fixture's
 TPDOs, EMCYs and heartbeats to its :class:`~hexapod_model.service.cycle.canopen_link.CanopenLink`,
 and the bus's SYNC to the one :class:`~hexapod_model.service.cycle.canopen_link.SyncClock` of
@@ -29,6 +29,9 @@ def frame_routes(config: ServiceConfig, cycles: dict[str, FixtureCycle]) -> dict
         if f.canopen is None:
             for k, leg in enumerate(f.legs):
                 routes[leg.extended_id][leg.can_id] = (cycle, cycle.on_frame, k)
+            if f.inclinometer is not None:  # its frame follows the legs'
+                tilt = f.inclinometer
+                routes[tilt.extended_id][tilt.can_id] = (cycle, cycle.on_frame, len(f.legs))
             continue
         clock = clocks.setdefault(f.canopen.sync_id, SyncClock())
         routes[False][f.canopen.sync_id] = (cycle, clock.on_sync, 0)

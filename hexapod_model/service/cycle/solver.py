@@ -16,6 +16,14 @@ judge every sample against the configured reading noise; see docs/evaluate.md).
   ``rotation`` that of the rotation-vector block (rad). ``margin`` is ``cond(home) / cond(here)``
   of the 6x6 map with rotations scaled by the characteristic length: 1 at home, towards 0 at a
   singularity.
+* A hexapod with redundant sensors (measuring legs, an inclinometer:
+  :mod:`hexapod_model.kinematics.redundant`) takes every reading, legs first; the tracker tracks
+  the six legs and solves all of them (:mod:`hexapod_model.tracking.extra_readings`): the
+  outcome's pose is their weighted least-squares pose, and a set failing the consistency test
+  is ``inconsistent`` (flags ``inconsistent_readings`` and ``isolated:NAME`` when the data name
+  the faulty reading, whose exclusion gives the pose, flagged ``estimate``; else
+  ``suspects:N`` and no pose). The uncertainty stays the six legs' (an upper bound: more
+  readings only shrink it).
 """
 
 from __future__ import annotations
@@ -28,9 +36,8 @@ import numpy as np
 from ...analysis.sensitivity import SensitivityEvaluator
 from ...kinematics.hexapod import Hexapod
 from ...kinematics.newton.solver import Solution
+from ...kinematics.redundant import RedundantSolution
 from ...tracking.tracker import Tracker, characteristic_length
-
-_UNREADABLE = np.full(6, np.nan)
 
 
 class Uncertainty(NamedTuple):
@@ -55,7 +62,8 @@ class SolveOutcome(NamedTuple):
     Attributes:
         pose: 4x4 base -> platform (m), or ``None`` when the solve failed.
         q: the configuration of the solution (``None`` when failed).
-        status: ``ok`` (no flag), ``flagged`` (a pose, see ``flags``) or ``failed``.
+        status: ``ok`` (no flag), ``flagged`` (a pose, see ``flags``), ``failed`` or
+            ``inconsistent`` (redundant readings failing their consistency test).
         flags: tracker flags (``jump``, ``stuck``, ``branch_uncertain``, ``settling``,
             ``near_singular``, ``out_of_limits``, ``imprecise``) and, for a failed solve, the
             failure's name.
@@ -117,6 +125,7 @@ class PoseSolver:
             sensitivity=sensitivity,
         )
         self._sens = sensitivity  # for poses outside the stream, between two steps
+        self._unreadable = np.full(len(hexa.reading_names), np.nan)  # an instant without a solved set
         self._instant: int | None = None  # of the last set given to the tracker
 
     def propagation(self, q: np.ndarray) -> np.ndarray:
@@ -151,16 +160,31 @@ class PoseSolver:
         if instant is not None and self._instant is not None:
             # beyond max_gap + 1 the tracker re-anchors anyway: more unreadable samples change nothing
             for _ in range(min(instant - self._instant - 1, self.tracker.settings.max_gap + 1)):
-                self.tracker.step(_UNREADABLE)
+                self.tracker.step(self._unreadable)
         self._instant = instant
         r = self.tracker.step(readings)
         if r.failed:
             flags = (*r.flags, r.status)
             return SolveOutcome(None, None, "failed", flags, r.iterations, None, _since(t0), r.legs)
         u = Uncertainty(r.sigma_translation, r.sigma_rotation, r.singularity_margin)
-        status = "flagged" if r.flags else "ok"
         sol = r.solution
+        if "inconsistent_readings" in r.flags:
+            return _inconsistent(sol, r.flags, u, t0, r.legs)
+        status = "flagged" if r.flags else "ok"
         return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, time.perf_counter() - t0, r.legs)
+
+
+def _inconsistent(
+    sol: Solution, flags: tuple[str, ...], u: Uncertainty, t0: float, legs: tuple[int, ...]
+) -> SolveOutcome:
+    """Readings failing their consistency test: the named reading and the others' estimate, or no pose."""
+    test = sol.consistency if isinstance(sol, RedundantSolution) else None
+    named = () if test is None or test.isolated is None else (f"isolated:{test.isolated}",)
+    why = named or (f"suspects:{0 if test is None else len(test.suspects)}",)
+    if not named or "estimate" not in sol.flags:  # no pose the data vouch for
+        return SolveOutcome(None, None, "inconsistent", (*flags, *why), sol.iterations, None, _since(t0), legs)
+    out = (*flags, *why, "estimate")
+    return SolveOutcome(sol.pose, sol.q, "inconsistent", out, sol.iterations, u, _since(t0), legs)
 
 
 def _since(t0: float) -> float:
@@ -176,6 +200,7 @@ def warm_up(hexa: Hexapod, noise: float, predictor: str = "eq22", samples: int =
     """
     solver = PoseSolver(hexa, max(noise, 1e-6), predictor)
     ramp = np.linspace(0.0, 1e-4, samples)
+    extra = np.zeros(len(hexa.reading_names) - 6)  # redundant sensors: their home readings (a consistency test fails)
     for k, step in enumerate(ramp):
-        solver.step(np.full(6, step), k)
+        solver.step(np.concatenate([np.full(6, step), extra]), k)
     solver.uncertainty(hexa.q_home)

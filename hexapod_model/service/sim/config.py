@@ -39,7 +39,11 @@ FAULTS = (
     "repeated_frames",
     "ahead_stamp",
     "gateway_burst",
+    "late_reading",
+    "creep",
+    "intruder",
 )
+VALUE_FAULTS = ("stuck_leg", "spike", "step", "late_reading", "creep", "intruder")  # act on a reading, any sensor
 
 
 @dataclass(frozen=True)
@@ -48,22 +52,33 @@ class Fault:
 
     A ``held_brake`` leg keeps the reading it had at ``start`` for ``duration`` (its brake did not
     release): the plate goes where the readings put it
-    (:class:`~hexapod_model.service.sim.plan_player.HeldBrakes`).
+    (:class:`~hexapod_model.service.sim.plan_player.HeldBrakes`). Faults that six readings cannot
+    reveal (docs/redundancy.md): ``late_reading`` (the frames carry the reading of ``sets`` sets
+    earlier with fresh stamps: a gateway buffering one sensor), ``creep`` (the reading drifts by
+    ``size`` per second from ``start``), a constant offset (``step`` from ``start`` 0) and
+    ``intruder`` (a device on the sensor's CAN id whose frames replace the genuine ones: it replays
+    the readings of ``sets`` sets earlier plus ``size``). Reading faults (:data:`VALUE_FAULTS`) act
+    on any reading, an extra sensor's too; frame faults on the frame that carries it.
 
     Attributes:
         kind: one of :data:`FAULTS`.
-        legs: affected legs (0-based).
+        legs: affected readings (0-based, the hexapod's reading order: the legs, then ``tilt_x``,
+            ``tilt_y``).
         start: seconds after the simulation starts.
-        duration: seconds (a ``spike`` affects the first set at or after ``start`` only).
+        duration: seconds (a ``spike`` affects the first set at or after ``start`` only; a
+            ``step``, ``held_brake``, ``late_reading``, ``creep`` and ``intruder`` last to the end
+            unless given, the others 1 s).
         probability: chance that a frame is lost (``dropped_frames``) or a whole set (``lost_sets``).
-        size: reading offset (m) of a ``spike``, a ``step`` (an encoder that slipped, for
-            ``duration``) or the second sender's frame of a ``duplicate_id`` (sent on the leg's
-            CAN id just before the genuine frame).
+        size: reading offset (m, rad for a tilt) of a ``spike``, a ``step`` (an encoder that
+            slipped, for ``duration``), an ``intruder``'s frames or the second sender's frame of a
+            ``duplicate_id`` (sent on the leg's CAN id just before the genuine frame); a ``creep``'s
+            rate (m/s, rad/s for a tilt).
         sets: a ``late_frame`` leg sends its frame of this many sets earlier, with that set's
             timestamp, last in the set, instead of the current one; ``repeated_frames``: every
             frame is sent this many times in a row, stamp and all (a gateway's repeats);
             ``gateway_burst``: this many sets are held, then sent in order with the stamp of the
-            last frame (a gateway that batches and stamps a burst once).
+            last frame (a gateway that batches and stamps a burst once); ``late_reading`` and
+            ``intruder``: how many sets old the readings sent are.
         seconds: an ``ahead_stamp`` leg's frames carry stamps this much later (s) than its set's.
     """
 
@@ -88,7 +103,8 @@ class SimFixture:
     Attributes:
         name: the fixture (of ``fixture.toml``).
         rate: reading sets per second (six frames each).
-        noise: 1-sigma Gaussian reading noise (m).
+        noise: 1-sigma Gaussian reading noise of a leg (m).
+        tilt_noise: 1-sigma Gaussian noise of an inclinometer angle (rad).
         poses: (n, 4, 4) pose sequence (base -> platform, m): one held pose, CSV rows (one per
             set), or the trajectory sampled at ``rate`` over one there-and-back ``period``.
         move, lock: seconds of motion, then seconds still (``lock = 0``: always moving).
@@ -106,6 +122,7 @@ class SimFixture:
     ramp: float = 0.2
     faults: tuple[Fault, ...] = ()
     changeover: ChangeoverScript | None = None
+    tilt_noise: float = 2e-5
 
     def speed(self, t: float) -> float:
         """Playback speed (0..1) of the pose sequence at simulation time ``t`` (s)."""
@@ -228,8 +245,9 @@ def _fixture(t: Table, service: ServiceConfig, folder: Path) -> SimFixture:
         move=t.number("move", 1.0, 0.01, 3600.0),
         lock=t.number("lock", 0.0, 0.0, 3600.0),
         ramp=t.number("ramp", 0.2, 0.0, 60.0),
-        faults=tuple(_fault(Table(f, t.name(f"faults[{k}]"), t.source)) for k, f in enumerate(faults)),
+        faults=tuple(_fault(Table(f, t.name(f"faults[{k}]"), t.source), hexa) for k, f in enumerate(faults)),
         changeover=_changeover(t.table("changeover")) if "changeover" in t.data else None,
+        tilt_noise=t.number("tilt_noise", 2e-5, 0.0, 0.1),
     )
     if 2 * sim.ramp > sim.move and sim.lock > 0:
         raise t.error("ramp", sim.ramp, f"two ramps must fit in move = {sim.move:g} s")
@@ -248,21 +266,36 @@ def _changeover(t: Table) -> ChangeoverScript:
     return script
 
 
-def _fault(t: Table) -> Fault:
+UNTIL_THE_END = {"spike": 0.0, "step": 1e6, "held_brake": 1e6, "late_reading": 1e6, "creep": 1e6, "intruder": 1e6}
+SETS = {"late_frame": 1, "repeated_frames": 10, "gateway_burst": 5, "late_reading": 1, "intruder": 100}
+
+
+def _fault(t: Table, hexa) -> Fault:
     kind = t.text("kind", choices=FAULTS)
+    names = hexa.reading_names
+    n_legs = sum(n.startswith("leg") for n in names)
     leg = t.take("leg", 0)
     every = kind in ("lost_sets", "repeated_frames", "gateway_burst") or (leg == 0 and kind == "dropped_frames")
-    legs = tuple(range(6)) if every else (t.integer("leg", lo=1, hi=6) - 1,)
+    if "reading" in t.data:  # any reading by name: leg7, tilt_x, ...
+        if "leg" in t.data:
+            raise t.error("reading", t.data["reading"], "give leg or reading, not both")
+        legs: tuple[int, ...] = (names.index(t.text("reading", choices=names)),)
+    else:
+        legs = tuple(range(len(names))) if every else (t.integer("leg", lo=1, hi=n_legs) - 1,)
+    if kind == "held_brake" and (legs[0] >= 6 or hexa.redundancy is not None):
+        raise t.error(
+            "kind", kind, "a held brake is simulated on the six braked legs of a hexapod without extra sensors"
+        )
     fault = Fault(
         kind=kind,
         legs=legs,
         start=t.number("start", 0.0, 0.0, 1e6),
-        duration=t.number("duration", {"spike": 0.0, "step": 1e6, "held_brake": 1e6}.get(kind, 1.0), 0.0, 1e6),
+        duration=t.number("duration", UNTIL_THE_END.get(kind, 1.0), 0.0, 1e6),
         probability=t.number("probability", 0.2, 0.0, 1.0) if kind in ("dropped_frames", "lost_sets") else 1.0,
-        size=t.number("size", 0.002, -0.5, 0.5) if kind in ("spike", "step", "duplicate_id") else 0.0,
-        sets=t.integer("sets", {"late_frame": 1, "repeated_frames": 10, "gateway_burst": 5}.get(kind, 1), 1, 1000)
-        if kind in ("late_frame", "repeated_frames", "gateway_burst")
-        else 1,
+        size=t.number("size", {"creep": 1e-4, "intruder": 0.0}.get(kind, 0.002), -0.5, 0.5)
+        if kind in ("spike", "step", "duplicate_id", "creep", "intruder")
+        else 0.0,
+        sets=t.integer("sets", SETS.get(kind, 1), 1, 1000) if kind in SETS else 1,
         seconds=t.number("seconds", 0.05, -10.0, 10.0) if kind == "ahead_stamp" else 0.0,
     )
     t.finish()

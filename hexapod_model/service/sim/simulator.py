@@ -3,9 +3,12 @@
 Each simulated fixture plays its pose sequence (:mod:`hexapod_model.service.sim.config`) at a
 playback speed that slows to 0 in lock phases; a pose between two samples of the sequence is
 interpolated on SE(3). Its leg readings come from the hexapod's inverse kinematics (warm
-started), get Gaussian noise, then the faults act, and every leg's reading is encoded with the
-fixture's frame layout, CAN id and home count and sent on the bus. Every sent set is kept in
-:attr:`Simulator.truth` (the poses the service should report).
+started), the readings of its redundant sensors (measuring legs, inclinometer) from the same
+pose through their sensor model
+(:meth:`~hexapod_model.kinematics.redundant.RedundantSensing.extra_readings`); all get Gaussian
+noise, then the faults act, and every leg's reading is encoded with the fixture's frame layout,
+CAN id and home count (the inclinometer's two angles in its own frame) and sent on the bus.
+Every sent set is kept in :attr:`Simulator.truth` (the poses the service should report).
 """
 
 from __future__ import annotations
@@ -47,8 +50,8 @@ class SentSet:
         t_first, t_last: time (s, Unix) of the set: its stamp and that of its last frame, or the
             wall-clock time just before the first and after the last frame when not stamped.
         pose: the true pose (4x4, base -> platform, m).
-        readings: the true readings (m), before noise and faults.
-        sent: which legs' frames went on the bus.
+        readings: the true readings (m, rad for tilts; reading order), before noise and faults.
+        sent: which frames went on the bus (one per leg, then the inclinometer's).
         faults: kinds of the faults active on this set.
     """
 
@@ -63,12 +66,18 @@ class SentSet:
 
 
 class _Encoders:
-    """The six simulated encoders of one fixture."""
+    """The simulated encoders of one fixture: its legs' and its inclinometer's."""
 
     def __init__(
         self, sim: SimFixture, cfg: FixtureConfig, hexa: Hexapod, rng: np.random.Generator, targets=None, path=None
     ):
         self.sim, self.cfg, self.hexa, self.rng = sim, cfg, hexa, rng
+        self.n = cfg.channels  # frames of a set
+        names = hexa.reading_names
+        #: the frame that carries each reading (the tilts share the inclinometer's)
+        self.channel = [min(k, len(cfg.legs)) for k in range(len(names))]
+        self.sigma = np.array([sim.tilt_noise if n.startswith("tilt") else sim.noise for n in names])
+        self.noisy: deque[np.ndarray] = deque(maxlen=1001)  # sent readings before faults (late_reading, intruder)
         self.path: PlatePath | None = path  # a plan carries this plate: it follows that, nothing else
         self.brakes = HeldBrakes(sim.faults, hexa)
         script = sim.changeover if targets is not None and path is None else None
@@ -83,7 +92,7 @@ class _Encoders:
         #: sent sets, newest last (for late_frame)
         self.past: deque[list[can.Message | None]] = deque(maxlen=1001)
         self.late: dict[int, int] = {}
-        self.duplicate: dict[int, float] = {}
+        self.duplicate: dict[int, np.ndarray] = {}  # frame -> readings of a second sender (duplicate_id)
         self.ahead: dict[int, float] = {}  # leg -> seconds its stamps run ahead (ahead_stamp)
         self.repeats = 1  # times each frame is sent (repeated_frames)
         self.burst = 0  # sets a gateway holds before sending them with one stamp (gateway_burst)
@@ -107,7 +116,17 @@ class _Encoders:
             pose, true = self._sol.pose, self._sol.lengths.copy()
         else:
             pose, true = self._play(t_sim)
-        return self.brakes.apply(t_sim, pose, true, self._sol)
+        pose, true = self.brakes.apply(t_sim, pose, true, self._sol)
+        if self.hexa.redundancy is not None:  # the extra sensors see the same pose
+            true = np.concatenate([true, self.hexa.redundancy.extra_readings(pose)])
+        return pose, true
+
+    def message(self, channel: int, r: np.ndarray, error: bool = False, warning: bool = False) -> can.Message:
+        """The frame ``channel`` sends for readings ``r`` (reading order)."""
+        if channel < len(self.cfg.legs):
+            return self.cfg.legs[channel].message(float(r[channel]), error, warning)
+        assert self.cfg.inclinometer is not None
+        return self.cfg.inclinometer.message(float(r[-2]), float(r[-1]), error, warning)
 
     def _play(self, t_sim: float) -> tuple[np.ndarray, np.ndarray]:
         factor = 1.0
@@ -143,9 +162,11 @@ class _Encoders:
             self.tau = (self.tau + factor * self.sim.speed(t_sim)) % len(self.sim.poses)
 
     def frames(self, t_sim: float, true: np.ndarray) -> tuple[list[can.Message | None], tuple[str, ...]]:
-        """The six frames (``None``: not sent) of a set at ``t_sim``."""
-        r = true + self.rng.normal(0.0, self.sim.noise, 6) if self.sim.noise > 0 else true.copy()
-        err, warn, drop = [False] * 6, [False] * 6, [False] * 6
+        """The frames (``None``: not sent) of a set at ``t_sim``: one per leg, then the inclinometer's."""
+        m, n, ch = len(true), self.n, self.channel
+        r = true + self.rng.normal(0.0, 1.0, m) * self.sigma if self.sigma.any() else true.copy()
+        self.noisy.append(r.copy())
+        err, warn, drop = [False] * n, [False] * n, [False] * n
         self.late = {}  # leg -> sets: send that old frame last instead (late_frame)
         self.duplicate = {}  # leg -> reading of a second sender (duplicate_id)
         self.ahead, self.repeats, self.burst = {}, 1, 0
@@ -165,36 +186,43 @@ class _Encoders:
                 continue
             active.append(f.kind)
             for k in f.legs:
+                c = ch[k]
                 if f.kind == "dropped_frames":
-                    drop[k] |= bool(self.rng.random() < f.probability)
+                    drop[c] |= bool(self.rng.random() < f.probability)
                 elif f.kind == "silent_leg":
-                    drop[k] = True
+                    drop[c] = True
                 elif f.kind == "stuck_leg":
                     r[k] = self._stuck.setdefault(k, float(r[k]))
                 elif f.kind == "error_bit":
-                    err[k] = True
+                    err[c] = True
                 elif f.kind == "warning_bit":
-                    warn[k] = True
+                    warn[c] = True
                 elif f.kind == "step":
                     r[k] += f.size
+                elif f.kind == "creep":
+                    r[k] += f.size * (t_sim - f.start)
+                elif f.kind in ("late_reading", "intruder"):  # readings of `sets` sets ago, stamped now
+                    old = self.noisy[-1 - f.sets] if len(self.noisy) > f.sets else self.noisy[0]
+                    r[k] = old[k] + (f.size if f.kind == "intruder" else 0.0)
                 elif f.kind == "late_frame":
-                    self.late[k] = f.sets
+                    self.late[c] = f.sets
                 elif f.kind == "duplicate_id":
-                    self.duplicate[k] = float(r[k] + f.size)
+                    second = self.duplicate.setdefault(c, r.copy())
+                    second[k] += f.size
                 elif f.kind == "ahead_stamp":
-                    self.ahead[k] = f.seconds
+                    self.ahead[c] = f.seconds
                 elif f.kind == "repeated_frames":
                     self.repeats = f.sets
                 elif f.kind == "gateway_burst":
                     self.burst = f.sets
             if f.kind == "lost_sets" and self.rng.random() < f.probability:
-                drop = [True] * 6
+                drop = [True] * n
         msgs: list[can.Message | None] = []
-        for k, leg in enumerate(self.cfg.legs):
+        for k in range(n):
             try:
-                msgs.append(None if drop[k] else leg.message(float(r[k]), err[k], warn[k]))
+                msgs.append(None if drop[k] else self.message(k, r, err[k], warn[k]))
             except FrameError as exc:
-                log.warning("simulated fixture %s leg %d: frame not sent: %s", self.cfg.name, k + 1, exc)
+                log.warning("simulated fixture %s frame %d: not sent: %s", self.cfg.name, k + 1, exc)
                 msgs.append(None)
         return msgs, tuple(active)
 
@@ -252,7 +280,7 @@ class Simulator:
         msgs, faults = enc.frames(t_sim, true)
         t_first = time.time()
         if stamp is not None and stall_check and t_first - stamp > 1.0 / enc.sim.rate:  # this thread stalled: lost
-            msgs = [None] * 6
+            msgs = [None] * enc.n
         for k, m in enumerate(msgs):
             if m is not None and stamp is not None:
                 m.timestamp = stamp + k * FRAME_TIME + enc.ahead.get(k, 0.0)
@@ -260,7 +288,7 @@ class Simulator:
         order: list[can.Message | None] = []
         for k, m in enumerate(msgs):
             if k in enc.duplicate and m is not None:
-                second = enc.cfg.legs[k].message(enc.duplicate[k])
+                second = enc.message(k, enc.duplicate[k])
                 second.timestamp = m.timestamp - FRAME_TIME / 2
                 order.append(second)
             order.append(None if k in enc.late else m)
@@ -285,7 +313,7 @@ class Simulator:
         for m in out:
             self.bus.send(m)
         if stamp is not None:
-            t_first, t_last = stamp, stamp + 5 * FRAME_TIME
+            t_first, t_last = stamp, stamp + (enc.n - 1) * FRAME_TIME
         else:
             t_last = time.time()
         sent = SentSet(enc.sim.name, t_sim, t_first, t_last, pose, true, tuple(m is not None for m in msgs), faults)
