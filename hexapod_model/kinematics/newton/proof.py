@@ -18,6 +18,7 @@ The numba kernels are imported by the first :class:`StepProver` (they compile on
 
 from __future__ import annotations
 
+import threading
 from dataclasses import replace
 
 import numpy as np
@@ -59,6 +60,8 @@ class StepProver:
         from . import krawczyk  # numba: compiled on first use
 
         self._prove = krawczyk.prove_path
+        self._workspace = krawczyk.workspace
+        self._local = threading.local()  # the work arrays, one set per thread
         self.leg_q = tables.leg_q
         n = tables.leg_q.shape[1]
         held = np.array([list(tables.leg_q[i]).index(clm.prismatic_q[i]) for i in range(6)], dtype=np.int64)
@@ -87,15 +90,29 @@ class StepProver:
         legs = q[self.leg_q[np.arange(6)[:, None], self.free]].ravel()
         return np.concatenate([legs, chart_coordinates(T0, self.platform(q))])
 
-    def prove(self, q0: np.ndarray, q1: np.ndarray) -> Proof:
-        """The proof of the readings path from ``q0`` (closed) to the result ``q1`` (see the module doc)."""
+    def work(self, nf: int) -> tuple:
+        """The calling thread's work arrays of :func:`.krawczyk.prove_path` for ``nf`` unknowns."""
+        work = getattr(self._local, "work", None)
+        if work is None:
+            work = self._local.work = self._workspace(nf, self.tables[4])
+        return work
+
+    def prove(self, q0: np.ndarray, q1: np.ndarray, structured: bool = True) -> Proof:
+        """The proof of the readings path from ``q0`` (closed) to the result ``q1`` (see the module doc).
+
+        Args:
+            q0: the start configuration (closed).
+            q1: the result.
+            structured: the Krawczyk test leg by leg (:mod:`.krawczyk_blocks`); False runs the
+                dense 36 x 36 reference test (same proof, several times the cost).
+        """
         T0 = self.platform(q1)
         x0, x1 = self.unknowns(q0, T0), self.unknowns(q1, T0)
         l0, l1 = q0[self.held_q].astype(float), q1[self.held_q].astype(float)
         if not (np.all(np.isfinite(x0)) and np.all(np.isfinite(x1)) and np.all(np.isfinite(l0 + l1))):
             return Proof(False, np.inf, np.inf, 0, 0)
         announce(self._prove)
-        proven, tests, radius, parts = self._prove(self.tables, T0, x0, x1, l0, l1)
+        proven, tests, radius, parts = self._prove(self.tables, T0, x0, x1, l0, l1, structured, self.work(x0.size))
         if not proven:
             return Proof(False, np.inf, np.inf, int(tests), 0)
         r = radius[-6:]
