@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hexapod_model.kinematics.newton.intervals import REL, enclose, motion, product
+from hexapod_model.kinematics.newton.enclosure import enclose
+from hexapod_model.kinematics.newton.intervals import REL, motion, product
 from hexapod_model.kinematics.newton.proof import StepProver
 from hexapod_model.lie import rpy_to_matrix
 

@@ -1,6 +1,6 @@
 """The Krawczyk test on the block-arrow structure of the closure Jacobian (per-leg Schur form).
 
-The closure Jacobian ``J`` of :mod:`.intervals` has, in each leg's ``r`` rows (6, or 3 for point
+The closure Jacobian ``J`` of :mod:`.enclosure` has, in each leg's ``r`` rows (6, or 3 for point
 closures), nonzero entries only in that leg's ``m = r - 1`` free joints and the six chart
 coordinates of the platform: ``J = [diag(A_i) | B]``, ``A_i`` (r x m), ``B_i`` (r x 6), a
 block-arrow matrix (every other entry is an exact zero of the enclosure: a leg's closure does
