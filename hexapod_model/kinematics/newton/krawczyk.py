@@ -126,8 +126,8 @@ def try_box(tables, T0, xc, rho, hm, hr, dl, half, structured, work, off, rad):
     enclose_into(placements, motions, closure, held, rows, T0, xc, rho, hm, hr, True, V[2], V[3], Jm, Jr, ew)
     _path_enclosure(tables, hm, dl, half, structured, work)
     if structured:
-        transform(Jm, Jr, rows, blocks)
-        return krawczyk_blocks(V[7], V[8], rows, blocks, rho, off, rad)
+        transform(Jm, rows, blocks)
+        return krawczyk_blocks(V[7], V[8], Jr, rows, blocks, rho, off, rad)
     return krawczyk(V[7], V[8], Jm, Jr, rho, Y, off, rad)
 
 
@@ -242,7 +242,7 @@ def prove_path(tables, T0, x0, x1, l0, l1, structured, work):
         if not _inside(x1, zero, box, prev_c, prev_rho):
             break
         if structured:
-            ok = krawczyk_blocks(YFm, YFr, rows, blocks, box, off, rad)
+            ok = krawczyk_blocks(YFm, YFr, Jr, rows, blocks, box, off, rad)
         else:
             ok = krawczyk(YFm, YFr, Jm, Jr, box, Y, off, rad)
         if ok:

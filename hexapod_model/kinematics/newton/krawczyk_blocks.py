@@ -21,25 +21,27 @@ point matrices built once per test from the Jacobian's midpoint at ``xc``:
   ``[A_i | a_i]`` (its free joints and its held prismatic joint ``a_i``): ``L_i A_i ~ [I; 0]``,
   its last row ``n_i`` a left null vector of ``A_i``, and ``S = [n_i B_i]`` (6 x 6) the
   platform's Jacobian of the held joints (the Schur complement of the legs' blocks);
-* ``Y2 = [[I, -G Z], [0, Z]]`` (the legs' first m rows, then the six ``n_i`` rows), ``G`` the
-  midpoints of ``L_i B_i``'s first m rows and ``Z ~ S^-1`` (6 x 6): block elimination of the
-  platform unknowns, so that ``Y ~ J(xc)^-1`` as the dense test's.
+* ``Y2 = [[I, -W], [0, Z]]`` (the legs' first m rows, then the six ``n_i`` rows), ``Z ~ S^-1``
+  (6 x 6) and ``W = G Z`` rounded, ``G`` the midpoints of ``L_i B_i``'s first m rows: block
+  elimination of the platform's unknowns, so that ``Y ~ J(xc)^-1`` as the dense test's.
 
-**The bound.** With ``M = L J(X)`` enclosed leg by leg (``r x (m + 6)`` intervals per leg,
-re-centred so that its (own rows, platform columns) midpoints are exactly ``G``), every real
-matrix ``A`` of the interval matrix ``J(X)`` has ``L A`` in ``M`` and
+**The bound.** Every real matrix ``A`` of the interval matrix ``J(X) = mid(J) +- rad(J)`` has
 
-    |I - Y A| <= |I - Y2 mid(M)| + |Y2| rad(M),
-    I - Y2 mid(M) = [[-E11 + G Z E21, -G R], [-Z E21, R]],   R = I - Z mid(S),
+    |I - Y A| <= |I - Y mid(J)| + |Y| rad(J),   Y mid(J) = Y2 M,  M = L mid(J) in Mm +- Mr,
+    |I - Y2 Mm| = |[[-E11 + W E21, -(G - W S)], [-Z E21, I - Z S]]|,
 
-``E11 = mid(M)``'s own block minus ``I``, ``E21`` its ``n_i`` rows' own columns: all small.
-:func:`krawczyk_blocks` evaluates ``|I - Y J(X)| rho`` from these as products of non-negative
-matrices and vectors (6 legs' r x (m + 6) blocks and 6 x 6 ones), every sum raised by the
-rounding allowance of :mod:`.intervals`, and ``Y F(xc)`` through ``L`` and ``Y2`` in
-midpoint-radius arithmetic (:func:`apply`): the same enclosures as the dense test's, so the same
-proof, at the cost of a few small blocks instead of 36 x 36 products (Rump, "Verification
-methods: rigorous results using floating-point arithmetic", Acta Numerica 19, 2010, sec. 10,
-on preconditioning with any approximate inverse). Work arrays come from :func:`workspace`.
+with ``M`` computed leg by leg (``r x (m + 6)`` per leg; ``Mr`` its rounding, its own rows'
+platform columns re-centred on ``G``), ``E11`` its own block minus ``I``, ``E21`` its ``n_i``
+rows' own columns, ``S`` their platform columns: all small. :func:`krawczyk_blocks` evaluates
+``|I - Y J(X)| rho <= |I - Y2 Mm| rho + |Y2| Mr rho + |Y| (rad(J) rho)`` with non-negative
+products of the 6 legs' blocks and 6 x 6 matrices, ``rad(J) rho`` by the block-arrow pattern and
+``|Y|`` (a bound of each entry of the exact ``Y2 L``, formed once per test in O(nf^2)): the
+radius term is as tight as the dense test's ``|Y| rad(J)``. ``Y F(xc)`` goes through ``L`` and
+``Y2`` in midpoint-radius arithmetic (:func:`apply`). Every sum is raised by the rounding
+allowance of :mod:`.intervals`. The cost is a few small blocks and O(nf^2) products instead of
+36 x 36 matrix products and a dense inverse (Rump, "Verification methods: rigorous results
+using floating-point arithmetic", Acta Numerica 19, 2010, sec. 10, on preconditioning with any
+approximate inverse). Work arrays come from :func:`workspace`.
 """
 
 from __future__ import annotations
@@ -47,28 +49,31 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .intervals import REL, up
+from .intervals import REL, UP, up
 from .linalg import lu_factor_in_place, lu_solve_in_place
 
 
 def workspace(rows: int) -> tuple:
     """The work arrays of the structured test for legs of ``rows`` closure rows (6 or 3)."""
-    m = rows - 1
+    m, nf = rows - 1, 6 * rows
     return (
         np.zeros((6, rows, rows)),  # L: the legs' left factors
-        np.zeros((6, m, 6)),  # G: midpoints of L_i B_i's own rows
+        np.zeros((6, m, 6)),  # W = G Z (rounded: Y2 is whatever matrix it holds)
         np.zeros((6, 6)),  # Z ~ S^-1
-        np.zeros((6, rows, m + 6)),  # Mm: L J(X), midpoints (own columns, then the platform's)
-        np.zeros((6, rows, m + 6)),  # Mr: its radii
+        np.zeros((6, rows, m + 6)),  # Mm: L mid(J) (own columns, then the platform's)
+        np.zeros((6, rows, m + 6)),  # Mr: its rounding (and re-centring)
         np.zeros((6, 6)),  # LU scratch
         np.zeros(6, dtype=np.int64),  # pivots
         np.zeros(6),  # a column
         np.zeros((6, 6)),  # R: |I - Z S| bound
-        np.zeros((6, rows)),  # u: midpoints of L v
-        np.zeros((6, rows)),  # its radii
+        np.zeros((6, rows)),  # u: L v
+        np.zeros((6, rows)),  # its rounding
         np.zeros(6),  # six-vectors
         np.zeros(6),
-        np.zeros(6),
+        np.zeros(nf),  # nf-vectors
+        np.zeros((6, m, 6)),  # G: midpoints of L_i B_i's own rows
+        np.zeros((nf, nf)),  # |Y|: a bound of Y2 L's magnitudes
+        np.zeros((6, m, 6)),  # D: |G - W S| bound
     )
 
 
@@ -93,12 +98,15 @@ def _invert(A, n, LU, piv, col, out):
 
 @njit(cache=True)
 def setup(Jm, rows, ws):
-    """The preconditioner ``Y = Y2 L`` from the Jacobian's midpoints ``Jm`` (nf x nf + 6); False when singular."""
-    L, G, Z, _, _, LU, piv, col, R, _, _, _, _, _ = ws
+    """The preconditioner ``Y = Y2 L`` from the Jacobian's midpoints ``Jm`` (nf x nf + 6); False when singular.
+
+    Also ``|Y|``: an upper bound of the magnitude of each entry of the exact product ``Y2 L``.
+    """
+    L, W, Z, _, _, LU, piv, col, R, _, _, _, _, _, G, aY, _ = ws
     m = rows - 1
     nf = Jm.shape[0]
     nl = 6 * m
-    A = R  # scratch (R is recomputed per box)
+    A = R  # scratch
     for i in range(6):
         o, c = i * rows, i * m
         for a in range(rows):
@@ -119,13 +127,33 @@ def setup(Jm, rows, ws):
                     G[i, a, b] = s
                 else:
                     S[i, b] = s
-    return _invert(S, 6, LU, piv, col, Z)
+    if not _invert(S, 6, LU, piv, col, Z):
+        return False
+    for i in range(6):
+        for a in range(m):
+            for j in range(6):
+                s = 0.0
+                for k in range(6):
+                    s += G[i, a, k] * Z[k, j]
+                W[i, a, j] = s
+    for j in range(6):  # Y's columns of leg j's rows: own rows L_j - W L_n, platform rows Z L_n
+        for k in range(rows):
+            y = j * rows + k
+            n = L[j, m, k]
+            for i in range(6):
+                for a in range(m):
+                    t = W[i, a, j] * n
+                    d = L[j, a, k] if i == j else 0.0
+                    aY[i * m + a, y] = up(abs(d - t) + REL * (abs(d) + abs(t)))
+            for p in range(6):
+                aY[nl + p, y] = up(abs(Z[p, j] * n) * UP)
+    return True
 
 
 @njit(cache=True)
-def transform(Jm, Jr, rows, ws):
-    """``M = L J(X)`` leg by leg as midpoints and radii (its own rows' platform columns centred on ``G``)."""
-    L, G, _, Mm, Mr, _, _, _, _, _, _, _, _, _ = ws
+def transform(Jm, rows, ws):
+    """``L mid(J)`` leg by leg with its rounding (own rows' platform columns centred on ``G``), and ``R``, ``D``."""
+    L, W, Z, Mm, Mr, _, _, _, R, _, _, _, _, _, G, _, D = ws
     m = rows - 1
     nl = 6 * m
     for i in range(6):
@@ -133,54 +161,83 @@ def transform(Jm, Jr, rows, ws):
         for a in range(rows):
             for b in range(m + 6):
                 j = c + b if b < m else nl + b - m
-                t, s, r = 0.0, 0.0, 0.0
+                t, s = 0.0, 0.0
                 for k in range(rows):
                     p = L[i, a, k] * Jm[o + k, j]
                     t += p
                     s += abs(p)
-                    r += abs(L[i, a, k]) * Jr[o + k, j]
-                r = up(r + REL * s)
+                r = up(REL * s)
                 if a < m and b >= m:  # re-centred on G (exact: the midpoint moved, the radius grew)
                     g = G[i, a, b - m]
                     r = up(r + abs(t - g) + REL * (abs(t) + abs(g)))
                     t = g
                 Mm[i, a, b], Mr[i, a, b] = t, r
+    for a in range(6):  # R = |I - Z S|, S = the n rows' platform columns
+        for b in range(6):
+            t, s = 1.0 if a == b else 0.0, 0.0
+            for k in range(6):
+                q = Z[a, k] * Mm[k, m, m + b]
+                t -= q
+                s += abs(q)
+            R[a, b] = up(abs(t) + REL * (s + 1.0))
+    for i in range(6):  # D = |G - W S|
+        for a in range(m):
+            for b in range(6):
+                t, s = G[i, a, b], abs(G[i, a, b])
+                for k in range(6):
+                    q = W[i, a, k] * Mm[k, m, m + b]
+                    t -= q
+                    s += abs(q)
+                D[i, a, b] = up(abs(t) + REL * s)
+
+
+@njit(cache=True)
+def _magnitudes(aY, v, w):
+    """``w = |Y| v`` (upper bound; ``v >= 0``)."""
+    n = v.shape[0]
+    for a in range(n):
+        s = 0.0
+        for b in range(n):
+            s += aY[a, b] * v[b]
+        w[a] = up(s)
 
 
 @njit(cache=True)
 def apply(ws, rows, vm, vr, wm, wr):
     """``wm +- wr`` (nf,) encloses ``Y v`` for every ``v`` in ``vm +- vr`` (nf,)."""
-    L, G, Z, _, _, _, _, _, _, um, ur, pm, pr, _ = ws
+    L, W, Z, _, _, _, _, _, _, um, ur, _, _, _, _, aY, _ = ws
     m = rows - 1
     nl = 6 * m
-    for i in range(6):
+    _magnitudes(aY, vr, wr)
+    for i in range(6):  # u = L vm, with its rounding
         o = i * rows
         for a in range(rows):
-            t, s, r = 0.0, 0.0, 0.0
+            t, s = 0.0, 0.0
             for k in range(rows):
                 p = L[i, a, k] * vm[o + k]
                 t += p
                 s += abs(p)
-                r += abs(L[i, a, k]) * vr[o + k]
-            um[i, a], ur[i, a] = t, up(r + REL * s)
-    for a in range(6):  # p = Z u_n: the platform's rows
+            um[i, a], ur[i, a] = t, up(REL * s)
+    for a in range(6):  # the platform's rows: Z u_n
         t, s, r = 0.0, 0.0, 0.0
         for j in range(6):
             p = Z[a, j] * um[j, m]
             t += p
             s += abs(p)
             r += abs(Z[a, j]) * ur[j, m]
-        pm[a], pr[a] = t, up(r + REL * s)
-        wm[nl + a], wr[nl + a] = pm[a], pr[a]
-    for i in range(6):  # the legs' own rows: u_own - G p
+        wm[nl + a] = t
+        wr[nl + a] = up(wr[nl + a] + up(r + REL * s))
+    for i in range(6):  # the legs' own rows: u_own - W u_n
         for a in range(m):
             t, s, r = um[i, a], abs(um[i, a]), ur[i, a]
-            for b in range(6):
-                p = G[i, a, b] * pm[b]
+            for j in range(6):
+                p = W[i, a, j] * um[j, m]
                 t -= p
                 s += abs(p)
-                r += abs(G[i, a, b]) * pr[b]
-            wm[i * m + a], wr[i * m + a] = t, up(r + REL * s)
+                r += abs(W[i, a, j]) * ur[j, m]
+            x = i * m + a
+            wm[x] = t
+            wr[x] = up(wr[x] + up(r + REL * s))
 
 
 @njit(cache=True)
@@ -194,51 +251,50 @@ def preconditioned(ws, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr):
         tr[a] = up(Fr[a] + gr[a])
     apply(ws, rows, Fm, tr, YFm, YFr)
     tr[:] = 0.0
-    apply(ws, rows, gm, tr, tm, gr)  # gr: free once added above
+    apply(ws, rows, gm, tr, tm, gr)
     for a in range(nf):
         YFr[a] = up(YFr[a] + up(abs(tm[a]) + gr[a]) * half)
 
 
 @njit(cache=True)
-def krawczyk_blocks(YFm, YFr, rows, ws, rho, off, rad):
-    """One Krawczyk test of the box ``xc +- rho`` with ``M`` of :func:`transform` (see the module doc).
+def krawczyk_blocks(YFm, YFr, Jr, rows, ws, rho, off, rad):
+    """One Krawczyk test of the box ``xc +- rho`` (``Jr``: the Jacobian's radii over it; see the module doc).
 
-    Writes ``K = xc + off +- rad`` and returns True when ``K`` lies in the interior of the box.
+    Needs :func:`transform` of the Jacobian's midpoint. Writes ``K = xc + off +- rad`` and
+    returns True when ``K`` lies in the interior of the box.
     """
-    _, G, Z, Mm, Mr, _, _, _, R, _, _, u, p, zu = ws
+    _, W, Z, Mm, Mr, _, _, _, R, _, _, u, zu, t, _, aY, D = ws
     m = rows - 1
     nl = 6 * m
-    for a in range(6):  # R = |I - Z S|, S = mid(M)'s n rows
-        for b in range(6):
-            t, s = 1.0 if a == b else 0.0, 0.0
-            for k in range(6):
-                q = Z[a, k] * Mm[k, m, m + b]
-                t -= q
-                s += abs(q)
-            R[a, b] = up(abs(t) + REL * (s + 1.0))
-    for j in range(6):  # u = |E21| rho_own + rad(M)'s n rows rho
+    for i in range(6):  # t = rad(J) rho (the block-arrow pattern), then |Y| t into rad
+        o, c = i * rows, i * m
+        for a in range(rows):
+            s = 0.0
+            for b in range(m):
+                s += Jr[o + a, c + b] * rho[c + b]
+            for b in range(6):
+                s += Jr[o + a, nl + b] * rho[nl + b]
+            t[o + a] = up(s)
+    _magnitudes(aY, t, rad)
+    for j in range(6):  # u = |E21| rho_own + the n rows' rounding times rho
         s = 0.0
         for b in range(m):
             s += (abs(Mm[j, m, b]) + Mr[j, m, b]) * rho[j * m + b]
         for b in range(6):
             s += Mr[j, m, m + b] * rho[nl + b]
         u[j] = up(s)
-    for a in range(6):  # p = |R| rho_p
-        s = 0.0
-        for b in range(6):
-            s += R[a, b] * rho[nl + b]
-        p[a] = up(s)
     ok = True
-    for a in range(6):  # the platform's rows: |Z| u + p
-        s = p[a]
+    for a in range(6):  # the platform's rows: |Z| u + |R| rho_p
+        s = 0.0
         for j in range(6):
-            s += abs(Z[a, j]) * u[j]
+            s += abs(Z[a, j]) * u[j] + R[a, j] * rho[nl + j]
         zu[a] = up(s)
-        off[nl + a] = -YFm[nl + a]
-        rad[nl + a] = up(zu[a] + YFr[nl + a])
-        if not up(abs(off[nl + a]) + rad[nl + a]) < rho[nl + a]:
+        x = nl + a
+        off[x] = -YFm[x]
+        rad[x] = up(up(rad[x] + zu[a]) + YFr[x])
+        if not up(abs(off[x]) + rad[x]) < rho[x]:
             ok = False
-    for i in range(6):  # the legs' own rows: |E11| rho_own + rad(M) rho + |G| (|Z| u + p)
+    for i in range(6):  # the legs' own rows: |E11| rho_own + rounding rho + |W| u + |D| rho_p
         for a in range(m):
             s = 0.0
             for b in range(m):
@@ -246,10 +302,10 @@ def krawczyk_blocks(YFm, YFr, rows, ws, rho, off, rad):
                 e = up(abs(e - 1.0) + REL * (abs(e) + 1.0)) if a == b else abs(e)
                 s += (e + Mr[i, a, b]) * rho[i * m + b]
             for b in range(6):
-                s += Mr[i, a, m + b] * rho[nl + b] + abs(G[i, a, b]) * zu[b]
+                s += Mr[i, a, m + b] * rho[nl + b] + abs(W[i, a, b]) * u[b] + D[i, a, b] * rho[nl + b]
             x = i * m + a
             off[x] = -YFm[x]
-            rad[x] = up(up(s) + YFr[x])
+            rad[x] = up(up(rad[x] + up(s)) + YFr[x])
             if not up(abs(off[x]) + rad[x]) < rho[x]:
                 ok = False
     return ok
