@@ -113,7 +113,7 @@ def test_the_block_kernels_run_as_python_give_the_compiled_answers():
         assert f(krawczyk_blocks.setup)(Jm, rows, ws)
         f(krawczyk_blocks.transform)(Jm, rows, ws)
         YFm, YFr, tm, tr = np.empty(nf), np.empty(nf), np.empty(nf), np.empty(nf)
-        f(krawczyk_blocks.preconditioned)(ws, rows, V[0], V[1], V[5].copy(), V[6].copy(), 0.5, YFm, YFr, tm, tr)
+        f(krawczyk.preconditioned_blocks)(ws, rows, V[0], V[1], V[5].copy(), V[6].copy(), 0.5, YFm, YFr, tm, tr)
         o, r = np.empty(nf), np.empty(nf)
         ok = f(krawczyk_blocks.krawczyk_blocks)(YFm, YFr, Jr, rows, ws, rho, o, r)
         results.append((ok, o, r, ws[3], ws[4]))

@@ -35,7 +35,7 @@ from numba import njit
 
 from .enclosure import enclose_into, enclosure_workspace
 from .intervals import REL, up
-from .krawczyk_blocks import apply, krawczyk_blocks, preconditioned, setup, transform
+from .krawczyk_blocks import apply, krawczyk_blocks, setup, transform
 from .krawczyk_blocks import workspace as workspace_blocks
 from .krawczyk_dense import inverse, krawczyk, preconditioned_dense
 
@@ -61,6 +61,22 @@ def _path_term(Jm, Jr, dl, half, e, gm, gr):
             gm[a] += t
             gr[a] += Jr[a, nf + i] * abs(dl[i]) * half + REL * abs(t) * half
             gr[a] += (abs(Jm[a, nf + i]) + Jr[a, nf + i]) * e[i]
+
+
+@njit(cache=True)
+def preconditioned_blocks(ws, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr):
+    """``Y F(xc, S)`` as midpoint and radius, ``F in Fm +- (Fr + gr) + gm [-half, half]`` (:func:`_path_term`).
+
+    ``tm``, ``tr`` (nf,) are scratch, and so is ``gr`` once read.
+    """
+    nf = Fm.shape[0]
+    for a in range(nf):
+        tr[a] = up(Fr[a] + gr[a])
+    apply(ws, rows, Fm, tr, YFm, YFr)
+    tr[:] = 0.0
+    apply(ws, rows, gm, tr, tm, gr)
+    for a in range(nf):
+        YFr[a] = up(YFr[a] + up(abs(tm[a]) + gr[a]) * half)
 
 
 def workspace(nf: int, rows: int) -> tuple:
@@ -108,7 +124,7 @@ def _path_enclosure(tables, hm, dl, half, structured, work):
         e[i] = REL * (abs(hm[i]) + abs(dl[i]))  # hm's rounding
     _path_term(Jm, Jr, dl, half, e, gm, gr)
     if structured:
-        preconditioned(blocks, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr)
+        preconditioned_blocks(blocks, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr)
     else:
         YFm[:], YFr[:] = preconditioned_dense(Y, Fm, Fr, gm, gr, half)
 

@@ -1,11 +1,10 @@
 """The Krawczyk test on the block-arrow structure of the closure Jacobian (per-leg Schur form).
 
 The closure Jacobian ``J`` of :mod:`.enclosure` has, in each leg's ``r`` rows (6, or 3 for point
-closures), nonzero entries only in that leg's ``m = r - 1`` free joints and the six chart
-coordinates of the platform: ``J = [diag(A_i) | B]``, ``A_i`` (r x m), ``B_i`` (r x 6), a
-block-arrow matrix (every other entry is an exact zero of the enclosure: a leg's closure does
-not depend on another leg's joints). The dense test of :mod:`.krawczyk` multiplies 36 x 36
-interval matrices; this one works leg by leg.
+closures), nonzero entries only in that leg's ``m = r - 1`` free joints and the platform's six
+chart coordinates: ``J = [diag(A_i) | B]``, ``A_i`` (r x m), ``B_i`` (r x 6), a block-arrow
+matrix (every other entry is an exact zero: a leg's closure does not depend on another leg's
+joints). The dense test (:mod:`.krawczyk_dense`) multiplies 36 x 36 interval matrices.
 
 **The preconditioner.** Krawczyk's operator
 
@@ -68,9 +67,9 @@ def workspace(rows: int) -> tuple:
         np.zeros((6, 6)),  # R: |I - Z S| bound
         np.zeros((6, rows)),  # u: L v
         np.zeros((6, rows)),  # its rounding
-        np.zeros(6),  # six-vectors
+        np.zeros(6),  # six-vectors, then an nf-vector
         np.zeros(6),
-        np.zeros(nf),  # nf-vectors
+        np.zeros(nf),
         np.zeros((6, m, 6)),  # G: midpoints of L_i B_i's own rows
         np.zeros((nf, nf)),  # |Y|: a bound of Y2 L's magnitudes
         np.zeros((6, m, 6)),  # D: |G - W S| bound
@@ -238,22 +237,6 @@ def apply(ws, rows, vm, vr, wm, wr):
             x = i * m + a
             wm[x] = t
             wr[x] = up(wr[x] + up(r + REL * s))
-
-
-@njit(cache=True)
-def preconditioned(ws, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr):
-    """``Y F(xc, S)`` as midpoint and radius, ``F in Fm +- (Fr + gr) + gm [-half, half]`` (:mod:`.krawczyk`).
-
-    ``tm``, ``tr`` (nf,) are scratch, and so is ``gr`` once read.
-    """
-    nf = Fm.shape[0]
-    for a in range(nf):
-        tr[a] = up(Fr[a] + gr[a])
-    apply(ws, rows, Fm, tr, YFm, YFr)
-    tr[:] = 0.0
-    apply(ws, rows, gm, tr, tm, gr)
-    for a in range(nf):
-        YFr[a] = up(YFr[a] + up(abs(tm[a]) + gr[a]) * half)
 
 
 @njit(cache=True)
