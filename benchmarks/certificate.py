@@ -18,7 +18,8 @@ Then the **proof** (``Hexapod.prove_step``, the Krawczyk test of
 :mod:`hexapod_model.kinematics.newton.krawczyk`) along trajectories A and B
 (:func:`hexapod_model.analysis.trajectories.trajectory_poses`, scaled to the preset, sampled at
 1 kHz, the first ``K`` samples): per preset and trajectory the fraction of warm steps proven,
-the median subdivisions, the median time of the warm solve and of its proof, and beside them the
+the median subdivisions, the median time of the warm solve and of its proof (the per-leg test,
+and beside it the dense reference test on the same solves, with its proven fraction), and the
 floor (``floor_newton.fk_newton``, the reference Newton iteration in one njit function, on the
 offset-Cardan presets whose legs it reads) on the same readings.
 """
@@ -106,22 +107,40 @@ def floor_times(hexa: Hexapod, readings: np.ndarray) -> list[float]:
 
 
 def trajectory_proofs(name: str, which: str, samples: int) -> dict:
-    """Proven fraction and per-step medians (us) of warm solves along trajectory ``which`` at 1 kHz."""
+    """Proven fractions and per-step medians (us) of warm solves along trajectory ``which`` at 1 kHz.
+
+    Each warm step is proven by ``Hexapod.prove_step`` (the per-leg Krawczyk test), then on the same
+    solve by ``StepProver.prove`` with the per-leg test and with the dense reference test
+    (``structured=False``), side by side without the facade.
+    """
     hexa = Hexapod.load(name)
+    prover = hexa.engine.prover
     _, poses = trajectory_poses(which, hexa.home_pose, hexa.base_radius / 50.0, 1000.0)
     ik = hexa.inverse_batch(poses[:samples])
     inside = np.asarray(ik.converged, dtype=bool)
     stop = int(np.argmin(inside)) if not inside.all() else len(inside)  # up to the first pose outside the limits
     readings = ik.lengths[:stop]
     sol = hexa.forward(readings[0], check=False)
-    hexa.prove_step(sol, hexa.forward(readings[1], sol, check=False))  # compile / warm up
-    solve_t, proof_t, proven, parts = [], [], 0, []
+    first = hexa.forward(readings[1], sol, check=False)  # compile / warm up
+    hexa.prove_step(sol, first)
+    if prover is not None:
+        prover.prove(hexa.engine.start(sol), first.q, structured=False)
+    solve_t, proof_t, blocks_t, dense_t, proven, dense_proven, parts = [], [], [], [], 0, 0, []
     for x in readings[1:]:
         t0 = time.perf_counter()
         nxt = hexa.forward(x, sol, check=False)
         t1 = time.perf_counter()
         checked = hexa.prove_step(sol, nxt)
         t2 = time.perf_counter()
+        if prover is not None and nxt.closed:
+            start = hexa.engine.start(sol)
+            t3 = time.perf_counter()
+            prover.prove(start, nxt.q)
+            t4 = time.perf_counter()
+            dense = prover.prove(start, nxt.q, structured=False)
+            blocks_t.append(t4 - t3)
+            dense_t.append(time.perf_counter() - t4)
+            dense_proven += dense.proven
         solve_t.append(t1 - t0)
         proof_t.append(t2 - t1)
         if checked.proof is not None and checked.proof.proven:
@@ -134,9 +153,12 @@ def trajectory_proofs(name: str, which: str, samples: int) -> dict:
         "steps": n,
         "outside_from": stop if stop < len(inside) else None,
         "proven_fraction": proven / n if n else float("nan"),
+        "dense_proven_fraction": dense_proven / n if n else float("nan"),
         "median_subdivisions": float(np.median(parts)) if parts else float("nan"),
         "solve_median_us": float(np.median(solve_t) * 1e6),
         "proof_median_us": float(np.median(proof_t) * 1e6),
+        "blocks_proof_median_us": float(np.median(blocks_t) * 1e6) if blocks_t else float("nan"),
+        "dense_proof_median_us": float(np.median(dense_t) * 1e6) if dense_t else float("nan"),
         "floor_median_us": float(np.median(floor) * 1e6) if floor else float("nan"),
     }
 
@@ -152,13 +174,16 @@ def main(argv=None) -> int:
     for name in args.presets:
         for which in ("A", "B"):
             t = trajectory_proofs(name, which, args.trajectory_samples)
+            ratio = (t["solve_median_us"] + t["proof_median_us"]) / t["floor_median_us"]
             print(
                 f"{name:12s} trajectory {which} at 1 kHz: {t['steps']} warm steps"
                 + (f" (sample {t['outside_from']} onwards outside the limits)" if t["outside_from"] is not None else "")
-                + ", proven "
-                f"{100 * t['proven_fraction']:.2f} % (median {t['median_subdivisions']:g} sub-intervals); "
-                f"warm solve {t['solve_median_us']:.1f} us + proof {t['proof_median_us']:.1f} us; "
-                f"floor {t['floor_median_us']:.1f} us (medians)",
+                + f", proven {100 * t['proven_fraction']:.2f} % (dense test {100 * t['dense_proven_fraction']:.2f} %; "
+                f"median {t['median_subdivisions']:g} sub-intervals); warm solve {t['solve_median_us']:.1f} us "
+                f"+ proof {t['proof_median_us']:.1f} us "
+                f"(StepProver.prove: per-leg {t['blocks_proof_median_us']:.1f} us, "
+                f"dense {t['dense_proof_median_us']:.1f} us); "
+                f"floor {t['floor_median_us']:.1f} us (medians); (solve + proof) / floor {ratio:.1f}",
                 flush=True,
             )
     for name in args.presets:

@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hexapod_model.kinematics.newton.intervals import REL, enclose, motion, product
+from hexapod_model.kinematics.newton.enclosure import enclose
+from hexapod_model.kinematics.newton.intervals import REL, motion, product, times_motion, times_point
 from hexapod_model.kinematics.newton.proof import StepProver
 from hexapod_model.lie import rpy_to_matrix
 
@@ -68,6 +69,57 @@ def test_the_primitives_enclose_the_exact_values_of_an_mpmath_reference():
                 if b == 3:
                     exact += _iv(Am[a, 3], Ar[a, 3])
                 assert _inside(exact, Cm[a, b], Cr[a, b]), (a, b)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_products_by_columns_enclose_the_exact_values_of_an_mpmath_reference(compiled):
+    # times_motion and times_point skip the exact zeros and ones of axis motions and identity rotations
+    iv.prec = 120
+    rng = np.random.default_rng(4)
+    tm, tp = (times_motion, times_point) if compiled else (times_motion.py_func, times_point.py_func)
+    scratch = np.empty((3, 4)), np.empty((3, 4))
+    for trial in range(24):
+        Am, Ar = rng.normal(size=(3, 4)), 10.0 ** rng.uniform(-12, -3, (3, 4))
+        j, sign, rotation = trial % 3, rng.choice([-1.0, 1.0]), trial % 2 == 0
+        S = np.zeros(6)
+        S[j + (3 if rotation else 0)] = sign
+        if trial % 8 == 7:  # any other direction: the general product
+            S[3 if rotation else 0 : 6 if rotation else 3] = rng.normal(size=3)
+            S /= np.linalg.norm(S)
+        xm, xr = rng.uniform(-3, 3), 10.0 ** rng.uniform(-9, -1)
+        Cm, Cr = np.empty((3, 4)), np.empty((3, 4))
+        tm(Am, Ar, S, xm, xr, Cm, Cr, *scratch)
+        x = _iv(xm, xr)
+        if rotation:
+            w = S[3:]
+            c, s = iv.cos(x), iv.sin(x)
+            K = [[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]]
+            M = [
+                [c * ((1 if a == b else 0) - w[a] * w[b]) + s * K[a][b] + w[a] * w[b] for b in range(3)]
+                for a in range(3)
+            ]
+            t = [0, 0, 0]
+        else:
+            M = [[iv.mpf(1 if a == b else 0) for b in range(3)] for a in range(3)]
+            t = [x * S[a] for a in range(3)]
+        for a in range(3):
+            for b in range(4):
+                col = [M[k][b] for k in range(3)] if b < 3 else t
+                exact = sum(_iv(Am[a, k], Ar[a, k]) * col[k] for k in range(3))
+                if b == 3:
+                    exact += _iv(Am[a, 3], Ar[a, 3])
+                assert _inside(exact, Cm[a, b], Cr[a, b]), (trial, a, b)
+        P = np.eye(4)
+        P[:3, 3] = rng.normal(size=3)
+        if trial % 3 == 0:
+            P[:3, :3] = rpy_to_matrix(*rng.uniform(-1, 1, 3))
+        tp(Am, Ar, P, Cm, Cr, *scratch)
+        for a in range(3):
+            for b in range(4):
+                exact = sum(_iv(Am[a, k], Ar[a, k]) * iv.mpf(P[k, b]) for k in range(3))
+                if b == 3:
+                    exact += _iv(Am[a, 3], Ar[a, 3])
+                assert _inside(exact, Cm[a, b], Cr[a, b]), (trial, a, b)
 
 
 def test_a_rounding_allowance_is_added_to_every_radius():

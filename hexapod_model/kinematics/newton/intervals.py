@@ -1,10 +1,9 @@
-"""Compiled midpoint-radius interval enclosures of the closure residual and its Jacobian over a box.
+"""Compiled midpoint-radius interval arithmetic of rigid placements (the primitives of :mod:`.enclosure`).
 
 An interval is a midpoint ``m`` and a radius ``r >= 0``: the set ``[m - r, m + r]`` of reals.
-The functions here evaluate the leg chains and the platform (as :mod:`.chains` does at a point,
-with the same formulas: ``oMi = oM_parent * M_i * exp(S_i q_i)``, the closure residual and its
-exact derivative of :mod:`.kernels`) for joint values given as intervals, and return intervals
-that are proven to contain the exact value for every point of the box.
+The functions here multiply placements (3 x 4: rotation, then translation) given as intervals
+and the exponentials of joint motions over an interval of joint values, and return intervals
+proven to contain the exact value for every point of their arguments.
 
 **Rounding.** numba cannot switch the rounding mode, so every operation is done in
 round-to-nearest and its radius is made rigorous by a bound of the rounding error (Rump's
@@ -18,13 +17,6 @@ with ``REL = 2^-40`` (above ``gamma_n`` for any ``n < 8000``; the sums here have
 terms, so it also covers the rounding of the radius' own sum) and ``ETA = 2^-1000`` (underflow).
 ``sin`` and ``cos`` (libm, within a few ulp) count an absolute error ``REL``; over an angle
 ``m +- r`` they are bounded by the mean-value form ``|cos(m + d) - cos m| <= min(r, |sin m| r + r^2/2)``.
-
-**The platform** is a chart around a fixed placement ``T0`` (the solver's platform pose):
-``T0 * Trans(v_0, v_1, v_2) * Rx(v_3) * Ry(v_4) * Rz(v_5)``, six one-dof joints of the same
-kind as the legs' (translations along ``T0``'s axes, m; rotations about the moving axes, rad).
-The unknowns are the legs' joints but the held one (each leg's prismatic joint, whose value is
-the reading) and the six chart coordinates: 6 (n - 1) + 6 of them, as many as the residual's
-rows (36 for 6-D closures, 18 for point closures).
 """
 
 from __future__ import annotations
@@ -90,7 +82,7 @@ def motion(S, xm, xr, Mm, Mr):
 
 
 @njit(cache=True, inline="always")
-def _point(M, Pm, Pr):
+def point(M, Pm, Pr):
     """The 4x4 homogeneous ``M`` as an interval placement of radius 0."""
     for a in range(3):
         for b in range(4):
@@ -99,166 +91,80 @@ def _point(M, Pm, Pr):
 
 
 @njit(cache=True, inline="always")
-def _column(Wm, Wr, S, dm, dr, Hm, Hr, rows, sign, Jm, Jr, row, col, wm, wr, vm, vr):
-    """Closure Jacobian column of the joint at world placement ``W`` with motion ``S``.
+def _axis(S):
+    """``(kind, j, sign)`` of a unit motion ``S = [v; w]`` along or about a coordinate axis ``j``.
 
-    ``[R v + (p - point) x R w; H R w]`` times ``sign``; ``d = p - point`` is given; ``wm``,
-    ``wr``, ``vm``, ``vr`` (3,) are scratch.
+    ``kind`` is 1 (translation along ``sign e_j``), 2 (rotation about ``sign e_j``) or 0 (any
+    other direction).
     """
-    for a in range(3):
-        m1, s1, r1, m2, s2, r2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        for k in range(3):
-            t1, t2 = Wm[a, k] * S[3 + k], Wm[a, k] * S[k]
-            m1 += t1
-            s1 += abs(t1)
-            r1 += Wr[a, k] * abs(S[3 + k])
-            m2 += t2
-            s2 += abs(t2)
-            r2 += Wr[a, k] * abs(S[k])
-        wm[a], wr[a] = m1, up(r1 + REL * s1)
-        vm[a], vr[a] = m2, up(r2 + REL * s2)
-    for a in range(3):
-        b, c = (a + 1) % 3, (a + 2) % 3  # (d x w)_a = d_b w_c - d_c w_b
-        t1, t2 = dm[b] * wm[c], dm[c] * wm[b]
-        m = vm[a] + t1 - t2
-        r = vr[a] + abs(dm[b]) * wr[c] + dr[b] * (abs(wm[c]) + wr[c])
-        r += abs(dm[c]) * wr[b] + dr[c] * (abs(wm[b]) + wr[b])
-        Jm[row + a, col] = sign * m
-        Jr[row + a, col] = up(r + REL * (abs(vm[a]) + abs(t1) + abs(t2)))
-    if rows == 6:
-        for a in range(3):
-            m, s, r = 0.0, 0.0, 0.0
-            for k in range(3):
-                t = Hm[a, k] * wm[k]
-                m += t
-                s += abs(t)
-                r += abs(Hm[a, k]) * wr[k] + Hr[a, k] * (abs(wm[k]) + wr[k])
-            Jm[row + 3 + a, col] = sign * m
-            Jr[row + 3 + a, col] = up(r + REL * s)
+    for j in range(6):
+        if S[j] != 0.0:
+            for k in range(j + 1, 6):
+                if S[k] != 0.0:
+                    return 0, 0, 0.0
+            if abs(S[j]) != 1.0:
+                return 0, 0, 0.0
+            return (1, j, S[j]) if j < 3 else (2, j - 3, S[j])
+    return 0, 0, 0.0
 
 
 @njit(cache=True)
-def _weights(Em, Er, transpose, Hm, Hr):
-    """``H = (tr(E) I - E)/2`` (tip side) or ``(tr(E) I - E^T)/2`` (anchor side), intervals."""
-    tm = Em[0, 0] + Em[1, 1] + Em[2, 2]
-    tr = up(Er[0, 0] + Er[1, 1] + Er[2, 2] + REL * (abs(Em[0, 0]) + abs(Em[1, 1]) + abs(Em[2, 2])))
+def times_point(Am, Ar, P, Cm, Cr, Mm, Mr):
+    """``C = A * P`` for an interval placement ``A`` and a point placement ``P`` (4x4).
+
+    When ``P``'s rotation is exactly the identity (most joint placements), the rotation is
+    copied exactly and only the translation is summed. ``Mm``, ``Mr`` (3, 4) are scratch.
+    """
     for a in range(3):
         for b in range(3):
-            e, er = (Em[b, a], Er[b, a]) if transpose else (Em[a, b], Er[a, b])
-            if a == b:
-                Hm[a, b] = 0.5 * (tm - e)
-                Hr[a, b] = up(0.5 * (tr + er) + REL * (abs(tm) + abs(e)))
-            else:
-                Hm[a, b] = -0.5 * e
-                Hr[a, b] = 0.5 * er  # exact: halving
+            if P[a, b] != (1.0 if a == b else 0.0):
+                point(P, Mm, Mr)
+                product(Am, Ar, Mm, Mr, Cm, Cr)
+                return
+    for a in range(3):
+        m, s, r = Am[a, 3], abs(Am[a, 3]), Ar[a, 3]
+        for k in range(3):
+            t = Am[a, k] * P[k, 3]
+            m += t
+            s += abs(t)
+            r += Ar[a, k] * abs(P[k, 3])
+            Cm[a, k], Cr[a, k] = Am[a, k], Ar[a, k]
+        Cm[a, 3], Cr[a, 3] = m, up(r + REL * s)
 
 
 @njit(cache=True)
-def enclose(placements, motions, closure, held, rows, T0, xm, xr, hm, hr, jacobian, Fm, Fr, Jm, Jr):
-    """Enclosures of the closure residual ``F`` (6 rows) and, if ``jacobian``, of its Jacobian.
+def times_motion(Am, Ar, S, xm, xr, Cm, Cr, Mm, Mr):
+    """``C = A * exp(S x)``, ``x = xm +- xr``: as :func:`motion` then :func:`product`, by columns for an axis.
 
-    Args:
-        placements: (6, n, 4, 4) joint placements (:class:`.legs.ChainTables`).
-        motions: (6, n, 6) motion subspaces.
-        closure: (12, 4, 4) tip, then anchor frames.
-        held: (6,) position of the held joint in each leg.
-        rows: 6 (6-D closures) or 3 (point closures).
-        T0: (4, 4) the platform chart's origin (world placement of the platform joint).
-        xm: (nf,) the unknowns' midpoints (leg joints but the held one, leg after leg, then the
-            six chart coordinates).
-        xr: (nf,) their radii.
-        hm: (6,) the held joints' midpoints (m).
-        hr: (6,) their radii (m).
-        jacobian: whether to fill ``Jm``, ``Jr`` (derivative of ``F`` in the unknowns).
-        Fm: (6 rows,) written: the residual's midpoints.
-        Fr: (6 rows,) written: its radii.
-        Jm: (6 rows, nf) written when ``jacobian``: the Jacobian's midpoints; with nf + 6
-            columns, the last six are the derivatives in the held joints (leg order).
-        Jr: (6 rows, nf or nf + 6) written when ``jacobian``: its radii.
+    A translation along a coordinate axis moves only the translation column; a rotation about
+    one mixes two columns by ``cos x`` and ``sin x`` (enclosed as in :func:`motion`). ``Mm``,
+    ``Mr`` (3, 4) are scratch.
     """
-    n = placements.shape[1]
-    nl = 6 * (n - 1)
-    nf = xm.shape[0]
-    Am, Ar, Bm, Br = np.empty((3, 4)), np.empty((3, 4)), np.empty((3, 4)), np.empty((3, 4))
-    Mm, Mr = np.empty((3, 4)), np.empty((3, 4))
-    Wm, Wr = np.empty((6, n, 3, 4)), np.empty((6, n, 3, 4))  # joints' world placements
-    Pm, Pr = np.empty((6, 3, 4)), np.empty((6, 3, 4))  # the chart's joints' world placements
-    tipm, tipr = np.empty((6, 3, 4)), np.empty((6, 3, 4))
-    ancm, ancr = np.empty((6, 3, 4)), np.empty((6, 3, 4))
-    chart = np.zeros((6, 6))
-    for j in range(3):
-        chart[j, j] = 1.0
-        chart[3 + j, 3 + j] = 1.0
-    _point(T0, Am, Ar)
-    for j in range(6):
-        motion(chart[j], xm[nl + j], xr[nl + j], Mm, Mr)
-        product(Am, Ar, Mm, Mr, Pm[j], Pr[j])
-        Am[:, :], Ar[:, :] = Pm[j], Pr[j]
-    for i in range(6):
-        _point(closure[6 + i], Mm, Mr)
-        product(Pm[5], Pr[5], Mm, Mr, ancm[i], ancr[i])
-        _point(placements[i, 0], Am, Ar)
-        v = i * (n - 1)
-        for k in range(n):
-            if k > 0:
-                _point(placements[i, k], Mm, Mr)
-                product(Am, Ar, Mm, Mr, Bm, Br)
-                Am[:, :], Ar[:, :] = Bm, Br
-            if k == held[i]:
-                motion(motions[i, k], hm[i], hr[i], Mm, Mr)
-            else:
-                motion(motions[i, k], xm[v], xr[v], Mm, Mr)
-                v += 1
-            product(Am, Ar, Mm, Mr, Wm[i, k], Wr[i, k])
-            Am[:, :], Ar[:, :] = Wm[i, k], Wr[i, k]
-        _point(closure[i], Mm, Mr)
-        product(Am, Ar, Mm, Mr, tipm[i], tipr[i])
-    Em, Er = np.empty((6, 3, 3)), np.empty((6, 3, 3))
-    for i in range(6):
-        o = i * rows
-        for a in range(3):
-            t, c = tipm[i, a, 3], ancm[i, a, 3]
-            Fm[o + a] = t - c
-            Fr[o + a] = up(tipr[i, a, 3] + ancr[i, a, 3] + REL * (abs(t) + abs(c)))
-        if rows == 6:
-            for a in range(3):
-                for b in range(3):
-                    m, s, r = 0.0, 0.0, 0.0
-                    for k in range(3):
-                        x, y = tipm[i, a, k], ancm[i, b, k]
-                        m += x * y
-                        s += abs(x * y)
-                        r += abs(x) * ancr[i, b, k] + tipr[i, a, k] * (abs(y) + ancr[i, b, k])
-                    Em[i, a, b], Er[i, a, b] = m, up(r + REL * s)
-            for a in range(3):
-                b, c = (a + 2) % 3, (a + 1) % 3  # e_R = vex(skew E): 0.5 (E[c, b] - E[b, c])
-                Fm[o + 3 + a] = 0.5 * (Em[i, b, c] - Em[i, c, b])
-                Fr[o + 3 + a] = up(0.5 * (Er[i, b, c] + Er[i, c, b]) + REL * (abs(Em[i, b, c]) + abs(Em[i, c, b])))
-    if not jacobian:
+    kind, j, sign = _axis(S)
+    if kind == 0:
+        motion(S, xm, xr, Mm, Mr)
+        product(Am, Ar, Mm, Mr, Cm, Cr)
         return
-    Jm[:, :] = 0.0
-    Jr[:, :] = 0.0
-    Hm, Hr, dm, dr = np.empty((3, 3)), np.empty((3, 3)), np.empty(3), np.empty(3)
-    wm, wr, vm, vr = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
-    for i in range(6):
-        o = i * rows
-        if rows == 6:
-            _weights(Em[i], Er[i], False, Hm, Hr)
-        v = i * (n - 1)
-        for k in range(n):
-            if k == held[i] and Jm.shape[1] == nf:
-                continue
-            for a in range(3):
-                dm[a] = Wm[i, k, a, 3] - tipm[i, a, 3]
-                dr[a] = up(Wr[i, k, a, 3] + tipr[i, a, 3] + REL * (abs(Wm[i, k, a, 3]) + abs(tipm[i, a, 3])))
-            c = nf + i if k == held[i] else v
-            _column(Wm[i, k], Wr[i, k], motions[i, k], dm, dr, Hm, Hr, rows, 1.0, Jm, Jr, o, c, wm, wr, vm, vr)
-            if k != held[i]:
-                v += 1
-        if rows == 6:
-            _weights(Em[i], Er[i], True, Hm, Hr)
-        for j in range(6):
-            for a in range(3):
-                dm[a] = Pm[j, a, 3] - ancm[i, a, 3]
-                dr[a] = up(Pr[j, a, 3] + ancr[i, a, 3] + REL * (abs(Pm[j, a, 3]) + abs(ancm[i, a, 3])))
-            _column(Pm[j], Pr[j], chart[j], dm, dr, Hm, Hr, rows, -1.0, Jm, Jr, o, nl + j, wm, wr, vm, vr)
+    if kind == 1:
+        t, tr = sign * xm, xr
+        for a in range(3):
+            p = Am[a, j] * t
+            m = Am[a, 3] + p
+            Cm[a, 3] = m
+            Cr[a, 3] = up(Ar[a, 3] + abs(Am[a, j]) * tr + Ar[a, j] * (abs(t) + tr) + REL * (abs(Am[a, 3]) + abs(p)))
+            for b in range(3):
+                Cm[a, b], Cr[a, b] = Am[a, b], Ar[a, b]
+        return
+    c, s = np.cos(xm), sign * np.sin(xm)
+    cr = up(min(xr, abs(s) * xr + 0.5 * xr * xr) + REL)
+    sr = up(min(xr, abs(c) * xr + 0.5 * xr * xr) + REL)
+    p, q = (j + 1) % 3, (j + 2) % 3  # R e_p = c e_p + s e_q, R e_q = -s e_p + c e_q
+    for a in range(3):
+        ap, aq, rp, rq = Am[a, p], Am[a, q], Ar[a, p], Ar[a, q]
+        t1, t2, t3, t4 = ap * c, aq * s, ap * s, aq * c
+        Cm[a, p] = t1 + t2
+        Cr[a, p] = up(abs(ap) * cr + rp * (abs(c) + cr) + abs(aq) * sr + rq * (abs(s) + sr) + REL * (abs(t1) + abs(t2)))
+        Cm[a, q] = t4 - t3
+        Cr[a, q] = up(abs(aq) * cr + rq * (abs(c) + cr) + abs(ap) * sr + rp * (abs(s) + sr) + REL * (abs(t3) + abs(t4)))
+        Cm[a, j], Cr[a, j] = Am[a, j], Ar[a, j]
+        Cm[a, 3], Cr[a, 3] = Am[a, 3], Ar[a, 3]

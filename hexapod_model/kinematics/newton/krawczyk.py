@@ -1,6 +1,6 @@
 """A compiled Krawczyk (interval Newton) proof that a readings path stays on one assembly.
 
-For the closure residual ``F(x, s)`` of direct kinematics (:mod:`.intervals`: the unknowns ``x``
+For the closure residual ``F(x, s)`` of direct kinematics (:mod:`.enclosure`: the unknowns ``x``
 are the legs' free joints and the platform's chart coordinates; the held prismatic joints move
 with the readings path ``l(s) = l0 + s (l1 - l0)``), a box ``X = xc +- rho`` and a parameter
 interval ``S = [s0, s1]``, the Krawczyk operator is
@@ -21,6 +21,11 @@ last box (whose Jacobian enclosure, over a larger box and parameter interval, ho
 Jacobian over it: inclusion isotonicity), gives the box that holds the exact solution the path
 ends at (the unique one of the last box at ``s = 1``).
 Each test tries ``INFLATIONS`` boxes (epsilon-inflation: ``rho <- 1.5 |K - xc|``).
+
+``Y`` is applied leg by leg (:mod:`.krawczyk_blocks`: each leg's block of the block-arrow
+Jacobian, then the 6 x 6 Schur complement onto the platform's unknowns), or, as the reference
+that the tests hold the structured test to, as a dense matrix (:mod:`.krawczyk_dense`): the
+same theorem with the same enclosures, proving the same statements.
 """
 
 from __future__ import annotations
@@ -28,108 +33,142 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .intervals import REL, enclose, up
-from .linalg import lu_factor_in_place, lu_solve_in_place
+from .enclosure import enclose_into, enclosure_workspace
+from .intervals import REL, up
+from .krawczyk_blocks import apply, krawczyk_blocks, setup, transform
+from .krawczyk_blocks import workspace as workspace_blocks
+from .krawczyk_dense import inverse, krawczyk, preconditioned_dense
 
 MAX_TESTS = 32  # Krawczyk tests per path (each sub-interval that fails is halved)
 MIN_WIDTH = 1.0 / 64.0  # narrowest sub-interval of the readings path tried
 INFLATIONS = 4  # boxes tried per test (epsilon-inflation)
+FLOOR = 0.05  # a first box's radius per unknown, at least this fraction of the largest one
 
 
 @njit(cache=True)
-def krawczyk(YFm, YFr, Jm, Jr, rho, Y, off, rad):
-    """One Krawczyk test of the box ``xc +- rho``.
+def _path_term(Jm, Jr, dl, half, e, gm, gr):
+    """The readings path's part of ``F(xc, S)``: ``J_held(xc, S) (dl (s - sm) + e)``, ``|s - sm| <= half``.
 
-    ``YFm +- YFr`` encloses ``Y F(xc, S)``, ``Jm +- Jr`` (its first nf columns) ``J(X, S)``; ``Y``
-    is the preconditioner (an approximate inverse of the Jacobian at ``xc``). Writes
-    ``K = xc + off +- rad`` and returns True when ``K`` lies in the interior of the box.
+    Writes ``gm`` (nf,) = ``J_held``'s midpoint times ``dl`` (the path's tangent, to be taken over
+    ``[-half, half]``) and ``gr`` (nf,) the radius of the rest; ``e`` the rounding of the held
+    joints' midpoint ``hm``.
     """
-    nf = YFm.shape[0]
-    aY = np.abs(Y)
-    Jf = np.ascontiguousarray(Jm[:, :nf])
-    YJ = Y @ Jf
-    Cr = aY @ (Jr[:, :nf] + REL * np.abs(Jf))  # J's radius and the product's rounding
-    ok = True
+    nf = gm.shape[0]
     for a in range(nf):
-        s = 0.0
-        for b in range(nf):
-            c = (1.0 if a == b else 0.0) - YJ[a, b]
-            s += (abs(c) + up(Cr[a, b] + REL * (abs(YJ[a, b]) + 1.0))) * rho[b]
-        off[a] = -YFm[a]
-        rad[a] = up(up(s) + YFr[a])
-        if not up(abs(off[a]) + rad[a]) < rho[a]:
-            ok = False
-    return ok
-
-
-@njit(cache=True)
-def _preconditioned(Y, Fm, Fr, Jm, Jr, dl, half, e):
-    """``Y F(xc, S)`` as midpoint and radius, by the mean-value form along the readings path.
-
-    ``F(xc, l(s)) in F(xc, hm) + J_held(xc, S) (dl (s - sm) + e)``, ``|s - sm| <= half``, ``e``
-    the rounding of the held joints' midpoint ``hm``: ``Y J_held dl`` is about the path's
-    tangent, so the readings' change is not spread over every unknown as ``|Y| |F|`` would.
-    """
-    nf = Fm.shape[0]
-    aY = np.abs(Y)
-    YFm = Y @ Fm
-    YFr = aY @ (Fr + REL * np.abs(Fm))
-    gm, gr = np.zeros(nf), np.zeros(nf)
-    for a in range(nf):
+        gm[a], gr[a] = 0.0, 0.0
         for i in range(6):
             t = Jm[a, nf + i] * dl[i]
             gm[a] += t
             gr[a] += Jr[a, nf + i] * abs(dl[i]) * half + REL * abs(t) * half
             gr[a] += (abs(Jm[a, nf + i]) + Jr[a, nf + i]) * e[i]
-    Yg = Y @ gm
-    YFr += aY @ gr + (np.abs(Yg) + REL * (aY @ np.abs(gm))) * half
-    for a in range(nf):
-        YFr[a] = up(YFr[a] + REL * abs(YFm[a]))
-    return YFm, YFr
 
 
 @njit(cache=True)
-def _inverse(J):
-    """``J^-1`` by the pivoted LU of :mod:`.linalg` (NaN when singular; any matrix serves as ``Y``)."""
-    nf = J.shape[0]
-    LU = J.copy()
-    piv = np.empty(nf, dtype=np.int64)
-    if lu_factor_in_place(LU, piv, nf) == 0.0:
-        return np.full((nf, nf), np.nan)
-    Y = np.zeros((nf, nf))
+def preconditioned_blocks(ws, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr):
+    """``Y F(xc, S)`` as midpoint and radius, ``F in Fm +- (Fr + gr) + gm [-half, half]`` (:func:`_path_term`).
+
+    ``tm``, ``tr`` (nf,) are scratch, and so is ``gr`` once read.
+    """
+    nf = Fm.shape[0]
     for a in range(nf):
-        Y[a, a] = 1.0
-        lu_solve_in_place(LU, piv, Y[a], nf)  # row a: column a of J^-1
-    return Y.T.copy()
+        tr[a] = up(Fr[a] + gr[a])
+    apply(ws, rows, Fm, tr, YFm, YFr)
+    tr[:] = 0.0
+    apply(ws, rows, gm, tr, tm, gr)
+    for a in range(nf):
+        YFr[a] = up(YFr[a] + up(abs(tm[a]) + gr[a]) * half)
+
+
+def workspace(nf: int, rows: int) -> tuple:
+    """The work arrays of :func:`prove_path` for ``nf`` unknowns and legs of ``rows`` closure rows."""
+    return (
+        np.zeros((21, nf)),  # vectors
+        np.zeros((nf, nf + 6)),  # Jm: the Jacobian's enclosure (and the held joints' columns)
+        np.zeros((nf, nf + 6)),  # Jr
+        np.zeros((nf, nf)),  # Y: the dense test's preconditioner
+        np.zeros((5, 6)),  # six-vectors
+        workspace_blocks(rows),
+        enclosure_workspace(nf // 6),  # legs of nf / 6 joints (6 (n - 1) + 6 unknowns)
+    )
 
 
 @njit(cache=True)
-def prove_box(tables, T0, xc, spread, hm, hr, dl, half, off, rad, rho, Jm, Jr, Y):
+def precondition(tables, T0, xc, hm, structured, work):
+    """``F(xc, hm)`` (``work``'s first two rows) and the preconditioner from the Jacobian at ``xc``, ``hm``.
+
+    The preconditioner is the inverse of the Jacobian's midpoint (the same at every box about
+    ``xc``), applied leg by leg (``structured``, :mod:`.krawczyk_blocks`) or as a dense matrix;
+    False when singular.
+    """
+    placements, motions, closure, held, rows = tables
+    V, Jm, Jr, Y, H, blocks, ew = work
+    zero, zero6 = V[4], H[1]
+    zero[:] = 0.0
+    zero6[:] = 0.0
+    enclose_into(placements, motions, closure, held, rows, T0, xc, zero, hm, zero6, True, V[0], V[1], Jm, Jr, ew)
+    if structured:
+        return setup(Jm, rows, blocks)
+    nf = xc.shape[0]
+    Y[:, :] = inverse(Jm[:, :nf])
+    return np.all(np.isfinite(Y))
+
+
+@njit(cache=True)
+def _path_enclosure(tables, hm, dl, half, structured, work):
+    """``Y F(xc, S)`` (``work``'s rows 7 and 8) with the Jacobian enclosure in ``work`` (see :func:`_path_term`)."""
+    rows = tables[4]
+    V, Jm, Jr, Y, H, blocks, ew = work
+    Fm, Fr, gm, gr, YFm, YFr, tm, tr = V[0], V[1], V[5], V[6], V[7], V[8], V[9], V[10]
+    e = H[0]
+    for i in range(6):
+        e[i] = REL * (abs(hm[i]) + abs(dl[i]))  # hm's rounding
+    _path_term(Jm, Jr, dl, half, e, gm, gr)
+    if structured:
+        preconditioned_blocks(blocks, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr)
+    else:
+        YFm[:], YFr[:] = preconditioned_dense(Y, Fm, Fr, gm, gr, half)
+
+
+@njit(cache=True)
+def try_box(tables, T0, xc, rho, hm, hr, dl, half, structured, work, off, rad):
+    """One Krawczyk test of the box ``xc +- rho`` over the held joints ``hm +- hr`` (after :func:`precondition`).
+
+    The Jacobian over the box (whose held columns hold them over ``xc`` and the path) gives
+    ``Y F(xc, S)`` and ``|I - Y J(X)| rho``; writes ``K = xc + off +- rad``; True when ``K``
+    lies in the interior of the box.
+    """
+    placements, motions, closure, held, rows = tables
+    V, Jm, Jr, Y, H, blocks, ew = work
+    enclose_into(placements, motions, closure, held, rows, T0, xc, rho, hm, hr, True, V[2], V[3], Jm, Jr, ew)
+    _path_enclosure(tables, hm, dl, half, structured, work)
+    if structured:
+        transform(Jm, rows, blocks)
+        return krawczyk_blocks(V[7], V[8], Jr, rows, blocks, rho, off, rad)
+    return krawczyk(V[7], V[8], Jm, Jr, rho, Y, off, rad)
+
+
+@njit(cache=True)
+def prove_box(tables, T0, xc, spread, hm, hr, dl, half, off, rad, rho, structured, work):
     """Krawczyk with epsilon-inflation around ``xc``; ``spread`` (nf,) is a first radius to cover.
 
     The held joints run over ``hm +- hr``, the path ``l0 + s dl`` with ``|s - sm| <= half``.
-    ``Y`` is the inverse of the Jacobian's midpoint at ``xc`` and ``hm``. Writes the last box
-    tried (``rho``), its ``K`` (``off``, ``rad``), the Jacobian's enclosure over it (``Jm``,
-    ``Jr``: nf + 6 columns) and ``Y``; True when proven.
+    Writes the last box tried (``rho``), its ``K`` (``off``, ``rad``) and, in ``work``, the
+    Jacobian's enclosure over it and the preconditioner; True when proven.
     """
-    placements, motions, closure, held, rows = tables
-    nf = xc.shape[0]
-    Fm, Fr, Gm, Gr = np.empty(nf), np.empty(nf), np.empty(nf), np.empty(nf)
-    zero = np.zeros(nf)
-    enclose(placements, motions, closure, held, rows, T0, xc, zero, hm, np.zeros(6), False, Fm, Fr, Jm, Jr)
-    enclose(placements, motions, closure, held, rows, T0, xc, zero, hm, hr, True, Gm, Gr, Jm, Jr)
-    Y[:, :] = _inverse(Jm[:, :nf])
-    if not np.all(np.isfinite(Y)):
+    if not precondition(tables, T0, xc, hm, structured, work):
         return False
-    e = np.empty(6)
-    for i in range(6):
-        e[i] = REL * (abs(hm[i]) + abs(dl[i]))  # hm's rounding
-    YFm, YFr = _preconditioned(Y, Fm, Fr, Jm, Jr, dl, half, e)
-    for a in range(nf):
-        rho[a] = spread[a] + 4.0 * (abs(YFm[a]) + YFr[a]) + 1e-12 * (1.0 + abs(xc[a]))  # room for the end box
+    V = work[0]
+    YFm, YFr = V[7], V[8]
+    nf = xc.shape[0]
+    _path_enclosure(tables, hm, dl, half, structured, work)  # with J at xc and hm only: the first box's size
+    big = 0.0
+    for a in range(nf):  # room for the end box
+        rho[a] = spread[a] + 4.0 * (abs(YFm[a]) + YFr[a]) + 1e-12 * (1.0 + abs(xc[a]))
+        big = max(big, rho[a])
+    for a in range(nf):  # room for the coupling |I - Y J(X)| rho of an unknown that hardly moves
+        rho[a] = max(rho[a], FLOOR * big)
     for _ in range(INFLATIONS):
-        enclose(placements, motions, closure, held, rows, T0, xc, rho, hm, hr, True, Gm, Gr, Jm, Jr)
-        if krawczyk(YFm, YFr, Jm, Jr, rho, Y, off, rad):
+        if try_box(tables, T0, xc, rho, hm, hr, dl, half, structured, work, off, rad):
             return True
         for a in range(nf):
             rho[a] = max(rho[a], 1.5 * (abs(off[a]) + rad[a]))
@@ -147,29 +186,34 @@ def _inside(c, off, rad, c2, rho2):
 
 
 @njit(cache=True)
-def prove_path(tables, T0, x0, x1, l0, l1):
+def prove_path(tables, T0, x0, x1, l0, l1, structured, work):
     """Prove that the readings path from ``x0`` (readings ``l0``) to ``x1`` (``l1``) stays on one assembly.
 
     Args:
-        tables: ``(placements, motions, closure, held, rows)`` (:func:`.intervals.enclose`).
+        tables: ``(placements, motions, closure, held, rows)`` (:func:`.enclosure.enclose_into`).
         T0: (4, 4) the platform chart's origin.
         x0: (nf,) the start in the unknowns' coordinates.
         x1: (nf,) the result.
         l0: (6,) the held joints' values at the start (m).
         l1: (6,) the held joints' values at the result (m).
+        structured: the per-leg test of :mod:`.krawczyk_blocks` (else the dense 36 x 36 one).
+        work: :func:`workspace` ``(nf, rows)``, overwritten.
 
     Returns:
         ``(proven, tests, radius, parts)`` (``tests``: the path's): ``radius`` (nf,) bounds ``|x - x1|`` for the unique
         exact solution ``x`` the path ends at (rad for the joints and the chart's rotations, m for
         its translations); ``tests`` the Krawczyk tests run; ``parts`` the sub-intervals of the
-        proven path.
+        proven path. ``radius`` is a row of ``work``.
     """
     nf = x0.shape[0]
-    off, rad, rho = np.empty(nf), np.empty(nf), np.empty(nf)
-    prev_c, prev_off, prev_rad, prev_rho = np.empty(nf), np.empty(nf), np.empty(nf), np.empty(nf)
-    hm, hr, xc, spread = np.empty(6), np.empty(6), np.empty(nf), np.empty(nf)
-    Jm, Jr, Y = np.empty((nf, nf + 6)), np.empty((nf, nf + 6)), np.empty((nf, nf))
-    dl = l1 - l0
+    V, Jm, Jr, Y, H, blocks, ew = work
+    Fm, Fr, zero, YFm, YFr = V[0], V[1], V[4], V[7], V[8]
+    off, rad, rho, prev_c, prev_off, prev_rad, prev_rho = V[11], V[12], V[13], V[14], V[15], V[16], V[17]
+    xc, spread, box = V[18], V[19], V[20]
+    hm, hr, dl = H[2], H[3], H[4]
+    placements, motions, closure, held, rows = tables
+    for i in range(6):
+        dl[i] = l1[i] - l0[i]
     tests, parts, s0, width = 0, 0, 0.0, 1.0
     while s0 < 1.0:
         s1 = min(1.0, s0 + width)
@@ -182,9 +226,10 @@ def prove_path(tables, T0, x0, x1, l0, l1):
             xc[a] = x0[a] + sm * d
             spread[a] = half * abs(d)
         tests += 1
-        ok = prove_box(tables, T0, xc, spread, hm, hr, dl, half, off, rad, rho, Jm, Jr, Y)
+        ok = prove_box(tables, T0, xc, spread, hm, hr, dl, half, off, rad, rho, structured, work)
+        zero[:] = 0.0
         if ok and s0 == 0.0:  # the start must lie in the first box
-            ok = _inside(x0, np.zeros(nf), np.zeros(nf), xc, rho)
+            ok = _inside(x0, zero, zero, xc, rho)
         if ok and s0 > 0.0:  # chained to the box before
             ok = _inside(prev_c, prev_off, prev_rad, xc, rho) or _inside(xc, off, rad, prev_c, prev_rho)
         if ok:
@@ -199,20 +244,24 @@ def prove_path(tables, T0, x0, x1, l0, l1):
         if tests >= MAX_TESTS and s0 < 1.0:
             return False, tests, rho, 0
     # the end: a box about x1 inside the last one, whose Jacobian enclosure holds J over it at s = 1
-    placements, motions, closure, held, rows = tables
-    Fm, Fr = np.empty(nf), np.empty(nf)
-    enclose(placements, motions, closure, held, rows, T0, x1, np.zeros(nf), l1, np.zeros(6), False, Fm, Fr, Jm, Jr)
-    YFm = Y @ Fm
-    YFr = np.abs(Y) @ (Fr + REL * np.abs(Fm))
-    box = np.empty(nf)
+    H[1][:] = 0.0
+    enclose_into(placements, motions, closure, held, rows, T0, x1, zero, l1, H[1], False, Fm, Fr, Jm, Jr, ew)
+    if structured:
+        apply(blocks, rows, Fm, Fr, YFm, YFr)
+    else:
+        YFm[:] = Y @ Fm
+        YFr[:] = np.abs(Y) @ (Fr + REL * np.abs(Fm))
     for a in range(nf):
         YFr[a] = up(YFr[a] + REL * abs(YFm[a]))
         box[a] = 2.0 * (abs(YFm[a]) + YFr[a]) + 1e-15 * (1.0 + abs(x1[a]))
-    zero = np.zeros(nf)
     for _ in range(INFLATIONS):
         if not _inside(x1, zero, box, prev_c, prev_rho):
             break
-        if krawczyk(YFm, YFr, Jm, Jr, box, Y, off, rad):
+        if structured:
+            ok = krawczyk_blocks(YFm, YFr, Jr, rows, blocks, box, off, rad)
+        else:
+            ok = krawczyk(YFm, YFr, Jm, Jr, box, Y, off, rad)
+        if ok:
             for a in range(nf):
                 rad[a] = up(abs(off[a]) + rad[a])
             return True, tests, rad, parts

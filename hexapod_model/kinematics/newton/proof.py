@@ -4,7 +4,7 @@
 from a start configuration ``q0`` (a closed configuration, e.g. the previous sample's result) to
 a result ``q1``: ``l(s) = l0 + s (l1 - l0)``, ``0 <= s <= 1``, ``l`` the held prismatic joints.
 When it succeeds it is a **proof**, with every floating-point rounding bounded
-(:mod:`.intervals`), that
+(:mod:`.intervals`, :mod:`.enclosure`), that
 
 * the closure equations have, for every ``s``, exactly one solution in each of a chain of boxes,
   which form one continuous path (no fold, no branch point, no other assembly met on the way);
@@ -18,6 +18,7 @@ The numba kernels are imported by the first :class:`StepProver` (they compile on
 
 from __future__ import annotations
 
+import threading
 from dataclasses import replace
 
 import numpy as np
@@ -33,12 +34,11 @@ __all__ = ["Proof", "StepProver", "chart_coordinates", "with_proof"]
 
 def chart_coordinates(T0: np.ndarray, T: np.ndarray) -> np.ndarray:
     """``v`` (6,) with ``T = T0 * Trans(v[:3]) * Rx(v[3]) Ry(v[4]) Rz(v[5])`` (m along ``T0``'s axes, rad)."""
-    R0 = T0[:3, :3]
-    M = R0.T @ T[:3, :3]
-    b = np.arcsin(np.clip(M[0, 2], -1.0, 1.0))
-    a = np.arctan2(-M[1, 2], M[2, 2])
-    c = np.arctan2(-M[0, 1], M[0, 0])
-    return np.concatenate([R0.T @ (T[:3, 3] - T0[:3, 3]), [a, b, c]])
+    from .proof_kernel import chart_coordinates_into  # numba: compiled on first use
+
+    v = np.empty(6)
+    chart_coordinates_into(np.asarray(T0, dtype=float), np.asarray(T, dtype=float), v)
+    return v
 
 
 class StepProver:
@@ -56,9 +56,11 @@ class StepProver:
         return None if tables is None else cls(clm, tables)
 
     def __init__(self, clm: ClosedLoopModel, tables: ChainTables):
-        from . import krawczyk  # numba: compiled on first use
+        from . import krawczyk, proof_kernel  # numba: compiled on first use
 
-        self._prove = krawczyk.prove_path
+        self._kernel = proof_kernel
+        self._workspace = krawczyk.workspace
+        self._local = threading.local()  # the work arrays, one set per thread
         self.leg_q = tables.leg_q
         n = tables.leg_q.shape[1]
         held = np.array([list(tables.leg_q[i]).index(clm.prismatic_q[i]) for i in range(6)], dtype=np.int64)
@@ -68,41 +70,46 @@ class StepProver:
         self.held_q = np.asarray(clm.prismatic_q, dtype=np.int64)
         self.platform_q = int(clm.platform_q)
         self.home = tables.home
+        self.nf = 6 * (n - 1) + 6
 
     def platform(self, q: np.ndarray) -> np.ndarray:
         """World placement (4, 4) of the platform joint at ``q`` (``home * X(q)``, as :mod:`.chains`)."""
-        x = q[self.platform_q : self.platform_q + 7]
-        qx, qy, qz, qw = x[3], x[4], x[5], x[6]
-        X = np.eye(4)
-        X[:3, :3] = [
-            [1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
-            [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
-            [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)],
-        ]
-        X[:3, 3] = x[:3]
-        return self.home @ X
+        T = np.empty((4, 4))
+        self._kernel.platform_placement(self.home, np.asarray(q, dtype=float), self.platform_q, T)
+        return T
 
     def unknowns(self, q: np.ndarray, T0: np.ndarray) -> np.ndarray:
         """The Krawczyk unknowns of ``q``: the legs' free joints, then the chart coordinates about ``T0``."""
-        legs = q[self.leg_q[np.arange(6)[:, None], self.free]].ravel()
-        return np.concatenate([legs, chart_coordinates(T0, self.platform(q))])
+        x = np.empty(self.nf)
+        q, T0 = np.asarray(q, dtype=float), np.asarray(T0, dtype=float)
+        self._kernel.unknowns_into(q, T0, np.empty((4, 4)), self.home, self.platform_q, self.leg_q, self.free, x)
+        return x
 
-    def prove(self, q0: np.ndarray, q1: np.ndarray) -> Proof:
-        """The proof of the readings path from ``q0`` (closed) to the result ``q1`` (see the module doc)."""
-        T0 = self.platform(q1)
-        x0, x1 = self.unknowns(q0, T0), self.unknowns(q1, T0)
-        l0, l1 = q0[self.held_q].astype(float), q1[self.held_q].astype(float)
-        if not (np.all(np.isfinite(x0)) and np.all(np.isfinite(x1)) and np.all(np.isfinite(l0 + l1))):
-            return Proof(False, np.inf, np.inf, 0, 0)
-        announce(self._prove)
-        proven, tests, radius, parts = self._prove(self.tables, T0, x0, x1, l0, l1)
-        if not proven:
-            return Proof(False, np.inf, np.inf, int(tests), 0)
-        r = radius[-6:]
-        slack = 1e-15  # the chart coordinates of q1 itself, computed in floating point
-        position = float(np.sqrt(r[0] ** 2 + r[1] ** 2 + r[2] ** 2) * (1.0 + 1e-12)) + slack
-        rotation = float((r[3] + r[4] + r[5]) * (1.0 + 1e-12)) + slack
-        return Proof(True, position, rotation, int(tests), int(parts))
+    def work(self) -> tuple:
+        """The calling thread's work arrays: :func:`.krawczyk.workspace` and the path's ends."""
+        work = getattr(self._local, "work", None)
+        if work is None:
+            ends = (np.zeros((4, 4)), np.zeros((4, 4)), np.zeros(self.nf), np.zeros(self.nf), np.zeros(6), np.zeros(6))
+            work = self._local.work = (self._workspace(self.nf, self.tables[4]), ends)
+        return work
+
+    def prove(self, q0: np.ndarray, q1: np.ndarray, structured: bool = True) -> Proof:
+        """The proof of the readings path from ``q0`` (closed) to the result ``q1`` (see the module doc).
+
+        Args:
+            q0: the start configuration (closed).
+            q1: the result.
+            structured: the Krawczyk test leg by leg (:mod:`.krawczyk_blocks`); False runs the
+                dense 36 x 36 reference test (the same proof at several times the cost).
+        """
+        kernel = self._kernel.prove_configurations
+        announce(kernel)
+        work, ends = self.work()
+        q0, q1 = np.asarray(q0, dtype=float), np.asarray(q1, dtype=float)
+        proven, tests, position, rotation, parts = kernel(
+            self.tables, self.home, self.platform_q, self.leg_q, self.free, self.held_q, q0, q1, structured, work, ends
+        )
+        return Proof(bool(proven), float(position), float(rotation), int(tests), int(parts))
 
 
 def with_proof(prover: StepProver | None, q0: np.ndarray, sol: Solution) -> Solution:

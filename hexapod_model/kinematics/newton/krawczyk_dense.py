@@ -1,0 +1,75 @@
+"""The dense Krawczyk test: the reference for the per-leg test of :mod:`.krawczyk_blocks`.
+
+The preconditioner ``Y`` is the inverse of the whole Jacobian's midpoint (36 x 36 for 6-D
+closures) and ``I - Y J(X)`` is formed as a dense interval matrix (:func:`krawczyk`); the
+rounding is bounded as in :mod:`.intervals`. :func:`.krawczyk.prove_path` runs it when asked
+for the dense test.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .intervals import REL, up
+from .linalg import lu_factor_in_place, lu_solve_in_place
+
+
+@njit(cache=True)
+def krawczyk(YFm, YFr, Jm, Jr, rho, Y, off, rad):
+    """One Krawczyk test of the box ``xc +- rho``.
+
+    ``YFm +- YFr`` encloses ``Y F(xc, S)``, ``Jm +- Jr`` (its first nf columns) ``J(X, S)``; ``Y``
+    is the preconditioner (an approximate inverse of the Jacobian at ``xc``). Writes
+    ``K = xc + off +- rad`` and returns True when ``K`` lies in the interior of the box.
+    """
+    nf = YFm.shape[0]
+    aY = np.abs(Y)
+    Jf = np.ascontiguousarray(Jm[:, :nf])
+    YJ = Y @ Jf
+    Cr = aY @ (Jr[:, :nf] + REL * np.abs(Jf))  # J's radius and the product's rounding
+    ok = True
+    for a in range(nf):
+        s = 0.0
+        for b in range(nf):
+            c = (1.0 if a == b else 0.0) - YJ[a, b]
+            s += (abs(c) + up(Cr[a, b] + REL * (abs(YJ[a, b]) + 1.0))) * rho[b]
+        off[a] = -YFm[a]
+        rad[a] = up(up(s) + YFr[a])
+        if not up(abs(off[a]) + rad[a]) < rho[a]:
+            ok = False
+    return ok
+
+
+@njit(cache=True)
+def preconditioned_dense(Y, Fm, Fr, gm, gr, half):
+    """``Y F(xc, S)`` as midpoint and radius, by the mean-value form along the readings path.
+
+    ``F(xc, l(s)) in F(xc, hm) + J_held(xc, S) (dl (s - sm) + e)`` (:mod:`.krawczyk`): ``Y J_held
+    dl`` is about the path's tangent, so the readings' change is not spread over every unknown
+    as ``|Y| |F|`` would.
+    """
+    nf = Fm.shape[0]
+    aY = np.abs(Y)
+    YFm = Y @ Fm
+    YFr = aY @ (Fr + REL * np.abs(Fm))
+    Yg = Y @ gm
+    YFr += aY @ gr + (np.abs(Yg) + REL * (aY @ np.abs(gm))) * half
+    for a in range(nf):
+        YFr[a] = up(YFr[a] + REL * abs(YFm[a]))
+    return YFm, YFr
+
+
+@njit(cache=True)
+def inverse(J):
+    """``J^-1`` by the pivoted LU of :mod:`.linalg` (NaN when singular; any matrix serves as ``Y``)."""
+    nf = J.shape[0]
+    LU = J.copy()
+    piv = np.empty(nf, dtype=np.int64)
+    if lu_factor_in_place(LU, piv, nf) == 0.0:
+        return np.full((nf, nf), np.nan)
+    Y = np.zeros((nf, nf))
+    for a in range(nf):
+        Y[a, a] = 1.0
+        lu_solve_in_place(LU, piv, Y[a], nf)  # row a: column a of J^-1
+    return Y.T.copy()

@@ -1,0 +1,108 @@
+"""The compiled entry of the warm-step proof: from two configurations to the Krawczyk proof's bounds.
+
+:func:`prove_configurations` reads the Krawczyk unknowns of the start and the result (the legs'
+free joints and the platform's chart coordinates about the result's placement,
+:mod:`.enclosure`), runs :func:`.krawczyk.prove_path` on the readings path between them and
+turns the proven radius into bounds of the platform's position and rotation, in one call:
+:class:`.proof.StepProver` wraps it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .krawczyk import prove_path
+
+
+@njit(cache=True)
+def platform_placement(home, q, platform_q, T):
+    """``T`` (4, 4) = world placement of the platform joint at ``q``: ``home * X(q)`` (as :mod:`.chains`)."""
+    px, py, pz = q[platform_q], q[platform_q + 1], q[platform_q + 2]
+    qx, qy, qz, qw = q[platform_q + 3], q[platform_q + 4], q[platform_q + 5], q[platform_q + 6]
+    X = (
+        (1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw), px),
+        (2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw), py),
+        (2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy), pz),
+    )
+    for a in range(4):
+        for b in range(4):
+            s = home[a, 3] if b == 3 else 0.0
+            for k in range(3):
+                s += home[a, k] * X[k][b]
+            T[a, b] = s
+
+
+@njit(cache=True, inline="always")
+def _relative(T0, T, a, b):
+    """``(R0^T R)[a, b]`` for the rotations of the placements ``T0`` and ``T``."""
+    return T0[0, a] * T[0, b] + T0[1, a] * T[1, b] + T0[2, a] * T[2, b]
+
+
+@njit(cache=True)
+def chart_coordinates_into(T0, T, v):
+    """``v`` (6,) with ``T = T0 * Trans(v[:3]) * Rx(v[3]) Ry(v[4]) Rz(v[5])`` (m along ``T0``'s axes, rad)."""
+    v[4] = np.arcsin(min(1.0, max(-1.0, _relative(T0, T, 0, 2))))
+    v[3] = np.arctan2(-_relative(T0, T, 1, 2), _relative(T0, T, 2, 2))
+    v[5] = np.arctan2(-_relative(T0, T, 0, 1), _relative(T0, T, 0, 0))
+    for a in range(3):
+        s = 0.0
+        for k in range(3):
+            s += T0[k, a] * (T[k, 3] - T0[k, 3])
+        v[a] = s
+
+
+@njit(cache=True)
+def unknowns_into(q, T0, T, home, platform_q, leg_q, free, x):
+    """``x`` (nf,): the legs' free joints of ``q``, then its chart coordinates about ``T0`` (``T`` scratch)."""
+    v = 0
+    for i in range(6):
+        for k in range(free.shape[1]):
+            x[v] = q[leg_q[i, free[i, k]]]
+            v += 1
+    platform_placement(home, q, platform_q, T)
+    chart_coordinates_into(T0, T, x[v:])
+
+
+@njit(cache=True)
+def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, structured, work, ends):
+    """The Krawczyk proof of the readings path from ``q0`` to ``q1`` (:meth:`.proof.StepProver.prove`).
+
+    Args:
+        tables: ``(placements, motions, closure, held, rows)`` (:func:`.enclosure.enclose_into`).
+        home: (4, 4) the platform joint's placement at home.
+        platform_q: configuration index of the platform's free flyer.
+        leg_q: (6, n) configuration index of each leg joint.
+        free: (6, n - 1) positions of each leg's free joints in ``leg_q``.
+        held_q: (6,) configuration indices of the held joints.
+        q0: the start configuration (closed).
+        q1: the result.
+        structured: the per-leg Krawczyk test (else the dense reference).
+        work: :func:`.krawczyk.workspace`, overwritten.
+        ends: ``(T0, T, x0, x1, l0, l1)`` work arrays ((4, 4), (4, 4), (nf,), (nf,), (6,), (6,))
+
+    Returns:
+        ``(proven, tests, position, rotation, parts)``: ``position`` (m) and ``rotation`` (rad)
+        bound the distance and the rotation angle between ``q1``'s platform and the exact one
+        the path ends at (``inf`` when not proven).
+    """
+    T0, T, x0, x1, l0, l1 = ends
+    platform_placement(home, q1, platform_q, T0)
+    unknowns_into(q0, T0, T, home, platform_q, leg_q, free, x0)
+    unknowns_into(q1, T0, T, home, platform_q, leg_q, free, x1)
+    for i in range(6):
+        l0[i], l1[i] = q0[held_q[i]], q1[held_q[i]]
+    for a in range(x0.shape[0]):
+        if not (np.isfinite(x0[a]) and np.isfinite(x1[a])):
+            return False, 0, np.inf, np.inf, 0
+    for i in range(6):
+        if not np.isfinite(l0[i] + l1[i]):
+            return False, 0, np.inf, np.inf, 0
+    proven, tests, radius, parts = prove_path(tables, T0, x0, x1, l0, l1, structured, work)
+    if not proven:
+        return False, tests, np.inf, np.inf, 0
+    r = radius[-6:]
+    slack = 1e-15  # the chart coordinates of q1 itself, computed in floating point
+    position = np.sqrt(r[0] ** 2 + r[1] ** 2 + r[2] ** 2) * (1.0 + 1e-12) + slack
+    rotation = (r[3] + r[4] + r[5]) * (1.0 + 1e-12) + slack
+    return True, tests, position, rotation, parts
