@@ -49,11 +49,12 @@ import pinocchio as pin
 
 from ..description.geometry import HexapodGeometry, LegGeometry
 from ..description.model import ClosedLoopModel
+from ..description.sensors import DEFAULT_ENCODER_SIGMA
 from ..exceptions import GeometryError, WorkspaceError
 from ..lie import pose_distance, rpy_to_matrix
 from .body_check import BodyCheck
 from .newton.solver import NewtonSolver, Solution
-from .noise_assemblies import noise_assemblies
+from .noise_assemblies import noise_assemblies, noise_reach
 from .three_six import ThreeSixFK
 
 SAME = 5e-7  # times the base radius (1e-7 m on the presets): two poses closer than this are one assembly
@@ -192,6 +193,10 @@ class AssemblyFinder:
             except GeometryError:  # not a 3-6 layout
                 self.exact = None
         self.length = hexa.base_radius  # m: rotations count times this in pose distances
+        sigma = DEFAULT_ENCODER_SIGMA if geometry is None else geometry.encoder_sigma
+        #: m, how far each prismatic joint may lie from the measured readings' (the noise reach of
+        #: :func:`.noise_assemblies.noise_reach`, the geometry's ``encoder_sigma``, through the encoder model)
+        self.reach = np.abs(hexa.joints_of(np.full(6, noise_reach(sigma))) - hexa.joints_of(np.zeros(6)))
 
     def find(
         self, readings: np.ndarray, reference: np.ndarray | None = None, starts: int = DEFAULT_STARTS, seed: int = 0
@@ -204,7 +209,7 @@ class AssemblyFinder:
             except WorkspaceError:  # two legs of a pair cannot meet: no assembly
                 poses = []
             method, complete = "resultant", True
-            near = [self.hexa.inverse(s.pose, check=False) for s in noise_assemblies(self.exact, joints)]
+            near = [self.hexa.inverse(s.pose, check=False) for s in noise_assemblies(self.exact, joints, self.reach)]
         else:
             poses = self._search(readings, starts, seed)
             method, complete, near = f"multi-start ({starts} starts)", False, []

@@ -122,7 +122,9 @@ def test_a_held_brake_during_the_planned_carry_raises_coupling_mismatch(planned)
     try:
         served.wait_port()
         # /health has its plan section once the simulator plays (the port opens before)
-        served.wait_for(lambda: (served.get("/health").get("plan") or {}).get("coupling_mismatch"), plan.total_time + 30)
+        served.wait_for(
+            lambda: (served.get("/health").get("plan") or {}).get("coupling_mismatch"), plan.total_time + 30
+        )
         health = served.get("/health")
         m = health["plan"]["coupling_mismatch"]
         assert m["fixture"] == "left" and m["phase"] in ("release_brakes", "carry", "lock_brakes"), m
