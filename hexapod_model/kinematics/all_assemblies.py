@@ -295,8 +295,9 @@ def review(
         if not rivals or not strict and not any(pose_distance(reference, s.pose, length) <= MARGIN * d for s in rivals):
             return sol  # the only assembly, or (warm, or the body check off) clearly the one nearest the start
         first = [sol]
-    else:
-        first = []
+    else:  # the path was blocked; proven past the block (flag ``connected``), its end is the first candidate
+        connected = "connected" in sol.flags
+        first = [s for s in within if connected and pose_distance(s.pose, sol.pose, length) <= same][:1]
         if len(within) == 1:  # Newton missed it or could not certify it; it is the only one within the limits
             only = within[0]
             msg = f"the only assembly within {LIMITS} (resultant polynomial of the 3-6 platform)"
@@ -320,7 +321,7 @@ def review(
         head.residual,
         head.jacobian,
         msg,
-        (),
+        ("connected",) if first else (),
         tuple(s.pose for s in ordered),
         sol.det_sign if first else 0,
     )
