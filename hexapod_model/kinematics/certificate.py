@@ -323,7 +323,7 @@ def with_connected(solver: NewtonSolver, out: Outcome, end: np.ndarray) -> Outco
     residual *= solver.residual_weights
     msg = (
         f"{out.message}; the path goes on past the block, each step proven (Krawczyk): "
-        "the first candidate is the assembly connected to the start"
+        f"the first of {1 + len(rest)} candidates is the assembly connected to the start"
     )
     flags = (*out.flags, "connected")
     return out._replace(
@@ -346,7 +346,8 @@ def restricted(solver: NewtonSolver, out: Outcome, keep: list[bool], why: str) -
         return out._replace(status="out_of_limits", message=msg, flags=flags, candidates=())
     residual, G = solver.evaluate(kept[0])
     residual *= solver.residual_weights
-    msg = f"{out.message}; {len(out.candidates) - len(kept)} of them lie {why}"
+    dropped = len(out.candidates) - len(kept)
+    msg = f"{out.message}; {dropped} of {len(out.candidates)} candidates {'lies' if dropped == 1 else 'lie'} {why}"
     return out._replace(
         q=kept[0], residual=float(np.linalg.norm(residual)), jacobian=G, message=msg, flags=flags, candidates=kept
     )
