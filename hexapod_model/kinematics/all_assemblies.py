@@ -14,7 +14,8 @@ answers it globally:
   with the body check off, where the stroke and joint limits alone rarely decide), when no other
   lies within ``MARGIN`` times its distance from the start (poses compared by
   :func:`hexapod_model.lie.pose_distance`, rotations times the base radius); otherwise it is
-  ``ambiguous_assembly`` with all of them as candidates, the connected one first. A connected
+  ``ambiguous_assembly`` with all of them as candidates, the connected one first (flagged
+  ``connected``; a blocked path's when :mod:`.connected` proved it past the block). A connected
   result beyond a cone, in collision or outside the envelope does not compete: the one
   assembly that does is returned (several: ``ambiguous_assembly``; none: the connected result
   with its flags). Readings the
