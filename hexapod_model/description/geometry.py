@@ -328,7 +328,8 @@ class HexapodGeometry:
         """Plain dict (the file format of :func:`geometry_from_dict`).
 
         Leg fields left at their default (``None``, a zero encoder model) are omitted, and so
-        are the body fields at their defaults and a zero ``encoder_resolution``.
+        are the body fields at their defaults, a zero ``encoder_resolution`` and, without
+        redundant sensors, the default ``encoder_sigma``.
         """
         out: dict[str, Any] = {}
         defaults = {f.name: f.default for f in fields(LegGeometry)}
@@ -336,7 +337,7 @@ class HexapodGeometry:
             v = getattr(self, f.name)
             if f.name in ("measuring_legs", "inclinometer"):
                 continue
-            if f.name == "encoder_sigma" and not self.redundant:
+            if f.name == "encoder_sigma" and not self.redundant and v == DEFAULT_ENCODER_SIGMA:
                 continue
             if f.name == "encoder_resolution" and v == 0.0:
                 continue

@@ -14,7 +14,8 @@ answers it globally:
   with the body check off, where the stroke and joint limits alone rarely decide), when no other
   lies within ``MARGIN`` times its distance from the start (poses compared by
   :func:`hexapod_model.lie.pose_distance`, rotations times the base radius); otherwise it is
-  ``ambiguous_assembly`` with all of them as candidates, the connected one first. A connected
+  ``ambiguous_assembly`` with all of them as candidates, the connected one first (flagged
+  ``connected``; a blocked path's when :mod:`.connected` proved it past the block). A connected
   result beyond a cone, in collision or outside the envelope does not compete: the one
   assembly that does is returned (several: ``ambiguous_assembly``; none: the connected result
   with its flags). Readings the
@@ -49,11 +50,12 @@ import pinocchio as pin
 
 from ..description.geometry import HexapodGeometry, LegGeometry
 from ..description.model import ClosedLoopModel
+from ..description.sensors import DEFAULT_ENCODER_SIGMA
 from ..exceptions import GeometryError, WorkspaceError
 from ..lie import pose_distance, rpy_to_matrix
 from .body_check import BodyCheck
 from .newton.solver import NewtonSolver, Solution
-from .noise_assemblies import noise_assemblies
+from .noise_assemblies import noise_assemblies, noise_reach
 from .three_six import ThreeSixFK
 
 SAME = 5e-7  # times the base radius (1e-7 m on the presets): two poses closer than this are one assembly
@@ -192,6 +194,10 @@ class AssemblyFinder:
             except GeometryError:  # not a 3-6 layout
                 self.exact = None
         self.length = hexa.base_radius  # m: rotations count times this in pose distances
+        sigma = DEFAULT_ENCODER_SIGMA if geometry is None else geometry.encoder_sigma
+        #: m, how far each prismatic joint may lie from the measured readings' (the noise reach of
+        #: :func:`.noise_assemblies.noise_reach`, the geometry's ``encoder_sigma``, through the encoder model)
+        self.reach = np.abs(hexa.joints_of(np.full(6, noise_reach(sigma))) - hexa.joints_of(np.zeros(6)))
 
     def find(
         self, readings: np.ndarray, reference: np.ndarray | None = None, starts: int = DEFAULT_STARTS, seed: int = 0
@@ -204,7 +210,7 @@ class AssemblyFinder:
             except WorkspaceError:  # two legs of a pair cannot meet: no assembly
                 poses = []
             method, complete = "resultant", True
-            near = [self.hexa.inverse(s.pose, check=False) for s in noise_assemblies(self.exact, joints)]
+            near = [self.hexa.inverse(s.pose, check=False) for s in noise_assemblies(self.exact, joints, self.reach)]
         else:
             poses = self._search(readings, starts, seed)
             method, complete, near = f"multi-start ({starts} starts)", False, []
@@ -290,8 +296,9 @@ def review(
         if not rivals or not strict and not any(pose_distance(reference, s.pose, length) <= MARGIN * d for s in rivals):
             return sol  # the only assembly, or (warm, or the body check off) clearly the one nearest the start
         first = [sol]
-    else:
-        first = []
+    else:  # the path was blocked; proven past the block (flag ``connected``), its end is the first candidate
+        connected = "connected" in sol.flags
+        first = [s for s in within if connected and pose_distance(s.pose, sol.pose, length) <= same][:1]
         if len(within) == 1:  # Newton missed it or could not certify it; it is the only one within the limits
             only = within[0]
             msg = f"the only assembly within {LIMITS} (resultant polynomial of the 3-6 platform)"
@@ -315,7 +322,7 @@ def review(
         head.residual,
         head.jacobian,
         msg,
-        (),
+        ("connected",) if first else (),
         tuple(s.pose for s in ordered),
         sol.det_sign if first else 0,
     )

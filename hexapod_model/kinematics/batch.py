@@ -5,8 +5,9 @@ give it (status, message, flags, iterations, determinant sign), and ``invalid_in
 those raise on the row's input (NaN, a reading outside the stroke, a matrix that is not a rigid
 transform). On the compiled path (:mod:`.newton`) the loop over rows runs compiled
 (:mod:`.batch_kernels`), the readings path of :mod:`.certificate` included; a direct-kinematics
-row whose path is blocked (``ambiguous_assembly`` and its candidates) or whose warm result is
-uncertified near a singularity is solved by ``forward`` itself. Other hexapods and held sets
+row whose path is blocked (``ambiguous_assembly`` and its candidates), or whose warm result lies
+near a singularity (``uncertified``, or ``converged`` only with the Krawczyk proof of its step),
+is solved by ``forward`` itself. Other hexapods and held sets
 are solved row by row. :mod:`.batch_result` holds the result and how the loops' outputs become it.
 """
 
@@ -95,7 +96,7 @@ def forward_batch(engine: SolveEngine, readings, guess, warm: bool, tol, max_ite
             one_call.arrays,
             out,
         )
-        if k < len(rows):  # the path is blocked, or a warm row is near a singularity: forward() says so
+        if k < len(rows):  # the path is blocked, or a warm row is near a singularity: forward() says so (and proves)
             g = (
                 guess
                 if not carry[1]

@@ -44,7 +44,7 @@ class BatchResult:
         iterations: (N,) Newton steps taken.
         residual: (N,) final closure residual norm (NaN for ``invalid_input``).
         messages: (N,) each row's ``Solution.message`` (or the error a per-row call raises).
-        flags: (N,) each row's ``Solution.flags`` (``("near_singular",)``, ``("not_closed",)`` or ``()``).
+        flags: (N,) each row's ``Solution.flags`` (``("near_singular",)``, ``("connected",)``, ... or ``()``).
         det_sign: (N,) each row's ``Solution.det_sign``.
     """
 

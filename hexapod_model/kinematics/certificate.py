@@ -37,7 +37,11 @@ assembly), so never ``converged``. When the path cannot be followed (it
 meets a singularity or a fold of the readings map), the result is ``ambiguous_assembly`` with
 the assemblies found (the plain solve's, and Newton's from the last certified point) as
 candidates, never ``converged``. On the compiled path the path is followed in compiled code
-(:func:`.follow.follow`, the same rules); the candidates are always looked for here.
+(:func:`.follow.follow`, the same rules); the candidates are always looked for here. Where
+the path goes on past the block (near a singularity, not at a fold), :func:`.connected.connected_end`
+follows it again in steps each proven by the Krawczyk test, and :func:`with_connected` puts
+the assembly it ends at first among the candidates, flagged ``connected``: the one the
+readings path from the start reaches.
 
 A certified result whose eliminated 6x6 Jacobian ``M`` (leg-reading rates per platform twist)
 has a condition-number bound (:func:`~hexapod_model.kinematics.newton.structured.schur_solve`) above
@@ -281,7 +285,7 @@ def _ambiguous(
             status, res, msg = st, r, m
     distinct: list[np.ndarray] = []
     for q in found:
-        if all((np.abs(pin.difference(clm.model, q, c)) * solver.weights).max() > _DISTINCT for c in distinct):
+        if all(_distinct(solver, q, c) for c in distinct):
             distinct.append(q)
     idx = clm.limited_q()
     inside = [q for q in distinct if solver.kernels.first_outside_at(q, idx, clm.lower[idx], clm.upper[idx], 1e-12) < 0]
@@ -296,3 +300,54 @@ def _ambiguous(
     residual *= solver.residual_weights  # rotation rows times the length scale: the iteration's norm
     msg = f"cannot certify the assembly connected to the start: {where}; {len(inside)} candidate assemblies"
     return Outcome(inside[0], "ambiguous_assembly", total, float(np.linalg.norm(residual)), G, msg, (), tuple(inside))
+
+
+def _distinct(solver: NewtonSolver, q: np.ndarray, c: np.ndarray) -> bool:
+    """Whether configurations ``q`` and ``c`` are different assemblies (``_DISTINCT`` apart)."""
+    return bool((np.abs(pin.difference(solver.clm.model, q, c)) * solver.weights).max() > _DISTINCT)
+
+
+def with_connected(solver: NewtonSolver, out: Outcome, end: np.ndarray) -> Outcome:
+    """The ``ambiguous_assembly`` outcome ``out`` with ``end``, the proven path's end, as its first candidate.
+
+    ``end`` (closed for the readings, :func:`.connected.connected_end`) is the assembly connected
+    to the start: flagged ``connected``, and the outcome's configuration. Outside the joint
+    limits it is no candidate (``out`` unchanged).
+    """
+    clm = solver.clm
+    idx = clm.limited_q()
+    if solver.kernels.first_outside_at(end, idx, clm.lower[idx], clm.upper[idx], 1e-12) >= 0:
+        return out
+    rest = tuple(c for c in out.candidates if _distinct(solver, end, c))
+    residual, G = solver.evaluate(end)
+    residual *= solver.residual_weights
+    msg = (
+        f"{out.message}; the path goes on past the block, each step proven (Krawczyk): "
+        f"the first of {1 + len(rest)} candidates is the assembly connected to the start"
+    )
+    flags = (*out.flags, "connected")
+    return out._replace(
+        q=end, residual=float(np.linalg.norm(residual)), jacobian=G, message=msg, flags=flags, candidates=(end, *rest)
+    )
+
+
+def restricted(solver: NewtonSolver, out: Outcome, keep: list[bool], why: str) -> Outcome:
+    """The ``ambiguous_assembly`` outcome ``out`` with only the candidates ``keep`` marks.
+
+    The first kept one becomes the outcome's configuration; ``connected`` stays only while the
+    first candidate is kept. None kept: ``out_of_limits``. ``why`` says where the others lie.
+    """
+    kept = tuple(c for c, k in zip(out.candidates, keep) if k)
+    if len(kept) == len(out.candidates):
+        return out
+    flags = out.flags if keep[0] else tuple(f for f in out.flags if f != "connected")
+    if not kept:
+        msg = f"{out.message}; every assembly found lies {why}"
+        return out._replace(status="out_of_limits", message=msg, flags=flags, candidates=())
+    residual, G = solver.evaluate(kept[0])
+    residual *= solver.residual_weights
+    dropped = len(out.candidates) - len(kept)
+    msg = f"{out.message}; {dropped} of {len(out.candidates)} candidates {'lies' if dropped == 1 else 'lie'} {why}"
+    return out._replace(
+        q=kept[0], residual=float(np.linalg.norm(residual)), jacobian=G, message=msg, flags=flags, candidates=kept
+    )

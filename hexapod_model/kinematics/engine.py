@@ -23,6 +23,7 @@ from . import certificate
 from .all_assemblies import AssemblyFinder, review
 from .body_check import BodyCheck
 from .certificate import Outcome
+from .connected import connected_end
 from .input_checks import LIMIT_SLACK, MAX_TOL, check_home_conditioning, check_max_iter, check_tolerance, failure_status
 from .joint_space import JointSpace
 from .newton.kernel_sets import kernel_set
@@ -174,7 +175,10 @@ class SolveEngine(JointSpace):
         if type(max_iter) is not int or max_iter < 0:
             max_iter = check_max_iter(max_iter)
         if forward:
+            start = q0.copy()  # solve_forward writes the readings into q0
             out = certificate.solve_forward(solver, q0, forward[0], tol, max_iter, *forward[1:])
+            if out.status == "ambiguous_assembly":  # the path is blocked: the candidates
+                out = self.candidates(solver, out, start, forward[0], tol, max_iter)
             return self.solution(out, check, max_iter=max_iter, forward=True)
         one_call = solver.one_call
         if one_call is not None:  # inverse kinematics: the solve, pose and limit check in one compiled call
@@ -182,6 +186,26 @@ class SolveEngine(JointSpace):
             if done is not None:
                 return self.solution(Outcome(*done[0]), check, done[1], done[2], max_iter)
         return self.solution(Outcome(*solver.run(q0, tol, max_iter)), check, max_iter=max_iter)
+
+    def candidates(
+        self, solver: NewtonSolver, out: Outcome, start: np.ndarray, joints: np.ndarray, tol: float, max_iter: int
+    ) -> Outcome:
+        """A blocked path's ``ambiguous_assembly`` outcome: the connected assembly first, the machine's only.
+
+        The proven path past the block (:func:`.connected.connected_end`) gives the assembly
+        connected to ``start`` (the first candidate, flagged ``connected``); with the body check
+        on, only the candidates within the cones, the collision-free set and the envelope
+        remain (the certificate kept those within the stroke and joint limits).
+        """
+        if self.prover is not None:
+            end = connected_end(solver, self.prover, start, joints, tol, max_iter)
+            if end is not None:
+                out = certificate.with_connected(solver, out, end)
+        body = self.body
+        if body is None:
+            return out
+        keep = [not body.violations(c) and body.within_envelope(self.pose_of(c)) for c in out.candidates]
+        return certificate.restricted(solver, out, keep, "beyond a cone, in collision or outside the envelope")
 
     def reviewed(self, sol: Solution, lengths: np.ndarray, guess: object, check: bool) -> Solution:
         """A 3-6 hexapod's result checked against every assembly (:func:`.all_assemblies.review`).

@@ -6,16 +6,22 @@ a few noise sigmas away have two more real roots than the measured ones: a compl
 assemblies. The platform is in one of those when the noise happened to move its readings off
 the fold, so a result is unique only if no such pair is within reach.
 
+**The reach** is the encoder's noise: every set of readings whose every reading lies within
+``NOISE_SIGMAS`` (``k`` = 6) standard deviations ``sigma`` of the measured one (a box about the
+measured readings; ``sigma`` is the geometry's ``encoder_sigma``, m). One Gaussian reading error
+exceeds 6 sigma with probability 2e-9, one of six with 1.2e-8: readings outside that box are not
+ones the platform gives. A hexapod whose readings are less certain than its encoders' noise (an
+uncalibrated layout, thermal growth) declares a larger ``encoder_sigma``.
+
 :func:`noise_assemblies` finds them: for every complex pair, the gap ``g = |log |z||`` (the
 imaginary part of ``psi_0``) and its gradient in the six readings, from the derivative of the
-resultant's coefficients (central differences, ``STEP`` m) through the root's sensitivity
-``dz = -(dP) (z) / P'(z)``. Near a fold the gap grows as the square root of the distance to it,
-so the linear estimate ``g / |grad g|`` is twice that distance: a pair whose estimate is at most
-twice ``reach`` is taken, the readings moved along ``-grad g`` by up to ``reach`` (1.1, 1.5, 2
-times half the estimate, capped at ``reach``), and the assemblies that appear there with
-``psi_0`` within ``ANGLE`` of the pair's are returned. ``reach`` (m, Euclidean over the six
-readings) is by default ``REACH`` base radii: ``NOISE_SIGMAS`` times ``READING_NOISE`` at the
-presets' 0.2 m base radius (0.3 mm), relative so that a scaled hexapod gets the same answers.
+resultant's coefficients (central differences, ``STEP`` base radii) through the root's
+sensitivity ``dz = -(dP) (z) / P'(z)``. Within the box the gap falls fastest towards the corner
+``-reach * sign(grad g)``, at the rate ``G = sum_i reach_i |grad_i g|``; near a fold the gap grows
+as the square root of the distance to it, so the linear estimate ``g / G`` (in fractions of the
+box) is twice that distance: a pair whose estimate is at most 2 is taken, the readings moved
+towards that corner by ``1.1, 1.5, 2`` times half the estimate (at most the corner itself), and
+the assemblies that appear there with ``psi_0`` within ``ANGLE`` of the pair's are returned.
 """
 
 from __future__ import annotations
@@ -25,14 +31,15 @@ import numpy as np
 from ..exceptions import WorkspaceError
 from .three_six import ThreeSixFK, ThreeSixSolution
 
-#: m, standard deviation of one reading on the presets: the order of the LinACE encoders'
-#: accuracy (Bem et al. (2026) section 2), as the tracker's default
-READING_NOISE = 10e-6
-NOISE_SIGMAS = 30.0  # a reading change within this many sigmas counts
-REACH = NOISE_SIGMAS * READING_NOISE / 0.2  # base radii: 0.3 mm at the presets' 0.2 m
+NOISE_SIGMAS = 6.0  # k: readings within k sigma of the measured ones count (Gaussian tail 2e-9 a reading)
 STEP = 5e-7  # base radii, central-difference step of the coefficients' derivative
 ANGLE = 0.3  # rad, how near the pair's psi_0 a new assembly must appear
 _CIRCLE = 1e-4  # |log |z|| of a real root (as .three_six)
+
+
+def noise_reach(sigma: float) -> float:
+    """How far (m) each reading may lie from the measured one: ``NOISE_SIGMAS`` times ``sigma`` (m)."""
+    return NOISE_SIGMAS * float(sigma)
 
 
 def _gaps(fk: ThreeSixFK, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -52,31 +59,39 @@ def _gaps(fk: ThreeSixFK, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return z, grad
 
 
-def noise_assemblies(fk: ThreeSixFK, lengths, reach: float | None = None) -> list[ThreeSixSolution]:
-    """The assemblies of readings within ``reach`` (m; default ``REACH`` base radii) of ``lengths`` that these lack.
+def noise_assemblies(fk: ThreeSixFK, lengths, reach) -> list[ThreeSixSolution]:
+    """The assemblies of readings within ``reach`` of ``lengths`` that these lack.
 
-    Each is a :class:`~.three_six.ThreeSixSolution` of the moved readings (its pose closes those,
-    not ``lengths``); none when no complex root pair of the resultant is that close to real.
+    Args:
+        fk: the 3-6 resultant of the hexapod.
+        lengths: the six prismatic joint values (m) of the measured readings.
+        reach: how far each joint value may move (m; a number, or six: the box
+            ``|dl_i| <= reach_i``), :func:`noise_reach` of the encoder's sigma.
+
+    Returns:
+        Each a :class:`~.three_six.ThreeSixSolution` of moved joint values within the box (its
+        pose closes those, not ``lengths``); none when no complex root pair of the resultant is
+        that close to real.
     """
     lengths = np.asarray(lengths, dtype=float)
-    reach = REACH * fk.length if reach is None else reach
+    box = np.broadcast_to(np.asarray(reach, dtype=float), (6,))
     try:
         z, grad = _gaps(fk, lengths)
     except WorkspaceError:
         return []
     found: list[ThreeSixSolution] = []
     for k in range(z.size):
-        g, norm = -np.log(np.abs(z[k])), np.linalg.norm(grad[k])
-        if not (norm > 0.0 and g / norm <= 2.0 * reach):
+        corner = -box * np.sign(grad[k])  # the corner of the box towards which the gap falls fastest
+        g, rate = -np.log(np.abs(z[k])), float(np.abs(grad[k]) @ box)
+        if not (rate > 0.0 and g / rate <= 2.0):
             continue
-        direction = -grad[k] / norm
         for factor in (1.1, 1.5, 2.0):
-            t = min(reach, factor * 0.5 * g / norm)
+            s = min(1.0, factor * 0.5 * g / rate)
             try:
-                sols = fk.solve_all(lengths + t * direction)
+                sols = fk.solve_all(lengths + s * corner)
             except WorkspaceError:
                 continue
-            near = [s for s in sols if abs(np.angle(np.exp(1j * s.psi[0]) / z[k] * abs(z[k]))) < ANGLE]
+            near = [a for a in sols if abs(np.angle(np.exp(1j * a.psi[0]) / z[k] * abs(z[k]))) < ANGLE]
             if near:
                 found.extend(near)
                 break

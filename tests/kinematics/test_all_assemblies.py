@@ -167,16 +167,32 @@ def _tracker_end(hexa, lengths, steps: int = 256):
 
 
 @pytest.mark.parametrize(("name", "index"), [("spherical", 494), ("spherical", 2615), ("guideway", 675)])
-def test_a_blocked_path_lists_the_assembly_a_tracker_reaches_past_the_fold(name, index):
+def test_a_blocked_path_lists_the_assembly_a_tracker_reaches_past_the_fold_first(name, index):
     """Beyond the box (+-100 mm / +-40 deg) on presets without a resultant: the readings path from
-    home is blocked; a tracker fed that path crosses it and ends on an assembly, which must be
-    among the candidates (so is the generating pose)."""
+    home is blocked near a singularity; two trackers fed that path (256 and 1024 samples) cross it
+    and end on one assembly, the one connected to home: the first candidate, flagged ``connected``
+    (the readings path proven past the block); it was listed, unmarked. So is the generating pose."""
     hexa = limits_only(name)
     T = box_poses(hexa.home_pose, 4000, seed=7, translation=0.1, angle_deg=40)[index]
     readings = hexa.inverse(T).lengths
     sol = hexa.forward(readings, check=False)
     assert sol.status == "ambiguous_assembly", sol.message
-    end = _tracker_end(hexa, readings)
-    assert end is not None
-    assert _has(sol.candidates, hexa.pose_of(end))
+    ends = [_tracker_end(hexa, readings, steps) for steps in (256, 1024)]
+    assert all(e is not None for e in ends)
+    assert pose_distance(hexa.pose_of(ends[0]), hexa.pose_of(ends[1]), 0.2) < SAME
+    assert "connected" in sol.flags and "connected to the start" in sol.message
+    assert pose_distance(sol.candidates[0], hexa.pose_of(ends[0]), 0.2) < SAME
+    np.testing.assert_array_equal(sol.pose, sol.candidates[0])
     assert _has(sol.candidates, T)
+
+
+def test_a_path_through_a_fold_marks_no_candidate_connected():
+    """+-150 mm / +-60 deg, spherical: the readings path from home meets a fold (trackers of 256 and
+    1024 samples end on different assemblies, or stop): no step past it is proven, no candidate marked."""
+    hexa = limits_only("spherical")
+    T = box_poses(hexa.home_pose, 1500, seed=7, translation=0.15, angle_deg=60)[319]
+    readings = hexa.inverse(T).lengths
+    sol = hexa.forward(readings, check=False)
+    assert sol.status == "ambiguous_assembly" and "connected" not in sol.flags
+    ends = [_tracker_end(hexa, readings, steps) for steps in (256, 1024)]
+    assert any(e is None for e in ends) or pose_distance(hexa.pose_of(ends[0]), hexa.pose_of(ends[1]), 0.2) > SAME

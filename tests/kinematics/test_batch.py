@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import threading
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -12,7 +14,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
 from hexapod_model.lie import rpy_to_matrix
 
-from ..conftest import PATH_TOL, PRESET_NAMES, assert_same_message, hexapod
+from ..conftest import PATH_TOL, PRESET_NAMES, assert_same_message, hexapod, limits_only
 from .test_newton import idle_roll_hexapod
 
 
@@ -126,6 +128,25 @@ def test_singular_and_near_singular_rows():
     statuses = set(hexa.forward_batch(rows, hexa.inverse(poses[2])).status)
     flagged = hexa.forward_batch(rows, hexa.inverse(poses[2]), warm=True).flags
     assert ("near_singular",) in flagged and len(statuses) > 1
+
+
+@pytest.mark.parametrize("body", [False, True])
+def test_a_warm_row_near_a_singularity_is_converged_only_with_its_proof(body):
+    """tests/data/three_six_warm_wrong.json: from its guess the warm step converges, flagged near_singular,
+    at another assembly 1.1 mm away; forward says uncertified (its Krawczyk proof fails), the batch
+    returned it converged."""
+    hexa = hexapod("3-6") if body else limits_only("3-6")
+    case = json.loads((Path(__file__).parents[1] / "data" / "three_six_warm_wrong.json").read_text())
+    guess = hexa.inverse(np.array(case["guess_pose"]), check=False)
+    readings = np.array(case["readings_m"])
+    T = hexa.home_pose.copy()
+    T[:3, 3] += [0.01, 0.0, 0.0]
+    rows = np.array([readings, hexa.inverse(T).lengths, readings])
+    for warm in (False, True):
+        result = hexa.forward_batch(rows, guess, warm=warm)
+        expected = per_row(hexa.forward, rows, guess, warm)
+        assert_rows_match(result, expected)
+        assert expected[0][0] == "uncertified" and "Krawczyk" in expected[0][1] and not result.converged[0]
 
 
 def test_general_path_batches():

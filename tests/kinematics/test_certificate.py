@@ -172,3 +172,37 @@ def test_a_warm_result_at_a_singularity_is_flagged_and_not_converged():
     assert sol.flags == ("near_singular",) and "near a singularity" in sol.message
     far = hexa.forward(at(60.0).lengths, guess=at(59.0))
     assert far.converged and far.flags == ()
+
+
+#: spherical preset, hair-thin bodies: no collision decides here, only the cones
+SLIM = {"leg_radius": 1e-4, "housing_radius": 2e-4, "plate_thickness": 1e-4}
+SLIM_PLATES = {"base_plate_radius": 1e-3, "platform_plate_radius": 1e-3}
+
+
+def test_a_blocked_paths_candidates_are_within_the_cones():
+    """A warm start 30 mm / 15 deg off: the path is blocked at once; Newton's candidates hold the assembly
+    the proven path reaches and a rival whose base joints deflect 50 deg. With 45 deg base cones the
+    rival is no candidate (it was listed); with the default 20 mm legs both collide: no candidate."""
+    from dataclasses import replace
+
+    T, G = np.eye(4), np.eye(4)  # the generating pose and the guess
+    T[:3, 3] = [0.11601710548415842, -0.06001226601678739, 0.3710966000536987]
+    T[:3, :3] = rpy_to_matrix(-0.45179485491487503, -0.8585477551993077, -0.37444946220325315)
+    G[:3, 3] = [0.15271145132397554, -0.10569699214224648, 0.37259958315059577]
+    G[:3, :3] = rpy_to_matrix(-0.6444145273334886, -0.9254348096504367, -0.17304477080103886)
+    slim = replace(hm.get_preset("spherical"), **SLIM, **SLIM_PLATES)
+    bare = hm.Hexapod.from_geometry(slim, compiled=False)
+    readings = bare.inverse(T).lengths
+    free = bare.forward(readings, bare.inverse(G), check=False)
+    assert free.status == "ambiguous_assembly" and len(free.candidates) == 2 and "connected" in free.flags
+    coned = hm.Hexapod.from_geometry(replace(slim, base_cone=np.radians(45.0)), compiled=False)
+    assert [coned.inverse(C, check=False).status for C in free.candidates] == ["converged", "cone_limit"]
+    sol = coned.forward(readings, coned.inverse(G), check=False)
+    assert sol.status == "ambiguous_assembly" and len(sol.candidates) == 1 and "connected" in sol.flags
+    assert all(coned.inverse(C, check=False).converged for C in sol.candidates)  # within every limit and cone
+    np.testing.assert_allclose(sol.candidates[0], free.candidates[0], rtol=0, atol=1e-12)
+    assert "1 of 2 candidates lies beyond a cone" in sol.message
+    thick = hm.Hexapod.from_preset("spherical", compiled=False)
+    assert [thick.inverse(C, check=False).status for C in free.candidates] == ["collision", "collision"]
+    none = thick.forward(readings, thick.inverse(G, check=False), check=False)
+    assert none.status == "out_of_limits" and not none.candidates and "every assembly found lies beyond" in none.message

@@ -37,7 +37,7 @@ FACTORS = [0.05, 10.0, 1 / 16, 8.0]  # the issue's sizes, and two whose length s
 
 
 def scaled(geometry: hm.HexapodGeometry, factor: float) -> hm.HexapodGeometry:
-    """``geometry`` with every length (its body's too) multiplied by ``factor`` (angles unchanged)."""
+    """``geometry`` with every length (its body's and its encoder noise too) times ``factor`` (angles unchanged)."""
     d = geometry.to_dict()
     for key in ("home_height", "base_offset", "platform_offset"):
         d[key] *= factor
@@ -55,6 +55,7 @@ def scaled(geometry: hm.HexapodGeometry, factor: float) -> hm.HexapodGeometry:
     for leg in d["legs"]:
         if "leg_radius" in leg:
             leg["leg_radius"] *= factor
+    d["encoder_sigma"] = geometry.encoder_sigma * factor  # the sensor's noise too (the 3-6 near-fold reach)
     d["name"] = f"{geometry.name}_scaled"
     return geometry_from_dict(d)
 

@@ -4,9 +4,10 @@ Per row: the input checks, the Newton iteration (:func:`.newton.iterate`) and th
 check of :meth:`.hexapod.Hexapod.forward` / :meth:`~.hexapod.Hexapod.inverse`. Direct kinematics
 runs :func:`.certificate.solve_forward`: the certified first attempt, then, for a row it does not
 settle, the readings path (:func:`.follow.follow`, :func:`_follow_row`). A row whose path is
-blocked (the candidates of an ambiguous assembly are looked for in Python) or whose warm plain
-result is uncertified near a singularity ends the loop, and the caller solves that row with
-``forward`` before resuming at the next one.
+blocked (the candidates of an ambiguous assembly are looked for in Python), whose warm plain
+result is uncertified near a singularity, or whose warm result converged near a singularity
+(``converged`` then only with the Krawczyk proof of its step, :meth:`.engine.SolveEngine.proven_near`)
+ends the loop, and the caller solves that row with ``forward`` before resuming at the next one.
 
 Each row starts from ``start`` with determinant sign ``carry[0]`` (home or a guess); with
 ``warm`` from the last row that converged instead (a time series, as ``hexapod fk`` reads its
@@ -102,7 +103,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, stroke, pac
     ``settings = (tol, max_iter, near_singular_kappa)``; ``stroke = (lower, upper)`` of the
     readings; ``packed``: the solver's :class:`.packing.Packed` arrays (with the prismatic joints
     and the joint limits). Returns the first row left to the caller (the certified attempt
-    failed), or N.
+    failed, or a warm row converged near a singularity), or N.
     """
     tol, max_iter, near_kappa = settings
     ints, floats, work, iwork = packed
@@ -130,6 +131,8 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, stroke, pac
             code, ratio = CONVERGED, 1.0
         kappa, sign = (state[1], state[0]) if code == CONVERGED else (np.inf, 0.0)
         code = _finish_row(k, q, code, it, norm, ratio, kappa, sign, ints, floats, out)
+        if code == CONVERGED and (carry[1] == 1.0 or carry[2] == 1.0) and not kappa <= near_kappa:
+            return k  # warm and near a singularity: converged only with its proof, which forward() runs
         if warm and code == CONVERGED:
             copy_into(start, q)
             carry[0], carry[1] = sign, 1.0

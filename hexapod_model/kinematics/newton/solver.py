@@ -115,6 +115,9 @@ class Solution:
             result beyond a joint cone or in collision (the message names the joint or pair;
             :mod:`~hexapod_model.kinematics.body_check`). ``("not_closed",)`` for an ``out_of_limits`` result whose
             iteration stopped outside the limits before closing the loops (``q`` closes nothing).
+            ``"connected"`` on an ``ambiguous_assembly`` result whose first candidate is the
+            assembly connected to the start (the readings path proven past its block, or a
+            certified result that another assembly rivals).
         candidates: with status ``ambiguous_assembly``, the (4, 4) poses of the assemblies
             found (``pose`` is the first).
         det_sign: sign of the direct-kinematics Jacobian's determinant at the result (0: none).
