@@ -39,6 +39,8 @@ FAULTS = (
     "repeated_frames",
     "ahead_stamp",
     "gateway_burst",
+    "bit_flip",
+    "intruder",
 )
 
 
@@ -55,16 +57,21 @@ class Fault:
         legs: affected legs (0-based).
         start: seconds after the simulation starts.
         duration: seconds (a ``spike`` affects the first set at or after ``start`` only).
-        probability: chance that a frame is lost (``dropped_frames``) or a whole set (``lost_sets``).
+        probability: chance that a frame is lost (``dropped_frames``), a whole set (``lost_sets``),
+            or that one random bit of a frame's payload is flipped after the encoder sent it
+            (``bit_flip``: a gateway or driver corrupting frames past CAN's own CRC).
         size: reading offset (m) of a ``spike``, a ``step`` (an encoder that slipped, for
-            ``duration``) or the second sender's frame of a ``duplicate_id`` (sent on the leg's
-            CAN id just before the genuine frame).
+            ``duration``), the second sender's frame of a ``duplicate_id`` (sent on the leg's
+            CAN id just before the genuine frame) or an ``intruder``'s frames (a sender on the
+            leg's id, ``seconds`` after each set, whose rolling counter copies the encoder's
+            next value and whose checksum is right: plausible frames).
         sets: a ``late_frame`` leg sends its frame of this many sets earlier, with that set's
             timestamp, last in the set, instead of the current one; ``repeated_frames``: every
             frame is sent this many times in a row, stamp and all (a gateway's repeats);
             ``gateway_burst``: this many sets are held, then sent in order with the stamp of the
             last frame (a gateway that batches and stamps a burst once).
-        seconds: an ``ahead_stamp`` leg's frames carry stamps this much later (s) than its set's.
+        seconds: an ``ahead_stamp`` leg's frames carry stamps this much later (s) than its set's;
+            an ``intruder`` sends this long (s) after each set.
     """
 
     kind: str
@@ -251,19 +258,27 @@ def _changeover(t: Table) -> ChangeoverScript:
 def _fault(t: Table) -> Fault:
     kind = t.text("kind", choices=FAULTS)
     leg = t.take("leg", 0)
-    every = kind in ("lost_sets", "repeated_frames", "gateway_burst") or (leg == 0 and kind == "dropped_frames")
+    every = kind in ("lost_sets", "repeated_frames", "gateway_burst") or (
+        leg == 0 and kind in ("dropped_frames", "bit_flip")
+    )
     legs = tuple(range(6)) if every else (t.integer("leg", lo=1, hi=6) - 1,)
     fault = Fault(
         kind=kind,
         legs=legs,
         start=t.number("start", 0.0, 0.0, 1e6),
         duration=t.number("duration", {"spike": 0.0, "step": 1e6, "held_brake": 1e6}.get(kind, 1.0), 0.0, 1e6),
-        probability=t.number("probability", 0.2, 0.0, 1.0) if kind in ("dropped_frames", "lost_sets") else 1.0,
-        size=t.number("size", 0.002, -0.5, 0.5) if kind in ("spike", "step", "duplicate_id") else 0.0,
+        probability=t.number("probability", 0.01 if kind == "bit_flip" else 0.2, 0.0, 1.0)
+        if kind in ("dropped_frames", "lost_sets", "bit_flip")
+        else 1.0,
+        size=t.number("size", 0.002, -0.5, 0.5) if kind in ("spike", "step", "duplicate_id", "intruder") else 0.0,
         sets=t.integer("sets", {"late_frame": 1, "repeated_frames": 10, "gateway_burst": 5}.get(kind, 1), 1, 1000)
         if kind in ("late_frame", "repeated_frames", "gateway_burst")
         else 1,
-        seconds=t.number("seconds", 0.05, -10.0, 10.0) if kind == "ahead_stamp" else 0.0,
+        seconds=t.number("seconds", 0.05, -10.0, 10.0)
+        if kind == "ahead_stamp"
+        else t.number("seconds", 0.005, 0.0, 10.0)
+        if kind == "intruder"
+        else 0.0,
     )
     t.finish()
     return fault

@@ -4,8 +4,10 @@ Each simulated fixture plays its pose sequence (:mod:`hexapod_model.service.sim.
 playback speed that slows to 0 in lock phases; a pose between two samples of the sequence is
 interpolated on SE(3). Its leg readings come from the hexapod's inverse kinematics (warm
 started), get Gaussian noise, then the faults act, and every leg's reading is encoded with the
-fixture's frame layout, CAN id and home count and sent on the bus. Every sent set is kept in
-:attr:`Simulator.truth` (the poses the service should report).
+fixture's frame layout, CAN id and home count and sent on the bus: with the layout's rolling
+counter (one up per frame of a leg, lost frames included) and checksum, and a CANopen SYNC with
+its counter (1..240). Every sent set is kept in :attr:`Simulator.truth` (the poses the service
+should report).
 """
 
 from __future__ import annotations
@@ -89,6 +91,9 @@ class _Encoders:
         self.burst = 0  # sets a gateway holds before sending them with one stamp (gateway_burst)
         self.held: list[can.Message] = []
         self.held_sets = 0
+        self.counter = [0] * 6  # each encoder's rolling counter (its next frame's)
+        self.sync_counter = 0  # the CANopen SYNC's counter (its last, 1..240)
+        self.intruder: dict[int, tuple[float, float]] = {}  # leg -> (reading, seconds after the set) (intruder)
 
     def pose(self) -> np.ndarray:
         n = len(self.sim.poses)
@@ -148,7 +153,8 @@ class _Encoders:
         err, warn, drop = [False] * 6, [False] * 6, [False] * 6
         self.late = {}  # leg -> sets: send that old frame last instead (late_frame)
         self.duplicate = {}  # leg -> reading of a second sender (duplicate_id)
-        self.ahead, self.repeats, self.burst = {}, 1, 0
+        self.ahead, self.repeats, self.burst, self.intruder = {}, 1, 0, {}
+        flip = 0.0
         active = []
         for i, f in enumerate(self.sim.faults):
             if f.kind == "spike":
@@ -187,16 +193,43 @@ class _Encoders:
                     self.repeats = f.sets
                 elif f.kind == "gateway_burst":
                     self.burst = f.sets
+                elif f.kind == "bit_flip":
+                    flip = f.probability
+                elif f.kind == "intruder":
+                    self.intruder[k] = (float(r[k] + f.size), f.seconds)
             if f.kind == "lost_sets" and self.rng.random() < f.probability:
                 drop = [True] * 6
         msgs: list[can.Message | None] = []
         for k, leg in enumerate(self.cfg.legs):
             try:
-                msgs.append(None if drop[k] else leg.message(float(r[k]), err[k], warn[k]))
+                msgs.append(None if drop[k] else leg.message(float(r[k]), err[k], warn[k], self.counter[k]))
             except FrameError as exc:
                 log.warning("simulated fixture %s leg %d: frame not sent: %s", self.cfg.name, k + 1, exc)
                 msgs.append(None)
+            self.counter[k] += 1  # a lost frame was counted by its encoder
+            m = msgs[-1]
+            if m is not None and flip > 0.0 and self.rng.random() < flip:
+                bit = int(self.rng.integers(8 * len(m.data)))
+                m.data[bit >> 3] ^= 1 << (bit & 7)
         return msgs, tuple(active)
+
+    def intruders(self, stamp: float | None) -> list[can.Message]:
+        """The intruders' frames of this set: on a leg's id, with the encoder's next counter."""
+        out = []
+        for k, (reading, seconds) in self.intruder.items():
+            try:
+                m = self.cfg.legs[k].message(reading, counter=self.counter[k])
+            except FrameError:
+                continue
+            if stamp is not None:
+                m.timestamp = stamp + seconds
+            out.append(m)
+        return out
+
+    def next_sync(self) -> int:
+        """The counter of the next CANopen SYNC (1..240, as a SYNC producer's with overflow value 240)."""
+        self.sync_counter = self.sync_counter % 240 + 1
+        return self.sync_counter
 
 
 class Simulator:
@@ -272,7 +305,9 @@ class Simulator:
             beat = t_sim >= enc.next_beat
             if beat:
                 enc.next_beat = t_sim + enc.cfg.canopen.heartbeat
-            order[:0] = master_frames(enc.cfg.canopen, None if stamp is None else stamp - FRAME_TIME, beat)
+            sync = master_frames(enc.cfg.canopen, None if stamp is None else stamp - FRAME_TIME, beat, enc.next_sync())
+            order[:0] = sync
+        order += enc.intruders(stamp)
         out = [m for m in order if m is not None for _ in range(enc.repeats)]
         if enc.burst > 1 or enc.held:  # a gateway: the burst goes out at once, stamped with its last frame
             enc.held += out
