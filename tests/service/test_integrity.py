@@ -13,6 +13,7 @@ from hexapod_model.service import ConfigError, FixtureCycle, Simulator, geometry
 from hexapod_model.service.config.codec import FrameLayout, decode, encode
 from hexapod_model.service.config.integrity import FrameIntegrity, checksum, crc8_sae_j1850
 from hexapod_model.service.cycle.canopen_link import CanopenLink, SyncClock
+from hexapod_model.service.cycle.frame_checks import FrameChecks
 
 from ..conftest import hexapod
 from .helpers import CollectingBus, fixture_table, pose_error, service_config, sim_config
@@ -159,3 +160,37 @@ def test_canopen_frames_after_two_syncs_are_no_set(tmp_path):
     ]
     assert cycle.counters["sync_mismatch"] == 1
     assert not any(r.status == "bad_frame" for r in records[-15:])
+
+
+DBC_TEXT = """VERSION ""
+
+BU_: ENC
+
+BO_ 385 Encoder: 8 ENC
+ SG_ Position : 0|32@1- (1,0) [0|0] "um" Vector__XXX
+ SG_ Error : 32|1@1+ (1,0) [0|1] "" Vector__XXX
+ SG_ Counter : 40|4@1+ (1,0) [0|15] "" Vector__XXX
+ SG_ Checksum : 56|8@1+ (1,0) [0|255] "" Vector__XXX
+"""
+
+
+def test_a_dbc_counter_and_checksum_are_checked_and_a_missing_warning_signal_is_none(tmp_path):
+    cantools = pytest.importorskip("cantools")
+    dbc = tmp_path / "counted.dbc"
+    dbc.write_text(DBC_TEXT)
+    encoder = {"protocol": "dbc", "dbc": str(dbc), "counter": "Counter", "crc": "Checksum", "crc_kind": "xor8"}
+    layout = service_config(tmp_path, [fixture_table(encoder=encoder)]).fixtures[0].legs[0].layout
+    assert layout.warning_bit is None and layout.error_bit == 32
+    i = layout.integrity
+    assert (i.counter_bit, i.counter_bits, i.crc_byte, i.crc_kind) == (40, 4, 7, "xor8")
+    message = cantools.database.load_file(str(dbc)).get_message_by_name("Encoder")
+    checks = FrameChecks(i)
+    for n in range(20):  # frames as the DBC describes them, the checksum computed by the sender
+        data = bytearray(message.encode({"Position": 1000 + n, "Error": 0, "Counter": n % 16, "Checksum": 0}))
+        data[7] = checksum("xor8", bytes(data[:7]))
+        assert checks.check(0, data) is None and decode(layout, data).position == 1000 + n
+    data[0] ^= 0x04
+    assert checks.check(0, data) == "bad_crc"
+    skipped = bytearray(message.encode({"Position": 5, "Error": 0, "Counter": 7, "Checksum": 0}))
+    skipped[7] = checksum("xor8", bytes(skipped[:7]))
+    assert checks.check(0, skipped) == "counter_gap"
