@@ -144,6 +144,15 @@ def test_without_the_sampling_period_a_gateways_bursts_give_flagged_poses_of_the
         assert dp < 5 * rec.sigma["translation_mm"] * 1e-3 or "jump" in rec.flags or "settling" in rec.flags
 
 
+def test_a_gateway_that_stops_batching_leaves_burst_mode(tmp_path):
+    batch = gateway()
+    truth: list = []
+    cycle, out = deliver(tmp_path, 300, lambda k, frames: batch(k, frames) if k < 150 else frames, truth=truth)
+    assert not wrong_ok(out, truth)
+    later = [rec for _, rec in out if set_of(rec) >= 175]
+    assert len(later) > 120 and all(rec.status == "ok" and rec.flags == [] for rec in later), later[:3]
+
+
 @pytest.mark.parametrize("fault", ["reordered", "frame_lost", "instant_lost"])
 def test_a_gateway_burst_that_cannot_be_split_into_instants_gives_no_pose(tmp_path, fault):
     rng = np.random.default_rng(7)

@@ -3,7 +3,8 @@
 USB and Ethernet CAN gateways deliver frames in bursts, often with one receive stamp for the
 whole burst, so stamps cannot tell its instants apart. Once a stamp holds two frames of one leg
 (different payloads; an exact repeat of the frame before is a gateway's repeat and dropped)
-the cycle buffers each burst here until a frame with another stamp ends it, then judges it:
+after a frame of every leg, the cycle buffers each burst here until a frame with another stamp
+ends it, then judges it:
 
 * **in order**: the burst is whole groups of six frames, each group every leg once, every group
   in the leg order of the burst's first (one frame per leg per instant, the bus's order kept).
@@ -21,7 +22,7 @@ every burst would fool: those sets are published with their poses but ``flagged`
 ``batched_stamps``. Any other burst (reordered, a frame lost, an instant lost, the first after
 frames with stamps of their own) is published as one ``incomplete`` record flagged
 ``batched_stamps``, without a pose: its frames cannot be put into instants. A single frame
-under a stamp of its own ends burst mode.
+under a stamp of its own, or three bursts in a row of one instant at most, end burst mode.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import statistics
 SAME_STAMP = 1e-6  # s: two frames stamped closer than this share one stamp
 RATIOS = 16  # in-order bursts whose period estimates are kept
 MIN_RATIOS = 3  # in-order bursts needed before a burst is timed
+SMALL_BURSTS = 3  # bursts in a row of at most six frames that end burst mode
 Frame = tuple[int, "bytes | bytearray", float, "str | None"]  # leg (0-based), payload, stamp (s), failed check
 
 
@@ -54,6 +56,8 @@ class Bursts:
         self._ratios: list[float] = []
         #: bursts that could not be split into instants, since the start
         self.unsplit = 0
+        #: bursts in a row of at most one instant (six frames): stamps separate instants again
+        self.small = 0
 
     def shares_instant(self, leg: int, data: bytes | bytearray, t: float) -> bool:
         """Whether a frame outside burst mode shows a stamp holding two instants (then burst mode begins with it)."""
@@ -61,10 +65,10 @@ class Bursts:
             self.stamp, self._run = t, {leg: data}
             return False
         last = self._run.get(leg)
-        if last is None or last == data:  # a new leg, or a repeat of the leg's frame
+        if last is None or last == data or len(self._run) < 6:  # not yet a second instant of the whole set
             self._run[leg] = data
             return False
-        self.engaged, self._first, self.frames = True, True, []
+        self.engaged, self._first, self.frames, self.small = True, True, [], 0
         return True
 
     def add(self, leg: int, data: bytes | bytearray, t: float, failed: str | None) -> bool:
@@ -85,6 +89,7 @@ class Bursts:
             return [], None, 0, False
         frames, stamp, previous, first = self.frames, self.stamp, self._previous, self._first
         self.frames, self.stamp, self._previous, self._first = [], next_stamp, stamp, False
+        self.small = self.small + 1 if len(frames) <= 6 else 0
         n = len(frames) // 6
         groups = [tuple(f[0] for f in frames[6 * j : 6 * j + 6]) for j in range(n)]
         in_order = n > 0 and len(frames) == 6 * n and len(set(groups[0])) == 6 and groups.count(groups[0]) == n

@@ -56,7 +56,7 @@ from ..targets.guidance import deviation, within
 from ..targets.target import Target
 from .ahead import AheadCheck
 from .alarms import UNACKNOWLEDGED, Acknowledgement, FaultLatch, LatchedFault
-from .burst import SAME_STAMP, Bursts
+from .burst import SAME_STAMP, SMALL_BURSTS, Bursts
 from .frame_checks import CHECKS, FrameChecks
 from .lock import MOTION_LEGS, LockDetector
 from .lock_load import lock_load
@@ -179,10 +179,21 @@ class FixtureCycle:
         unfinished set as ``incomplete`` (or ``silent_leg``) naming the missing legs. A frame that
         would open a newer instant waits for the next frame (:mod:`~hexapod_model.service.cycle.ahead`):
         one whose stamp ran ahead of the others is dropped and named (``ahead:legN``). An exact
-        repeat of a leg's frame (a gateway's) is dropped and counted.
+        repeat of a leg's frame (a gateway's) is dropped and counted. A gateway's bursts of
+        instants under one stamp are buffered and split (:mod:`~hexapod_model.service.cycle.burst`):
+        their records come one per call, after the burst.
         """
         if self._bursts.engaged or self._bursts.shares_instant(leg, data, t):
             return self._burst_frame(leg, data, t)
+        record = self._frame(leg, data, t)
+        if self._pending:  # a burst's records are still queued: this one after them
+            if record is not None:
+                self._pending.append(record)
+            return self._pending.popleft()
+        return record
+
+    def _frame(self, leg: int, data: bytes | bytearray, t: float, check: bool = True) -> PoseRecord | None:
+        """A frame outside burst mode (see :meth:`on_frame`); ``check``: not checked yet (integrity)."""
         skew = self._max_skew or 0.75 * self._period  # NaN until the period is measured
         if t < self._t_newest - skew:  # older than this instant: a late frame (False for NaN)
             self._late_run += 1
@@ -196,7 +207,7 @@ class FixtureCycle:
         if (since == 0.0 or since <= window) and data == self._data[leg] or self._ahead.repeats(leg, data, t, window):
             self.counters["repeated_frames"] += 1  # the same frame again (a gateway's repeat)
             return None
-        if self._checks is not None:
+        if self._checks is not None and check:
             failed = self._checks.check(leg, data)
             if failed is not None:  # it takes its leg's place in its set, which gives no pose
                 self.counters[failed] += 1
@@ -217,14 +228,19 @@ class FixtureCycle:
             self._late.add(leg)
             return self._pending.popleft() if self._pending else None
         if t - bursts.stamp >= SAME_STAMP:
-            single = len(bursts.frames) == 1 and bursts.frames[0]
+            single = len(bursts.frames) == 1 and bursts.frames.pop()  # not a burst: taken as a frame below
             self._close_burst(t)
-            if single:  # a frame under a stamp of its own: frames are stamped one by one again
+            if single or bursts.small >= SMALL_BURSTS:  # stamps separate instants again
                 bursts.disengage()
-                for frame in (single[:3], (leg, data, t)):
-                    record = self.on_frame(*frame)
+                if single:  # checked when it came
+                    if single[3] is not None:
+                        self._failed[single[0], single[2]] = single[3]
+                    record = self._frame(*single[:3], check=False)
                     if record is not None:
                         self._pending.append(record)
+                record = self._frame(leg, data, t)
+                if record is not None:
+                    self._pending.append(record)
                 return self._pending.popleft() if self._pending else None
         failed = self._checks.check(leg, data) if self._checks is not None else None
         if failed is not None:
