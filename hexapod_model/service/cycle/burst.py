@@ -61,8 +61,10 @@ class Bursts:
 
     def shares_instant(self, leg: int, data: bytes | bytearray, t: float) -> bool:
         """Whether a frame outside burst mode shows a stamp holding two instants (then burst mode begins with it)."""
-        if abs(t - self.stamp) >= SAME_STAMP:
-            self.stamp, self._run = t, {leg: data}
+        if abs(t - self.stamp) >= SAME_STAMP:  # the common case: a stamp of its own
+            self.stamp = t
+            self._run.clear()
+            self._run[leg] = data
             return False
         last = self._run.get(leg)
         if last is None or last == data or len(self._run) < 6:  # not yet a second instant of the whole set
