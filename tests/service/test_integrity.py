@@ -194,3 +194,29 @@ def test_a_dbc_counter_and_checksum_are_checked_and_a_missing_warning_signal_is_
     skipped = bytearray(message.encode({"Position": 5, "Error": 0, "Counter": 7, "Checksum": 0}))
     skipped[7] = checksum("xor8", bytes(skipped[:7]))
     assert checks.check(0, skipped) == "counter_gap"
+
+
+def test_a_canopen_tpdo_long_after_its_sync_never_joins_the_next_syncs_set(tmp_path):
+    from .test_fieldbus import EDS
+
+    cfg = service_config(tmp_path, [fixture_table(encoder={"protocol": "canopen", "eds": str(EDS)})]).fixtures[0]
+    hexa = hexapod("reference")
+    cycle = FixtureCycle(cfg, hexa, geometry_hash(hexa), None, 1.0e9)
+    clock = SyncClock()
+    assert cfg.canopen is not None
+    link = CanopenLink("left", cfg.canopen, cycle.on_frame, clock, cfg.staleness)
+    records = []
+    t = 1.0e9
+    for n in range(80):
+        clock.on_sync(0, b"", t)  # a SYNC without a counter
+        tpdo = encode(cfg.legs[0].layout, 10 * n)[: cfg.canopen.pdo_length]  # instant n: count 10 n on every leg
+        for k in range(6):
+            link.on_heartbeat(k, bytes([0x05]), t)
+            stalled = n == 40 and k >= 3  # the sender stalled 60 ms: legs 4-6 come just before the next SYNC
+            rec = link.on_pdo(k, tpdo, t + (0.06 if stalled else 0.0001 * k))
+            if rec is not None:
+                records.append(rec)
+        t += 0.0601 if n == 40 else 0.01
+    posed = [r for r in records if r.pose is not None]
+    assert len(posed) > 40
+    assert all(len(set(r.readings)) == 1 for r in posed), [r.readings for r in posed if len(set(r.readings)) > 1][:2]

@@ -9,7 +9,11 @@ fixture's :meth:`~hexapod_model.service.cycle.fixture_cycle.FixtureCycle.on_fram
   instant carry one stamp (the sampling instant, not the arrival order). A SYNC with a counter
   byte (CiA 301, ``0x1019`` of the SYNC producer) has it appended to each TPDO that follows it
   (0 without one): a set whose frames follow different SYNCs is ``sync_mismatch``
-  (:mod:`~hexapod_model.service.cycle.frame_checks`), never a pose.
+  (:mod:`~hexapod_model.service.cycle.frame_checks`), never a pose. A TPDO received more than
+  ``staleness`` after the latest SYNC is not used (its instant is unknown: stamped with its own
+  receipt time it could join the next SYNC's set); its leg is then missing from its set. Before
+  any SYNC was heard TPDOs are stamped with their receipt time (encoders sending on their own
+  timer).
 * **EMCY** (``0x80`` + node id): an emergency with a non-zero error code marks the leg's
   readings ``encoder_error`` (the status byte the link appends to each TPDO: the layout's error
   bit) until the node's error-reset EMCY (code ``0x0000``); both are logged.
@@ -75,6 +79,7 @@ class CanopenLink:
         self._operational = [False] * n
         self._late = LATE * encoders.heartbeat
         self._reported: set[int] = set()  # legs whose lost heartbeat was logged
+        self._unsynced: set[int] = set()  # legs whose TPDO came too long after the SYNC (logged once)
 
     def routes(self, tpdo_ids: list[int]) -> list[Route]:
         """``(can id, handler, leg)`` of every frame the link reads: TPDOs, EMCYs, heartbeats."""
@@ -99,7 +104,14 @@ class CanopenLink:
         if not self.alive(leg, t):
             return None  # a node not heard is silent, whatever it still sends
         sync = self.sync
-        stamp = sync.t if 0.0 <= t - sync.t <= self.staleness else t
+        since = t - sync.t
+        if not 0.0 <= since <= self.staleness and sync.t > -math.inf:  # long after its SYNC: which instant?
+            if leg not in self._unsynced:
+                self._unsynced.add(leg)
+                log.warning("fixture %s: leg%d: a TPDO %.3g s after the SYNC: not used", self.name, leg + 1, since)
+            return None
+        self._unsynced.discard(leg)
+        stamp = sync.t if since <= self.staleness else t
         status = 1 if self.emergency[leg] else 0
         return self._on_frame(leg, bytes(data[: self.encoders.pdo_length]) + bytes((status, sync.counter)), stamp)
 
