@@ -25,7 +25,7 @@ rate over that many fault-free samples, with its 99 % binomial interval, against
 :class:`~hexapod_model.service.Simulator` playing trajectory A (scale 2 mm, 100 sets/s, the
 geometry's noise) with leg 3 faulty from the start: ``offset 0.1`` / ``offset 0.3`` (mm),
 ``creep`` (1 um per set), ``late 1`` / ``late 3`` (its readings 1 or 3 sets old with fresh
-stamps), ``intruder`` (a device on its CAN id replaying its readings of 100 sets before), and
+stamps), ``replay`` (a device on its CAN id replaying its readings of 100 sets before), and
 ``clean`` (no fault: its inconsistent sets are false alarms, at the stated rate 1e-3). Per
 case: records ``ok``, "wrong ok" (an ``ok`` pose more than 10 um or 50 urad off the truth),
 "wrong ok above" (of those, the sets whose fault exceeds twice the leg's minimal detectable
@@ -126,7 +126,7 @@ SERVICE_CASES: dict[str, dict | None] = {  # the simulator's fault on leg 3 (sim
     "creep": {"kind": "creep", "size": 1e-4},  # m/s: 1 um per set at 100 sets/s
     "late 1": {"kind": "late_reading", "sets": 1},
     "late 3": {"kind": "late_reading", "sets": 3},
-    "intruder": {"kind": "intruder", "sets": 100},
+    "replay": {"kind": "replay", "sets": 100},
 }
 SERVICE_RATE = 100.0  # sets per second
 SERVICE_SCALE = 0.002  # m per unit of trajectory A: legs up to about 0.06 m/s

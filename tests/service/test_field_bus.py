@@ -18,12 +18,12 @@ from .test_cell import HOLD
 from .test_cycle import RATE, check_ok_poses, set_of
 
 
-def deliver(tmp_path, sets, transform, faults=(), seed=3, truth=None):
+def deliver(tmp_path, sets, transform, faults=(), seed=3, truth=None, **fixture):
     """Drive a cycle set by set; ``transform(k, frames) -> frames`` edits each set's ``(leg, data, t)`` list.
 
-    ``truth``: a list that receives every sent set, in order.
+    ``truth``: a list that receives every sent set, in order; ``fixture``: more fields of the fixture's table.
     """
-    svc = service_config(tmp_path, [fixture_table()])
+    svc = service_config(tmp_path, [fixture_table(**fixture)])
     sim = sim_config(svc, [{"name": "left", "rate": RATE, "trajectory": "A", "faults": list(faults)}], seed=seed)
     cfg, hexa = svc.fixtures[0], hexapod("reference")
     cycle = FixtureCycle(cfg, hexa, geometry_hash(hexa), None, 1.0e9)
@@ -88,45 +88,87 @@ def test_a_leg_stamped_50_ms_ahead_is_named_and_no_record_runs_ahead(tmp_path):
     check_ok_poses(out)
 
 
-def test_a_gateway_stamping_five_instants_with_one_time_gives_no_wrong_ok(tmp_path):
+def gateway(order=None):
+    """A ``deliver`` transform: five sets held, then delivered with the stamp of the burst's last frame.
+
+    ``order(frames) -> frames``: how the gateway orders a burst (default: as received).
+    """
     burst: list = []
 
-    def batch(k, frames):  # five sets held, then delivered in order with the stamp of the burst's last frame
+    def batch(k, frames):
         burst.extend(frames)
         if k % 5 != 4:
             return []
         stamp = frames[-1][2]
         out = [(leg, data, stamp) for leg, data, _ in burst]
         burst.clear()
-        return out
+        return out if order is None else order(out)
 
-    cycle, out = deliver(tmp_path, 300, batch)
+    return batch
+
+
+def wrong_ok(out, truth):
+    """``ok`` records farther than 5 sigma from the truth of the instant their ``t`` names."""
     wrong = []
-    for sent, rec in out:  # the truth at the record's time: the burst's last set
+    for _, rec in out:
         if rec.status == "ok":
-            dp, _ = pose_error(rec, sent.pose)
+            dp, _ = pose_error(rec, truth[set_of(rec)].pose)
             if dp > 5 * rec.sigma["translation_mm"] * 1e-3:
                 wrong.append((set_of(rec), dp))
-    assert not wrong, wrong[:5]
-    assert sum("batched_stamps" in rec.flags for _, rec in out) > 200
+    return wrong
 
 
-def test_a_gateway_reordering_frames_within_a_burst_never_gives_a_pose_of_two_instants(tmp_path):
-    burst: list = []
+PERIOD = {"encoder": {"sample_period": 1.0 / RATE}}  # the encoders' sampling period, given
+
+
+def test_a_gateway_stamping_five_instants_with_one_time_in_order_gives_their_poses(tmp_path):
+    truth: list = []
+    cycle, out = deliver(tmp_path, 300, gateway(), truth=truth, **PERIOD)
+    assert not wrong_ok(out, truth)
+    ok = [set_of(rec) for _, rec in out if rec.status == "ok"]
+    assert len(ok) > 250 and len(set(ok)) == len(ok), "one record per instant, dated at its instant"
+    times = [rec.t for _, rec in out]
+    assert all(b >= a for a, b in zip(times, times[1:])), "record times ran backwards"
+    assert cycle.fault is None, cycle.fault
+    check_ok_poses([(truth[set_of(rec)], rec) for _, rec in out])
+
+
+def test_without_the_sampling_period_a_gateways_bursts_give_flagged_poses_of_their_instants(tmp_path):
+    truth: list = []
+    cycle, out = deliver(tmp_path, 300, gateway(), truth=truth)
+    assert not any(rec.status == "ok" for _, rec in out)
+    posed = [(truth[set_of(rec)], rec) for _, rec in out if rec.pose is not None and "batched_stamps" in rec.flags]
+    assert len(posed) > 200
+    for sent, rec in posed:  # right for the instant its t names
+        dp, _ = pose_error(rec, sent.pose)
+        assert dp < 5 * rec.sigma["translation_mm"] * 1e-3 or "jump" in rec.flags or "settling" in rec.flags
+
+
+def test_a_gateway_that_stops_batching_leaves_burst_mode(tmp_path):
+    batch = gateway()
+    truth: list = []
+    cycle, out = deliver(tmp_path, 300, lambda k, frames: batch(k, frames) if k < 150 else frames, truth=truth)
+    assert not wrong_ok(out, truth)
+    later = [rec for _, rec in out if set_of(rec) >= 175]
+    assert len(later) > 120 and all(rec.status == "ok" and rec.flags == [] for rec in later), later[:3]
+
+
+@pytest.mark.parametrize("fault", ["reordered", "frame_lost", "instant_lost"])
+def test_a_gateway_burst_that_cannot_be_split_into_instants_gives_no_pose(tmp_path, fault):
     rng = np.random.default_rng(7)
 
-    def shuffled(k, frames):
-        burst.extend(frames)
-        if k % 5 != 4:
-            return []
-        stamp = frames[-1][2]
-        out = [(leg, data, stamp) for leg, data, _ in burst]
-        burst.clear()
-        order = rng.permutation(len(out))
-        return [out[i] for i in order]
+    def order(frames):
+        if fault == "reordered":
+            return [frames[i] for i in rng.permutation(len(frames))]
+        if fault == "frame_lost":
+            return frames[:9] + frames[10:]
+        return frames[:12] + frames[18:]  # the third instant of every burst lost
 
-    cycle, out = deliver(tmp_path, 300, shuffled)
-    assert not any(rec.status == "ok" for _, rec in out)
+    truth: list = []
+    cycle, out = deliver(tmp_path, 300, gateway(order), truth=truth, **PERIOD)
+    assert not any(rec.status == "ok" for _, rec in out), [rec.flags for _, rec in out if rec.status == "ok"][:3]
+    assert not any(rec.pose is not None for _, rec in out[10:])
+    assert sum("batched_stamps" in rec.flags for _, rec in out) > 50
 
 
 def test_a_frame_of_the_instant_arriving_after_the_next_instant_began_names_no_healthy_leg(tmp_path):

@@ -10,7 +10,7 @@ import pytest
 from hexapod_model.service import FixtureService, Simulator
 
 from ..conftest import hexapod
-from .helpers import service_config, sim_config
+from .helpers import fixture_table, pose_error, service_config, sim_config
 
 
 def serve(tmp_path, faults, seconds=4.0):
@@ -83,3 +83,61 @@ def test_a_batching_gateway_gives_no_wrong_ok_through_the_service(tmp_path):
     assert len(records) > 100
     assert not any(r.status == "ok" for r in records), [r.flags for r in records if r.status == "ok"][:3]
     assert sum("batched_stamps" in r.flags for r in records) > 100
+
+
+def test_a_batching_gateway_with_the_sampling_period_given_gives_right_poses_through_the_service(tmp_path):
+    table = fixture_table(encoder={"sample_period": 0.01}, staleness=0.2)  # staleness: longer than a burst's span
+    config = service_config(tmp_path, [table])
+    fault = {"kind": "gateway_burst", "sets": 5, "start": 0.0, "duration": 60}
+    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A", "faults": [fault]}])
+    records = []
+    hexa = hexapod("reference")
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    service = FixtureService(config, hexapods={"left": hexa}, http=False)
+    service.subscribe(records.append)
+    try:
+        service.start()
+        simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
+        simulator.run(3.0)
+        time.sleep(0.3)
+    finally:
+        service.stop()
+        bus.shutdown()
+    truth = {round(s.t_first * 100.0): s.pose for s in simulator.truth}
+    ok = [r for r in records if r.status == "ok"]
+    assert len(ok) > 150, sorted({(r.status, tuple(r.flags)) for r in records})[:10]
+    for r in ok:  # the pose of the instant its t names
+        dp, _ = pose_error(r, truth[round(r.t * 100.0)])
+        assert dp < 5 * r.sigma["translation_mm"] * 1e-3, (r.t, dp)
+
+
+def test_bit_flips_and_an_intruder_on_a_checked_layout_give_no_wrong_ok_through_the_service(tmp_path):
+    encoder = {"error_bit": 32, "warning_bit": 33, "counter": {"offset": 40, "bits": 4}, "crc": {"offset": 7}}
+    config = service_config(tmp_path, [fixture_table(encoder=encoder)])
+    faults = [
+        {"kind": "bit_flip", "probability": 0.01, "start": 0.3, "duration": 60},
+        {"kind": "intruder", "leg": 2, "size": 0.0003, "start": 1.5, "duration": 1.0},
+    ]
+    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A", "faults": faults}])
+    records = []
+    hexa = hexapod("reference")
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    service = FixtureService(config, hexapods={"left": hexa}, http=False)
+    service.subscribe(records.append)
+    try:
+        service.start()
+        simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
+        simulator.run(3.5)
+        time.sleep(0.2)
+        cycle = service.cycles["left"]
+    finally:
+        service.stop()
+        bus.shutdown()
+    truth = {round(s.t_first * 100.0): s.pose for s in simulator.truth}
+    ok = [r for r in records if r.status == "ok"]
+    assert len(ok) > 100, (cycle.fault, sorted({(r.status, tuple(r.flags)) for r in records})[:12])
+    for r in ok:
+        dp, _ = pose_error(r, truth[round(r.t * 100.0)])
+        assert dp < 5 * r.sigma["translation_mm"] * 1e-3, (r.t, dp, r.flags)
+    assert cycle.counters["bad_crc"] > 3 and cycle.counters["counter_gap"] > 30
+    assert any("bad_crc:leg" in f for r in records for f in r.flags)

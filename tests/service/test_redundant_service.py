@@ -228,7 +228,7 @@ def test_the_service_routes_the_inclinometer_frame_and_health_and_log_name_the_l
     [
         ({"kind": "late_reading", "sets": 3}, lambda z, k, t: z[k - 3]),
         ({"kind": "creep", "size": 1e-4}, lambda z, k, t: z[k] + 1e-4 * t),
-        ({"kind": "intruder", "sets": 5, "size": 2e-5}, lambda z, k, t: z[k - 5] + 2e-5),
+        ({"kind": "replay", "sets": 5, "size": 2e-5}, lambda z, k, t: z[k - 5] + 2e-5),
         ({"kind": "step", "size": 1e-4}, lambda z, k, t: z[k] + 1e-4),
     ],
 )

@@ -23,9 +23,10 @@ from typing import NamedTuple
 import can
 
 from ..errors import ConfigError, FrameError
+from .integrity import MAX_PAYLOAD, FrameIntegrity
 from .table import Table
 
-MAX_PAYLOAD = 8  # classic CAN
+MAX_SAMPLE_PERIOD = 10.0  # s
 
 
 @dataclass(frozen=True)
@@ -42,6 +43,10 @@ class FrameLayout:
         error_bit: payload bit meaning *error* (reading unusable), or ``None`` (``-1`` in the file).
         warning_bit: payload bit meaning *warning* (reading usable, e.g. signal margin low), or
             ``None`` (``-1`` in the file).
+        integrity: the frame's rolling counter and checksum byte, if any
+            (:mod:`~hexapod_model.service.config.integrity`).
+        sample_period: the encoders' sampling (or SYNC) period (s; 0: not given): it splits a
+            batching gateway's bursts into instants (:mod:`~hexapod_model.service.cycle.burst`).
     """
 
     byte_order: str = "little"
@@ -51,8 +56,12 @@ class FrameLayout:
     metres_per_count: float = 1e-6
     error_bit: int | None = 32
     warning_bit: int | None = 33
+    integrity: FrameIntegrity = FrameIntegrity()
+    sample_period: float = 0.0
 
     def __post_init__(self) -> None:
+        if not 0.0 <= self.sample_period <= MAX_SAMPLE_PERIOD:
+            raise ConfigError("sample_period", self.sample_period, f"expected 0 (not given) to {MAX_SAMPLE_PERIOD:g} s")
         if self.byte_order not in ("little", "big"):
             raise ConfigError("byte_order", self.byte_order, "expected 'little' or 'big'")
         if not 1 <= self.width <= MAX_PAYLOAD:
@@ -76,6 +85,14 @@ class FrameLayout:
                 )
         if self.error_bit is not None and self.error_bit == self.warning_bit:
             raise ConfigError("warning_bit", self.warning_bit, "same bit as error_bit")
+        taken = self.integrity.used_bits()
+        for name, bits in (
+            ("offset", set(count_bits)),
+            ("error_bit", {self.error_bit}),
+            ("warning_bit", {self.warning_bit}),
+        ):
+            if bits & taken:
+                raise ConfigError(name, getattr(self, name), "overlaps the frame's counter or checksum")
 
     @classmethod
     def from_table(cls, t: Table) -> FrameLayout:
@@ -95,6 +112,8 @@ class FrameLayout:
                 metres_per_count=t.number("metres_per_count", d.metres_per_count, -1.0, 1.0),
                 error_bit=bit("error_bit", d.error_bit),
                 warning_bit=bit("warning_bit", d.warning_bit),
+                integrity=FrameIntegrity.from_table(t),
+                sample_period=t.number("sample_period", 0.0, 0.0, MAX_SAMPLE_PERIOD),
             )
         except ConfigError as exc:
             if exc.field.startswith(t.where):
@@ -105,9 +124,9 @@ class FrameLayout:
 
     @cached_property
     def length(self) -> int:
-        """Bytes a frame needs: the count field and every status bit."""
+        """Bytes a frame needs: the count field, every status bit and the integrity fields."""
         bits = [b for b in (self.error_bit, self.warning_bit) if b is not None]
-        return max([self.offset + self.width] + [b // 8 + 1 for b in bits])
+        return max([self.offset + self.width, self.integrity.length] + [b // 8 + 1 for b in bits])
 
     @cached_property
     def count_range(self) -> tuple[int, int]:
@@ -162,8 +181,12 @@ def decode(layout: FrameLayout, data: bytes | bytearray) -> Decoded:
     return Decoded(*layout.unpack(data))
 
 
-def encode(layout: FrameLayout, count: int, error: bool = False, warning: bool = False) -> bytes:
-    """Payload of ``layout.length`` bytes; :class:`FrameError` when ``count`` does not fit the field."""
+def encode(layout: FrameLayout, count: int, error: bool = False, warning: bool = False, counter: int = 0) -> bytes:
+    """Payload of ``layout.length`` bytes; :class:`FrameError` when ``count`` does not fit the field.
+
+    A layout with a rolling counter carries ``counter`` (modulo its range), one with a checksum
+    byte the checksum of the other bytes (:mod:`~hexapod_model.service.config.integrity`).
+    """
     lo, hi = layout.count_range
     if not lo <= count <= hi:
         raise FrameError(f"count {count} does not fit the {8 * layout.width}-bit field [{lo}, {hi}]")
@@ -176,6 +199,7 @@ def encode(layout: FrameLayout, count: int, error: bool = False, warning: bool =
     for bit, on in ((layout.error_bit, error), (layout.warning_bit, warning)):
         if on and bit is not None:
             data[bit >> 3] |= 1 << (bit & 7)
+    layout.integrity.seal(data, counter)
     return bytes(data)
 
 
@@ -207,10 +231,10 @@ class LegCodec:
             raise FrameError(f"reading {reading!r} m is count {c}, outside the field [{lo}, {hi}]")
         return c
 
-    def message(self, reading: float, error: bool = False, warning: bool = False) -> can.Message:
-        """The ``can.Message`` an encoder at ``reading`` (m) sends."""
+    def message(self, reading: float, error: bool = False, warning: bool = False, counter: int = 0) -> can.Message:
+        """The ``can.Message`` an encoder at ``reading`` (m) sends (``counter``: its rolling counter, if any)."""
         return can.Message(
             arbitration_id=self.can_id,
             is_extended_id=self.extended_id,
-            data=encode(self.layout, self.count(reading), error, warning),
+            data=encode(self.layout, self.count(reading), error, warning, counter),
         )

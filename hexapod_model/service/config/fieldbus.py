@@ -9,7 +9,10 @@
   follows, on that leg's id of ``can_ids``; its signal ``position`` (default ``"Position"``) is
   the count, its 1-bit signals ``error`` / ``warning`` (default ``"Error"`` / ``"Warning"``
   when the message has them) the status bits. The count's size is the signal's ``scale`` in its
-  ``unit`` (``m``, ``mm``, ``um`` or ``nm``).
+  ``unit`` (``m``, ``mm``, ``um`` or ``nm``). ``counter`` names the message's rolling-counter
+  signal (2..16 bits, unsigned, little-endian or within one byte; it may be the message's
+  multiplexer: a multiplexed counter), ``crc`` its checksum signal (one whole byte) and
+  ``crc_kind`` the checksum (:mod:`~hexapod_model.service.config.integrity`).
 * ``"canopen"``: CiA 301/406 encoders described by their EDS or DCF (``eds = "encoder.eds"``,
   read with ``canopen``): ``can_ids`` are the legs' TPDO1 COB-IDs, the node id of each is its
   COB-ID less the EDS's TPDO1 base (``$NODEID+0x180``); the position object ``position_object``
@@ -17,7 +20,8 @@
   is ``0x6005`` sub 1 (nm) unless ``metres_per_count`` is given. At run time
   (:mod:`~hexapod_model.service.cycle.canopen_link`) the SYNC stamps the set, an EMCY makes the
   leg's readings ``encoder_error`` until its error-reset EMCY, and a leg whose heartbeat
-  (``0x1017``, ms) is late by half a period more is ``silent_leg``.
+  (``0x1017``, ms) is late by half a period more is ``silent_leg``; a set whose frames follow
+  SYNCs with different counters is ``sync_mismatch``.
 
 Each is turned into one :class:`FrameLayout` the cycle decodes (byte-aligned fields; a layout
 the fast decoder cannot read is a :class:`ConfigError` naming the signal).
@@ -31,7 +35,8 @@ from typing import Any
 
 from ...extras import install_hint
 from ..errors import ConfigError
-from .codec import MAX_PAYLOAD, FrameLayout
+from .codec import MAX_PAYLOAD, MAX_SAMPLE_PERIOD, FrameLayout
+from .integrity import CHECKSUMS, COUNTER_BITS, FrameIntegrity
 from .table import Table
 
 PROTOCOLS = ("raw", "dbc", "canopen")
@@ -51,7 +56,7 @@ class CanopenEncoders:
         sync_id: COB-ID of the SYNC (``0x1005``).
         emcy_base: EMCY COB-ID less the node id (``0x1014``, ``$NODEID+0x80``).
         heartbeat: the producer heartbeat time (s, ``0x1017``); 0: none is watched.
-        pdo_length: bytes of the TPDO; the link appends one status byte after them.
+        pdo_length: bytes of the TPDO; the link appends a status byte and the SYNC counter after them.
     """
 
     eds: Path
@@ -95,8 +100,10 @@ def dbc_layout(t: Table, folder: Path) -> FrameLayout:
     signals = {s.name: s for s in message.signals}
 
     def signal(key: str, default: str | None):
-        chosen = t.text(key, default if default in signals else "")
-        if chosen and chosen not in signals:
+        if key not in t.data:  # the default signal when the message has it
+            return signals.get(default) if default else None
+        chosen = t.text(key)
+        if chosen not in signals:
             raise t.error(key, chosen, f"message {name} has no such signal ({', '.join(signals)})")
         return signals.get(chosen)
 
@@ -118,6 +125,8 @@ def dbc_layout(t: Table, folder: Path) -> FrameLayout:
         if s is not None and s.length != 1:
             raise t.error(key, s.name, f"a {s.length}-bit signal: expected a 1-bit status")
         bits.append(None if s is None else s.start)
+    integrity = _dbc_integrity(t, name, signal("counter", None), signal("crc", None))
+    period = t.number("sample_period", 0.0, 0.0, MAX_SAMPLE_PERIOD)
     t.finish()
     try:
         return FrameLayout(
@@ -128,7 +137,34 @@ def dbc_layout(t: Table, folder: Path) -> FrameLayout:
             metres_per_count=float(position.scale) / UNITS[unit],
             error_bit=bits[0],
             warning_bit=bits[1],
+            integrity=integrity,
+            sample_period=period,
         )
+    except ConfigError as exc:
+        raise exc.within(t.where, t.source) from None
+
+
+def _dbc_integrity(t: Table, message: str, counter: Any, crc: Any) -> FrameIntegrity:
+    """The rolling counter and checksum signals of a DBC message as :class:`FrameIntegrity`."""
+    lo, hi = COUNTER_BITS
+    counter_bit = None
+    if counter is not None:
+        within_byte = counter.start // 8 == (counter.start + counter.length - 1) // 8
+        if counter.is_signed or not lo <= counter.length <= hi:
+            raise t.error("counter", counter.name, f"expected an unsigned counter of {lo}..{hi} bits")
+        if counter.byte_order != "little_endian" and not within_byte:
+            raise t.error("counter", counter.name, "a big-endian counter across bytes: use protocol = raw")
+        if getattr(counter, "multiplexer_ids", None):
+            raise t.error("counter", counter.name, f"present only for some multiplexer values of {message}")
+        counter_bit = counter.start if counter.byte_order == "little_endian" else counter.start - counter.length + 1
+    crc_byte = None
+    if crc is not None:
+        if crc.length != 8 or (crc.start % 8 != (0 if crc.byte_order == "little_endian" else 7)):
+            raise t.error("crc", crc.name, "expected a checksum of one whole byte")
+        crc_byte = crc.start // 8
+    kind = t.text("crc_kind", "crc8-sae-j1850", CHECKSUMS) if crc is not None else "crc8-sae-j1850"
+    try:
+        return FrameIntegrity(counter_bit, counter.length if counter is not None else 4, crc_byte, kind)
     except ConfigError as exc:
         raise exc.within(t.where, t.source) from None
 
@@ -142,6 +178,7 @@ def canopen_layout(t: Table, folder: Path, can_ids: list[int]) -> tuple[FrameLay
     path = _path(t, "eds", folder)
     position_object = t.integer("position_object", 0x6004, 0x1000, 0xFFFF)
     step = t.number("metres_per_count", 0.0, -1.0, 1.0) if "metres_per_count" in t.data else None
+    period = t.number("sample_period", 0.0, 0.0, MAX_SAMPLE_PERIOD)
     try:
         od: Any = canopen.objectdictionary.import_od(str(path), 0)  # its entries' types vary by object
         cob = int(od[0x1800][1].default) & 0x7FF
@@ -169,8 +206,8 @@ def canopen_layout(t: Table, folder: Path, can_ids: list[int]) -> tuple[FrameLay
     else:
         raise t.error("position_object", hex(position_object), f"not mapped in TPDO1 of {path.name}")
     length = sum(m & 0xFF for m in mapped) // 8
-    if offset % 8 or bits % 8 or length >= MAX_PAYLOAD:
-        raise t.error("eds", str(path), "the position must be whole bytes of a TPDO shorter than 8 bytes")
+    if offset % 8 or bits % 8 or length > MAX_PAYLOAD - 2:  # the link appends the status and SYNC counter bytes
+        raise t.error("eds", str(path), "the position must be whole bytes of a TPDO of at most 6 bytes")
     if cob != TPDO1_BASE:
         raise t.error("eds", str(path), f"TPDO1's COB-ID is node id + {cob:#x}; expected node id + 0x180")
     nodes = tuple(i - cob for i in can_ids)
@@ -180,7 +217,15 @@ def canopen_layout(t: Table, folder: Path, can_ids: list[int]) -> tuple[FrameLay
     t.finish()
     try:
         layout = FrameLayout(
-            "little", offset // 8, bits // 8, kind in _SIGNED, step or 1e-6, error_bit=8 * length, warning_bit=None
+            "little",
+            offset // 8,
+            bits // 8,
+            kind in _SIGNED,
+            step or 1e-6,
+            error_bit=8 * length,
+            warning_bit=None,
+            integrity=FrameIntegrity(sync_byte=length + 1),
+            sample_period=period,
         )
     except ConfigError as exc:
         raise exc.within(t.where, t.source) from None

@@ -6,7 +6,14 @@ fixture's :meth:`~hexapod_model.service.cycle.fixture_cycle.FixtureCycle.on_fram
 
 * **SYNC** (shared by the bus's CANopen fixtures, :class:`SyncClock`): a TPDO received within
   ``staleness`` of the latest SYNC is stamped with that SYNC's time, so the six frames of one
-  instant carry one stamp (the sampling instant, not the arrival order).
+  instant carry one stamp (the sampling instant, not the arrival order). A SYNC with a counter
+  byte (CiA 301, ``0x1019`` of the SYNC producer) has it appended to each TPDO that follows it
+  (0 without one): a set whose frames follow different SYNCs is ``sync_mismatch``
+  (:mod:`~hexapod_model.service.cycle.frame_checks`), never a pose. A TPDO received more than
+  ``staleness`` after the latest SYNC is not used (its instant is unknown: stamped with its own
+  receipt time it could join the next SYNC's set); its leg is then missing from its set. Before
+  any SYNC was heard TPDOs are stamped with their receipt time (encoders sending on their own
+  timer).
 * **EMCY** (``0x80`` + node id): an emergency with a non-zero error code marks the leg's
   readings ``encoder_error`` (the status byte the link appends to each TPDO: the layout's error
   bit) until the node's error-reset EMCY (code ``0x0000``); both are logged.
@@ -35,14 +42,16 @@ Route = tuple[int, OnFrame, int]  # CAN id, handler, leg
 
 
 class SyncClock:
-    """The time (s, bus clock) of the latest SYNC on the bus."""
+    """The time (s, bus clock) and the counter (0: none) of the latest SYNC on the bus."""
 
     def __init__(self) -> None:
         self.t = -math.inf
+        self.counter = 0
 
     def on_sync(self, leg: int, data: bytes | bytearray, t: float) -> None:
-        """A SYNC frame stamped ``t`` (``leg`` and ``data`` unused: the route's signature)."""
+        """A SYNC frame stamped ``t``, with its counter byte if it has one (``leg`` unused: the route's signature)."""
         self.t = t
+        self.counter = data[0] if data else 0
 
 
 class CanopenLink:
@@ -70,6 +79,7 @@ class CanopenLink:
         self._operational = [False] * n
         self._late = LATE * encoders.heartbeat
         self._reported: set[int] = set()  # legs whose lost heartbeat was logged
+        self._unsynced: set[int] = set()  # legs whose TPDO came too long after the SYNC (logged once)
 
     def routes(self, tpdo_ids: list[int]) -> list[Route]:
         """``(can id, handler, leg)`` of every frame the link reads: TPDOs, EMCYs, heartbeats."""
@@ -90,12 +100,20 @@ class CanopenLink:
         return ok
 
     def on_pdo(self, leg: int, data: bytes | bytearray, t: float) -> PoseRecord | None:
-        """A TPDO of leg ``leg``: to the cycle, SYNC-stamped, with the EMCY status byte appended."""
+        """A TPDO of leg ``leg``: to the cycle, SYNC-stamped, the EMCY status byte and the SYNC counter appended."""
         if not self.alive(leg, t):
             return None  # a node not heard is silent, whatever it still sends
-        stamp = self.sync.t if 0.0 <= t - self.sync.t <= self.staleness else t
-        status = b"\x01" if self.emergency[leg] else b"\x00"
-        return self._on_frame(leg, bytes(data[: self.encoders.pdo_length]) + status, stamp)
+        sync = self.sync
+        since = t - sync.t
+        if not 0.0 <= since <= self.staleness and sync.t > -math.inf:  # long after its SYNC: which instant?
+            if leg not in self._unsynced:
+                self._unsynced.add(leg)
+                log.warning("fixture %s: leg%d: a TPDO %.3g s after the SYNC: not used", self.name, leg + 1, since)
+            return None
+        self._unsynced.discard(leg)
+        stamp = sync.t if since <= self.staleness else t
+        status = 1 if self.emergency[leg] else 0
+        return self._on_frame(leg, bytes(data[: self.encoders.pdo_length]) + bytes((status, sync.counter)), stamp)
 
     def on_emcy(self, leg: int, data: bytes | bytearray, t: float) -> None:
         """An EMCY of leg ``leg``: its error code (bytes 0-1) is active until a code 0 resets it."""
@@ -116,13 +134,17 @@ class CanopenLink:
             log.warning("fixture %s: leg%d: heartbeat heard again", self.name, leg + 1)
 
 
-def master_frames(encoders: CanopenEncoders, stamp: float | None, heartbeats: bool) -> list[can.Message]:
+def master_frames(
+    encoders: CanopenEncoders, stamp: float | None, heartbeats: bool, sync_counter: int | None = None
+) -> list[can.Message]:
     """What a CANopen bus carries besides the TPDOs of one instant, for a simulation.
 
-    The SYNC that starts the instant (stamped ``stamp``, s, when given) and, with
-    ``heartbeats``, each node's heartbeat in the *operational* state.
+    The SYNC that starts the instant (stamped ``stamp``, s, when given; with its counter byte
+    ``sync_counter``, 1..240, when given) and, with ``heartbeats``, each node's heartbeat in the
+    *operational* state.
     """
-    out = [can.Message(arbitration_id=encoders.sync_id, is_extended_id=False, data=b"")]
+    data = b"" if sync_counter is None else bytes([sync_counter])
+    out = [can.Message(arbitration_id=encoders.sync_id, is_extended_id=False, data=data)]
     if heartbeats:
         out += [
             can.Message(arbitration_id=0x700 + n, is_extended_id=False, data=bytes([OPERATIONAL]))

@@ -10,9 +10,14 @@ id); a frame of a newer instant closes an unfinished set, published as ``incompl
 (``missing:legN``) or, when a missing leg's newest frame is older than ``staleness``,
 ``silent_leg``; a leg whose stamps run ahead of the others' is dropped and named
 (``ahead:legN``, :mod:`~hexapod_model.service.cycle.ahead`), and an exact repeat of a frame is
-dropped and counted. So every instant ends in a record, and a set never mixes two instants. A
-set with a bad frame, an error bit, a reading outside the stroke or a stuck leg is published
-with that status and **no pose**; a solved set is ``ok`` only when the tracker (through
+dropped and counted. A frame failing its layout's integrity check
+(:mod:`~hexapod_model.service.cycle.frame_checks`: ``bad_crc``, ``counter_gap``) takes its leg's
+place in its set, which is published ``bad_frame`` naming the check and the leg (``bad_crc:leg3``),
+as is a CANopen set whose frames follow different SYNCs (``sync_mismatch``). A batching gateway's
+bursts are split into instants where they can be (:mod:`~hexapod_model.service.cycle.burst`). So
+every instant ends in a record, and a set never mixes two instants. A set with a bad frame, an
+error bit, a reading outside the stroke or a stuck leg is published with that status and **no
+pose**; a solved set is ``ok`` only when the tracker (through
 :class:`~hexapod_model.service.cycle.solver.PoseSolver`) raised no flag, no leg of a locked
 fixture moved and no fault waits for an acknowledgement
 (:mod:`~hexapod_model.service.cycle.alarms`).
@@ -27,15 +32,16 @@ others' estimate when the data name the faulty reading, ``isolated:NAME``, else 
 (``encoder_error:leg3``) or the tracker's doubt (``jump``, ``branch_uncertain``,
 ``near_singular``, ``out_of_limits``); *advisory* flags leave a good pose ``ok``:
 ``encoder_warning:legN``, ``late_frame:legN``, ``moved_while_off``, ``stored_geometry_changed``.
-``batched_stamps`` (``flagged``): sets share one stamp (a gateway stamping a burst once), so a
-record's ``t`` is the burst's, not its instant's: the pose is right for an instant the stamp does
-not give.
+``batched_stamps``: a gateway stamped a burst of instants once; with a pose (``flagged``) when
+the burst was split into its instants by an estimated period (or the set shares a stamp with
+the one before), without one (``incomplete``) when it could not be split.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+from collections import deque
 from dataclasses import replace
 
 import numpy as np
@@ -54,6 +60,8 @@ from ..targets.guidance import deviation, within
 from ..targets.target import Target
 from .ahead import AheadCheck
 from .alarms import UNACKNOWLEDGED, Acknowledgement, FaultLatch, LatchedFault
+from .burst import SAME_STAMP, SMALL_BURSTS, Bursts
+from .frame_checks import CHECKS, FrameChecks
 from .lock import MOTION_LEGS, LockDetector
 from .lock_load import lock_load
 from .solver import PoseSolver, SolveOutcome
@@ -64,7 +72,6 @@ _POSE_STATUSES = ("ok", "flagged", "drift")
 STATUS_OF = {"ok": "ok", "flagged": "flagged", "failed": "not_converged", "inconsistent": "inconsistent_readings"}
 CLOCK_BACK_FRAMES = 12  # late frames in a row (two sets, no frame on time): the bus's clock went back
 MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma from the stored lock pose
-SAME_STAMP = 1e-6  # s: two sets stamped closer than this cannot be told apart in time (a batching gateway)
 BATCH_MEMORY = 64  # sets after the last two sharing a stamp during which records stay `batched_stamps`
 REPEAT = 0.25  # periods: a frame equal to its leg's last one within this is a repeat (a leg at rest sends equal ones)
 INTERVALS = 255  # frame intervals kept for the period: about 40 sets, so lost sets cannot stretch it
@@ -108,7 +115,8 @@ class FixtureCycle:
         self._readings = [math.nan] * len(hexa.reading_names)  # the legs', then tilt_x and tilt_y
         self._data: list[bytes | bytearray] = [b""] * n  # each channel's newest frame (a repeat of it is dropped)
         self._counts = [0] * n
-        self._err, self._warn, self._bad, self._fresh = [False] * n, [False] * n, [False] * n, [False] * n
+        self._err, self._warn, self._fresh = [False] * n, [False] * n, [False] * n
+        self._bad = [""] * n  # why each channel's newest frame is unusable: "bad_frame" (short) or a failed check
         self.inconsistent_since: float | None = None  # t of the first set of a run of inconsistent ones
         self._n_fresh = 0
         self._max_skew, self._staleness = cfg.max_skew, cfg.staleness  # read per frame (the config is frozen)
@@ -133,8 +141,18 @@ class FixtureCycle:
             "repeated_frames": 0,
             "ahead_frames": 0,
             "inconsistent_sets": 0,
+            **dict.fromkeys(CHECKS, 0),  # frames (sets for sync_mismatch) failing an integrity check
         }
+        integrity = self.layout.integrity
+        self._checks = FrameChecks(integrity, self._n_legs) if integrity.checked else None
+        self._sync_byte = integrity.sync_byte
+        self._tags = [0] * self._n_legs  # the SYNC counter each leg's newest frame follows (CANopen)
+        self._failed: dict[tuple[int, float], str] = {}  # (leg, stamp) of a frame that failed a check -> the check
+        self._named: list[str] = []  # failed checks of duplicate frames dropped from the set being collected
         self._ahead = AheadCheck()
+        self._bursts = Bursts(self.layout.sample_period, n)
+        self._estimated = False  # the sets being published were dated by an estimated period (batched_stamps)
+        self._pending: deque[PoseRecord] = deque()  # records of a burst, published one per call
         self.alarm = FaultLatch(cfg.name)
         self._drift_logged = False
         self._advisory: set[str] = set()
@@ -174,8 +192,21 @@ class FixtureCycle:
         unfinished set as ``incomplete`` (or ``silent_leg``) naming the missing legs. A frame that
         would open a newer instant waits for the next frame (:mod:`~hexapod_model.service.cycle.ahead`):
         one whose stamp ran ahead of the others is dropped and named (``ahead:legN``). An exact
-        repeat of a leg's frame (a gateway's) is dropped and counted.
+        repeat of a leg's frame (a gateway's) is dropped and counted. A gateway's bursts of
+        instants under one stamp are buffered and split (:mod:`~hexapod_model.service.cycle.burst`):
+        their records come one per call, after the burst.
         """
+        if self._bursts.engaged or self._bursts.shares_instant(leg, data, t):
+            return self._burst_frame(leg, data, t)
+        record = self._frame(leg, data, t)
+        if self._pending:  # a burst's records are still queued: this one after them
+            if record is not None:
+                self._pending.append(record)
+            return self._pending.popleft()
+        return record
+
+    def _frame(self, leg: int, data: bytes | bytearray, t: float, check: bool = True) -> PoseRecord | None:
+        """A frame outside burst mode (see :meth:`on_frame`); ``check``: not checked yet (integrity)."""
         skew = self._max_skew or 0.75 * self._period  # NaN until the period is measured
         if t < self._t_newest - skew:  # older than this instant: a late frame (False for NaN)
             self._late_run += 1
@@ -189,11 +220,68 @@ class FixtureCycle:
         if (since == 0.0 or since <= window) and data == self._data[leg] or self._ahead.repeats(leg, data, t, window):
             self.counters["repeated_frames"] += 1  # the same frame again (a gateway's repeat)
             return None
+        if self._checks is not None and check and leg < self._n_legs:  # the legs' layout (not the inclinometer's)
+            failed = self._checks.check(leg, data)
+            if failed is not None:  # it takes its leg's place in its set, which gives no pose
+                self.counters[failed] += 1
+                if len(self._failed) > 64:  # frames dropped meanwhile (ahead): never taken
+                    self._failed.clear()
+                self._failed[leg, t] = failed
         published = None
         current = self._t_first if self._n_fresh else self._t_newest
         for frame in self._ahead.offer(leg, data, t, skew, self._t_newest, current):
             published = self._take(*frame, skew) or published
         return published
+
+    def _burst_frame(self, leg: int, data: bytes | bytearray, t: float) -> PoseRecord | None:
+        """A frame in burst mode (:mod:`~hexapod_model.service.cycle.burst`): buffered; a new stamp judges the burst."""
+        bursts = self._bursts
+        if t < bursts.stamp - SAME_STAMP:  # older than the burst being received
+            self.counters["late_frames"] += 1
+            self._late.add(leg)
+            return self._pending.popleft() if self._pending else None
+        if t - bursts.stamp >= SAME_STAMP:
+            single = len(bursts.frames) == 1 and bursts.frames.pop()  # not a burst: taken as a frame below
+            self._close_burst(t)
+            if single or bursts.small >= SMALL_BURSTS:  # stamps separate instants again
+                bursts.disengage()
+                if single:  # checked when it came
+                    if single[3] is not None:
+                        self._failed[single[0], single[2]] = single[3]
+                    record = self._frame(*single[:3], check=False)
+                    if record is not None:
+                        self._pending.append(record)
+                record = self._frame(leg, data, t)
+                if record is not None:
+                    self._pending.append(record)
+                return self._pending.popleft() if self._pending else None
+        failed = self._checks.check(leg, data) if self._checks is not None and leg < self._n_legs else None
+        if failed is not None:
+            self.counters[failed] += 1
+        if not bursts.add(leg, data, t, failed):
+            self.counters["repeated_frames"] += 1
+        return self._pending.popleft() if self._pending else None
+
+    def _close_burst(self, next_stamp: float) -> None:
+        """Judge the burst received; its sets' records (or one ``incomplete`` record) wait in the queue."""
+        frames, times, instants, exact = self._bursts.close(next_stamp)
+        if not frames:
+            return
+        if times is None:  # its frames cannot be put into instants: no pose from them
+            self._lost += instants
+            self.counters["incomplete_sets"] += instants
+            self._pending.append(self._failure(frames[-1][2], "incomplete", self._set_flags(["batched_stamps"])))
+            return
+        skew = self._max_skew or 0.75 * self._period
+        self._estimated = not exact
+        for j, (leg, data, _, failed) in enumerate(frames):
+            t = times[j // self._n]
+            if failed is not None:
+                self._failed[leg, t] = failed
+            record = self._take(leg, data, t, skew)
+            if record is not None:
+                self._pending.append(record)
+        self._estimated = False
 
     def _take(self, leg: int, data: bytes | bytearray, t: float, skew: float) -> PoseRecord | None:
         """Add a frame that is neither late, a repeat nor ahead to the set (see :meth:`on_frame`)."""
@@ -205,15 +293,22 @@ class FixtureCycle:
             elif repeat:  # a second frame on this id within one instant
                 self.counters["duplicate_frames"] += 1
                 self._duplicate.add(leg)
+                why = self._failed.pop((leg, t), None) if self._failed else None
+                if why is not None:
+                    self._named.append(f"{why}:{self._names[leg]}")
                 return None
-        if leg >= self._n_legs:  # the inclinometer's frame: two angles
+        if self._failed and (leg, t) in self._failed:
+            self._bad[leg], self._readings[leg] = self._failed.pop((leg, t)), math.nan
+        elif leg >= self._n_legs:  # the inclinometer's frame: two angles
             self._tilt_frame(leg, data)
         elif len(data) >= self._min_length:  # codec.decode's check, without its exception on the hot path
             count, self._err[leg], self._warn[leg] = self._unpack(data)
-            self._counts[leg], self._bad[leg] = count, False
+            self._counts[leg], self._bad[leg] = count, ""
             self._readings[leg] = (count - self._home[leg]) * self._metres_per_count
+            if self._sync_byte is not None:
+                self._tags[leg] = data[self._sync_byte]
         else:
-            self._bad[leg], self._readings[leg] = True, math.nan
+            self._bad[leg], self._readings[leg] = "bad_frame", math.nan
         dt = t - self._t[leg]
         if 0.0 < dt <= self._staleness:  # the lower quartile ignores missed frames (up to 3 in 4 intervals)
             if len(self._intervals) < INTERVALS:
@@ -245,9 +340,9 @@ class FixtureCycle:
         assert tilt is not None
         if len(data) >= tilt.length:
             x, y, self._err[channel], self._warn[channel] = tilt.readings(data)
-            self._readings[-2], self._readings[-1], self._bad[channel] = x, y, False
+            self._readings[-2], self._readings[-1], self._bad[channel] = x, y, ""
         else:
-            self._bad[channel], self._readings[-2], self._readings[-1] = True, math.nan, math.nan
+            self._bad[channel], self._readings[-2], self._readings[-1] = "bad_frame", math.nan, math.nan
 
     def _clock_went_back(self, t: float) -> None:
         """Frames keep coming older than the newest one: the bus's clock was set back; follow it."""
@@ -256,6 +351,7 @@ class FixtureCycle:
         self._t_newest, self._t_set, self._t = t, math.nan, [min(tk, t) for tk in self._t]
         self._fresh, self._n_fresh = [False] * self._n, 0
         self._ahead.clear()
+        self._failed.clear()
         self._lost += round(self._late_run / self._n)  # the sets whose frames were taken for late ones
         self._late.clear()
         self.lock.restart_clock(t)
@@ -277,6 +373,9 @@ class FixtureCycle:
 
     def _set_flags(self, flags: list[str]) -> list[str]:
         """``flags`` plus the set's duplicate and late frames (then forgotten)."""
+        if self._named:
+            flags += self._named
+            self._named = []
         if self._duplicate:
             flags += [f"duplicate:{self._names[k]}" for k in sorted(self._duplicate)]
             self._duplicate.clear()
@@ -290,7 +389,14 @@ class FixtureCycle:
         return flags
 
     def check_silence(self, now: float) -> PoseRecord | None:
-        """Publish ``silent_leg`` when nothing was published for ``staleness`` and a leg is silent."""
+        """Publish ``silent_leg`` when nothing was published for ``staleness`` and a leg is silent.
+
+        A burst still buffered ``staleness`` after its stamp is judged now (the gateway sent no more).
+        """
+        if self._bursts.frames and now - self._bursts.stamp > self.cfg.staleness:
+            self._close_burst(self._bursts.stamp)
+        if self._pending:
+            return self._pending.popleft()
         if now - self.last.t <= self.cfg.staleness:
             return None
         silent = [k for k in range(self._n) if now - self._t[k] > self.cfg.staleness]
@@ -339,13 +445,17 @@ class FixtureCycle:
                 self.lock.release(t, six)
                 self._episode += 1
         r = np.array(self._readings)
-        for status, bad, name in (
-            ("bad_frame", self._bad, "bad_frame"),
-            ("encoder_error", self._err, "encoder_error"),
-        ):
-            if any(bad):
-                flags = [f"{name}:{self._names[k]}" for k in range(self._n) if bad[k]]
-                return self._failure(t, status, self._set_flags(flags))
+        if any(self._bad):  # a short frame, or one that failed an integrity check
+            return self._failure(
+                t, "bad_frame", self._set_flags([f"{b}:{self._names[k]}" for k, b in enumerate(self._bad) if b])
+            )
+        if self._sync_byte is not None and self._tags.count(self._tags[0]) != len(self._tags):
+            self.counters["sync_mismatch"] += 1
+            mixed = FrameChecks.sync_mismatch(self._tags)
+            return self._failure(t, "bad_frame", self._set_flags([f"sync_mismatch:{self._names[k]}" for k in mixed]))
+        if any(self._err):
+            flags = [f"encoder_error:{self._names[k]}" for k in range(self._n) if self._err[k]]
+            return self._failure(t, "encoder_error", self._set_flags(flags))
         out = [k for k in range(len(self._lo)) if not self._lo[k] <= self._readings[k] <= self._hi[k]]
         if out:
             return self._failure(t, "out_of_stroke", self._set_flags([f"out_of_stroke:leg{k + 1}" for k in out]))
@@ -384,7 +494,7 @@ class FixtureCycle:
         if self.steps.pending and "jump" not in flags:  # a jump that may be a step: not ok until it is known
             flags.append("jump")
             status = "flagged" if status == "ok" else status
-        if self._instant - self._batched <= BATCH_MEMORY:  # t is the burst's stamp, not this instant's time
+        if self._estimated or self._instant - self._batched <= BATCH_MEMORY:  # t: the burst's, or estimated
             flags.append("batched_stamps")
             status = "flagged" if status == "ok" else status
         if status == "ok" and self.lock.drift:

@@ -34,9 +34,11 @@ from typing import NamedTuple
 import numpy as np
 
 from ...analysis.sensitivity import SensitivityEvaluator
+from ...exceptions import HexapodError
 from ...kinematics.hexapod import Hexapod
 from ...kinematics.newton.solver import Solution
 from ...kinematics.redundant import RedundantSolution
+from ...lie import xyz_rpy_to_pose
 from ...tracking.tracker import Tracker, characteristic_length
 
 
@@ -192,11 +194,16 @@ def _since(t0: float) -> float:
 
 
 def warm_up(hexa: Hexapod, noise: float, predictor: str = "eq22", samples: int = 20) -> None:
-    """Run what a reading set runs (tracker step, certified solve, sensitivity) on a throwaway tracker.
+    """Run what a reading set may run (tracker step, certified solve, readings path, proof, sensitivity).
 
-    The first call of each compiled kernel compiles it (about a minute after installation, before
-    numba has cached it next to the package) or loads it from the cache: done here, before the
-    first frame is read, the first sets are not late. ``samples`` sets along a small ramp from home.
+    The first call of each compiled kernel compiles it (one to two minutes after installation,
+    before numba has cached it next to the package) or loads it from the cache: done here,
+    before the first frame is read, no set waits for a compilation. ``samples`` sets along a
+    small ramp from home run the tracker's kernels and the warm certified solve; then the
+    kernels a set runs only sometimes: the readings path that a solve follows in substeps when
+    its first attempt does not certify (the first sets after a restart with the plate moved
+    from its stored lock pose, :func:`_warm_readings_path`), and the Krawczyk proof of a warm
+    step near a singularity (:meth:`~hexapod_model.kinematics.hexapod.Hexapod.prove_step`).
     """
     solver = PoseSolver(hexa, max(noise, 1e-6), predictor)
     ramp = np.linspace(0.0, 1e-4, samples)
@@ -204,3 +211,30 @@ def warm_up(hexa: Hexapod, noise: float, predictor: str = "eq22", samples: int =
     for k, step in enumerate(ramp):
         solver.step(np.concatenate([np.full(6, step), extra]), k)
     solver.uncertainty(hexa.q_home)
+    _warm_readings_path(hexa)
+    first = solver.solve_once(np.concatenate([np.zeros(6), extra]), hexa.q_home)
+    step = solver.solve_once(np.concatenate([np.full(6, 1e-4), extra]), first.q)
+    if first.converged and step.converged:
+        hexa.prove_step(first, step)
+
+
+def _warm_readings_path(hexa: Hexapod) -> None:
+    """Solve from home the readings of the plate turned and raised (as after a restart with the plate moved).
+
+    Far enough that the first attempt does not certify: the path is followed in substeps to a
+    certified result. Turns of growing size until one did (a geometry whose workspace is small
+    stops at the first it cannot reach).
+    """
+    from ...kinematics.newton.follow import follow  # the compiled readings path: compiled once it ran
+
+    rise = 0.15 * float(np.mean(hexa.stroke[:, 1] - hexa.stroke[:, 0]))
+    for yaw in (45.0, 30.0, 60.0, 20.0):
+        if not hexa.compiled:
+            return
+        try:
+            target = hexa.inverse(hexa.home_pose @ xyz_rpy_to_pose([0.0, 0.0, rise, 0.0, 0.0, yaw]))
+            sol = hexa.forward(target.lengths, guess=hexa.q_home, check=False)
+        except HexapodError:  # outside what this geometry reaches: the next turn may not be
+            continue
+        if follow.signatures and sol.converged:
+            return

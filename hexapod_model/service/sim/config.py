@@ -41,9 +41,11 @@ FAULTS = (
     "gateway_burst",
     "late_reading",
     "creep",
+    "replay",
+    "bit_flip",
     "intruder",
 )
-VALUE_FAULTS = ("stuck_leg", "spike", "step", "late_reading", "creep", "intruder")  # act on a reading, any sensor
+VALUE_FAULTS = ("stuck_leg", "spike", "step", "late_reading", "creep", "replay")  # act on a reading, any sensor
 
 
 @dataclass(frozen=True)
@@ -56,8 +58,9 @@ class Fault:
     reveal (docs/redundancy.md): ``late_reading`` (the frames carry the reading of ``sets`` sets
     earlier with fresh stamps: a gateway buffering one sensor), ``creep`` (the reading drifts by
     ``size`` per second from ``start``), a constant offset (``step`` from ``start`` 0) and
-    ``intruder`` (a device on the sensor's CAN id whose frames replace the genuine ones: it replays
-    the readings of ``sets`` sets earlier plus ``size``). Reading faults (:data:`VALUE_FAULTS`) act
+    ``replay`` (a device on the sensor's CAN id whose frames replace the genuine ones: it replays
+    the readings of ``sets`` sets earlier plus ``size``). An ``intruder`` is a second sender on a
+    leg's id whose frames are plausible to the layout's counter and checksum. Reading faults (:data:`VALUE_FAULTS`) act
     on any reading, an extra sensor's too; frame faults on the frame that carries it.
 
     Attributes:
@@ -66,20 +69,25 @@ class Fault:
             ``tilt_y``).
         start: seconds after the simulation starts.
         duration: seconds (a ``spike`` affects the first set at or after ``start`` only; a
-            ``step``, ``held_brake``, ``late_reading``, ``creep`` and ``intruder`` last to the end
+            ``step``, ``held_brake``, ``late_reading``, ``creep`` and ``replay`` last to the end
             unless given, the others 1 s).
-        probability: chance that a frame is lost (``dropped_frames``) or a whole set (``lost_sets``).
+        probability: chance that a frame is lost (``dropped_frames``), a whole set (``lost_sets``),
+            or that one random bit of a frame's payload is flipped after the encoder sent it
+            (``bit_flip``: a gateway or driver corrupting frames past CAN's own CRC).
         size: reading offset (m, rad for a tilt) of a ``spike``, a ``step`` (an encoder that
-            slipped, for ``duration``), an ``intruder``'s frames or the second sender's frame of a
-            ``duplicate_id`` (sent on the leg's CAN id just before the genuine frame); a ``creep``'s
-            rate (m/s, rad/s for a tilt).
+            slipped, for ``duration``), a ``replay``'s frames, the second sender's frame of a
+            ``duplicate_id`` (sent on the leg's CAN id just before the genuine frame) or an
+            ``intruder``'s frames (a sender on the leg's id, ``seconds`` after each set, whose
+            rolling counter copies the encoder's next value and whose checksum is right:
+            plausible frames); a ``creep``'s rate (m/s, rad/s for a tilt).
         sets: a ``late_frame`` leg sends its frame of this many sets earlier, with that set's
             timestamp, last in the set, instead of the current one; ``repeated_frames``: every
             frame is sent this many times in a row, stamp and all (a gateway's repeats);
             ``gateway_burst``: this many sets are held, then sent in order with the stamp of the
             last frame (a gateway that batches and stamps a burst once); ``late_reading`` and
-            ``intruder``: how many sets old the readings sent are.
-        seconds: an ``ahead_stamp`` leg's frames carry stamps this much later (s) than its set's.
+            ``replay``: how many sets old the readings sent are.
+        seconds: an ``ahead_stamp`` leg's frames carry stamps this much later (s) than its set's;
+            an ``intruder`` sends this long (s) after each set.
     """
 
     kind: str
@@ -266,8 +274,8 @@ def _changeover(t: Table) -> ChangeoverScript:
     return script
 
 
-UNTIL_THE_END = {"spike": 0.0, "step": 1e6, "held_brake": 1e6, "late_reading": 1e6, "creep": 1e6, "intruder": 1e6}
-SETS = {"late_frame": 1, "repeated_frames": 10, "gateway_burst": 5, "late_reading": 1, "intruder": 100}
+UNTIL_THE_END = {"spike": 0.0, "step": 1e6, "held_brake": 1e6, "late_reading": 1e6, "creep": 1e6, "replay": 1e6}
+SETS = {"late_frame": 1, "repeated_frames": 10, "gateway_burst": 5, "late_reading": 1, "replay": 100}
 
 
 def _fault(t: Table, hexa) -> Fault:
@@ -275,7 +283,9 @@ def _fault(t: Table, hexa) -> Fault:
     names = hexa.reading_names
     n_legs = sum(n.startswith("leg") for n in names)
     leg = t.take("leg", 0)
-    every = kind in ("lost_sets", "repeated_frames", "gateway_burst") or (leg == 0 and kind == "dropped_frames")
+    every = kind in ("lost_sets", "repeated_frames", "gateway_burst") or (
+        leg == 0 and kind in ("dropped_frames", "bit_flip")
+    )
     if "reading" in t.data:  # any reading by name: leg7, tilt_x, ...
         if "leg" in t.data:
             raise t.error("reading", t.data["reading"], "give leg or reading, not both")
@@ -291,12 +301,18 @@ def _fault(t: Table, hexa) -> Fault:
         legs=legs,
         start=t.number("start", 0.0, 0.0, 1e6),
         duration=t.number("duration", UNTIL_THE_END.get(kind, 1.0), 0.0, 1e6),
-        probability=t.number("probability", 0.2, 0.0, 1.0) if kind in ("dropped_frames", "lost_sets") else 1.0,
-        size=t.number("size", {"creep": 1e-4, "intruder": 0.0}.get(kind, 0.002), -0.5, 0.5)
-        if kind in ("spike", "step", "duplicate_id", "creep", "intruder")
+        probability=t.number("probability", 0.01 if kind == "bit_flip" else 0.2, 0.0, 1.0)
+        if kind in ("dropped_frames", "lost_sets", "bit_flip")
+        else 1.0,
+        size=t.number("size", {"creep": 1e-4, "replay": 0.0}.get(kind, 0.002), -0.5, 0.5)
+        if kind in ("spike", "step", "duplicate_id", "creep", "replay", "intruder")
         else 0.0,
         sets=t.integer("sets", SETS.get(kind, 1), 1, 1000) if kind in SETS else 1,
-        seconds=t.number("seconds", 0.05, -10.0, 10.0) if kind == "ahead_stamp" else 0.0,
+        seconds=t.number("seconds", 0.05, -10.0, 10.0)
+        if kind == "ahead_stamp"
+        else t.number("seconds", 0.005, 0.0, 10.0)
+        if kind == "intruder"
+        else 0.0,
     )
     t.finish()
     return fault

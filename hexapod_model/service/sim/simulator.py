@@ -7,8 +7,10 @@ started), the readings of its redundant sensors (measuring legs, inclinometer) f
 pose through their sensor model
 (:meth:`~hexapod_model.kinematics.redundant.RedundantSensing.extra_readings`); all get Gaussian
 noise, then the faults act, and every leg's reading is encoded with the fixture's frame layout,
-CAN id and home count (the inclinometer's two angles in its own frame) and sent on the bus.
-Every sent set is kept in :attr:`Simulator.truth` (the poses the service should report).
+CAN id and home count (the inclinometer's two angles in its own frame) and sent on the bus: with
+the layout's rolling counter (one up per frame of a leg, lost frames included) and checksum, and
+a CANopen SYNC with its counter (1..240). Every sent set is kept in :attr:`Simulator.truth` (the
+poses the service should report).
 """
 
 from __future__ import annotations
@@ -77,7 +79,7 @@ class _Encoders:
         #: the frame that carries each reading (the tilts share the inclinometer's)
         self.channel = [min(k, len(cfg.legs)) for k in range(len(names))]
         self.sigma = np.array([sim.tilt_noise if n.startswith("tilt") else sim.noise for n in names])
-        self.noisy: deque[np.ndarray] = deque(maxlen=1001)  # sent readings before faults (late_reading, intruder)
+        self.noisy: deque[np.ndarray] = deque(maxlen=1001)  # sent readings before faults (late_reading, replay)
         self.path: PlatePath | None = path  # a plan carries this plate: it follows that, nothing else
         self.brakes = HeldBrakes(sim.faults, hexa)
         script = sim.changeover if targets is not None and path is None else None
@@ -98,6 +100,9 @@ class _Encoders:
         self.burst = 0  # sets a gateway holds before sending them with one stamp (gateway_burst)
         self.held: list[can.Message] = []
         self.held_sets = 0
+        self.counter = [0] * self.n  # each frame sender's rolling counter (its next frame's)
+        self.sync_counter = 0  # the CANopen SYNC's counter (its last, 1..240)
+        self.intruder: dict[int, tuple[float, float]] = {}  # leg -> (reading, seconds after the set) (intruder)
 
     def pose(self) -> np.ndarray:
         n = len(self.sim.poses)
@@ -121,10 +126,12 @@ class _Encoders:
             true = np.concatenate([true, self.hexa.redundancy.extra_readings(pose)])
         return pose, true
 
-    def message(self, channel: int, r: np.ndarray, error: bool = False, warning: bool = False) -> can.Message:
-        """The frame ``channel`` sends for readings ``r`` (reading order)."""
+    def message(
+        self, channel: int, r: np.ndarray, error: bool = False, warning: bool = False, counter: int = 0
+    ) -> can.Message:
+        """The frame ``channel`` sends for readings ``r`` (reading order), a leg's with its rolling ``counter``."""
         if channel < len(self.cfg.legs):
-            return self.cfg.legs[channel].message(float(r[channel]), error, warning)
+            return self.cfg.legs[channel].message(float(r[channel]), error, warning, counter)
         assert self.cfg.inclinometer is not None
         return self.cfg.inclinometer.message(float(r[-2]), float(r[-1]), error, warning)
 
@@ -169,7 +176,8 @@ class _Encoders:
         err, warn, drop = [False] * n, [False] * n, [False] * n
         self.late = {}  # leg -> sets: send that old frame last instead (late_frame)
         self.duplicate = {}  # leg -> reading of a second sender (duplicate_id)
-        self.ahead, self.repeats, self.burst = {}, 1, 0
+        self.ahead, self.repeats, self.burst, self.intruder = {}, 1, 0, {}
+        flip = 0.0
         active = []
         for i, f in enumerate(self.sim.faults):
             if f.kind == "spike":
@@ -201,9 +209,9 @@ class _Encoders:
                     r[k] += f.size
                 elif f.kind == "creep":
                     r[k] += f.size * (t_sim - f.start)
-                elif f.kind in ("late_reading", "intruder"):  # readings of `sets` sets ago, stamped now
+                elif f.kind in ("late_reading", "replay"):  # readings of `sets` sets ago, stamped now
                     old = self.noisy[-1 - f.sets] if len(self.noisy) > f.sets else self.noisy[0]
-                    r[k] = old[k] + (f.size if f.kind == "intruder" else 0.0)
+                    r[k] = old[k] + (f.size if f.kind == "replay" else 0.0)
                 elif f.kind == "late_frame":
                     self.late[c] = f.sets
                 elif f.kind == "duplicate_id":
@@ -215,16 +223,43 @@ class _Encoders:
                     self.repeats = f.sets
                 elif f.kind == "gateway_burst":
                     self.burst = f.sets
+                elif f.kind == "bit_flip":
+                    flip = f.probability
+                elif f.kind == "intruder":
+                    self.intruder[k] = (float(r[k] + f.size), f.seconds)
             if f.kind == "lost_sets" and self.rng.random() < f.probability:
                 drop = [True] * n
         msgs: list[can.Message | None] = []
         for k in range(n):
             try:
-                msgs.append(None if drop[k] else self.message(k, r, err[k], warn[k]))
+                msgs.append(None if drop[k] else self.message(k, r, err[k], warn[k], self.counter[k]))
             except FrameError as exc:
                 log.warning("simulated fixture %s frame %d: not sent: %s", self.cfg.name, k + 1, exc)
                 msgs.append(None)
+            self.counter[k] += 1  # a lost frame was counted by its encoder
+            sent = msgs[-1]
+            if sent is not None and flip > 0.0 and self.rng.random() < flip:
+                bit = int(self.rng.integers(8 * len(sent.data)))
+                sent.data[bit >> 3] ^= 1 << (bit & 7)
         return msgs, tuple(active)
+
+    def intruders(self, stamp: float | None) -> list[can.Message]:
+        """The intruders' frames of this set: on a leg's id, with the encoder's next counter."""
+        out = []
+        for k, (reading, seconds) in self.intruder.items():
+            try:
+                m = self.cfg.legs[k].message(reading, counter=self.counter[k])
+            except FrameError:
+                continue
+            if stamp is not None:
+                m.timestamp = stamp + seconds
+            out.append(m)
+        return out
+
+    def next_sync(self) -> int:
+        """The counter of the next CANopen SYNC (1..240, as a SYNC producer's with overflow value 240)."""
+        self.sync_counter = self.sync_counter % 240 + 1
+        return self.sync_counter
 
 
 class Simulator:
@@ -300,7 +335,9 @@ class Simulator:
             beat = t_sim >= enc.next_beat
             if beat:
                 enc.next_beat = t_sim + enc.cfg.canopen.heartbeat
-            order[:0] = master_frames(enc.cfg.canopen, None if stamp is None else stamp - FRAME_TIME, beat)
+            sync = master_frames(enc.cfg.canopen, None if stamp is None else stamp - FRAME_TIME, beat, enc.next_sync())
+            order[:0] = sync
+        order += enc.intruders(stamp)
         out = [m for m in order if m is not None for _ in range(enc.repeats)]
         if enc.burst > 1 or enc.held:  # a gateway: the burst goes out at once, stamped with its last frame
             enc.held += out
