@@ -220,3 +220,34 @@ def test_a_canopen_tpdo_long_after_its_sync_never_joins_the_next_syncs_set(tmp_p
     posed = [r for r in records if r.pose is not None]
     assert len(posed) > 40
     assert all(len(set(r.readings)) == 1 for r in posed), [r.readings for r in posed if len(set(r.readings)) > 1][:2]
+
+
+def test_a_stalled_canopen_sender_never_mixes_two_syncs_instants_without_a_sync_counter(tmp_path):
+    from .test_fieldbus import EDS
+
+    cfg = service_config(tmp_path, [fixture_table(encoder={"protocol": "canopen", "eds": str(EDS)})]).fixtures[0]
+    hexa = hexapod("reference")
+    cycle = FixtureCycle(cfg, hexa, geometry_hash(hexa), None, 1.0e9)
+    clock = SyncClock()
+    assert cfg.canopen is not None
+    link = CanopenLink("left", cfg.canopen, cycle.on_frame, clock, cfg.staleness)
+    records = []
+    t = 1.0e9
+    for n in range(80):
+        clock.on_sync(0, b"", t)  # SYNCs without a counter
+        tpdo = encode(cfg.legs[0].layout, 10 * n)[: cfg.canopen.pdo_length]  # instant n: count 10 n on every leg
+        for k in range(6):
+            link.on_heartbeat(k, bytes([0x05]), t)
+            if n == 40 and k >= 3:  # legs 4-6's frames of this instant lost
+                continue
+            if n == 41 and k < 3:  # and legs 1-3's of the next
+                continue
+            rec = link.on_pdo(k, tpdo, t + 1e-6 * k)
+            if rec is not None:
+                records.append(rec)
+        # after instant 40 the sender had stalled: instant 41 follows 20 us later (stamps cannot separate them)
+        t += 2e-5 if n == 40 else 0.01
+    posed = [r for r in records if r.pose is not None]
+    assert len(posed) > 40
+    assert all(len(set(r.readings)) == 1 for r in posed), [r.readings for r in posed if len(set(r.readings)) > 1][:2]
+    assert cycle.counters["sync_mismatch"] >= 1

@@ -42,16 +42,24 @@ Route = tuple[int, OnFrame, int]  # CAN id, handler, leg
 
 
 class SyncClock:
-    """The time (s, bus clock) and the counter (0: none) of the latest SYNC on the bus."""
+    """The time (s, bus clock) and the tag of the latest SYNC on the bus.
+
+    The tag is the SYNC's counter byte when it has one, else the number (1..255, rolling) of
+    SYNCs heard: either way the frames that follow two different SYNCs carry different tags, so
+    a set mixing them is ``sync_mismatch`` even when their stamps cannot separate the instants
+    (a sender that stalled, then sent several instants at once).
+    """
 
     def __init__(self) -> None:
         self.t = -math.inf
         self.counter = 0
+        self._heard = 0
 
     def on_sync(self, leg: int, data: bytes | bytearray, t: float) -> None:
         """A SYNC frame stamped ``t``, with its counter byte if it has one (``leg`` unused: the route's signature)."""
         self.t = t
-        self.counter = data[0] if data else 0
+        self._heard = self._heard % 255 + 1
+        self.counter = data[0] if data else self._heard
 
 
 class CanopenLink:
