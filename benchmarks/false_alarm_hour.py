@@ -1,7 +1,7 @@
 """The consistency test's false-alarm rate over an hour of simulated clean samples.
 
 python benchmarks/false_alarm_hour.py [PRESET ...] [--seconds 3600] [--rate 100] [--motion moving rest]
-    [--seed 0] [--json FILE]
+    [--seed 0] [--progress 0] [--json FILE]
 
 For each redundant preset (default ``reference7`` and ``reference_tilt``) and each motion, the
 stream tracker (:class:`hexapod_model.tracking.tracker.Tracker`, as the fixture service solves
@@ -54,8 +54,12 @@ def true_readings(hexa: Hexapod, poses: list[np.ndarray]) -> np.ndarray:
     return np.array([np.concatenate([hexa.inverse(T).lengths, hexa.redundancy.extra_readings(T)]) for T in poses])
 
 
-def false_alarms(name: str, motion: str, seconds: float, rate: float = 100.0, seed: int = 0) -> dict:
+def false_alarms(
+    name: str, motion: str, seconds: float, rate: float = 100.0, seed: int = 0, progress: float = 0.0
+) -> dict:
     """Alarms of the tracker over ``seconds`` of clean samples of preset ``name`` (module doc).
+
+    ``progress`` > 0: print the counts so far every ``progress`` s of samples.
 
     Returns:
         ``preset``, ``motion``, ``samples``, ``alarms`` (``inconsistent_readings`` samples),
@@ -76,6 +80,8 @@ def false_alarms(name: str, motion: str, seconds: float, rate: float = 100.0, se
         r = tracker.step(z0[k % len(z0)] + rng.normal(0.0, 1.0, len(sig)) * sig)
         failed += r.failed
         alarms += INCONSISTENT in r.flags
+        if progress > 0 and (k + 1) % max(round(progress * rate), 1) == 0:
+            print(f"  {name} {motion}: {alarms} alarms in {k + 1} samples so far", flush=True)
     ci = binomtest(alarms, n, alpha).proportion_ci(0.95)
     return {
         "preset": name,
@@ -98,12 +104,13 @@ def main() -> None:
     ap.add_argument("--rate", type=float, default=100.0, help="samples per second (Hz)")
     ap.add_argument("--motion", nargs="+", choices=MOTIONS, default=list(MOTIONS))
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--progress", type=float, default=0.0, help="s of samples between progress lines (0: none)")
     ap.add_argument("--json", help="write the results as JSON")
     args = ap.parse_args()
     results = []
     for name in args.presets:
         for motion in args.motion:
-            r = false_alarms(name, motion, args.seconds, args.rate, args.seed)
+            r = false_alarms(name, motion, args.seconds, args.rate, args.seed, args.progress)
             results.append(r)
             lo, hi = r["ci95"]
             print(
