@@ -15,7 +15,8 @@ the measured rate with its exact (Clopper-Pearson) binomial 95 % interval, and t
 
 Motions: ``moving``, the platform circling 20 mm around home at one turn per 2 s while tilting
 5 deg (the trajectory of ``benchmarks/redundancy_faults.py``); ``rest``, the platform at home.
-The true readings of one period are computed once and repeated; the noise is fresh every sample.
+The true readings of one period are computed once and repeated; the noise is fresh every sample,
+its stream seeded by ``--seed`` and the motion (the two motions' alarms are independent counts).
 """
 
 from __future__ import annotations
@@ -72,7 +73,7 @@ def false_alarms(
     z0 = true_readings(hexa, period_poses(hexa, motion, rate))
     sig = hexa.redundancy.sigmas
     n = round(seconds * rate)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng([seed, MOTIONS.index(motion)])  # the motions' noise independent
     tracker = Tracker(hexa, "eq22", initial=hexa.inverse(period_poses(hexa, motion, rate)[0]), noise=sig[0])
     alpha, alarms, failed = DEFAULT_ALPHA, 0, 0
     t0 = time.process_time()
