@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.stats import binomtest
 
 import hexapod_model as hm
 
@@ -342,3 +343,20 @@ def test_seventh_leg_placement_benchmark_runs():
     assert out.returncode == 0, out.stdout + out.stderr
     worst = [float(line.split("worst")[1].split()[0]) for line in out.stdout.splitlines()]
     assert len(worst) == 5 and worst[0] == min(worst)  # reference7's placement is the best of them
+
+
+def test_false_alarm_hour_benchmark_rate_is_the_stated_one_at_its_sample_size(tmp_path):
+    """A short span of the hour: every case runs, and its alarm count is binomially consistent with the stated rate."""
+    out_json = tmp_path / "fa.json"
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "false_alarm_hour.py"), "--seconds", "6", "--json", str(out_json)]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stdout + out.stderr
+    results = json.loads(out_json.read_text())
+    assert {(r["preset"], r["motion"]) for r in results} == {
+        (p, m) for p in ("reference7", "reference_tilt") for m in ("moving", "rest")
+    }
+    for r in results:
+        assert r["samples"] == 600 and r["failed"] == 0, r
+        assert binomtest(r["alarms"], r["samples"], r["alpha"]).pvalue > 1e-3, r
+        assert r["ci95"][0] <= r["alarms"] / r["samples"] <= r["ci95"][1]
+    assert ("NOT consistent" in out.stdout) != all(r["consistent"] for r in results)

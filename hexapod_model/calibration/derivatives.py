@@ -15,9 +15,15 @@ placement ``M`` changed to ``M exp(xi)`` moves every frame after it by the world
 velocity there. ``dxi/dtheta`` is the complex-step derivative of the leg's home construction
 (:mod:`hexapod_model.description.legs`): exact to rounding. Readings enter through the encoder
 model ``q = (reading - zero) / (1 + scale)``.
+
+A geometry with redundant sensors (measuring legs, an inclinometer) is identified from its six
+legs' readings: the rows are those six, solved by the hexapod of the six legs; the extra
+sensors are carried into the corrected geometry at their nominal values.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pinocchio as pin
@@ -71,14 +77,16 @@ class CalibrationModel:
 
     Attributes:
         geometry: the corrected geometry.
-        hexapod: its :class:`~hexapod_model.kinematics.hexapod.Hexapod` (generated URDF).
+        hexapod: the :class:`~hexapod_model.kinematics.hexapod.Hexapod` of its six legs (generated URDF).
     """
 
     def __init__(self, ps: ParameterSet, delta: np.ndarray):
         self.ps = ps
         self.delta = np.array(delta, dtype=float)
         self.geometry = ps.geometry(self.delta)
-        self.hexapod = Hexapod.from_geometry(self.geometry)
+        # the six legs' readings are the rows' (measuring legs and an inclinometer stay nominal)
+        six = dataclasses.replace(self.geometry, measuring_legs=(), inclinometer=None)
+        self.hexapod = Hexapod.from_geometry(six)
         clm = self.hexapod.closed_loop
         if any(len(leg.joints) != 6 for leg in clm.legs):  # pragma: no cover - cardan legs are generated
             raise AssertionError("calibration expects the generated cardan leg chain")

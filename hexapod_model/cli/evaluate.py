@@ -51,7 +51,60 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="instead: each redundant reading's minimal detectable fault over the x-y section at home height "
         "(a hexapod with measuring legs or an inclinometer, e.g. reference7; docs/redundancy.md)",
     )
+    p.add_argument(
+        "--place-seventh-leg",
+        metavar="CANDIDATES",
+        help="instead: rank the candidate measuring legs of a TOML file ([[measuring_legs]] tables) added to "
+        "HEXAPOD by the largest fault of any leg they may miss over the x-y section at home height "
+        "(docs/redundancy.md)",
+    )
+    p.add_argument(
+        "--placement-grid",
+        type=int,
+        default=None,
+        help="points along x and y of each candidate's section (default 5)",
+    )
     p.set_defaults(func=run)
+
+
+def run_placement(args: argparse.Namespace) -> int:
+    """``hexapod evaluate --place-seventh-leg CANDIDATES``: the candidates ranked, best first."""
+    from ..analysis.placement import DEFAULT_PLACEMENT_GRID, candidates_from_toml, rank_placements
+
+    if args.json:
+        check_output_path(args.json, args.hexapod)
+    hexa = load_hexapod(args.hexapod)
+    if hexa.geometry is None:
+        raise InputError(
+            "hexapod", args.hexapod, "a URDF has no geometry to add a leg to: give a preset or geometry file"
+        )
+    grid = DEFAULT_PLACEMENT_GRID if args.placement_grid is None else args.placement_grid
+    scores = rank_placements(hexa.geometry, candidates_from_toml(args.place_seventh_leg), grid=grid)
+    print(
+        f"hexapod {args.hexapod}: {len(scores)} candidate measuring legs from {args.place_seventh_leg}, "
+        f"largest minimal detectable fault of any leg over home +-50 mm in x and y ({grid}x{grid} points), best first"
+    )
+    print(f"  {'rank':>4s} {'candidate':>9s} {'worst (um)':>11s}  base anchor (m) -> platform anchor (m)")
+    for rank, s in enumerate(scores, 1):
+        b = ", ".join(f"{v:g}" for v in s.leg.base_anchor)
+        pa = ", ".join(f"{v:g}" for v in s.leg.platform_anchor)
+        print(f"  {rank:4d} {s.index + 1:9d} {1e6 * s.worst:11.4g}  ({b}) -> ({pa})  [{s.inside} points inside]")
+    if args.json:
+        rows = [
+            {
+                "candidate": s.index + 1,
+                "base_anchor": list(s.leg.base_anchor),
+                "platform_anchor": list(s.leg.platform_anchor),
+                "worst_m": s.worst,
+                "largest": dict(zip(s.names, map(float, s.largest), strict=True)),
+                "points_inside": s.inside,
+            }
+            for s in scores
+        ]
+        atomic_write_text(
+            args.json, json.dumps({"hexapod": str(args.hexapod), "grid": grid, "ranking": rows}, indent=2)
+        )
+    return 0
 
 
 def run_detectability(args: argparse.Namespace) -> int:
@@ -112,6 +165,8 @@ def run(args: argparse.Namespace) -> int:
     """``hexapod evaluate``."""
     if args.detectability:
         return run_detectability(args)
+    if args.place_seventh_leg:
+        return run_placement(args)
     if args.json:
         check_output_path(args.json, args.hexapod)
     settings = Settings(args.grid, args.cone_deg, args.cone_samples, args.length_unit)

@@ -156,3 +156,14 @@ def test_data_no_geometry_near_nominal_explains(small):
     measured[:, :3, 3] *= 1.3  # positions from another scale: not a rigid motion of the model's poses
     with pytest.raises(hm.InputError, match="no geometry near nominal explains"):
         identify(small.nominal, MeasuredPoses(small.data.readings, measured, "scaled.csv"), FINE)
+
+
+def test_a_hexapod_with_a_measuring_leg_is_identified_from_its_six_legs():
+    """reference7: the six legs' rows are solved (not refused for lacking leg7) and leg7 is carried nominal."""
+    sim = simulate(hm.get_preset("reference7"), 30, seed=5, encoder_noise=1e-7, noise=FINE)
+    six = simulate(hm.get_preset("reference"), 30, seed=5, encoder_noise=1e-7, noise=FINE)
+    np.testing.assert_array_equal(sim.data.readings, six.data.readings)
+    found = identify(sim.nominal, sim.data, FINE)
+    plain = identify(six.nominal, six.data, FINE)
+    assert found.geometry.measuring_legs == sim.nominal.measuring_legs
+    np.testing.assert_allclose(found.delta, plain.delta, rtol=0, atol=1e-12)
