@@ -250,3 +250,14 @@ def test_the_faults_six_readings_cannot_reveal_act_on_the_frames_to_the_end(tmp_
         sent.append(leg7.reading(leg7.layout.unpack(frame.data)[0]))
     for k in range(10, 250):
         assert abs(sent[k] - expected(truth, k, k / 100)) <= 0.51e-7, k  # to the count
+
+
+@pytest.mark.parametrize("preset", ["reference7", "reference_tilt"])
+def test_a_simulation_without_noise_given_simulates_the_noise_the_consistency_test_assumes(tmp_path, preset):
+    ids = SEVEN if preset == "reference7" else SEVEN[:6]
+    config = service_config(tmp_path, [fixture(preset, ids, **({} if preset == "reference7" else TILT))])
+    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A"}]).fixtures[0]
+    sigmas = hexapod(preset).redundancy.sigmas
+    assert sim.noise == sigmas[0]  # not the 10 um of a hexapod without redundant sensors: 10 sigma, an alarm a set
+    if preset == "reference_tilt":
+        assert sim.tilt_noise == sigmas[-1]

@@ -111,8 +111,9 @@ class SimFixture:
     Attributes:
         name: the fixture (of ``fixture.toml``).
         rate: reading sets per second (six frames each).
-        noise: 1-sigma Gaussian reading noise of a leg (m).
-        tilt_noise: 1-sigma Gaussian noise of an inclinometer angle (rad).
+        noise: 1-sigma Gaussian reading noise of a leg (m; default 10 um, a redundant hexapod's
+            own ``encoder_sigma``).
+        tilt_noise: 1-sigma Gaussian noise of an inclinometer angle (rad; default its ``sigma``).
         poses: (n, 4, 4) pose sequence (base -> platform, m): one held pose, CSV rows (one per
             set), or the trajectory sampled at ``rate`` over one there-and-back ``period``.
         move, lock: seconds of motion, then seconds still (``lock = 0``: always moving).
@@ -245,17 +246,22 @@ def _fixture(t: Table, service: ServiceConfig, folder: Path) -> SimFixture:
     faults = t.take("faults", [])
     if not isinstance(faults, list):
         raise t.error("faults", faults, "expected [[fixtures.faults]] tables")
+    # a hexapod with redundant sensors: by default the noise its consistency test assumes (else
+    # nearly every set would be a false alarm); without them 10 um, a typical encoder's
+    sigmas = None if hexa.redundancy is None else hexa.redundancy.sigmas
+    noise = 10e-6 if sigmas is None else float(sigmas[0])
+    tilt_noise = 2e-5 if sigmas is None or "tilt_x" not in hexa.reading_names else float(sigmas[-1])
     sim = SimFixture(
         name=name,
         rate=rate,
-        noise=t.number("noise", 10e-6, 0.0, 0.01),
+        noise=t.number("noise", noise, 0.0, 0.01),
         poses=poses,
         move=t.number("move", 1.0, 0.01, 3600.0),
         lock=t.number("lock", 0.0, 0.0, 3600.0),
         ramp=t.number("ramp", 0.2, 0.0, 60.0),
         faults=tuple(_fault(Table(f, t.name(f"faults[{k}]"), t.source), hexa) for k, f in enumerate(faults)),
         changeover=_changeover(t.table("changeover")) if "changeover" in t.data else None,
-        tilt_noise=t.number("tilt_noise", 2e-5, 0.0, 0.1),
+        tilt_noise=t.number("tilt_noise", tilt_noise, 0.0, 0.1),
     )
     if 2 * sim.ramp > sim.move and sim.lock > 0:
         raise t.error("ramp", sim.ramp, f"two ramps must fit in move = {sim.move:g} s")
