@@ -1,6 +1,7 @@
 """What the assembly check of direct kinematics costs and how often it refuses, per preset.
 
     python benchmarks/certificate.py [PRESET ...] [--poses N] [--seed S] [--warm-offset M] [--trajectory-samples K]
+        [--json FILE]
 
 For ``N`` random poses per preset (home +- 50 mm, roll/pitch/yaw +- 25 deg, within the limits),
 the readings are solved cold (from home) and warm (from the pose moved by ``warm-offset`` m) by
@@ -22,13 +23,18 @@ the median subdivisions, the median time of the warm solve and of its proof (the
 and beside it the dense reference test on the same solves, with its proven fraction), and the
 floor (``floor_newton.fk_newton``, the reference Newton iteration in one njit function, on the
 offset-Cardan presets whose legs it reads) on the same readings.
+
+``--json`` also writes the figures (``benchmarks/performance_table.py`` reads it); ``--poses 0``
+measures the proof alone.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import time
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 
@@ -170,10 +176,13 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--warm-offset", type=float, default=1e-4, help="m (default 1e-4: a 1 kHz sample at 0.1 m/s)")
     ap.add_argument("--trajectory-samples", type=int, default=4001, help="1 kHz samples of A and B (4001: all)")
+    ap.add_argument("--json", type=Path, help="also write the figures as JSON")
     args = ap.parse_args(argv)
+    report: dict = {"trajectories": [], "solves": []}
     for name in args.presets:
         for which in ("A", "B"):
             t = trajectory_proofs(name, which, args.trajectory_samples)
+            report["trajectories"].append({"preset": name, "trajectory": which, **t})
             ratio = (t["solve_median_us"] + t["proof_median_us"]) / t["floor_median_us"]
             print(
                 f"{name:12s} trajectory {which} at 1 kHz: {t['steps']} warm steps"
@@ -190,6 +199,7 @@ def main(argv=None) -> int:
         if args.poses <= 0:
             break
         r = run(name, args.poses, args.seed, args.warm_offset)
+        report["solves"].append(r)
         for mode in ("cold", "warm"):
             c = r[mode]
             print(
@@ -199,6 +209,8 @@ def main(argv=None) -> int:
                 f"not converged {c.get('not_converged', 0)}",
                 flush=True,
             )
+    if args.json:
+        args.json.write_text(json.dumps(report, indent=1))  # NaN where a figure does not apply
     return 0
 
 

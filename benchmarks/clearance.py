@@ -1,6 +1,6 @@
 """The clearance query and the body check against a warm forward solve, beside the plain ones, on the reference preset.
 
-    python benchmarks/clearance.py [--poses N] [--seed S] [--rounds R]
+    python benchmarks/clearance.py [--poses N] [--seed S] [--rounds R] [--json FILE]
 
 Random poses of the +-50 mm / +-25 deg box; their readings (inverse kinematics) are solved
 warm, each from the previous solution, without the body check (``check_body=False``) and with
@@ -18,13 +18,16 @@ rounds, alternating (the machine is shared: the load affects every variant alike
   the pairs closer than ``min_clearance`` in one call) and the plain check (NumPy cones, then the
   plain query).
 
-Prints the median and p99 of the best round (us) and the answers' agreement.
+Prints the median and p99 of the best round (us) and the answers' agreement; ``--json`` also
+writes them (``benchmarks/performance_table.py`` reads it).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import time
+from pathlib import Path
 
 import numpy as np
 from clearance_plain import PlainCheck, PlainQuery
@@ -60,6 +63,7 @@ def main(argv=None) -> int:
     ap.add_argument("--poses", type=int, default=2000)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--json", type=Path, help="also write the figures as JSON")
     args = ap.parse_args(argv)
     bare = Hexapod.from_preset("reference", check_body=False)
     checked = Hexapod.from_preset("reference")
@@ -99,18 +103,31 @@ def main(argv=None) -> int:
     best = {name: min(r, key=np.median) for name, r in rounds.items()}
     for name, t in best.items():
         print(f"  {name:32s}{np.median(t):9.1f}{np.percentile(t, 99):9.1f}")
+    report: dict = {
+        "poses": len(qs),
+        "pairs": len(query.pairs),
+        "rounds": args.rounds,
+        "us": {name: {"median": float(np.median(t)), "p99": float(np.percentile(t, 99))} for name, t in best.items()},
+        "check_ratio": {},
+        "query_ratio": {},
+    }
     for label, kind in (("box poses", "warm forward"), ("trajectory A", "trajectory A")):
         ratio = np.median(best[f"{kind}, check_body=True"]) / np.median(best[f"{kind}, check_body=False"])
         print(f"  warm forward with / without the check, {label}: {ratio:.2f}x")
+        report["check_ratio"][label] = float(ratio)
     query_us = np.median(best["clearance: Hexapod.clearance"])
     for label, kind in (("box poses", "warm forward"), ("trajectory A", "trajectory A")):
         ratio = query_us / np.median(best[f"{kind}, check_body=False"])
         print(f"  Hexapod.clearance / warm forward without the check, {label}: {ratio:.2f}x")
+        report["query_ratio"][label] = float(ratio)
     worst = max(abs(bare.clearance(q).distance - plain_query(q).distance) for q in qs)
     coal = max(abs(bare.clearance(q).distance - query.all_pairs(q).min()) for q in qs)
     flags = sum([k for k, _ in body.violations(q)] == plain_check(q) for q in qs)
     print(f"answers: the query against the plain one {worst:.1e} m, against coal on every pair {coal:.1e} m;")
     print(f"the body check's verdicts equal the plain check's on {flags} of {len(qs)} poses")
+    if args.json:
+        report["agreement"] = {"plain_query_m": float(worst), "coal_m": float(coal), "verdicts_equal": int(flags)}
+        args.json.write_text(json.dumps(report, indent=1))
     return 0
 
 
