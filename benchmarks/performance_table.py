@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
+import math
 import os
 import platform
 import shlex
@@ -126,6 +127,43 @@ def floor_rows(data: dict) -> list[tuple[str, str]]:
     return rows
 
 
+def clearance_rows(data: dict) -> list[tuple[str, str]]:
+    """``clearance.py``: the clearance query and the body check against a warm forward solve."""
+    us = data["us"]
+
+    def cell(name: str) -> str:
+        return f"median {us[name]['median']:.1f} µs, p99 {us[name]['p99']:.1f} µs"
+
+    bare, checked = us["trajectory A, check_body=False"], us["trajectory A, check_body=True"]
+    query = f"{cell('clearance: Hexapod.clearance')} ({data['query_ratio']['trajectory A']:.2f}x the bare warm FK)"
+    return [
+        ("reference: clearance query (Hexapod.clearance), time per query", query),
+        ("reference: clearance query, its compiled kernel call alone", cell("clearance: kernel call")),
+        (f"reference: coal's distance on every pair ({data['pairs']} pairs)", cell("clearance: coal, every pair")),
+        ("reference: body check of one answer (cones and collisions)", cell("body check: one call")),
+        (
+            "reference: warm FK along trajectory A, without / with the body check, CPU per solve",
+            f"{bare['median']:.1f} µs / {checked['median']:.1f} µs ({data['check_ratio']['trajectory A']:.2f}x)",
+        ),
+    ]
+
+
+def certificate_rows(data: dict) -> list[tuple[str, str]]:
+    """``certificate.py``: the proof's proven fraction and its cost per warm step beside the floor's."""
+    rows = []
+    for t in data["trajectories"]:
+        where = f"{t['preset']}: trajectory {t['trajectory']} at 1 kHz"
+        rows.append((f"{where}, warm steps proven (Krawczyk)", f"{100 * t['proven_fraction']:.2f} % of {t['steps']}"))
+        step = t["solve_median_us"] + t["proof_median_us"]
+        value = f"{t['solve_median_us']:.0f} µs solve + {t['proof_median_us']:.0f} µs proof (medians)"
+        if not math.isnan(t["floor_median_us"]):  # NaN: the floor does not read this preset's legs
+            value += f"; floor {t['floor_median_us']:.1f} µs ({step / t['floor_median_us']:.0f}x)"
+        else:
+            value += "; no floor for this preset"
+        rows.append((f"{where}, warm step with its proof, time per step", value))
+    return rows
+
+
 #: (script and its quick arguments, its full arguments, the rows of its JSON)
 BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str]]]]] = [
     (["run_benchmarks.py", "reference", "--samples", "300"], ["run_benchmarks.py"], bench_rows),
@@ -143,6 +181,12 @@ BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str
         service_rows,
     ),
     (["service_memory.py", "--fixtures", "1,20", "--sets", "100"], ["service_memory.py"], memory_rows),
+    (["clearance.py", "--poses", "300", "--rounds", "2"], ["clearance.py"], clearance_rows),
+    (
+        ["certificate.py", "reference", "3-6", "--poses", "0", "--trajectory-samples", "500"],
+        ["certificate.py"],
+        certificate_rows,
+    ),
 ]
 
 

@@ -218,6 +218,56 @@ def test_certificate_and_tracker_false_alarm_benchmarks_run():
     assert out.stdout.count("expected <=") == 4  # two noise levels, at rest and moving
 
 
+def _performance_table():
+    """benchmarks/performance_table.py as a module (its row parsers and BENCHMARKS)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("performance_table", ROOT / "benchmarks" / "performance_table.py")
+    assert spec is not None and spec.loader is not None
+    table = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(table)
+    return table
+
+
+def test_clearance_benchmark_json_makes_the_performance_rows(tmp_path):
+    report = tmp_path / "clearance.json"
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "clearance.py"), "--poses", "20", "--rounds", "1"]
+    out = subprocess.run([*cmd, "--json", str(report)], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stdout + out.stderr
+    data = json.loads(report.read_text())
+    assert data["us"]["clearance: Hexapod.clearance"]["median"] > 0 and data["check_ratio"]["trajectory A"] > 0
+    assert data["agreement"]["verdicts_equal"] == data["poses"] > 0
+    table = _performance_table()
+    rows = dict(table.clearance_rows(data))
+    assert "µs" in rows["reference: clearance query (Hexapod.clearance), time per query"]
+    assert "µs" in rows["reference: clearance query, its compiled kernel call alone"]
+    assert rows["reference: warm FK along trajectory A, without / with the body check, CPU per solve"].endswith("x)")
+    assert any(args[0] == "clearance.py" and parse is table.clearance_rows for args, _, parse in table.BENCHMARKS)
+
+
+def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
+    report = tmp_path / "certificate.json"
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "certificate.py"), "reference", "3-6", "--poses", "0"]
+    out = subprocess.run(
+        [*cmd, "--trajectory-samples", "20", "--json", str(report)], capture_output=True, text=True, timeout=600
+    )
+    assert out.returncode == 0, out.stdout + out.stderr
+    data = json.loads(report.read_text())
+    assert [(t["preset"], t["trajectory"]) for t in data["trajectories"]] == [
+        (p, w) for p in ("reference", "3-6") for w in ("A", "B")
+    ]
+    assert all(0 <= t["proven_fraction"] <= 1 and t["steps"] > 0 for t in data["trajectories"]) and not data["solves"]
+    table = _performance_table()
+    rows = dict(table.certificate_rows(data))
+    assert len(rows) == 8
+    for preset, which in (("reference", "A"), ("reference", "B"), ("3-6", "A"), ("3-6", "B")):
+        where = f"{preset}: trajectory {which} at 1 kHz"
+        assert rows[f"{where}, warm steps proven (Krawczyk)"].endswith(" of 19")
+        step = rows[f"{where}, warm step with its proof, time per step"]
+        assert "µs proof" in step and (("floor" in step and step.endswith("x)")) == (preset == "reference"))
+    assert any(args[0] == "certificate.py" and parse is table.certificate_rows for args, _, parse in table.BENCHMARKS)
+
+
 def test_three_six_benchmark_runs():
     out = subprocess.run(
         [sys.executable, str(ROOT / "benchmarks" / "three_six_fk.py"), "--poses", "30"],
