@@ -181,12 +181,8 @@ BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str
         service_rows,
     ),
     (["service_memory.py", "--fixtures", "1,20", "--sets", "100"], ["service_memory.py"], memory_rows),
-    (["clearance.py", "--poses", "300", "--rounds", "2"], ["clearance.py"], clearance_rows),
-    (
-        ["certificate.py", "reference", "3-6", "--poses", "0", "--trajectory-samples", "500"],
-        ["certificate.py"],
-        certificate_rows,
-    ),
+    (["clearance.py", "--poses", "1000"], ["clearance.py"], clearance_rows),
+    (["certificate.py", "reference", "3-6", "--poses", "0"], ["certificate.py"], certificate_rows),
 ]
 
 
