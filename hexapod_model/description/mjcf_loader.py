@@ -29,6 +29,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import MjcfError, UrdfError
+from .mjcf import COLLISION_GROUP
 from .model import ClosedLoopModel, same_placement
 from .urdf import Closure
 
@@ -121,6 +122,36 @@ def _load(text: str, path: Path, source: str) -> ClosedLoopModel:
         raise MjcfError(source, exc.value, exc.reason) from None
     clm.mjcf_xml = text
     return clm
+
+
+def mjcf_collision_bodies(clm: ClosedLoopModel) -> pin.GeometryModel:
+    """The collision bodies of the MJCF ``clm`` was loaded from, on its model: every named geom of group
+    :data:`~hexapod_model.description.mjcf.COLLISION_GROUP`, in file order, named as in the file.
+
+    Pinocchio's parser files a geom with ``contype`` and ``conaffinity`` 0 (the writer's inert
+    collision geoms) under the visual model and any other under the collision model: both are
+    read, and the group decides. Empty for a model not loaded from an MJCF or an MJCF without such
+    geoms.
+    """
+    if clm.mjcf_xml is None:
+        return pin.GeometryModel()
+    wanted = [
+        str(el.get("name"))
+        for el in ET.fromstring(clm.mjcf_xml).iter("geom")
+        if el.get("group") == str(COLLISION_GROUP) and el.get("name")
+    ]
+    found: dict[str, pin.GeometryObject] = {}
+    with tempfile.TemporaryDirectory() as tmp:  # Pinocchio reads MJCF from files only
+        path = Path(tmp) / "hexapod.xml"
+        path.write_text(clm.mjcf_xml)
+        for kind in (pin.GeometryType.VISUAL, pin.GeometryType.COLLISION):
+            for go in pin.buildGeomFromMJCF(clm.model, str(path), kind).geometryObjects:
+                found.setdefault(go.name, go)
+    out = pin.GeometryModel()
+    for name in wanted:
+        if name in found:
+            out.addGeometryObject(found[name].copy())
+    return out
 
 
 def _place_home(model: pin.Model, source: str) -> None:

@@ -1,0 +1,65 @@
+"""The body check of a hexapod loaded from MJCF: the same collision bodies, pairs, cones and answers as from its URDF."""
+
+from __future__ import annotations
+
+import functools
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hexapod_model as hm
+from hexapod_model.description.geometry import load_geometry
+from hexapod_model.description.mjcf import geometry_to_mjcf
+from hexapod_model.description.mjcf_loader import load_mjcf_text
+from hexapod_model.kinematics.clearance import query_of
+from hexapod_model.lie import xyz_rpy_to_pose
+
+ROOT = Path(__file__).resolve().parents[2]
+THICK = ROOT / "docs" / "geometries" / "thick_legs.toml"
+TWIST = (0.0, 0.0, 0.0, 0.0, 0.0, 75.0)  # deg: the thick legs' platform housing meets a neighbour's rod
+
+
+@functools.cache
+def pair(path: Path = THICK) -> tuple[hm.Hexapod, hm.Hexapod]:
+    """The hexapod of a geometry file from the geometry (its URDF) and from its MJCF."""
+    g = load_geometry(path)
+    return hm.Hexapod.from_geometry(g, compiled=False), hm.Hexapod(
+        load_mjcf_text(geometry_to_mjcf(g), f"{g.name}.xml"), compiled=False
+    )
+
+
+def test_a_twist_into_collision_is_collision_naming_the_same_pair_from_both():
+    urdf, mjcf = pair()
+    T = urdf.home_pose @ xyz_rpy_to_pose(TWIST)
+    a, b = urdf.inverse(T, check=False), mjcf.inverse(T, check=False)
+    assert a.status == b.status == "collision"
+    assert a.message == b.message and "leg" in a.message
+    with pytest.raises(hm.WorkspaceError, match="collision"):
+        mjcf.inverse(T)
+    fa, fb = urdf.forward(a.lengths, check=False), mjcf.forward(a.lengths, check=False)
+    assert "collision" in fa.flags and "collision" in fb.flags
+
+
+def test_the_mjcf_hexapod_has_the_urdf_bodies_and_pairs():
+    urdf, mjcf = pair()
+    qu, qm = query_of(urdf), query_of(mjcf)
+    assert qu.pairs == qm.pairs and len(qm.pairs) > 0
+    assert qu.collision.owners == qm.collision.owners
+
+
+def test_clearance_agrees_on_seeded_poses():
+    urdf, mjcf = pair()
+    rng = np.random.default_rng(32)
+    for _ in range(20):
+        T = urdf.home_pose @ xyz_rpy_to_pose(np.r_[rng.uniform(-0.04, 0.04, 3), rng.uniform(-25.0, 25.0, 3)])
+        q = urdf.inverse(T, check=False).q
+        a, b = urdf.clearance(q), mjcf.clearance(q)
+        assert abs(a.distance - b.distance) < 1e-9
+        every = query_of(urdf).all_pairs(q)
+        np.testing.assert_allclose(query_of(mjcf).all_pairs(q), every, rtol=0, atol=1e-9)
+        # two pairs of a symmetric pose may tie to 1e-16 m: the pair named is one at the smallest distance
+        assert abs(every[query_of(urdf).pairs.index(b.pair)] - a.distance) < 1e-9
+        if a.pair == b.pair:
+            np.testing.assert_allclose(a.points, b.points, atol=1e-9)
