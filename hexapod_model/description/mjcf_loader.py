@@ -125,8 +125,10 @@ def _load(text: str, path: Path, source: str) -> ClosedLoopModel:
 
 
 def mjcf_collision_bodies(clm: ClosedLoopModel) -> pin.GeometryModel:
-    """The collision bodies of the MJCF ``clm`` was loaded from, on its model: every named geom of group
-    :data:`~hexapod_model.description.mjcf.COLLISION_GROUP`, in file order, named as in the file.
+    """The collision bodies of the MJCF ``clm`` was loaded from, on its model, named as in the file.
+
+    They are the named geoms of group :data:`~hexapod_model.description.mjcf.COLLISION_GROUP`,
+    in file order (the ``<collision>`` bodies of the URDF ``hexapod mjcf`` translated).
 
     Pinocchio's parser files a geom with ``contype`` and ``conaffinity`` 0 (the writer's inert
     collision geoms) under the visual model and any other under the collision model: both are

@@ -1,9 +1,8 @@
-"""The body check of a hexapod loaded from MJCF: the same collision bodies, pairs, cones and answers as from its URDF."""
+"""The body check of a hexapod loaded from MJCF: the same bodies, pairs, cones and answers as from its URDF."""
 
 from __future__ import annotations
 
 import functools
-import re
 from pathlib import Path
 
 import numpy as np
