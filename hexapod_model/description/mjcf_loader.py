@@ -30,6 +30,7 @@ import pinocchio as pin
 
 from ..exceptions import MjcfError, UrdfError
 from .mjcf import COLLISION_GROUP
+from .mjcf_body import read_body_limits
 from .model import ClosedLoopModel, same_placement
 from .urdf import Closure
 
@@ -110,6 +111,7 @@ def load_mjcf_text(mjcf_xml: str, source: str = "<string>") -> ClosedLoopModel:
 
 def _load(text: str, path: Path, source: str) -> ClosedLoopModel:
     closures = read_equalities(text, source)
+    read_body_limits(text, source)  # a bad cone or bound is named at loading, not at the first check
     try:
         model, points, frames = pin.buildModelAndConstraintsFromMJCF(str(path))
     except (RuntimeError, ValueError) as exc:

@@ -1,7 +1,8 @@
 """Clearance: the smallest distance between two bodies of a hexapod in a configuration.
 
 The bodies are the ``<collision>`` elements of the hexapod's URDF
-(:mod:`~hexapod_model.description.urdf_collision`), loaded as a Pinocchio ``GeometryModel``
+(:mod:`~hexapod_model.description.urdf_collision`), or the geoms an MJCF written from it carries
+in their place, loaded as a Pinocchio ``GeometryModel``
 with the pairs that touch by construction left out
 (:mod:`~hexapod_model.description.collision`). A query places the bodies and measures every pair
 in one compiled call (:mod:`~hexapod_model.kinematics.clearance_kernel`: capsules, spheres and
@@ -35,6 +36,7 @@ from ..description.geometry import HexapodGeometry
 from ..description.model import ClosedLoopModel
 from ..exceptions import InputError, UrdfError
 from . import clearance_kernel as kernel
+from .body_check import body_limits
 from .body_tables import kernel_tables
 from .cones import ConeGeometry
 from .newton.solver import Solution
@@ -216,14 +218,14 @@ _LOCK = threading.Lock()
 
 
 def query_of(hexapod: _Solves) -> ClearanceQuery:
-    """The hexapod's :class:`ClearanceQuery`, built at the first call (the bound from its geometry, 0 without one)."""
+    """The hexapod's :class:`ClearanceQuery`, built at the first call (the bound of its geometry or MJCF, else 0)."""
     query = _QUERIES.get(hexapod)  # a dict read needs no lock; building one does
     if query is not None:
         return query
     with _LOCK:
         query = _QUERIES.get(hexapod)
         if query is None:
-            bound = 0.0 if hexapod.geometry is None else hexapod.geometry.min_clearance
+            bound = body_limits(hexapod.closed_loop, hexapod.geometry)[1]
             query = _QUERIES[hexapod] = ClearanceQuery(hexapod.closed_loop, bound, hexapod.compiled)
     return query
 

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import re
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +14,8 @@ import hexapod_model as hm
 from hexapod_model.description.geometry import load_geometry
 from hexapod_model.description.mjcf import geometry_to_mjcf
 from hexapod_model.description.mjcf_loader import load_mjcf_text
+from hexapod_model.exceptions import MjcfError
+from hexapod_model.kinematics.body_check import body_limits
 from hexapod_model.kinematics.clearance import query_of
 from hexapod_model.lie import xyz_rpy_to_pose
 
@@ -62,3 +66,32 @@ def test_clearance_agrees_on_seeded_poses():
         assert abs(every[query_of(urdf).pairs.index(b.pair)] - a.distance) < 1e-9
         if a.pair == b.pair:
             np.testing.assert_allclose(a.points, b.points, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["reference", "3-6"])
+def test_the_mjcf_carries_the_cones_and_min_clearance(name):
+    g = dataclasses.replace(hm.get_preset(name), min_clearance=0.002)
+    urdf = hm.Hexapod.from_geometry(g, compiled=False)
+    mjcf = hm.Hexapod(load_mjcf_text(geometry_to_mjcf(g), f"{name}.xml"), compiled=False)
+    a, b = body_limits(urdf.closed_loop, urdf.geometry), body_limits(mjcf.closed_loop, None)
+    assert np.isfinite(a[0]).any()
+    np.testing.assert_array_equal(a[0], b[0])
+    assert a[1] == b[1] == 0.002
+    assert query_of(mjcf).min_clearance == 0.002
+    rng = np.random.default_rng(7)
+    seen = set()
+    for _ in range(40):
+        T = urdf.home_pose @ xyz_rpy_to_pose(np.r_[rng.uniform(-0.1, 0.1, 3), rng.uniform(-40.0, 40.0, 3)])
+        sa, sb = urdf.inverse(T, check=False), mjcf.inverse(T, check=False)
+        assert (sa.status, sa.message) == (sb.status, sb.message)
+        seen.add(sa.status)
+    assert "cone_limit" in seen or name == "reference"
+
+
+def test_a_bad_cone_in_an_mjcf_is_named(tmp_path):
+    text = geometry_to_mjcf(load_geometry(THICK))
+    bad = re.sub(r'(name="hexapod_leg2_base_cone" data=")[^"]*', r"\g<1>-1", text)
+    assert bad != text
+    with pytest.raises(MjcfError, match="hexapod_leg2_base_cone") as err:
+        load_mjcf_text(bad, "bad.xml")
+    assert "bad.xml" in str(err.value) and "\n" not in str(err.value)
