@@ -86,6 +86,19 @@ def _shared_anchors(clm: ClosedLoopModel) -> set[tuple[int, int]]:
     return out
 
 
+def has_collision_bodies(clm: ClosedLoopModel) -> bool:
+    """Whether the file ``clm`` was loaded from declares collision bodies (read without building them).
+
+    A URDF: a ``<collision>`` element in a link; an MJCF: a named geom of the collision group.
+    """
+    if clm.urdf_xml is not None:
+        return any(link.find("collision") is not None for link in ET.fromstring(clm.urdf_xml).iter("link"))
+    if clm.mjcf_xml is not None:
+        group = str(COLLISION_GROUP)
+        return any(g.get("group") == group and g.get("name") for g in ET.fromstring(clm.mjcf_xml).iter("geom"))
+    return False
+
+
 def collision_model(clm: ClosedLoopModel) -> CollisionModel:
     """The collision bodies of ``clm``'s URDF and the pairs to check (see the module doc).
 

@@ -25,8 +25,9 @@ collision-free set and the envelope compete.
 The check is one compiled call (:meth:`.clearance.ClearanceQuery.check`: the placements, the
 cone angles and the pairs closer than ``min_clearance``), about 5 us on the reference preset;
 ``Hexapod.check_body = False`` skips it (docs/solver.md): the warm forward path then costs
-what it did without it. A model without collision bodies (a URDF written without them) has
-no collision check; a geometry without cones no cone check.
+what it did without it. A file without collision bodies (a URDF or MJCF written without them)
+cannot be checked: :class:`BodyCheck` refuses it, so that ``check_body=False`` is asked for
+explicitly rather than collisions silently left out; a geometry without cones has no cone check.
 """
 
 from __future__ import annotations
@@ -37,10 +38,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..description.collision import has_collision_bodies
 from ..description.geometry import HexapodGeometry
+from ..description.mjcf import COLLISION_GROUP
 from ..description.mjcf_body import read_body_limits
 from ..description.model import ClosedLoopModel
-from ..exceptions import UrdfError
+from ..exceptions import MjcfError, UrdfError
 from ..lie import matrix_to_rpy
 from .cones import ConeAngles, ConeGeometry, cone_limits
 from .newton.solver import Solution
@@ -78,9 +81,25 @@ class BodyCheck:
         clm: the loaded hexapod.
         geometry: its geometry (cones, ``min_clearance``, envelope), if any.
         compiled: run the compiled clearance kernel.
+
+    Raises:
+        UrdfError: the file ``clm`` was loaded from declares no collision bodies (an
+            :class:`~hexapod_model.exceptions.MjcfError` for an MJCF): a check that cannot look
+            for collisions would pass poses in collision; ``check_body=False`` says so.
     """
 
     def __init__(self, clm: ClosedLoopModel, geometry: HexapodGeometry | None, compiled: bool = True):
+        if not has_collision_bodies(clm):
+            error, what = (
+                (MjcfError, f"geoms of group {COLLISION_GROUP}") if clm.mjcf_xml else (UrdfError, "<collision>")
+            )
+            raise error(
+                clm.source,
+                what,
+                "the file has no collision bodies, so the body check cannot look for collisions: pass "
+                "check_body=False (--no-body-check) to solve without it, or load a file with them "
+                "(hexapod urdf, hexapod mjcf)",
+            )
         self.clm = clm
         self.geometry = geometry
         self.compiled = compiled

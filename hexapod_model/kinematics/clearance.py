@@ -33,10 +33,10 @@ from numpy.typing import ArrayLike
 
 from ..description.collision import CollisionModel, collision_model
 from ..description.geometry import HexapodGeometry
+from ..description.mjcf_body import read_body_limits
 from ..description.model import ClosedLoopModel
 from ..exceptions import InputError, UrdfError
 from . import clearance_kernel as kernel
-from .body_check import body_limits
 from .body_tables import kernel_tables
 from .cones import ConeGeometry
 from .newton.solver import Solution
@@ -225,7 +225,11 @@ def query_of(hexapod: _Solves) -> ClearanceQuery:
     with _LOCK:
         query = _QUERIES.get(hexapod)
         if query is None:
-            bound = body_limits(hexapod.closed_loop, hexapod.geometry)[1]
+            clm, geometry = hexapod.closed_loop, hexapod.geometry
+            if geometry is not None:
+                bound = geometry.min_clearance
+            else:  # an MJCF carries its geometry's bound
+                bound = 0.0 if clm.mjcf_xml is None else read_body_limits(clm.mjcf_xml, clm.source).min_clearance
             query = _QUERIES[hexapod] = ClearanceQuery(hexapod.closed_loop, bound, hexapod.compiled)
     return query
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import re
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +13,7 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.description.geometry import load_geometry
-from hexapod_model.description.mjcf import geometry_to_mjcf
+from hexapod_model.description.mjcf import COLLISION_GROUP, geometry_to_mjcf
 from hexapod_model.description.mjcf_loader import load_mjcf_text
 from hexapod_model.exceptions import MjcfError
 from hexapod_model.kinematics.body_check import body_limits
@@ -95,3 +96,26 @@ def test_a_bad_cone_in_an_mjcf_is_named(tmp_path):
     with pytest.raises(MjcfError, match="hexapod_leg2_base_cone") as err:
         load_mjcf_text(bad, "bad.xml")
     assert "bad.xml" in str(err.value) and "\n" not in str(err.value)
+
+
+def _without_collision_geoms(text: str) -> str:
+    root = ET.fromstring(text)
+    for body in root.iter("body"):
+        for geom in body.findall("geom"):
+            if geom.get("group") == str(COLLISION_GROUP):
+                body.remove(geom)
+    return ET.tostring(root, encoding="unicode")
+
+
+def test_an_mjcf_without_collision_bodies_needs_check_body_false():
+    urdf, _ = pair()
+    bare = _without_collision_geoms(geometry_to_mjcf(load_geometry(THICK)))
+    with pytest.raises(MjcfError, match="no collision bodies.*check_body=False") as err:
+        hm.Hexapod(load_mjcf_text(bare, "bare.xml"), compiled=False)
+    assert "bare.xml" in str(err.value) and "\n" not in str(err.value)
+    hexa = hm.Hexapod(load_mjcf_text(bare, "bare.xml"), compiled=False, check_body=False)
+    with pytest.raises(MjcfError, match="no collision bodies"):
+        hexa.check_body = True
+    assert not hexa.check_body
+    T = urdf.home_pose @ xyz_rpy_to_pose(TWIST)  # in collision: a solve the caller asked to leave unchecked
+    assert hexa.inverse(T).status == "converged"
