@@ -20,6 +20,8 @@ from hexapod_model.kinematics.body_check import body_limits
 from hexapod_model.kinematics.clearance import query_of
 from hexapod_model.lie import xyz_rpy_to_pose
 
+from ..conftest import PRESET_NAMES
+
 ROOT = Path(__file__).resolve().parents[2]
 THICK = ROOT / "docs" / "geometries" / "thick_legs.toml"
 TWIST = (0.0, 0.0, 0.0, 0.0, 0.0, 75.0)  # deg: the thick legs' platform housing meets a neighbour's rod
@@ -119,3 +121,14 @@ def test_an_mjcf_without_collision_bodies_needs_check_body_false():
     assert not hexa.check_body
     T = urdf.home_pose @ xyz_rpy_to_pose(TWIST)  # in collision: a solve the caller asked to leave unchecked
     assert hexa.inverse(T).status == "converged"
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_every_preset_from_mjcf_has_the_urdf_clearance(name):
+    g = hm.get_preset(name)
+    urdf = hm.Hexapod.from_geometry(g, compiled=False)
+    mjcf = hm.Hexapod(load_mjcf_text(geometry_to_mjcf(g), f"{name}.xml"), compiled=False)
+    assert query_of(urdf).pairs == query_of(mjcf).pairs
+    q = urdf.inverse(urdf.home_pose @ xyz_rpy_to_pose([0.01, 0.0, 0.0, 3.0, 2.0, 5.0]), check=False).q
+    np.testing.assert_allclose(query_of(mjcf).all_pairs(q), query_of(urdf).all_pairs(q), rtol=0, atol=1e-9)
+    assert abs(urdf.clearance(q).distance - mjcf.clearance(q).distance) < 1e-9
