@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..description.mjcf import urdf_to_mjcf
+from ..description.mjcf import geometry_to_mjcf, urdf_to_mjcf
 from ..description.mjcf_loader import MJCF_SUFFIXES, load_mjcf_text
 from ..exceptions import InputError
 from ..files import atomic_write_text, check_output_path
@@ -42,7 +42,10 @@ def cmd_mjcf(args: argparse.Namespace) -> int:
     urdf_xml = hexa.closed_loop.urdf_xml
     if urdf_xml is None:
         raise InputError("HEXAPOD", args.hexapod, "is an MJCF file already; give a preset, URDF or geometry file")
-    text = urdf_to_mjcf(urdf_xml, actuated=args.actuated, source=str(args.hexapod))
+    if hexa.geometry is not None:  # a preset or geometry file: its cones and min_clearance go in the file too
+        text = geometry_to_mjcf(hexa.geometry, actuated=args.actuated)
+    else:
+        text = urdf_to_mjcf(urdf_xml, actuated=args.actuated, source=str(args.hexapod))
     load_mjcf_text(text, "the generated MJCF")  # refuse to write a file that does not load and assemble
     if args.output:
         atomic_write_text(args.output, text)

@@ -3,7 +3,10 @@
 :func:`collision_model` reads the ``<collision>`` elements of the URDF a
 :class:`~hexapod_model.description.model.ClosedLoopModel` was made from (Pinocchio's
 ``buildGeomFromUrdfString``; capsules through the ``<collision_checking>`` convention) and names
-each body after its ``<collision name=...>``. The pairs whose distance is checked are all
+each body after its ``<collision name=...>``; for a hexapod loaded from an MJCF, the geoms of
+the collision group that ``hexapod mjcf`` writes from those elements
+(:func:`~hexapod_model.description.mjcf_loader.mjcf_collision_bodies`), the same bodies under
+the same names. The pairs whose distance is checked are all
 pairs of bodies except those that touch by construction, found from the model, not from a list
 of names:
 
@@ -25,7 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import UrdfError
+from ..exceptions import MjcfError, UrdfError
+from .mjcf import COLLISION_GROUP
+from .mjcf_loader import mjcf_collision_bodies
 from .model import ClosedLoopModel
 
 SHARED_JOINT = 1e-9  # m: closure anchors closer than this at home are one joint
@@ -81,29 +86,56 @@ def _shared_anchors(clm: ClosedLoopModel) -> set[tuple[int, int]]:
     return out
 
 
+def has_collision_bodies(clm: ClosedLoopModel) -> bool:
+    """Whether the file ``clm`` was loaded from declares collision bodies (read without building them).
+
+    A URDF: a ``<collision>`` element in a link; an MJCF: a named geom of the collision group.
+    """
+    if clm.urdf_xml is not None:
+        return any(link.find("collision") is not None for link in ET.fromstring(clm.urdf_xml).iter("link"))
+    if clm.mjcf_xml is not None:
+        group = str(COLLISION_GROUP)
+        return any(g.get("group") == group and g.get("name") for g in ET.fromstring(clm.mjcf_xml).iter("geom"))
+    return False
+
+
 def collision_model(clm: ClosedLoopModel) -> CollisionModel:
     """The collision bodies of ``clm``'s URDF and the pairs to check (see the module doc).
 
     Raises:
-        UrdfError: the hexapod was not loaded from a URDF, or its URDF has no ``<collision>``
-            element (regenerate it with ``hexapod urdf``).
+        UrdfError: the hexapod was loaded from neither a URDF nor an MJCF, or its URDF has no
+            ``<collision>`` element (regenerate it with ``hexapod urdf``).
+        MjcfError: its MJCF has no named geom of the collision group (regenerate it with
+            ``hexapod mjcf``).
     """
-    if clm.urdf_xml is None:
-        raise UrdfError(clm.source, "<collision>", "clearance needs a URDF with collision bodies (hexapod urdf)")
     m = clm.model
-    geometry = pin.buildGeomFromUrdfString(m, clm.urdf_xml, pin.GeometryType.COLLISION)
-    if geometry.ngeoms == 0:
-        raise UrdfError(clm.source, "<collision>", "the URDF has no collision bodies; regenerate it with hexapod urdf")
-    declared = _collision_names(clm.urdf_xml)
     names: list[str] = []
     owners: list[int] = []
-    seen: dict[str, int] = {}
+    if clm.urdf_xml is not None:
+        geometry = pin.buildGeomFromUrdfString(m, clm.urdf_xml, pin.GeometryType.COLLISION)
+        if geometry.ngeoms == 0:
+            raise UrdfError(
+                clm.source, "<collision>", "the URDF has no collision bodies; regenerate it with hexapod urdf"
+            )
+        declared = _collision_names(clm.urdf_xml)
+        seen: dict[str, int] = {}
+        for go in geometry.geometryObjects:
+            link = m.frames[go.parentFrame].name
+            k = seen.get(link, 0)
+            seen[link] = k + 1
+            given = declared.get(link, [])
+            go.name = given[k] if k < len(given) and given[k] else go.name
+    elif clm.mjcf_xml is not None:
+        geometry = mjcf_collision_bodies(clm)
+        if geometry.ngeoms == 0:
+            raise MjcfError(
+                clm.source,
+                f"group {COLLISION_GROUP}",
+                "the MJCF has no collision bodies (named geoms of that group); regenerate it with hexapod mjcf",
+            )
+    else:
+        raise UrdfError(clm.source, "<collision>", "clearance needs a URDF or MJCF with collision bodies")
     for go in geometry.geometryObjects:
-        link = m.frames[go.parentFrame].name
-        k = seen.get(link, 0)
-        seen[link] = k + 1
-        given = declared.get(link, [])
-        go.name = given[k] if k < len(given) and given[k] else go.name
         names.append(go.name)
         owners.append(_owner(clm, go.parentJoint))
     # per leg: the bodies nearest to the base and to the platform along its chain

@@ -20,6 +20,8 @@ and Pinocchio's MJCF parser both read. The writer translates a URDF that follows
   ``capsule`` where the URDF's ``<collision_checking>`` names one; with ``contype`` and
   ``conaffinity`` 0, as the visuals: MuJoCo computes no contacts between the parts of a
   mechanism whose loops it closes softly (the clearance is measured, not simulated);
+* from a geometry (:func:`geometry_to_mjcf`), a ``<custom>`` element holding its joint cones and
+  ``min_clearance`` (:mod:`~hexapod_model.description.mjcf_body`);
 * with ``actuated``, one ``position`` actuator per measured (prismatic) joint, its control
   range the stroke (m).
 
@@ -36,6 +38,7 @@ import xml.etree.ElementTree as ET
 from ..exceptions import UrdfError
 from ..lie import rpy_to_quaternion
 from .geometry import HexapodGeometry
+from .mjcf_body import body_limits_element
 from .urdf import format_number, geometry_to_urdf, read_closures
 
 #: closure constraint softness (MuJoCo ``solref``: time constant s, damping ratio); see docs/mjcf.md
@@ -246,6 +249,11 @@ def urdf_to_mjcf(urdf_xml: str, *, actuated: bool = False, source: str = "<strin
             or it carries an ``<encoder>`` reading model (a calibrated geometry), which MJCF
             has no place for: the exported file would read joint values as readings.
     """
+    return _to_mjcf(urdf_xml, actuated, source, None)
+
+
+def _to_mjcf(urdf_xml: str, actuated: bool, source: str, custom: ET.Element | None) -> str:
+    """:func:`urdf_to_mjcf`, with a ``<custom>`` element (the body limits) after the equalities."""
     conv = _Converter(urdf_xml, source)
     if conv.robot.find("encoder") is not None:
         raise UrdfError(source, "<encoder>", "MJCF cannot carry the encoder zero/scale of a calibrated geometry")
@@ -277,6 +285,8 @@ def urdf_to_mjcf(urdf_xml: str, *, actuated: bool = False, source: str = "<strin
             solref=_vec(EQUALITY_SOLREF),
             solimp=_vec(EQUALITY_SOLIMP),
         )
+    if custom is not None:
+        root.append(custom)
     if actuated:
         actuator = ET.SubElement(root, "actuator")
         actuator.append(ET.Comment(" one position actuator per leg: ctrl is the leg reading (m, zero at home) "))
@@ -338,5 +348,9 @@ def _light_and_floor(world: ET.Element) -> None:
 
 
 def geometry_to_mjcf(geom: HexapodGeometry, *, actuated: bool = False) -> str:
-    """MJCF text of ``geom``: :func:`urdf_to_mjcf` of :func:`~hexapod_model.description.urdf.geometry_to_urdf`."""
-    return urdf_to_mjcf(geometry_to_urdf(geom), actuated=actuated, source=f"<geometry {geom.name}>")
+    """MJCF text of ``geom``: :func:`urdf_to_mjcf` of :func:`~hexapod_model.description.urdf.geometry_to_urdf`.
+
+    The file carries the geometry's joint cones and ``min_clearance`` too, which a URDF cannot
+    (:mod:`~hexapod_model.description.mjcf_body`).
+    """
+    return _to_mjcf(geometry_to_urdf(geom), actuated, f"<geometry {geom.name}>", body_limits_element(geom))

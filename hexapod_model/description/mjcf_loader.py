@@ -29,6 +29,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import MjcfError, UrdfError
+from .mjcf import COLLISION_GROUP
+from .mjcf_body import read_body_limits
 from .model import ClosedLoopModel, same_placement
 from .urdf import Closure
 
@@ -109,6 +111,7 @@ def load_mjcf_text(mjcf_xml: str, source: str = "<string>") -> ClosedLoopModel:
 
 def _load(text: str, path: Path, source: str) -> ClosedLoopModel:
     closures = read_equalities(text, source)
+    read_body_limits(text, source)  # a bad cone or bound is named at loading, not at the first check
     try:
         model, points, frames = pin.buildModelAndConstraintsFromMJCF(str(path))
     except (RuntimeError, ValueError) as exc:
@@ -121,6 +124,38 @@ def _load(text: str, path: Path, source: str) -> ClosedLoopModel:
         raise MjcfError(source, exc.value, exc.reason) from None
     clm.mjcf_xml = text
     return clm
+
+
+def mjcf_collision_bodies(clm: ClosedLoopModel) -> pin.GeometryModel:
+    """The collision bodies of the MJCF ``clm`` was loaded from, on its model, named as in the file.
+
+    They are the named geoms of group :data:`~hexapod_model.description.mjcf.COLLISION_GROUP`,
+    in file order (the ``<collision>`` bodies of the URDF ``hexapod mjcf`` translated).
+
+    Pinocchio's parser files a geom with ``contype`` and ``conaffinity`` 0 (the writer's inert
+    collision geoms) under the visual model and any other under the collision model: both are
+    read, and the group decides. Empty for a model not loaded from an MJCF or an MJCF without such
+    geoms.
+    """
+    if clm.mjcf_xml is None:
+        return pin.GeometryModel()
+    wanted = [
+        str(el.get("name"))
+        for el in ET.fromstring(clm.mjcf_xml).iter("geom")
+        if el.get("group") == str(COLLISION_GROUP) and el.get("name")
+    ]
+    found: dict[str, pin.GeometryObject] = {}
+    with tempfile.TemporaryDirectory() as tmp:  # Pinocchio reads MJCF from files only
+        path = Path(tmp) / "hexapod.xml"
+        path.write_text(clm.mjcf_xml)
+        for kind in (pin.GeometryType.VISUAL, pin.GeometryType.COLLISION):
+            for go in pin.buildGeomFromMJCF(clm.model, str(path), kind).geometryObjects:
+                found.setdefault(go.name, go)
+    out = pin.GeometryModel()
+    for name in wanted:
+        if name in found:
+            out.addGeometryObject(found[name].copy())
+    return out
 
 
 def _place_home(model: pin.Model, source: str) -> None:

@@ -11,6 +11,10 @@ path that returns a pose:
 * **direct kinematics** (a measured pose: the platform is there): the status stays, the flags
   ``cone_limit`` / ``collision`` say what the pose violates and the message names it.
 
+The cones and ``min_clearance`` come from the geometry, or for a hexapod loaded from an MJCF
+from the file (:func:`body_limits`); the collision bodies from the URDF or the MJCF
+(:mod:`~hexapod_model.description.collision`).
+
 The **operating envelope** (``HexapodGeometry.envelope``: half-widths ``x, y, z`` (m) and
 ``roll, pitch, yaw`` (rad) of a box about the home pose; the translation in the base frame,
 the angles those of :func:`hexapod_model.lie.matrix_to_rpy` of ``R_home^T R``) says where the
@@ -21,8 +25,9 @@ collision-free set and the envelope compete.
 The check is one compiled call (:meth:`.clearance.ClearanceQuery.check`: the placements, the
 cone angles and the pairs closer than ``min_clearance``), about 5 us on the reference preset;
 ``Hexapod.check_body = False`` skips it (docs/solver.md): the warm forward path then costs
-what it did without it. A model without collision bodies (a URDF written without them) has
-no collision check; a geometry without cones no cone check.
+what it did without it. A file without collision bodies (a URDF or MJCF written without them)
+cannot be checked: :class:`BodyCheck` refuses it, so that ``check_body=False`` is asked for
+explicitly rather than collisions silently left out; a geometry without cones has no cone check.
 """
 
 from __future__ import annotations
@@ -33,9 +38,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..description.collision import has_collision_bodies
 from ..description.geometry import HexapodGeometry
+from ..description.mjcf import COLLISION_GROUP
+from ..description.mjcf_body import read_body_limits
 from ..description.model import ClosedLoopModel
-from ..exceptions import UrdfError
+from ..exceptions import MjcfError, UrdfError
 from ..lie import matrix_to_rpy
 from .cones import ConeAngles, ConeGeometry, cone_limits
 from .newton.solver import Solution
@@ -45,6 +53,18 @@ if TYPE_CHECKING:
 
 #: the statuses (inverse, hybrid) and flags (direct kinematics) of the body check
 BODY_STATUSES = ("cone_limit", "collision")
+
+
+def body_limits(clm: ClosedLoopModel, geometry: HexapodGeometry | None) -> tuple[np.ndarray, float]:
+    """(6, 2) cone half-angles (rad, ``inf``: none) and ``min_clearance`` (m) of a loaded hexapod.
+
+    From its geometry; without one, from the MJCF it was loaded from
+    (:mod:`~hexapod_model.description.mjcf_body`); else no cones and a bound of 0.
+    """
+    if geometry is None and clm.mjcf_xml is not None:
+        found = read_body_limits(clm.mjcf_xml, clm.source)
+        return found.cones, found.min_clearance
+    return cone_limits(geometry), 0.0 if geometry is None else geometry.min_clearance
 
 
 def message_of(found: list[tuple[str, str]], forward: bool) -> str:
@@ -61,14 +81,30 @@ class BodyCheck:
         clm: the loaded hexapod.
         geometry: its geometry (cones, ``min_clearance``, envelope), if any.
         compiled: run the compiled clearance kernel.
+
+    Raises:
+        UrdfError: the file ``clm`` was loaded from declares no collision bodies (an
+            :class:`~hexapod_model.exceptions.MjcfError` for an MJCF): a check that cannot look
+            for collisions would pass poses in collision; ``check_body=False`` says so.
     """
 
     def __init__(self, clm: ClosedLoopModel, geometry: HexapodGeometry | None, compiled: bool = True):
+        if not has_collision_bodies(clm):
+            error, what = (
+                (MjcfError, f"geoms of group {COLLISION_GROUP}") if clm.mjcf_xml else (UrdfError, "<collision>")
+            )
+            raise error(
+                clm.source,
+                what,
+                "the file has no collision bodies, so the body check cannot look for collisions: pass "
+                "check_body=False (--no-body-check) to solve without it, or load a file with them "
+                "(hexapod urdf, hexapod mjcf)",
+            )
         self.clm = clm
         self.geometry = geometry
         self.compiled = compiled
-        #: (6, 2) cone half-angles (rad, ``inf``: none)
-        self.limits = cone_limits(geometry)
+        #: (6, 2) cone half-angles (rad, ``inf``: none), and the collision bound (m)
+        self.limits, self.min_clearance = body_limits(clm, geometry)
         self.has_cones = bool(np.isfinite(self.limits).any())
         self._cones = ConeGeometry(clm) if self.has_cones else None
         self._local = threading.local()
@@ -86,9 +122,10 @@ class BodyCheck:
 
             with self._lock:
                 if self._query is None and not self._no_bodies:
-                    bound = 0.0 if self.geometry is None else self.geometry.min_clearance
                     try:
-                        self._query = ClearanceQuery(self.clm, bound, self.compiled, self._cones, self.limits)
+                        self._query = ClearanceQuery(
+                            self.clm, self.min_clearance, self.compiled, self._cones, self.limits
+                        )
                     except UrdfError:
                         self._no_bodies = True
         return self._query

@@ -1,7 +1,8 @@
 """Clearance: the smallest distance between two bodies of a hexapod in a configuration.
 
 The bodies are the ``<collision>`` elements of the hexapod's URDF
-(:mod:`~hexapod_model.description.urdf_collision`), loaded as a Pinocchio ``GeometryModel``
+(:mod:`~hexapod_model.description.urdf_collision`), or the geoms an MJCF written from it carries
+in their place, loaded as a Pinocchio ``GeometryModel``
 with the pairs that touch by construction left out
 (:mod:`~hexapod_model.description.collision`). A query places the bodies and measures every pair
 in one compiled call (:mod:`~hexapod_model.kinematics.clearance_kernel`: capsules, spheres and
@@ -32,6 +33,7 @@ from numpy.typing import ArrayLike
 
 from ..description.collision import CollisionModel, collision_model
 from ..description.geometry import HexapodGeometry
+from ..description.mjcf_body import read_body_limits
 from ..description.model import ClosedLoopModel
 from ..exceptions import InputError, UrdfError
 from . import clearance_kernel as kernel
@@ -216,14 +218,18 @@ _LOCK = threading.Lock()
 
 
 def query_of(hexapod: _Solves) -> ClearanceQuery:
-    """The hexapod's :class:`ClearanceQuery`, built at the first call (the bound from its geometry, 0 without one)."""
+    """The hexapod's :class:`ClearanceQuery`, built at the first call (the bound of its geometry or MJCF, else 0)."""
     query = _QUERIES.get(hexapod)  # a dict read needs no lock; building one does
     if query is not None:
         return query
     with _LOCK:
         query = _QUERIES.get(hexapod)
         if query is None:
-            bound = 0.0 if hexapod.geometry is None else hexapod.geometry.min_clearance
+            clm, geometry = hexapod.closed_loop, hexapod.geometry
+            if geometry is not None:
+                bound = geometry.min_clearance
+            else:  # an MJCF carries its geometry's bound
+                bound = 0.0 if clm.mjcf_xml is None else read_body_limits(clm.mjcf_xml, clm.source).min_clearance
             query = _QUERIES[hexapod] = ClearanceQuery(hexapod.closed_loop, bound, hexapod.compiled)
     return query
 

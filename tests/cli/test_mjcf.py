@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -54,7 +55,12 @@ def test_actuated_stdout_and_geometry_file(tmp_path, capsys):
     urdf = tmp_path / "mine.urdf"
     assert main(["urdf", "--geometry", str(tmp_path / "mine.json"), "-o", str(urdf)]) == 0
     assert main(["mjcf", str(urdf), "-o", str(tmp_path / "from_urdf.xml")]) == 0
-    assert (tmp_path / "from_urdf.xml").read_text() == (tmp_path / "mine.xml").read_text()
+    # the same file but for the geometry's cones and min_clearance, which the URDF cannot carry
+    mine, from_urdf = (tmp_path / "mine.xml").read_text(), (tmp_path / "from_urdf.xml").read_text()
+    custom = re.search(r"\n *<custom>.*?</custom>", mine, flags=re.S)
+    assert custom is not None and "hexapod_min_clearance" in custom.group(0)
+    assert "<custom>" not in from_urdf
+    assert from_urdf == mine.replace(custom.group(0), "")
 
 
 def test_refusals_are_one_line_with_exit_code_2(tmp_path, capsys):

@@ -253,7 +253,10 @@ def test_a_urdf_without_collision_bodies_is_named():
         r"\s*<collision .*?</collision>|\s*<collision_checking>.*?</collision_checking>", "", text, flags=re.S
     )
     assert "<collision" not in bare
-    hexa = hm.Hexapod(ClosedLoopModel(bare, "bare.urdf"), compiled=False)
+    with pytest.raises(hm.UrdfError, match="no collision bodies.*check_body=False") as err:
+        hm.Hexapod(ClosedLoopModel(bare, "bare.urdf"), compiled=False)  # the body check cannot run: said
+    assert "bare.urdf" in str(err.value) and "\n" not in str(err.value)
+    hexa = hm.Hexapod(ClosedLoopModel(bare, "bare.urdf"), compiled=False, check_body=False)
     with pytest.raises(hm.UrdfError, match="no collision bodies") as err:
         hexa.clearance(hexa.q_home)
     assert "bare.urdf" in str(err.value) and "\n" not in str(err.value)
