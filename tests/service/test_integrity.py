@@ -126,7 +126,8 @@ def test_a_lost_frame_costs_its_legs_next_frame_not_more(tmp_path):
     assert not wrong_ok(records, truth)
 
 
-def test_canopen_frames_after_two_syncs_are_no_set(tmp_path):
+def canopen_cycle(tmp_path):
+    """A CANopen fixture's cycle behind its link and the bus's SYNC clock (reference hexapod)."""
     from .test_fieldbus import EDS
 
     cfg = service_config(tmp_path, [fixture_table(encoder={"protocol": "canopen", "eds": str(EDS)})]).fixtures[0]
@@ -134,7 +135,11 @@ def test_canopen_frames_after_two_syncs_are_no_set(tmp_path):
     cycle = FixtureCycle(cfg, hexa, geometry_hash(hexa), None, 1.0e9)
     clock = SyncClock()
     assert cfg.canopen is not None
-    link = CanopenLink("left", cfg.canopen, cycle.on_frame, clock, cfg.staleness)
+    return cfg, cycle, clock, CanopenLink("left", cfg.canopen, cycle.on_frame, clock, cfg.staleness)
+
+
+def test_canopen_frames_after_two_syncs_are_no_set(tmp_path):
+    cfg, cycle, clock, link = canopen_cycle(tmp_path)
     tpdo = [encode(cfg.legs[k].layout, 0)[: cfg.canopen.pdo_length] for k in range(6)]
     records = []
     for n in range(60):
@@ -197,14 +202,7 @@ def test_a_dbc_counter_and_checksum_are_checked_and_a_missing_warning_signal_is_
 
 
 def test_a_canopen_tpdo_long_after_its_sync_never_joins_the_next_syncs_set(tmp_path):
-    from .test_fieldbus import EDS
-
-    cfg = service_config(tmp_path, [fixture_table(encoder={"protocol": "canopen", "eds": str(EDS)})]).fixtures[0]
-    hexa = hexapod("reference")
-    cycle = FixtureCycle(cfg, hexa, geometry_hash(hexa), None, 1.0e9)
-    clock = SyncClock()
-    assert cfg.canopen is not None
-    link = CanopenLink("left", cfg.canopen, cycle.on_frame, clock, cfg.staleness)
+    cfg, cycle, clock, link = canopen_cycle(tmp_path)
     records = []
     t = 1.0e9
     for n in range(80):
@@ -223,14 +221,7 @@ def test_a_canopen_tpdo_long_after_its_sync_never_joins_the_next_syncs_set(tmp_p
 
 
 def test_a_stalled_canopen_sender_never_mixes_two_syncs_instants_without_a_sync_counter(tmp_path):
-    from .test_fieldbus import EDS
-
-    cfg = service_config(tmp_path, [fixture_table(encoder={"protocol": "canopen", "eds": str(EDS)})]).fixtures[0]
-    hexa = hexapod("reference")
-    cycle = FixtureCycle(cfg, hexa, geometry_hash(hexa), None, 1.0e9)
-    clock = SyncClock()
-    assert cfg.canopen is not None
-    link = CanopenLink("left", cfg.canopen, cycle.on_frame, clock, cfg.staleness)
+    cfg, cycle, clock, link = canopen_cycle(tmp_path)
     records = []
     t = 1.0e9
     for n in range(80):
