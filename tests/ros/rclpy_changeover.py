@@ -33,14 +33,24 @@ def main() -> None:
     node = Node("hexapod_test_changeover")
     qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
     results, guidance = [], []
-    node.create_subscription(String, f"/{ns}/target_result", lambda m: results.append(json.loads(m.data)), qos)
+    answers = node.create_subscription(
+        String, f"/{ns}/target_result", lambda m: results.append(json.loads(m.data)), qos
+    )
+    # the service's result writer matched to this reader (not only seen in the graph): a result
+    # written before the match would be lost (volatile durability)
+    matched = getattr(answers, "get_publisher_count", lambda: 1)
     node.create_subscription(String, f"/{ns}/{fixture}/guidance", lambda m: guidance.append(json.loads(m.data)), qos)
     pub = node.create_publisher(String, f"/{ns}/target", qos)
     end = time.monotonic() + seconds
     sent, next_send = 0, None
     while time.monotonic() < end and (len(results) < len(todo) or len(guidance) < 3):
         rclpy.spin_once(node, timeout_sec=0.05)
-        if next_send is None and pub.get_subscription_count() > 0 and node.count_publishers(f"/{ns}/target_result"):
+        if (
+            next_send is None
+            and pub.get_subscription_count() > 0
+            and node.count_publishers(f"/{ns}/target_result")
+            and matched() > 0
+        ):
             next_send = time.monotonic() + 1.0  # both ways matched: the service's result writer hears this node too
         if sent < len(todo) and next_send is not None and time.monotonic() >= next_send:
             pub.publish(String(data=todo[sent]))
