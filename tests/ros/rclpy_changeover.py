@@ -2,9 +2,12 @@
 
 Usage: python rclpy_changeover.py NAMESPACE FIXTURE REQUESTS.json OUT.json SECONDS
 
-Publishes each ``data`` of REQUESTS.json (a list of strings) on /NS/target once the service's
-reader is matched, one every 0.3 s, and writes to OUT.json the target results and the guidance
-messages of /NS/FIXTURE/guidance it received (JSON texts decoded), within SECONDS.
+Publishes a probe (a malformed request) on /NS/target every 0.5 s until its result is heard on
+/NS/target_result, so that both ways are matched at both ends (a DDS match can be seen by one side
+before the other, and a volatile result written before it is lost); then publishes each ``data`` of
+REQUESTS.json (a list of strings), one every 0.3 s, and writes to OUT.json the results of these
+requests and the guidance messages of /NS/FIXTURE/guidance it received (JSON texts decoded), within
+SECONDS.
 """
 
 import json
@@ -32,31 +35,29 @@ def main() -> None:
     rclpy.init()
     node = Node("hexapod_test_changeover")
     qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-    results, guidance = [], []
-    answers = node.create_subscription(
-        String, f"/{ns}/target_result", lambda m: results.append(json.loads(m.data)), qos
-    )
-    # the service's result writer matched to this reader (not only seen in the graph): a result
-    # written before the match would be lost (volatile durability)
-    matched = getattr(answers, "get_publisher_count", lambda: 1)
+    results, guidance, probes = [], [], []
+
+    def heard(msg: String) -> None:
+        result = json.loads(msg.data)
+        (probes if result.get("fixture") is None else results).append(result)
+
+    node.create_subscription(String, f"/{ns}/target_result", heard, qos)
     node.create_subscription(String, f"/{ns}/{fixture}/guidance", lambda m: guidance.append(json.loads(m.data)), qos)
     pub = node.create_publisher(String, f"/{ns}/target", qos)
     end = time.monotonic() + seconds
-    sent, next_send = 0, None
+    sent, next_send = 0, time.monotonic()
     while time.monotonic() < end and (len(results) < len(todo) or len(guidance) < 3):
         rclpy.spin_once(node, timeout_sec=0.05)
-        if (
-            next_send is None
-            and pub.get_subscription_count() > 0
-            and node.count_publishers(f"/{ns}/target_result")
-            and matched() > 0
-        ):
-            next_send = time.monotonic() + 1.0  # both ways matched: the service's result writer hears this node too
-        if sent < len(todo) and next_send is not None and time.monotonic() >= next_send:
+        if time.monotonic() < next_send:
+            continue
+        if not probes:
+            pub.publish(String(data="probe"))  # not JSON: answered "malformed target request", fixture null
+            next_send = time.monotonic() + 0.5
+        elif sent < len(todo):
             pub.publish(String(data=todo[sent]))
             sent, next_send = sent + 1, time.monotonic() + 0.3
     with open(out, "w") as fh:
-        json.dump({"results": results, "guidance": guidance[-3:]}, fh)
+        json.dump({"results": results, "probes": probes, "guidance": guidance[-3:]}, fh)
     node.destroy_node()
     rclpy.shutdown()
 

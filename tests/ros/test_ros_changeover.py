@@ -1,9 +1,9 @@
 """The changeover on ROS 2: a stock rclpy node sets a fixture's target by a signed message and hears the guidance.
 
 The service runs in this process on the simulated bus with a token and a :class:`RosBridge`; the
-node (another process, no discovery setting) sends a request signed with a wrong token, a good
-one, the good one again (a replay) and one for a fixture that does not exist, and listens to the
-results and to ``/<ns>/right/guidance``.
+node (another process, no discovery setting) probes until a result comes back, then sends a request
+signed with a wrong token, a good one, the good one again (a replay) and one for a fixture that does
+not exist, and listens to the results and to ``/<ns>/right/guidance``.
 """
 
 from __future__ import annotations
@@ -77,6 +77,7 @@ def test_a_signed_target_over_ros2_is_set_once_and_the_guidance_is_published(tmp
         bus.shutdown()
     out = json.loads((tmp_path / "out.json").read_text())
     results = out["results"]
+    assert out["probes"] and all("malformed target request" in p["error"] for p in out["probes"]), out["probes"]
     assert [r["ok"] for r in results] == [False, True, False, False], results
     assert "wrong signature" in results[0]["error"] and "already taken" in results[2]["error"]
     assert "left" in results[3]["error"]
