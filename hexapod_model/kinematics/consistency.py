@@ -75,7 +75,11 @@ def minimal_detectable_bias(
     dof = A.shape[0] - A.shape[1]
     if dof <= 0:
         return np.full(A.shape[0], np.inf)
-    p = parity_diagonal(A)
+    return _detectable(parity_diagonal(A), sigmas, alpha, power, dof)
+
+
+def _detectable(p: np.ndarray, sigmas: np.ndarray, alpha: float, power: float, dof: int) -> np.ndarray:
+    """:func:`minimal_detectable_bias` from the parity diagonal ``p`` (``dof > 0``)."""
     lam = noncentrality(alpha, power, dof)
     with np.errstate(divide="ignore"):
         return np.where(p > OBSERVABLE, np.asarray(sigmas) * np.sqrt(lam / np.maximum(p, OBSERVABLE)), np.inf)
@@ -160,5 +164,5 @@ def consistency(
             sub = threshold(alpha, dof - 1)
             suspects = tuple(n for n, s, x in zip(names, seen, excl, strict=True) if s and x <= sub)
         isolated = suspects[0] if len(suspects) == 1 else None
-    mdb = minimal_detectable_bias(A, sigmas, alpha)
+    mdb = _detectable(p, sigmas, alpha, DEFAULT_POWER, dof) if dof > 0 else np.full(m, np.inf)
     return Consistency(names, residuals, stat, dof, alpha, bound, excl, suspects, isolated, mdb)

@@ -10,8 +10,11 @@ A hexapod whose geometry (or URDF) declares measuring legs or an inclinometer
    ``sum ((z_j - h_j(T)) / sigma_j)^2``, with ``h`` the readings a pose gives: the six legs'
    by inverse kinematics (the closed-loop model, offset Cardan joints included), the measuring
    legs' and the tilts' in closed form; a step that raises the weighted cost is halved (a gross
-   fault makes the problem far from linear). The Jacobian ``dh / d delta`` is by central differences
-   of ``h`` (NumPy and the inverse-kinematics solves; no compiled kernel of its own);
+   fault makes the problem far from linear). The Jacobian ``dh / d delta`` is analytic: the six
+   legs' rows from the closure constraints' Jacobian at the inverse-kinematics configuration
+   (the passive joints eliminated by one linear solve, the encoder model's gain applied), the
+   measuring legs' and the tilts' in closed form (:meth:`RedundantSensing.jacobian`; tested
+   against central differences of ``h``);
 3. the residual's chi-square test, isolation and the minimal detectable biases
    (:mod:`.consistency`).
 
@@ -32,7 +35,14 @@ import numpy as np
 import pinocchio as pin
 
 from ..description.sensor_layout import SensorLayout
-from ..exceptions import ConvergenceError, InconsistentReadingsError, InputError, LimitError, SolverError
+from ..exceptions import (
+    ConvergenceError,
+    InconsistentReadingsError,
+    InputError,
+    LimitError,
+    SingularityError,
+    SolverError,
+)
 from .body_check import BODY_STATUSES
 from .consistency import DEFAULT_ALPHA, Consistency, consistency, threshold
 from .engine import ERRORS, SolveEngine
@@ -41,7 +51,6 @@ from .newton.solver import Solution
 
 MAX_GAUSS_NEWTON = 30  # Gauss-Newton steps of one redundant solve
 HALVINGS = 30  # step halvings of one Gauss-Newton step at most
-STEP = 1e-6  # central-difference step of the measurement Jacobian (m and rad, times the length scale)
 
 
 @dataclass(frozen=True)
@@ -75,6 +84,14 @@ class RedundantSensing:
         d = home[:3, 3] + layout.platform @ home[:3, :3].T - layout.base
         #: (k,) measuring legs' anchor distances at home (m)
         self.home_lengths = np.linalg.norm(d, axis=1)
+        clm = engine.closed_loop
+        ff = np.arange(clm.platform_v, clm.platform_v + 6)
+        free = np.setdiff1d(np.arange(clm.model.nv), ff)
+        #: velocity indices of the platform's free flyer and of every other joint (the eliminated ones)
+        self._ff, self._free = ff, free
+        #: each leg's prismatic joint among ``_free``
+        self._prismatic = np.searchsorted(free, clm.prismatic_v)
+        self._gain = np.ones(6) if engine.encoder is None else engine.encoder[1].copy()
 
     # ----- the measurement model -----
     def extra_readings(self, pose: np.ndarray) -> np.ndarray:
@@ -99,16 +116,52 @@ class RedundantSensing:
             raise ConvergenceError(sol, f"{sol.status}: inverse kinematics of a least-squares pose: {sol.message}")
         return np.concatenate([sol.lengths, self.extra_readings(pose)]), sol
 
-    def jacobian(self, pose: np.ndarray, guess: Solution, tol: float, max_iter: int) -> np.ndarray:
-        """``m x 6`` derivative of the readings in the platform-frame twist ``(v, omega)`` at ``pose``."""
-        h = STEP * self.engine.scale
+    def jacobian(self, pose: np.ndarray, ik: Solution) -> np.ndarray:
+        """``m x 6`` derivative of the readings in the platform-frame twist ``(v, omega)`` at ``pose``.
+
+        Args:
+            pose: 4x4 base -> platform transform (m).
+            ik: the inverse-kinematics solution of ``pose`` (its configuration ``q``).
+
+        Rows in reading order (m per m and m per rad for legs, rad per m and rad per rad for
+        tilts); the twist moves the pose to ``pose @ exp6((v, omega))``, both in the platform frame.
+
+        Raises:
+            SingularityError: the legs' passive joints cannot follow the platform at ``ik.q``
+                (a leg at a singular configuration).
+        """
+        _, G = self.engine.solver(()).evaluate(ik.q)  # closure rows, every joint's velocity column
+        A, B = G[:, self._free], G[:, self._ff]
+        try:
+            X = np.linalg.solve(A, -B) if A.shape[0] == A.shape[1] else np.linalg.lstsq(A, -B, rcond=None)[0]
+        except np.linalg.LinAlgError:
+            X = np.full((A.shape[1], 6), np.nan)
+        if not np.all(np.isfinite(X)):
+            raise SingularityError(ik, "the legs' joints cannot follow the platform: a leg is singular")
         J = np.empty((self.m, 6))
-        for i in range(6):
-            e = np.zeros(6)
-            e[i] = h
-            plus = self.readings_at(pose @ pin.exp6(e).homogeneous, guess, tol, max_iter)[0]
-            minus = self.readings_at(pose @ pin.exp6(-e).homogeneous, guess, tol, max_iter)[0]
-            J[:, i] = (plus - minus) / (2.0 * h)
+        J[:6] = self._gain[:, None] * X[self._prismatic]  # the joint rates through the encoder model
+        lay = self.layout
+        R, t = pose[:3, :3], pose[:3, 3]
+        k = len(lay.base)
+        if k:
+            u = (t + lay.platform @ R.T - lay.base) @ R  # the legs' vectors in the platform frame
+            u *= ((1.0 + lay.scale) / np.sqrt(np.einsum("ij,ij->i", u, u)))[:, None]  # unit, times the gain
+            P = lay.platform
+            J[6 : 6 + k, :3] = u
+            J[6 : 6 + k, 3] = P[:, 1] * u[:, 2] - P[:, 2] * u[:, 1]  # platform anchor x u
+            J[6 : 6 + k, 4] = P[:, 2] * u[:, 0] - P[:, 0] * u[:, 2]
+            J[6 : 6 + k, 5] = P[:, 0] * u[:, 1] - P[:, 1] * u[:, 0]
+        if lay.tilt_rotation is not None:
+            g = R[2]  # the base's z axis in the platform frame
+            for j in range(2):
+                c = lay.tilt_rotation[:, j]  # the inclinometer's axis j in the platform frame
+                s = float(g @ c)
+                w = 1.0 / np.sqrt(max(1.0 - s * s, 1e-300))
+                row = J[6 + k + j]
+                row[:3] = 0.0
+                row[3] = w * (c[1] * g[2] - c[2] * g[1])  # (c x g) / cos(angle)
+                row[4] = w * (c[2] * g[0] - c[0] * g[2])
+                row[5] = w * (c[0] * g[1] - c[1] * g[0])
         return J
 
     def whitened_jacobian(self, pose: np.ndarray, tol: float | None = None, max_iter: int = 50) -> np.ndarray:
@@ -121,7 +174,7 @@ class RedundantSensing:
         """
         tol = self.engine.default_tol if tol is None else check_tolerance(tol)
         ik = self.readings_at(pose, None, tol, max_iter)[1]
-        return self.jacobian(pose, ik, tol, max_iter) / self.sigmas[:, None]
+        return self.jacobian(pose, ik) / self.sigmas[:, None]
 
     # ----- the solve -----
     def check(self, readings: object) -> np.ndarray:
@@ -149,13 +202,19 @@ class RedundantSensing:
         """
         h_now, sol = self.readings_at(pose, guess, tol, max_iter)
         step_tol = 10.0 * tol
-        done, steps = False, 0
-        while steps < MAX_GAUSS_NEWTON:
-            steps += 1
-            A = self.jacobian(pose, sol, tol, max_iter) / self.sigmas[:, None]
+        done, stalled, steps = False, False, 0
+        while True:  # the Jacobian and residuals at the pose reached: the returned ones at the end
+            A = self.jacobian(pose, sol) / self.sigmas[:, None]
             r = (z - h_now) / self.sigmas
+            if stalled or steps == MAX_GAUSS_NEWTON:
+                done = stalled
+                break
+            steps += 1
             cost = float(r[keep] @ r[keep])
             delta = np.linalg.lstsq(A[keep], r[keep], rcond=None)[0]
+            if float(np.max(np.abs(delta))) <= step_tol:  # converged: the pose moves less than step_tol
+                done = True
+                break
             for _ in range(HALVINGS):  # a step that raises the weighted cost is halved (gross faults)
                 trial = pose @ pin.exp6(delta).homogeneous
                 h_trial, sol_trial = self.readings_at(trial, sol, tol, max_iter)
@@ -164,11 +223,8 @@ class RedundantSensing:
                     break
                 delta = delta / 2.0
             pose, h_now, sol = trial, h_trial, sol_trial
-            if float(np.max(np.abs(delta))) <= step_tol:
-                done = True
-                break
-        A = self.jacobian(pose, sol, tol, max_iter) / self.sigmas[:, None]
-        return pose, sol, A, (z - h_now) / self.sigmas, steps, done
+            stalled = float(np.max(np.abs(delta))) <= step_tol  # halved down to nothing: a minimum
+        return pose, sol, A, r, steps, done
 
     def forward(
         self, readings: object, guess: object, tol: float, max_iter: int, check: bool, alpha: float = DEFAULT_ALPHA

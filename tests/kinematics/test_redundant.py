@@ -200,3 +200,39 @@ def test_warm_start_from_a_redundant_solution():
     second = hexa.forward(readings(hexa, b), guess=first)
     assert second.converged and pose_error(second.pose, b) < POSE_TOL
     assert first.det_sign == hexapod("reference").forward(readings(hexa, a)[:6]).det_sign != 0
+
+
+def central_differences(hexa: hm.Hexapod, pose: np.ndarray, step: float = 1e-6) -> np.ndarray:
+    """``m x 6`` derivative of every reading in the platform-frame twist, by central differences."""
+    J = np.empty((len(hexa.reading_names), 6))
+    for i in range(6):
+        e = np.zeros(6)
+        e[i] = step
+        plus = readings(hexa, pose @ pin.exp6(e).homogeneous)
+        minus = readings(hexa, pose @ pin.exp6(-e).homogeneous)
+        J[:, i] = (plus - minus) / (2.0 * step)
+    return J
+
+
+def with_encoder_models(name: str) -> hm.Hexapod:
+    """``name`` with an encoder model on every leg (zero and scale) and scale errors on the measuring legs."""
+    from dataclasses import replace
+
+    g = hexapod(name).geometry
+    legs = tuple(replace(leg, encoder_zero=0.01 * i, encoder_scale=0.02 * (i - 2.5)) for i, leg in enumerate(g.legs))
+    return hm.Hexapod.from_geometry(replace(g, legs=legs))
+
+
+@pytest.mark.parametrize("name", ["reference7", "reference_tilt", "encoders"])
+def test_the_readings_jacobian_matches_central_differences(name):
+    # the Gauss-Newton step's and the consistency test's Jacobian, analytic: every reading's row
+    # against central differences of inverse kinematics and the extra sensors' model
+    hexa = with_encoder_models("reference7") if name == "encoders" else hexapod(name)
+    assert name != "encoders" or hexa.engine.encoder is not None
+    for T in [hexa.home_pose, *poses(4, seed=7)]:
+        ik = hexa.inverse(T)
+        J = hexa.redundancy.jacobian(T, ik)
+        fd = central_differences(hexa, T)
+        # m/m and m/rad (legs), rad/m and rad/rad (tilts); central differences of 1e-6 are good to
+        # about 1e-7 of a row's size here (the inverse solves stop at 1e-10 m)
+        np.testing.assert_allclose(J, fd, rtol=0, atol=2e-6)
