@@ -47,7 +47,7 @@ from .detectability import DEFAULT_HALF_WIDTH, detectability_map
 
 DEFAULT_PLACEMENT_GRID = 5  # points along x and along y of each candidate's section
 #: relative difference of two scores below which the ranking cannot tell them apart: the
-#: Jacobian is taken by central differences, whose rounding moves a score by about 1e-9
+#: Jacobian is taken by central differences, whose rounding moves a score by about 1e-12 relative
 TIE_RTOL = 1e-6
 #: the largest elevation (deg) of an inclinometer's sensing axis above the platform plane: near
 #: the vertical a tilt reading (an arcsine) loses its slope and the axis's direction its meaning
