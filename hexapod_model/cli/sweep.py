@@ -18,7 +18,10 @@ does (workspace volume for the tool cone, singular values and condition number o
 the largest leg force per unit wrench, the locked fixture's stiffness and the home conditioning.
 Candidates run as Dask tasks: on a LocalCluster of this machine's cores, or on the cluster at
 --scheduler. DIR/sweep.csv has one row per candidate (invalid ones with the reason),
-DIR/pareto.png the trade-off; a rerun computes only the candidates not yet done."""
+DIR/pareto.png the trade-off; a rerun computes only the candidates not yet done. With a
+[placement] table, each candidate's redundant sensors (a measuring leg's anchors, an
+inclinometer's mounting) are scored by the largest leg fault the consistency test may miss and
+ranked into DIR/placement.csv."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
