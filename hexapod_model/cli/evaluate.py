@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
+from ..description.sensors import Inclinometer, MeasuringLeg
 from ..exceptions import InputError
 from ..extras import require_extra
 from ..files import atomic_write_text, check_output_path
@@ -59,6 +61,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         "(docs/redundancy.md)",
     )
     p.add_argument(
+        "--place-inclinometer",
+        metavar="CANDIDATES",
+        help="instead: rank the candidate inclinometers of a TOML file ([[inclinometers]] tables: rpy_deg "
+        "or rpy, sigma) mounted on HEXAPOD's platform in place of its own by the same criterion",
+    )
+    p.add_argument(
         "--placement-grid",
         type=int,
         default=None,
@@ -67,34 +75,60 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def run_placement(args: argparse.Namespace) -> int:
-    """``hexapod evaluate --place-seventh-leg CANDIDATES``: the candidates ranked, best first."""
-    from ..analysis.placement import DEFAULT_PLACEMENT_GRID, candidates_from_toml, rank_placements
+def describe(sensor: MeasuringLeg | Inclinometer) -> str:
+    """A candidate sensor in one line: a leg's anchors (m), an inclinometer's rotation (deg) and noise (urad)."""
+    if isinstance(sensor, Inclinometer):
+        rpy = ", ".join(f"{math.degrees(v):.4g}" for v in sensor.rpy)
+        return f"inclinometer rpy ({rpy}) deg, sigma {1e6 * sensor.sigma:.4g} urad"
+    b = ", ".join(f"{v:g}" for v in sensor.base_anchor)
+    pa = ", ".join(f"{v:g}" for v in sensor.platform_anchor)
+    return f"({b}) -> ({pa})"
 
+
+def _candidate_json(sensor: MeasuringLeg | Inclinometer) -> dict:
+    if isinstance(sensor, Inclinometer):
+        return {"rpy": list(sensor.rpy), "sigma": sensor.sigma}
+    return {"base_anchor": list(sensor.base_anchor), "platform_anchor": list(sensor.platform_anchor)}
+
+
+def run_placement(args: argparse.Namespace) -> int:
+    """``hexapod evaluate --place-seventh-leg | --place-inclinometer CANDIDATES``: the candidates ranked, best first."""
+    from ..analysis.placement import DEFAULT_PLACEMENT_GRID, candidates_from_toml, rank_placements, tied
+
+    if args.place_seventh_leg and args.place_inclinometer:
+        raise InputError("--place-inclinometer", args.place_inclinometer, "give it or --place-seventh-leg, not both")
     if args.json:
         check_output_path(args.json, args.hexapod)
+    if args.place_seventh_leg:
+        source, kind, what = args.place_seventh_leg, "measuring_legs", "measuring legs"
+    else:
+        source, kind, what = args.place_inclinometer, "inclinometers", "inclinometers"
+    candidates = candidates_from_toml(source, (kind,))
     hexa = load_hexapod(args.hexapod)
     if hexa.geometry is None:
         raise InputError(
-            "hexapod", args.hexapod, "a URDF has no geometry to add a leg to: give a preset or geometry file"
+            "hexapod", args.hexapod, "a URDF has no geometry to add a sensor to: give a preset or geometry file"
         )
     grid = DEFAULT_PLACEMENT_GRID if args.placement_grid is None else args.placement_grid
-    scores = rank_placements(hexa.geometry, candidates_from_toml(args.place_seventh_leg), grid=grid)
+    scores = rank_placements(hexa.geometry, candidates, grid=grid)
     print(
-        f"hexapod {args.hexapod}: {len(scores)} candidate measuring legs from {args.place_seventh_leg}, "
-        f"largest minimal detectable fault of any leg over home +-50 mm in x and y ({grid}x{grid} points), best first"
+        f"hexapod {args.hexapod}: {len(scores)} candidate {what} from {source}, largest minimal detectable "
+        f"fault of any leg over home +-50 mm in x and y ({grid}x{grid} points), best first"
     )
-    print(f"  {'rank':>4s} {'candidate':>9s} {'worst (um)':>11s}  base anchor (m) -> platform anchor (m)")
+    print(f"  {'rank':>4s} {'candidate':>9s} {'worst (um)':>11s}  candidate")
     for rank, s in enumerate(scores, 1):
-        b = ", ".join(f"{v:g}" for v in s.leg.base_anchor)
-        pa = ", ".join(f"{v:g}" for v in s.leg.platform_anchor)
-        print(f"  {rank:4d} {s.index + 1:9d} {1e6 * s.worst:11.4g}  ({b}) -> ({pa})  [{s.inside} points inside]")
+        tie = rank > 1 and tied(s.worst, scores[rank - 2].worst)
+        mark = "=" if tie else " "
+        print(
+            f"  {rank:4d}{mark}{s.index + 1:9d} {1e6 * s.worst:11.4g}  {describe(s.sensor)}  [{s.inside} points inside]"
+        )
+    if any(rank > 1 and tied(s.worst, scores[rank - 2].worst) for rank, s in enumerate(scores, 1)):
+        print("  =: ties the rank above (within 1e-6 relative): the criterion cannot tell them apart")
     if args.json:
         rows = [
             {
                 "candidate": s.index + 1,
-                "base_anchor": list(s.leg.base_anchor),
-                "platform_anchor": list(s.leg.platform_anchor),
+                **_candidate_json(s.sensor),
                 "worst_m": s.worst,
                 "largest": dict(zip(s.names, map(float, s.largest), strict=True)),
                 "points_inside": s.inside,
@@ -165,7 +199,7 @@ def run(args: argparse.Namespace) -> int:
     """``hexapod evaluate``."""
     if args.detectability:
         return run_detectability(args)
-    if args.place_seventh_leg:
+    if args.place_seventh_leg or args.place_inclinometer:
         return run_placement(args)
     if args.json:
         check_output_path(args.json, args.hexapod)

@@ -18,7 +18,10 @@ does (workspace volume for the tool cone, singular values and condition number o
 the largest leg force per unit wrench, the locked fixture's stiffness and the home conditioning.
 Candidates run as Dask tasks: on a LocalCluster of this machine's cores, or on the cluster at
 --scheduler. DIR/sweep.csv has one row per candidate (invalid ones with the reason),
-DIR/pareto.png the trade-off; a rerun computes only the candidates not yet done."""
+DIR/pareto.png the trade-off; a rerun computes only the candidates not yet done. With a
+[placement] table, each candidate's redundant sensors (a measuring leg's anchors, an
+inclinometer's mounting) are scored by the largest leg fault the consistency test may miss and
+ranked into DIR/placement.csv."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -63,16 +66,28 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     rows = result["rows"]
-    from ..plots.sweep import plot_pareto
+    placement = spec.placement
+    figure = ""
+    if placement is None or placement.workspace:
+        from ..plots.sweep import plot_pareto
 
-    png = Path(args.out) / "pareto.png"
-    plot_pareto(rows, png)
+        png = Path(args.out) / "pareto.png"
+        plot_pareto(rows, png)
+        figure = f", figure {png}"
     invalid = [r for r in rows if r["status"] != "ok"]
-    print(format_table(rows, list(spec.parameters)))
+    print(format_table(rows, list(spec.parameters), workspace=placement is None or placement.workspace))
     print(
         f"sweep: {len(rows)} candidates ({result['computed']} computed, {result['reused']} from earlier runs), "
-        f"{len(invalid)} invalid; table {result['table']}, figure {png}"
+        f"{len(invalid)} invalid; table {result['table']}{figure}"
     )
+    if placement is not None and result["ranked"]:
+        best = result["ranked"][0]
+        worst_um = 1e6 * float(best["placement_worst_m"])
+        print(
+            f"placement: best {best['id']} (largest detectable leg fault {worst_um:.4g} um "
+            f"over home +-{1e3 * placement.half_width:g} mm, {placement.grid}x{placement.grid} points); "
+            f"ranked table {result['placement_table']}"
+        )
     return 0
 
 
@@ -84,22 +99,33 @@ def _figure(value, scale: float = 1.0, digits: int = 4) -> str:
         return "-"
 
 
-def format_table(rows: list[dict], parameters: list[str]) -> str:
+def format_table(rows: list[dict], parameters: list[str], workspace: bool = True) -> str:
     """The results table ``hexapod sweep`` prints: a line per candidate, ``*`` on the Pareto front.
 
     Columns: the id, the swept parameters (their units as in the spec), the workspace volume
     (cm^3), the largest leg force per unit force (N/N), the home condition number, the front
-    mark; an invalid candidate shows its reason instead of figures.
+    mark; with a ``[placement]`` table, the placement score (um) and rank (1: best), and
+    without the workspace figures when ``workspace`` is false; an invalid candidate shows its
+    reason instead of figures.
     """
-    header = ["id", *parameters, "volume_cm3", "force_N_per_N", "home_kappa", "pareto"]
+    placed = any("placement_worst_m" in r for r in rows)
+    header = ["id", *parameters]
+    if workspace:
+        header += ["volume_cm3", "force_N_per_N", "home_kappa", "pareto"]
+    if placed:
+        header += ["worst_um", "rank"]
     body = []
     for r in rows:
         values = [str(r["id"]), *(_figure(r.get(p)) for p in parameters)]
         if r.get("status") != "ok":
             body.append([*values, f"{r.get('status')}: {r.get('reason')}"])
             continue
-        figures = [_figure(r["volume_m3"], 1e6), _figure(r["force_per_force_max"]), _figure(r["home_kappa"])]
-        body.append([*values, *figures, "*" if str(r.get("pareto")) == "True" else ""])
+        if workspace:
+            values += [_figure(r["volume_m3"], 1e6), _figure(r["force_per_force_max"]), _figure(r["home_kappa"])]
+            values.append("*" if str(r.get("pareto")) == "True" else "")
+        if placed:
+            values += [_figure(r.get("placement_worst_m"), 1e6), str(r.get("placement_rank", "-"))]
+        body.append(values)
     full = [line for line in [header, *body] if len(line) == len(header)]  # an invalid row ends on its reason
     width = [max(len(line[i]) for line in full) for i in range(len(header))]
     lines = []

@@ -45,9 +45,15 @@ def geometry_to_toml(geom: HexapodGeometry, comment: str = "") -> str:
     data = compact(geom).to_dict()
     lines = [f"# {line}".rstrip() for line in comment.splitlines()]
     legs = data.pop("legs")
+    measuring = data.pop("measuring_legs", [])
+    inclinometer = data.pop("inclinometer", None)
     lines += [f"{k} = {_value(v)}" for k, v in data.items()]
+    if inclinometer is not None:
+        lines += ["", "[inclinometer]"] + [f"{k} = {_value(v)}" for k, v in inclinometer.items()]
     for leg in legs:
         lines += ["", "[[legs]]"] + [f"{k} = {_value(v)}" for k, v in leg.items()]
+    for leg in measuring:
+        lines += ["", "[[measuring_legs]]"] + [f"{k} = {_value(v)}" for k, v in leg.items()]
     return "\n".join(lines) + "\n"
 
 

@@ -27,6 +27,13 @@ from ..exceptions import HexapodError
 from ..files import atomic_write_text
 from ..kinematics.hexapod import Hexapod
 from .evaluate import Settings, evaluate_hexapod
+from .sweep_placement import (
+    PLACEMENT_METRICS,
+    PlacementSettings,
+    placement_figures,
+    rank_rows,
+    write_placement_table,
+)
 from .sweep_spec import SweepSpec, apply_parameters
 
 RESULT_VERSION = 2
@@ -55,6 +62,8 @@ def candidate_id(spec: SweepSpec, values: dict[str, float]) -> str:
         "leg_stiffness": spec.leg_stiffness,
         "leg_clearance": spec.leg_clearance,
     }
+    if spec.placement is not None:  # only then: the ids of a sweep without one stay as they were
+        key["placement"] = asdict(spec.placement)
     return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:12]
 
 
@@ -89,11 +98,17 @@ def crossing_legs(g: HexapodGeometry, clearance: float) -> str | None:
 
 
 def evaluate_candidate(
-    toml_text: str, settings: Settings, leg_stiffness: float | None, clearance: float
+    toml_text: str,
+    settings: Settings,
+    leg_stiffness: float | None,
+    clearance: float,
+    placement: PlacementSettings | None = None,
 ) -> dict[str, Any]:
     """The figures of one candidate geometry (TOML text), or ``{"status": "invalid", "reason": ...}``.
 
     A Dask task: it needs nothing but its arguments (the geometry travels as text, read back exactly).
+    With ``placement``, the placement score too (:mod:`.sweep_placement`), and without the workspace
+    figures when ``placement.workspace`` is false.
     """
     start = time.perf_counter()
     try:
@@ -101,6 +116,9 @@ def evaluate_candidate(
         crossing = crossing_legs(g, clearance)
         if crossing:
             return {"status": "invalid", "reason": crossing}
+        placed = {} if placement is None else placement_figures(g, placement)
+        if placement is not None and not placement.workspace:
+            return {"status": "ok", "reason": "", **placed, "seconds": time.perf_counter() - start}
         hexa = Hexapod.from_geometry(g)
     except HexapodError as exc:
         return {"status": "invalid", "reason": " ".join(str(exc).split())}
@@ -120,6 +138,7 @@ def evaluate_candidate(
         "home_kappa": r["home"]["kappa"],
         "home_sigma_min": r["home"]["sigma_min"],
         "length_unit_m": r["length_unit_m"],
+        **placed,
         "seconds": time.perf_counter() - start,
     }
 
@@ -154,7 +173,8 @@ def run_sweep(
 
     Returns:
         ``{"rows": [...], "computed": n, "reused": m, "table": path}`` (rows as written, spec order; ``reused``:
-        results of earlier runs; candidates whose parameters give no geometry are neither).
+        results of earlier runs; candidates whose parameters give no geometry are neither); with a
+        ``[placement]`` table also ``"ranked"`` (the valid rows, best first) and ``"placement_table"``.
 
     Raises:
         InputError: no scheduler answering at ``scheduler``; dask.distributed not installed.
@@ -197,8 +217,15 @@ def run_sweep(
     force = np.array([float(r["force_per_force_max"]) for r in rows])
     for row, on_front in zip(rows, pareto_front(volume, force)):
         row["pareto"] = bool(on_front)
-    table = write_table(out / "sweep.csv", rows, list(spec.parameters))
-    return {"rows": rows, "computed": len(todo), "reused": reused, "table": table}
+    summary: dict[str, Any] = {"rows": rows, "computed": len(todo), "reused": reused}
+    extra: tuple[str, ...] = ()
+    if spec.placement is not None:
+        extra = PLACEMENT_METRICS
+        ranked = rank_rows(rows)
+        summary["placement_table"] = write_placement_table(out / "placement.csv", ranked, list(spec.parameters))
+        summary["ranked"] = ranked
+    summary["table"] = write_table(out / "sweep.csv", rows, list(spec.parameters), extra)
+    return summary
 
 
 def _compute(
@@ -217,7 +244,7 @@ def _compute(
     with dask_client(scheduler, workers) as client:
         if on_client is not None:
             on_client(client)
-        args = (spec.settings, spec.leg_stiffness, spec.leg_clearance)
+        args = (spec.settings, spec.leg_stiffness, spec.leg_clearance, spec.placement)
         futures = {
             client.submit(evaluate_candidate, text, *args, key=f"candidate-{cid}", pure=False): cid
             for cid, (text, _) in todo.items()
@@ -232,12 +259,12 @@ def _compute(
             raise
 
 
-def write_table(path: Path, rows: list[dict[str, Any]], parameters: list[str]) -> Path:
-    """``sweep.csv``: id, status, reason, the parameters, the metrics, pareto, geometry (atomically)."""
+def write_table(path: Path, rows: list[dict[str, Any]], parameters: list[str], extra: tuple[str, ...] = ()) -> Path:
+    """``sweep.csv``: id, status, reason, the parameters, the metrics, ``extra``, pareto, geometry (atomically)."""
     import csv
     import io
 
-    header = ["id", "status", "reason", *parameters, *METRICS, "pareto", "geometry"]
+    header = ["id", "status", "reason", *parameters, *METRICS, *extra, "pareto", "geometry"]
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(header)

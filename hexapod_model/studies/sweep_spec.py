@@ -34,6 +34,14 @@ from ..description.plausibility import check_length
 from ..description.presets import PRESETS, get_preset, symmetric_legs
 from ..exceptions import InputError
 from .evaluate import Settings
+from .sweep_placement import (
+    SENSOR_LENGTHS,
+    SENSOR_PARAMETERS,
+    PlacementSettings,
+    apply_sensors,
+    check_sensor_parameter,
+    placement_settings,
+)
 
 #: what a sweep may vary: name -> meaning (SI; angles in degrees where the name says so)
 PARAMETERS = {
@@ -49,6 +57,7 @@ PARAMETERS = {
     "platform_radius": "radius of the platform anchors (m), same layout",
     "base_spread_deg": "angle between the two base anchors of a pair (deg), same layout",
     "platform_spread_deg": "angle between the two platform anchors of a pair (deg), same layout",
+    **SENSOR_PARAMETERS,
 }
 #: the parameters in metres, checked against the base geometry's base radius (a value in mm is refused)
 LENGTHS = (
@@ -59,6 +68,7 @@ LENGTHS = (
     "stroke_max",
     "base_radius",
     "platform_radius",
+    *SENSOR_LENGTHS,
 )
 LAYOUT = ("base_radius", "platform_radius", "base_spread_deg", "platform_spread_deg")
 MODES = ("grid", "random")
@@ -80,6 +90,7 @@ class SweepSpec:
         settings: the evaluation's settings (as ``hexapod evaluate``).
         leg_stiffness: N/m of each locked leg, or ``None``.
         leg_clearance: smallest distance between two legs at home (m) below which they cross.
+        placement: the ``[placement]`` table (score and rank each candidate's sensors), or ``None``.
     """
 
     base: HexapodGeometry
@@ -92,6 +103,7 @@ class SweepSpec:
     settings: Settings = Settings()
     leg_stiffness: float | None = None
     leg_clearance: float = 0.0
+    placement: PlacementSettings | None = None
 
     def candidates(self) -> list[dict[str, float]]:
         """The parameter sets, in a fixed order (grid: row-major over the parameters as written)."""
@@ -153,7 +165,7 @@ def apply_parameters(base: HexapodGeometry, values: dict[str, float], name: str)
             replace(leg, stroke=(values.get("stroke_min", leg.stroke[0]), values.get("stroke_max", leg.stroke[1])))
             for leg in legs
         )
-    return replace(g, legs=tuple(legs), **fields)
+    return apply_sensors(replace(g, legs=tuple(legs), **fields), values)
 
 
 def _values(name: str, raw: Any, mode: str) -> tuple[tuple[float, ...], bool]:
@@ -195,7 +207,7 @@ def load_spec(path: str | Path) -> SweepSpec:
         raise InputError("spec", str(path), f"cannot read file: {exc.strerror}") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError("spec", str(path), f"not valid TOML: {exc}") from None
-    unknown = sorted(set(data) - {"base", "evaluate", "statics", "sample", "parameters", "checks"})
+    unknown = sorted(set(data) - {"base", "evaluate", "statics", "sample", "parameters", "checks", "placement"})
     if unknown:
         raise InputError(unknown[0], data[unknown[0]], "unknown table or key of a sweep spec")
     base_name = data.get("base")
@@ -225,6 +237,8 @@ def load_spec(path: str | Path) -> SweepSpec:
         params[name], is_range = _values(name, value, mode)
         if is_range:
             ranges.add(name)
+        if name in SENSOR_PARAMETERS:
+            check_sensor_parameter(name, params[name], base)
         if name in LENGTHS:  # metres: a value in mm would rate a platform 1000 times the base's size
             for v in params[name]:
                 check_length(f"parameters.{name}", name, v, base.base_radius)
@@ -254,6 +268,8 @@ def load_spec(path: str | Path) -> SweepSpec:
     clearance = _table(data, "checks").get("leg_clearance", 0.0)
     if not (isinstance(clearance, (int, float)) and 0 <= clearance < 1):
         raise InputError("checks.leg_clearance", clearance, "expected a distance in [0, 1) m")
+    placement = placement_settings(data["placement"], base) if "placement" in data else None
+    stiffness = k and float(k)
     return SweepSpec(
-        base, source, params, frozenset(ranges), mode, count, seed, settings, k and float(k), float(clearance)
+        base, source, params, frozenset(ranges), mode, count, seed, settings, stiffness, float(clearance), placement
     )

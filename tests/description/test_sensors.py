@@ -93,3 +93,14 @@ def test_mjcf_keeps_the_sensor_frames_and_solves_six_legs(tmp_path):
     hexa = hm.Hexapod.from_mjcf(path)
     assert hexa.redundancy is None and hexa.reading_names == tuple(f"leg{i}" for i in range(1, 7))
     assert hexa.model.existFrame("leg7_base") and hexa.model.existFrame("leg7_anchor")
+
+
+def test_geometry_toml_writes_the_sensors_and_reads_back_exactly(tmp_path):
+    from hexapod_model.description.geometry_toml import save_geometry
+
+    both = hm.get_preset("reference7")
+    both = hm.HexapodGeometry(
+        **{**vars(both), "inclinometer": Inclinometer(rpy=(0.1, -0.2, 0.3), sigma=3e-5), "name": "both"}
+    )
+    path = save_geometry(both, tmp_path / "both.toml")
+    assert hm.load_geometry(path) == both
