@@ -17,6 +17,10 @@ class FixtureNames:
         joints: names of the hexapod's one-dof URDF joints (legs' prismatic and passive joints).
         joint_q: index of each of ``joints`` in the configuration ``q``.
         prismatic: names of the six prismatic joints, leg order.
+        readings: names of the readings a record carries, in their order
+            (:attr:`~hexapod_model.kinematics.hexapod.Hexapod.reading_names`: ``leg1`` ... ``leg6``,
+            then a redundant fixture's measuring legs ``leg7`` ... and inclinometer ``tilt_x``,
+            ``tilt_y``).
     """
 
     fixture: str
@@ -24,6 +28,7 @@ class FixtureNames:
     joints: tuple[str, ...]
     joint_q: tuple[int, ...]
     prismatic: tuple[str, ...]
+    readings: tuple[str, ...]
 
     @classmethod
     def of(cls, fixture: str, namespace: str, hexa: Hexapod) -> FixtureNames:
@@ -36,7 +41,13 @@ class FixtureNames:
             tuple(m.names[j] for j in one_dof),
             tuple(m.joints[j].idx_q for j in one_dof),
             tuple(hexa.prismatic_names),
+            tuple(hexa.reading_names),
         )
+
+    @property
+    def redundant(self) -> bool:
+        """Whether the fixture has redundant sensors (more readings than its six legs)."""
+        return len(self.readings) > len(self.prismatic)
 
     def topic(self, leaf: str) -> str:
         """``/<namespace>/<fixture>/<leaf>``."""
