@@ -90,7 +90,8 @@ def joint_state(rec: PoseRecord, names: FixtureNames, q: np.ndarray | None) -> J
     Without ``q`` (a stored sample) the six prismatic joints only, from the record's readings of
     the six legs (the first six: a measuring leg or an inclinometer is no URDF joint).
     Prismatic values are joint values (m) as the URDF has them: the readings, through the URDF's
-    encoder model when it has one (the caller's ``q`` already is).
+    encoder model when it has one (``(reading - zero) / gain``; the caller's ``q`` already holds
+    joint values).
     """
     if _good_pose(rec) is None:
         return None
@@ -101,6 +102,9 @@ def joint_state(rec: PoseRecord, names: FixtureNames, q: np.ndarray | None) -> J
     readings = [float(r) for r in legs if r is not None]
     if len(readings) < len(names.prismatic):
         return None
+    if names.encoder is not None:
+        zero, gain = names.encoder
+        readings = [(r - z) / g for r, z, g in zip(readings, zero, gain)]
     return JointState(header, list(names.prismatic), readings)
 
 

@@ -21,6 +21,8 @@ class FixtureNames:
             (:attr:`~hexapod_model.kinematics.hexapod.Hexapod.reading_names`: ``leg1`` ... ``leg6``,
             then a redundant fixture's measuring legs ``leg7`` ... and inclinometer ``tilt_x``,
             ``tilt_y``).
+        encoder: the six legs' encoder model ``(zero, gain)`` (m, dimensionless; reading =
+            ``zero + gain *`` prismatic joint value), None when the reading is the joint value.
     """
 
     fixture: str
@@ -29,11 +31,12 @@ class FixtureNames:
     joint_q: tuple[int, ...]
     prismatic: tuple[str, ...]
     readings: tuple[str, ...]
+    encoder: tuple[tuple[float, ...], tuple[float, ...]] | None = None
 
     @classmethod
     def of(cls, fixture: str, namespace: str, hexa: Hexapod) -> FixtureNames:
         """The names of ``fixture`` modelled by ``hexa``."""
-        m = hexa.model
+        m, enc = hexa.model, hexa.engine.encoder
         one_dof = [j for j in range(1, m.njoints) if m.joints[j].nq == 1]
         return cls(
             fixture,
@@ -42,6 +45,7 @@ class FixtureNames:
             tuple(m.joints[j].idx_q for j in one_dof),
             tuple(hexa.prismatic_names),
             tuple(hexa.reading_names),
+            None if enc is None else (tuple(map(float, enc[0])), tuple(map(float, enc[1]))),
         )
 
     @property

@@ -322,3 +322,26 @@ def test_six_legs_diagnostics_carry_no_consistency_test(ros):
         "singularity_margin",
         "store",
     ]
+
+
+def test_joint_states_without_a_configuration_are_joint_values_through_the_encoder_model(ros):
+    """A stored sample keeps readings; a calibrated fixture's reading is not its prismatic joint value."""
+    from hexapod_model import Hexapod, get_preset
+    from hexapod_model.description.geometry import geometry_from_dict
+    from hexapod_model.ros.names import FixtureNames
+
+    convert, _, _, store = ros
+    d = get_preset("reference").to_dict()
+    for k, leg in enumerate(d["legs"]):
+        leg["encoder_zero"], leg["encoder_scale"] = 1e-3 * (k - 2.5), 2e-3 * (k - 3)
+    hexa = Hexapod.from_geometry(geometry_from_dict(d), compiled=False)
+    names = FixtureNames.of("right", "cell/hexapod", hexa)
+    rec = record()
+    js = decode(store, convert.joint_state(rec, names, None), "sensor_msgs/msg/JointState")
+    joints = hexa.joints_of(np.array(rec.readings))
+    assert js.name == list(hexa.prismatic_names)
+    assert np.max(np.abs(np.array(js.position) - joints)) <= 1e-15  # m; the readings are up to 2.5 mm off them
+    q = hexa.q_home.copy()  # the same through a configuration: the URDF's prismatic joints hold joint values
+    q[hexa.model.joints[hexa.model.getJointId(js.name[2])].idx_q] = joints[2]
+    live = convert.joint_state(rec, names, q)
+    assert live.position[live.name.index(js.name[2])] == joints[2]
