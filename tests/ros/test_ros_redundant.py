@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import time
 from types import SimpleNamespace
 
 import pytest
@@ -153,3 +154,64 @@ def test_the_bag_of_a_redundant_fixture_carries_its_test(records, tmp_path):
             assert s["consistency"] == "failed"
         named = [f.split(":")[1] for f in rec.flags if f.startswith("isolated:")]
         assert s["consistency_isolated"] == (named[0] if named else "")
+
+
+def test_over_dds_a_redundant_fixtures_poses_are_its_ok_records_and_its_test_is_on_diagnostics(tmp_path):
+    """The service, its bridge and the simulated inclinometer fixture in real time; a Cyclone DDS reader listens."""
+    need_extra()
+    import can
+    from cyclonedds.core import Qos
+    from cyclonedds.domain import DomainParticipant
+    from cyclonedds.qos import Policy
+    from cyclonedds.sub import DataReader
+    from cyclonedds.topic import Topic
+    from cyclonedds.util import duration
+
+    from hexapod_model.ros.dds import RosBridge
+    from hexapod_model.ros.messages import DiagnosticArray, PoseStamped
+
+    from .conftest import run_domain
+
+    config = service_config(tmp_path, [FIXTURE], ros={"domain_id": run_domain(), "diagnostics_period": 0.1})
+    fault = {"kind": "step", "leg": 3, "size": 3e-4, "start": 1.5}
+    sim = sim_config(config, [{"name": "left", "rate": 50.0, "trajectory": "A", "noise": 1e-6, "faults": [fault]}])
+    hexapods = {"left": hexapod("reference_tilt")}
+    service = FixtureService(config, http=False, hexapods=hexapods)
+    bridge = RosBridge(service, config.ros)
+    records: list = []
+    service.subscribe(records.append)
+    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
+    simulator = Simulator(config, sim, bus, hexapods=hexapods)
+    poses, diagnostics = [], []
+    try:
+        service.start()
+        bridge.start()
+        participant = DomainParticipant(run_domain())  # the bridge's domain (one Domain per id and process)
+        qos = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepLast(1000))
+        readers = [
+            (DataReader(participant, Topic(participant, "rt/hexapod/left/pose", PoseStamped, qos=qos), qos=qos), poses),
+            (
+                DataReader(participant, Topic(participant, "rt/diagnostics", DiagnosticArray, qos=qos), qos=qos),
+                diagnostics,
+            ),
+        ]
+        time.sleep(0.5)  # matched before the first set
+        simulator.start()
+        end = time.monotonic() + 3.5
+        while time.monotonic() < end:
+            for reader, out in readers:
+                out.extend(reader.take(N=100))
+            time.sleep(0.05)
+        assert bridge.error is None
+    finally:
+        simulator.stop()
+        bridge.stop()
+        service.stop()
+        bus.shutdown()
+    ok = {round(r.t * 1e6) for r in records if r.status == "ok"}
+    assert len(poses) > 20 and {round((p.header.stamp.sec + p.header.stamp.nanosec * 1e-9) * 1e6) for p in poses} <= ok
+    values = [({kv.key: kv.value for kv in m.status[0].values}, m.status[0].level) for m in diagnostics]
+    assert any(v["consistency"] == "passed" and level == 0 for v, level in values)
+    failed = [(v, level) for v, level in values if "inconsistent_readings" in json.loads(v["flags"])]
+    assert failed and all(v["consistency"] == "failed" and level == 2 for v, level in failed)
+    assert any(v["consistency_isolated"] == "leg3" for v, _ in failed)
