@@ -157,7 +157,7 @@ def test_the_bag_of_a_redundant_fixture_carries_its_test(records, tmp_path):
 
 
 def test_over_dds_a_redundant_fixtures_poses_are_its_ok_records_and_its_test_is_on_diagnostics(tmp_path):
-    """The service, its bridge and the simulated inclinometer fixture in real time; a Cyclone DDS reader listens."""
+    """The service, its bridge and the held inclinometer fixture simulated in real time; a DDS reader listens."""
     need_extra()
     import can
     from cyclonedds.core import Qos
@@ -173,8 +173,9 @@ def test_over_dds_a_redundant_fixtures_poses_are_its_ok_records_and_its_test_is_
     from .conftest import run_domain
 
     config = service_config(tmp_path, [FIXTURE], ros={"domain_id": run_domain(), "diagnostics_period": 0.1})
-    fault = {"kind": "step", "leg": 3, "size": 3e-4, "start": 1.5}
-    sim = sim_config(config, [{"name": "left", "rate": 50.0, "trajectory": "A", "noise": 1e-6, "faults": [fault]}])
+    fault = {"kind": "step", "leg": 3, "size": 3e-4, "start": 0.8}  # before the held fixture locks (1 s)
+    held = {"name": "left", "rate": 50.0, "hold": [0, 0, 0.4, 0, 0, 0], "noise": 1e-6, "faults": [fault]}
+    sim = sim_config(config, [held])  # held: a set late on a busy machine is still one pose
     hexapods = {"left": hexapod("reference_tilt")}
     service = FixtureService(config, http=False, hexapods=hexapods)
     bridge = RosBridge(service, config.ros)
@@ -197,7 +198,7 @@ def test_over_dds_a_redundant_fixtures_poses_are_its_ok_records_and_its_test_is_
         ]
         time.sleep(0.5)  # matched before the first set
         simulator.start()
-        end = time.monotonic() + 3.5
+        end = time.monotonic() + 2.5
         while time.monotonic() < end:
             for reader, out in readers:
                 out.extend(reader.take(N=100))
@@ -209,7 +210,7 @@ def test_over_dds_a_redundant_fixtures_poses_are_its_ok_records_and_its_test_is_
         service.stop()
         bus.shutdown()
     ok = {round(r.t * 1e6) for r in records if r.status == "ok"}
-    assert len(poses) > 20 and {round((p.header.stamp.sec + p.header.stamp.nanosec * 1e-9) * 1e6) for p in poses} <= ok
+    assert len(poses) >= 5 and {round((p.header.stamp.sec + p.header.stamp.nanosec * 1e-9) * 1e6) for p in poses} <= ok
     values = [({kv.key: kv.value for kv in m.status[0].values}, m.status[0].level) for m in diagnostics]
     assert any(v["consistency"] == "passed" and level == 0 for v, level in values)
     failed = [(v, level) for v, level in values if "inconsistent_readings" in json.loads(v["flags"])]
