@@ -7,6 +7,8 @@
 * :class:`~hexapod_model.ros.changeover_topics.ChangeoverTopics` (run by the bridge): each
   fixture's guidance as a topic, and targets set over ROS 2 by messages signed with the
   service's token (:func:`~hexapod_model.ros.changeover_topics.request`).
+* :func:`~hexapod_model.ros.redundancy.consistency_values`: a fixture with redundant sensors
+  carries its consistency test on ``/diagnostics`` (live and in the bag).
 * :func:`~hexapod_model.ros.bag.write_mcap`: the store's sample log and lock events as a ROS 2
   bag in MCAP (``hexapod fixture history CONFIG --mcap out.mcap``).
 

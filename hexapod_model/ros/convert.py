@@ -8,7 +8,9 @@
 * Diagnostic levels: ``OK`` for an ``ok`` record without flags; ``WARN`` for an ``ok`` record with
   an advisory flag or an unhealthy store, and for a doubted pose (``flagged``, ``drift``);
   ``STALE`` before the first reading (``no_data``); ``ERROR`` for every other record (no pose:
-  failed or faulty readings; or a latched fault waiting for its acknowledgement).
+  failed or faulty readings; readings failing a redundant fixture's consistency test,
+  ``inconsistent_readings``, even with the others' estimate; or a latched fault waiting for its
+  acknowledgement).
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from .messages import (  # cyclonedds: the ros extra
     Vector3,
 )
 from .names import FixtureNames
+from .redundancy import consistency_values
 
 OK, WARN, ERROR, STALE = 0, 1, 2, 3  # diagnostic_msgs/DiagnosticStatus levels
 
@@ -84,18 +87,24 @@ def _pose(p: dict) -> tuple[tuple[float, float, float], Quaternion]:
 def joint_state(rec: PoseRecord, names: FixtureNames, q: np.ndarray | None) -> JointState | None:
     """The one-dof joints of an ``ok`` record: all of them from its configuration ``q``, else None.
 
-    Without ``q`` (a stored sample) the six prismatic joints only, from the record's readings.
+    Without ``q`` (a stored sample) the six prismatic joints only, from the record's readings of
+    the six legs (the first six: a measuring leg or an inclinometer is no URDF joint).
     Prismatic values are joint values (m) as the URDF has them: the readings, through the URDF's
-    encoder model when it has one (the caller's ``q`` already is).
+    encoder model when it has one (``(reading - zero) / gain``; the caller's ``q`` already holds
+    joint values).
     """
     if _good_pose(rec) is None:
         return None
     header = Header(stamp(rec.t), "")
     if q is not None:
         return JointState(header, list(names.joints), [float(q[i]) for i in names.joint_q])
-    readings = [float(r) for r in rec.readings if r is not None]
-    if len(readings) < len(rec.readings):
+    legs = rec.readings[: len(names.prismatic)]
+    readings = [float(r) for r in legs if r is not None]
+    if len(readings) < len(names.prismatic):
         return None
+    if names.encoder is not None:
+        zero, gain = names.encoder
+        readings = [(r - z) / g for r, z, g in zip(readings, zero, gain)]
     return JointState(header, list(names.prismatic), readings)
 
 
@@ -112,7 +121,11 @@ def level(rec: PoseRecord, store_error: str | None = None) -> int:
 def diagnostic(
     rec: PoseRecord, names: FixtureNames, hardware_id: str, store_error: str | None = None
 ) -> DiagnosticStatus:
-    """One fixture's ``DiagnosticStatus``: its status, flags, state, sigma, singularity margin and store health."""
+    """One fixture's ``DiagnosticStatus``: its status, flags, state, sigma, singularity margin and store health.
+
+    A fixture with redundant sensors adds its consistency test
+    (:func:`~hexapod_model.ros.redundancy.consistency_values`).
+    """
     sigma = rec.sigma or {}
     values = {
         "status": rec.status,
@@ -124,6 +137,7 @@ def diagnostic(
         "sigma_rotation_deg": _text(sigma.get("rotation_deg")),
         "singularity_margin": _text(rec.singularity_margin),
         "store": "ok" if store_error is None else store_error,
+        **consistency_values(rec, names),
     }
     flags = ", ".join(rec.flags)
     message = rec.status + (f" ({flags})" if flags else "") + ("" if store_error is None else "; store error")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -206,3 +207,141 @@ def test_packed_bytes_equal_cyclonedds_own_serialiser(ros, frame):
     for m in msgs:
         assert m.serialize() == IdlStruct.serialize(m), m
     assert type(msgs[0]).deserialize(msgs[0].serialize()) == msgs[0]
+
+
+@pytest.fixture(scope="module", params=["reference7", "reference_tilt"])
+def redundant(request):
+    need_extra()
+    from hexapod_model import Hexapod
+    from hexapod_model.ros.names import FixtureNames
+
+    hexa = Hexapod.from_preset(request.param, compiled=False)
+    return request.param, hexa, FixtureNames.of("right", "cell/hexapod", hexa)
+
+
+def test_a_redundant_fixtures_joint_states_are_its_urdf_joints_and_six_legs(ros, redundant):
+    """The seventh leg is a distance closure between two fixed links, the inclinometer a fixed link: no joint."""
+    import xml.etree.ElementTree as ET
+    from pathlib import Path
+
+    convert, _, _, store = ros
+    preset, hexa, names = redundant
+    urdf = ET.parse(Path(__file__).resolve().parents[2] / "urdf" / f"{preset}.urdf").getroot()
+    movable = [j.get("name") for j in urdf.iter("joint") if j.get("type") not in ("fixed", "floating")]
+    assert list(names.joints) == movable and len(movable) == 36
+    assert names.readings == hexa.reading_names and names.redundant
+    rec = record()._replace(readings=[0.001, -0.002, 0.0031, 0.0, 1e-6, -0.004])  # a record: the six legs'
+    q = hexa.q_home.copy()
+    q[: hexa.nq - 7] = np.linspace(-0.3, 0.3, hexa.nq - 7)
+    js = decode(store, convert.joint_state(rec, names, q), "sensor_msgs/msg/JointState")
+    assert js.name == movable and len(js.position) == len(js.name)
+    legs = decode(store, convert.joint_state(rec, names, None), "sensor_msgs/msg/JointState")
+    assert legs.name == list(hexa.prismatic_names) and list(legs.position) == rec.readings
+
+
+def test_joint_states_of_a_record_with_every_reading_name_the_six_legs_only(ros, redundant):
+    convert, _, _, store = ros
+    _, hexa, names = redundant
+    every = [1e-3 * (k + 1) for k in range(len(hexa.reading_names))]  # legs first, then leg7 or tilt_x, tilt_y
+    legs = decode(
+        store, convert.joint_state(record()._replace(readings=every), names, None), "sensor_msgs/msg/JointState"
+    )
+    assert legs.name == list(hexa.prismatic_names) and list(legs.position) == every[:6]
+
+
+def diagnostic_values(convert, store, rec, names):
+    from hexapod_model.ros.messages import DiagnosticArray, Header
+
+    msg = DiagnosticArray(Header(convert.stamp(rec.t), ""), [convert.diagnostic(rec, names, "cell/hexapod/right")])
+    (s,) = decode(store, msg, "diagnostic_msgs/msg/DiagnosticArray").status
+    return s.level, {kv.key: kv.value for kv in s.values}
+
+
+@pytest.mark.parametrize(
+    ("status", "flags", "pose", "level", "verdict", "isolated", "suspects"),
+    [
+        ("ok", [], True, 0, "passed", "", ""),
+        ("flagged", ["jump"], True, 1, "passed", "", ""),
+        (
+            "inconsistent_readings",
+            ["inconsistent_readings", "isolated:leg3", "estimate"],
+            True,
+            2,
+            "failed",
+            "leg3",
+            "",
+        ),
+        ("inconsistent_readings", ["inconsistent_readings", "suspects:7"], False, 2, "failed", "", "7"),
+        (
+            "unacknowledged_fault",
+            ["inconsistent_readings", "isolated:tilt_x", "estimate"],
+            True,
+            2,
+            "failed",
+            "tilt_x",
+            "",
+        ),
+        ("encoder_error", ["encoder_error:leg7"], False, 2, "", "", ""),
+        ("no_data", [], False, 3, "", "", ""),
+    ],
+)
+def test_a_redundant_fixtures_diagnostics_carry_its_consistency_test(
+    ros, redundant, status, flags, pose, level, verdict, isolated, suspects
+):
+    from scipy.stats import chi2
+
+    convert, _, _, store = ros
+    _, hexa, names = redundant
+    rec = record(status, flags)
+    if not pose:
+        rec = rec._replace(pose=None)
+    got, values = diagnostic_values(convert, store, rec, names)
+    dof = len(hexa.reading_names) - 6
+    assert got == level and values["status"] == status
+    assert values["consistency"] == verdict
+    assert (values["consistency_isolated"], values["consistency_suspects"]) == (isolated, suspects)
+    assert json.loads(values["consistency_readings"]) == list(hexa.reading_names)
+    assert values["consistency_dof"] == str(dof) and float(values["consistency_false_alarm_rate"]) == 1e-3
+    assert float(values["consistency_chi2_bound"]) == pytest.approx(chi2.ppf(1 - 1e-3, dof), rel=1e-9)
+    if status != "ok":
+        assert convert.pose_stamped(rec, names) is None and convert.joint_state(rec, names, hexa.q_home) is None
+
+
+def test_six_legs_diagnostics_carry_no_consistency_test(ros):
+    convert, names, _, store = ros
+    _, values = diagnostic_values(convert, store, record(), names)
+    assert not names.redundant and not [k for k in values if k.startswith("consistency")]
+    assert list(values) == [
+        "status",
+        "flags",
+        "state",
+        "stored",
+        "t",
+        "sigma_translation_mm",
+        "sigma_rotation_deg",
+        "singularity_margin",
+        "store",
+    ]
+
+
+def test_joint_states_without_a_configuration_are_joint_values_through_the_encoder_model(ros):
+    """A stored sample keeps readings; a calibrated fixture's reading is not its prismatic joint value."""
+    from hexapod_model import Hexapod, get_preset
+    from hexapod_model.description.geometry import geometry_from_dict
+    from hexapod_model.ros.names import FixtureNames
+
+    convert, _, _, store = ros
+    d = get_preset("reference").to_dict()
+    for k, leg in enumerate(d["legs"]):
+        leg["encoder_zero"], leg["encoder_scale"] = 1e-3 * (k - 2.5), 2e-3 * (k - 3)
+    hexa = Hexapod.from_geometry(geometry_from_dict(d), compiled=False)
+    names = FixtureNames.of("right", "cell/hexapod", hexa)
+    rec = record()
+    js = decode(store, convert.joint_state(rec, names, None), "sensor_msgs/msg/JointState")
+    joints = hexa.joints_of(np.array(rec.readings))
+    assert js.name == list(hexa.prismatic_names)
+    assert np.max(np.abs(np.array(js.position) - joints)) <= 1e-15  # m; the readings are up to 2.5 mm off them
+    q = hexa.q_home.copy()  # the same through a configuration: the URDF's prismatic joints hold joint values
+    q[hexa.model.joints[hexa.model.getJointId(js.name[2])].idx_q] = joints[2]
+    live = convert.joint_state(rec, names, q)
+    assert live.position[live.name.index(js.name[2])] == joints[2]
