@@ -20,10 +20,12 @@ class StepDetector:
     The tracker flags a reading far from its motion model (``jump``) but, for a small step, may
     take the new level as motion from the next set on. So when it flags a jump at a sampling
     instant, each named leg's readings around it, ``before`` instants before and ``after``
-    after, are fitted twice: a cubic in time plus a *step* from that instant on, and a cubic plus
-    a *spike* at it. A leg is stepped when the step model fits better, its step exceeds
-    :data:`STEP_SIGMAS` of its own uncertainty (the reading noise through the fit) and a quarter
-    of the largest step found. Until then
+    after, are fitted three times: a cubic in time plus a *step* from that instant on, a cubic
+    plus a *spike* at it, and a quartic (*smooth* motion, as many parameters). A leg is stepped
+    when the step model fits better than both, its step exceeds :data:`STEP_SIGMAS` of its own
+    uncertainty (the reading noise through the fit, or the step fit's residual where it is larger:
+    motion rougher than a cubic over the window, as at a slow sampling rate) and a quarter of the
+    largest step found. Until then
     the caller keeps the records off ``ok``. The trend restarts after a gap of more than
     :data:`GAP_INSTANTS` instants. A step below the tracker's jump threshold (about 5 sigma of
     its prediction), one within a gap, and a creep slower than the noise are not seen.
@@ -81,14 +83,23 @@ class StepDetector:
         R = np.array([r for _, r in sets])
         base = np.column_stack([np.ones_like(n), n, n**2, n**3])
         fits = {}
-        for name, extra in (("step", n >= 0), ("spike", n == 0)):
+        scale = max(float(np.abs(n).max()), 1.0)  # the quartic's column in units of the window
+        for name, extra in (("step", n >= 0), ("spike", n == 0), ("smooth", (n / scale) ** 4)):
             V = np.column_stack([base, extra.astype(float)])
             coef, *_ = np.linalg.lstsq(V, R, rcond=None)
             rss = ((R - V @ coef) ** 2).sum(axis=0)
-            sd = self.noise * math.sqrt(float(np.linalg.inv(V.T @ V)[4, 4]))
-            fits[name] = (coef[4], rss, sd)
-        step, rss_step, sd = fits["step"]
-        rss_spike = fits["spike"][1]
-        found = [j for j in legs if abs(step[j]) > STEP_SIGMAS * sd and rss_step[j] < rss_spike[j]]
+            gain = math.sqrt(float(np.linalg.inv(V.T @ V)[4, 4]))
+            fits[name] = (coef[4], rss, gain)
+        step, rss_step, gain = fits["step"]
+        rss_spike, rss_smooth = fits["spike"][1], fits["smooth"][1]
+        # the step's sigma: the reading noise, or the step fit's own residual where the motion is
+        # rougher than a cubic over the window (a slow sampling rate): never smaller than the noise
+        dof = max(len(sets) - 5, 1)
+        sd = gain * np.maximum(self.noise, np.sqrt(rss_step / dof))
+        found = [
+            j
+            for j in legs
+            if abs(step[j]) > STEP_SIGMAS * sd[j] and rss_step[j] < rss_spike[j] and rss_step[j] < rss_smooth[j]
+        ]
         largest = max((abs(step[j]) for j in found), default=0.0)
         return tuple(j for j in found if abs(step[j]) >= largest / 4)  # not a leg the largest step dragged along
