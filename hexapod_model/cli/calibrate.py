@@ -112,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
         sim = simulate(nominal, args.poses, args.seed, noise=noise)
         data = sim.data
     else:
-        data = load_poses(args.measured)
+        data = load_poses(args.measured, nominal)
     options = {"encoder_scale": args.encoder_scale, "hold": tuple(args.hold), "max_sigma": args.max_sigma}
     if sys.stderr.isatty():  # like the progress bars: only on a terminal
         note("calibrate", f"identifying on {len(data.readings)} poses, then {args.folds}-fold validation ...")
