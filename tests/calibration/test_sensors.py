@@ -1,0 +1,89 @@
+"""Extra sensors in a calibration: their unknowns, reading model and derivatives, frame convention."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import hexapod_model as hm
+from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.calibration.gauge import move
+from hexapod_model.calibration.parameters import ParameterSet
+from hexapod_model.calibration.sensors import SensorModel
+
+PRESETS = ("reference7", "reference_tilt")
+
+
+@pytest.fixture(scope="module", params=PRESETS)
+def corrected(request):
+    """A parameter set with the sensors' unknowns (and scales) and a geometry off nominal in all of them."""
+    ps = ParameterSet(hm.get_preset(request.param), encoder_scale=True, sensors=True)
+    delta = np.random.default_rng(2).uniform(-1, 1, ps.size) * ps.scales
+    return ps, delta
+
+
+def _model(ps: ParameterSet, delta: np.ndarray) -> SensorModel:
+    return SensorModel(ps.geometry(delta), hm.Hexapod.from_geometry(ps.nominal).home_pose, ps.mount(delta))
+
+
+def _poses(ps: ParameterSet) -> np.ndarray:
+    return box_poses(hm.Hexapod.from_geometry(ps.nominal).home_pose, 4, seed=7)
+
+
+def test_the_unknowns_follow_the_six_legs_and_round_trip(corrected):
+    ps, delta = corrected
+    six = ParameterSet(ps.nominal, encoder_scale=True)
+    assert ps.names[: six.size] == six.names and ps.size > six.size
+    extra = [ps.names[k] for k in ps.sensor_index]
+    if ps.nominal.inclinometer is not None:
+        assert extra == ["inclinometer.mount.x_rad", "inclinometer.mount.y_rad", "inclinometer.mount.z_rad"]
+        assert ps.gauge_constraints().shape == (10, ps.size)  # the base's tilt is seen by the inclinometer
+    else:
+        assert extra[0] == "leg7.base_anchor.x_m" and "leg7.encoder_zero_m" in extra and "leg7.encoder_scale" in extra
+        assert ps.gauge_constraints().shape == (12, ps.size)
+    np.testing.assert_allclose(ps.delta_of(ps.geometry(delta)), delta, rtol=0, atol=1e-15)
+    assert six.geometry(delta[: six.size]).measuring_legs == ps.nominal.measuring_legs  # without: kept nominal
+
+
+def test_the_sensor_model_reads_as_the_least_squares_solve_does(corrected):
+    """Its readings are those Hexapod.forward compares with, for the corrected geometry."""
+    ps, delta = corrected
+    hexa = hm.Hexapod.from_geometry(ps.geometry(delta))
+    assert hexa.redundancy is not None
+    P = _poses(ps)
+    expected = np.array([hexa.redundancy.extra_readings(T) for T in P])
+    np.testing.assert_allclose(_model(ps, delta).readings(P), expected, rtol=0, atol=1e-13)
+
+
+def test_sensor_derivatives_match_finite_differences(corrected):
+    ps, delta = corrected
+    P = _poses(ps)
+    model = _model(ps, delta)
+    pose, own = model.derivatives(P)
+    h = 1e-7
+    for i in range(6):
+        e = np.zeros(6)
+        e[i] = h
+        plus = model.readings(P @ pin.exp6(e).homogeneous)
+        minus = model.readings(P @ pin.exp6(-e).homogeneous)
+        np.testing.assert_allclose(pose[:, :, i], (plus - minus) / (2 * h), rtol=0, atol=1e-7)
+    for k, col in zip(ps.sensor_index, ps.sensor_columns):
+        e = np.zeros(ps.size)
+        e[k] = h
+        fd = (_model(ps, delta + e).readings(P) - _model(ps, delta - e).readings(P)) / (2 * h)
+        np.testing.assert_allclose(own[:, :, col], fd, rtol=0, atol=1e-7, err_msg=ps.names[k])
+
+
+def test_the_frame_convention_moves_the_sensors_without_changing_a_reading(corrected):
+    """A base motion about z and any platform motion, with the poses following: the same extra readings."""
+    ps, delta = corrected
+    geom = ps.geometry(delta)
+    G_b = pin.exp6(np.array([1e-3, -2e-3, 5e-4, 0.0, 0.0, 4e-3])).homogeneous  # about z: the base stays levelled
+    G_p = pin.exp6(np.array([-1e-3, 1e-3, 2e-3, 3e-3, -2e-3, 1e-3])).homogeneous
+    moved = move(geom, G_b, G_p)
+    home = hm.Hexapod.from_geometry(ps.nominal).home_pose
+    P = _poses(ps)
+    before = SensorModel(geom, home).readings(P)
+    after = SensorModel(moved, home).readings(G_b @ P @ np.linalg.inv(G_p))
+    np.testing.assert_allclose(after, before, rtol=0, atol=1e-12)
