@@ -11,6 +11,7 @@ from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.calibration.gauge import move
 from hexapod_model.calibration.parameters import ParameterSet
 from hexapod_model.calibration.sensors import SensorModel
+from hexapod_model.description.geometry_toml import save_geometry
 
 PRESETS = ("reference7", "reference_tilt")
 
@@ -87,3 +88,12 @@ def test_the_frame_convention_moves_the_sensors_without_changing_a_reading(corre
     before = SensorModel(geom, home).readings(P)
     after = SensorModel(moved, home).readings(G_b @ P @ np.linalg.inv(G_p))
     np.testing.assert_allclose(after, before, rtol=0, atol=1e-12)
+
+
+def test_a_calibrated_geometry_with_sensors_is_written_and_read_back_exactly(corrected, tmp_path):
+    """The geometry file carries the identified sensors (the TOML writer failed on sensor tables)."""
+    ps, delta = corrected
+    geom = ps.geometry(delta, name="calibrated")
+    back = hm.load_geometry(save_geometry(geom, tmp_path / "g.toml"))
+    assert back.measuring_legs == geom.measuring_legs and back.inclinometer == geom.inclinometer
+    np.testing.assert_allclose(ps.delta_of(back), ps.delta_of(geom), rtol=0, atol=1e-15)
