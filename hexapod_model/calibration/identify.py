@@ -11,10 +11,12 @@ function theorem on the closures), closed forms for the frames and the sensors.
 
 Before the fit, :func:`~hexapod_model.calibration.identifiability.analyse` fixes the
 gauge and holds at nominal every parameter the data cannot determine; after it, the analysis
-is repeated at the solution. The 1-sigma of each identified parameter is from the covariance
-``s0^2 (J^T J)^-1`` (``s0`` the a-posteriori noise factor, 1 when the stated noise is right)
-plus what the held parameters, known only to their expected magnitude, do to it: ``S S^T``
-with ``S = (J^T J)^-1 J^T J_held diag(scale_held)`` (a "consider" covariance).
+is repeated at the solution. With extra sensors, the fit starts from their unknowns fitted
+alone to their readings at the nominal poses
+(:func:`~hexapod_model.calibration.problem.fit_sensors`). The 1-sigma of each identified
+parameter is from the covariance ``s0^2 (J^T J)^-1`` (``s0`` the a-posteriori noise factor,
+1 when the stated noise is right) plus what the held parameters, known only to their expected
+magnitude, do to it: ``S S^T`` with ``S = (J^T J)^-1 J^T J_held diag(scale_held)`` (a "consider" covariance).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from .derivatives import CalibrationModel
 from .frames import Noise, fit_frames, predict
 from .identifiability import Combination, analyse
 from .parameters import ParameterSet
-from .problem import FRAME_SCALE, MeasuredPoses, Problem, jacobians, sensor_whitening
+from .problem import FRAME_SCALE, MeasuredPoses, Problem, fit_sensors, jacobians, sensor_whitening
 
 EQUATIONS_PER_UNKNOWN = 2  # at least this many residual rows per unknown
 OUTLIER_RMS = 5.0  # a row this many stated sigmas off (RMS over its 6 rows) ...
@@ -179,6 +181,8 @@ def identify(
     frames = fit_frames(P, data.measured, noise)
     whitening = sensor_whitening(model, P, qs, Gs) if use else None
     result, delta = None, np.zeros(ps.size)
+    if whitening is not None:  # start from the sensors fitted alone at the nominal poses
+        delta = fit_sensors(ps, model.hexapod.home_pose, P, data.readings[:, 6:], whitening, held)
     combinations: list[Combination] = []
     for _ in range(3):
         Jg, Jf = jacobians(model, P, qs, Gs, *frames, data.measured, noise, whitening)

@@ -36,9 +36,10 @@ def test_the_extra_sensors_perturbed_parameters_are_recovered(study):
     z = (found.delta - truth) / found.sigma
     ok = found.identifiable
     assert np.all(np.abs(z[ok]) < Z_LIMIT), np.array(ps.names)[ok][np.abs(z[ok]) >= Z_LIMIT]
-    # the extra residuals are whitened by their stated noise: their RMS is about one standard deviation
-    assert found.sensor_rms is not None and 0.7 < found.sensor_rms < 1.3
-    assert 0.7 < found.noise_factor < 1.3
+    # every row is whitened by its stated noise: the a-posteriori factor is about 1; the extra rows'
+    # RMS is below 1 by what the unknowns they determine absorb, not above it
+    assert 0.8 < found.noise_factor < 1.2
+    assert found.sensor_rms is not None and 0.5 < found.sensor_rms < 1.1
 
 
 def test_the_extra_equations_determine_more_of_the_six_legs(study):
