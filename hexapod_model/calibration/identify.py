@@ -141,8 +141,8 @@ def identify(
     Args:
         nominal: the nominal ``cardan`` geometry.
         data: readings and measured poses: six readings a row, or, for a geometry with extra
-            sensors, all of ``nominal.reading_names`` (six rows identify from the six legs and
-            carry the sensors as ``nominal`` has them).
+            sensors, all of ``nominal.reading_names`` (with six a row, the six legs are
+            identified and the sensors carried as ``nominal`` has them).
         noise: the stated measurement noise (weights the residuals).
         encoder_scale: also identify each reading's scale error.
         hold: parameter names or ``fnmatch`` patterns to keep at nominal. Offsets that are
