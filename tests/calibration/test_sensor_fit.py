@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -9,6 +11,7 @@ import hexapod_model as hm
 from hexapod_model.calibration.gauge import regauge
 from hexapod_model.calibration.identify import identify
 from hexapod_model.calibration.validation import cross_validate
+from hexapod_model.description.sensors import Inclinometer
 from hexapod_model.studies.calibrate import simulate
 
 Z_LIMIT = 4.0  # an identified parameter within this many of its 1-sigma of the truth
@@ -59,3 +62,19 @@ def test_the_held_out_error_is_reported_with_and_without_the_extra_sensors(study
     six = cross_validate(sim.nominal, sim.data.six(), folds=2, seed=0)
     assert six.after_without_sensors is None  # six readings a row: the six-leg fit only ...
     np.testing.assert_array_equal(six.after[0], val.after_without_sensors[0])  # ... the same one
+
+
+def test_a_sensor_the_data_cannot_calibrate_is_named_and_held_not_fitted():
+    """An inclinometer of 0.1 rad noise cannot place its 0.3 deg mounting rotation: reported and held at nominal."""
+    coarse = replace(hm.get_preset("reference_tilt"), inclinometer=Inclinometer(sigma=0.1))
+    sim = simulate(coarse, 40, seed=3)
+    found = identify(coarse, sim.data)
+    ps = found.parameters
+    mount = [ps.index(f"inclinometer.mount.{c}_rad") for c in "xyz"]
+    assert found.sensors and not found.identifiable[mount].any()
+    assert np.all(found.delta[mount] == 0.0) and np.all(np.isnan(found.sigma[mount]))
+    assert found.geometry.inclinometer == coarse.inclinometer
+    held = {c.held: c for c in found.combinations}
+    for k in mount:
+        assert held[ps.names[k]].sigma > 1.0  # its 1-sigma if identified: beyond its tolerance
+        assert ps.names[k] in held[ps.names[k]].describe()
