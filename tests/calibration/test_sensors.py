@@ -8,8 +8,12 @@ import pytest
 
 import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.calibration.derivatives import CalibrationModel
+from hexapod_model.calibration.frames import Noise
 from hexapod_model.calibration.gauge import move
+from hexapod_model.calibration.identifiability import free_basis
 from hexapod_model.calibration.parameters import ParameterSet
+from hexapod_model.calibration.problem import MeasuredPoses, Problem, sensor_whitening
 from hexapod_model.calibration.sensors import SensorModel
 from hexapod_model.description.geometry_toml import save_geometry
 
@@ -97,3 +101,31 @@ def test_a_calibrated_geometry_with_sensors_is_written_and_read_back_exactly(cor
     back = hm.load_geometry(save_geometry(geom, tmp_path / "g.toml"))
     assert back.measuring_legs == geom.measuring_legs and back.inclinometer == geom.inclinometer
     np.testing.assert_allclose(ps.delta_of(back), ps.delta_of(geom), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_the_problem_jacobian_with_extra_rows_matches_finite_differences(name):
+    """The extra readings' rows: through the pose, the sensors' own columns, zero frame columns, the whitening."""
+    ps = ParameterSet(hm.get_preset(name), sensors=True)
+    nominal = CalibrationModel(ps, np.zeros(ps.size))
+    true = hm.Hexapod.from_geometry(ps.nominal)
+    poses = box_poses(true.home_pose, 6, seed=2)
+    assert true.redundancy is not None
+    readings = np.array([[*true.inverse(T).lengths, *true.redundancy.extra_readings(T)] for T in poses])
+    data = MeasuredPoses(readings, poses)
+    P, qs, Gs, ok = nominal.forward(readings)
+    assert ok.all()
+    whitening = sensor_whitening(nominal, P, qs, Gs)
+    basis = free_basis(ps.gauge_constraints() * ps.scales, (), ps.size)
+    problem = Problem(ps, data, Noise(), basis, (np.eye(4), np.eye(4)), None, whitening)
+    x = np.concatenate([np.random.default_rng(3).normal(0, 0.5, basis.shape[1]), np.zeros(12)])
+    J = problem.jac(x)
+    assert J.shape == (6 * 6 + 6 * whitening.shape[1], basis.shape[1] + 12)
+    extra = slice(36, None)
+    np.testing.assert_array_equal(J[extra, basis.shape[1] :], 0.0)  # the frames do not move a reading
+    for k in [0, 7, basis.shape[1] - 1]:
+        e = np.zeros_like(x)
+        e[k] = 1e-4
+        fd = (problem.fun(x + e) - problem.fun(x - e)) / 2e-4
+        scale = np.max(np.abs(fd[extra])) + 1.0
+        np.testing.assert_allclose(J[extra, k] / scale, fd[extra] / scale, rtol=0, atol=2e-3)
