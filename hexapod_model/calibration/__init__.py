@@ -1,6 +1,7 @@
 """Calibration: identify a hexapod's joint geometry from measured platform poses.
 
 * :mod:`.parameters` — the unknowns: per-leg corrections to a nominal geometry;
+* :mod:`.sensors` — a redundant hexapod's extra sensors: their unknowns and readings;
 * :mod:`.frames` — the measurement model (measuring device and marker frames);
 * :mod:`.derivatives` — the corrected hexapod and the exact derivative of its solved poses;
 * :mod:`.problem` — the least-squares problem and its Jacobian;

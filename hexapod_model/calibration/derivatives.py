@@ -16,9 +16,12 @@ velocity there. ``dxi/dtheta`` is the complex-step derivative of the leg's home 
 (:mod:`hexapod_model.description.legs`): exact to rounding. Readings enter through the encoder
 model ``q = (reading - zero) / (1 + scale)``.
 
-A geometry with redundant sensors (measuring legs, an inclinometer) is identified from its six
-legs' readings: the rows are those six, solved by the hexapod of the six legs; the extra
-sensors are carried into the corrected geometry at their nominal values.
+A geometry with redundant sensors (measuring legs, an inclinometer) is solved from its six
+legs' readings (the hexapod of the six legs). When the parameter set has the sensors'
+unknowns, :meth:`CalibrationModel.extra_readings` predicts the extra readings at those poses
+and :meth:`CalibrationModel.extra_jacobian` gives their derivative: through the pose (the
+six legs' parameters) and directly (the sensors' own, :mod:`.sensors`); otherwise the sensors
+are carried into the corrected geometry as the nominal one has them.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ from ..description.legs import leg_axes
 from ..exceptions import HexapodError
 from ..kinematics.hexapod import Hexapod
 from .parameters import LEG_SIZE, ParameterSet
+from .sensors import SensorModel
 
 COMPLEX_STEP = 1e-30
 SITES = ("cardan_base_1", "cardan_base_2", "roll", "cardan_platform_1", "cardan_platform_2", "tip", "anchor")
@@ -97,9 +101,13 @@ class CalibrationModel:
         m = clm.model
         self._joints = [[leg.joints[k] for k in (0, 1, 2, 4, 5)] for leg in clm.legs]
         self._parents = [[m.parents[j] for j in js] for js in self._joints]
+        #: the extra sensors' reading model (``None`` unless the parameter set has their unknowns)
+        self.sensors = (
+            SensorModel(self.geometry, self.hexapod.home_pose, ps.mount(self.delta)) if ps.sensor_index.size else None
+        )
 
     def forward(self, readings: np.ndarray, guesses: list | None = None) -> tuple[np.ndarray, list, list, np.ndarray]:
-        """Solve every row of ``readings`` (N, 6, m).
+        """Solve every row of ``readings`` (N, 6 or more; m) from its first six (the six legs').
 
         Returns poses (N, 4, 4), configurations and reduced constraint Jacobians (``None``
         where the solve failed) and the (N,) ok mask. ``guesses``: configurations to start from
@@ -113,7 +121,7 @@ class CalibrationModel:
             starts = [None] if guesses is None or guesses[k] is None else [guesses[k], None]
             for start in starts:
                 try:
-                    sol = self.hexapod.forward(readings[k], guess=start, check=False)
+                    sol = self.hexapod.forward(readings[k, :6], guess=start, check=False)
                 except HexapodError:  # readings outside this geometry's stroke: the row fails
                     break
                 if sol.converged and sol.jacobian is not None:
@@ -159,6 +167,31 @@ class CalibrationModel:
             cols = self.ps.legs[i]
             dr[6 * i : 6 * i + 6, cols] = block[i, :, : len(cols)]
         return -Z @ dr
+
+    def extra_readings(self, P: np.ndarray) -> np.ndarray:
+        """(N, m) the extra sensors' readings at platform poses ``P`` (N, 4, 4), reading order (m, rad)."""
+        assert self.sensors is not None
+        return self.sensors.readings(P)
+
+    def extra_jacobian(self, P: np.ndarray, pose_jacobians: np.ndarray) -> np.ndarray:
+        """(N, m, P) derivative of :meth:`extra_readings` w.r.t. the corrections.
+
+        ``pose_jacobians``: (N, 6, P) :meth:`pose_jacobian` of each row (the six legs'
+        parameters move the pose the readings are taken at).
+        """
+        assert self.sensors is not None
+        pose, own = self.sensors.derivatives(P)
+        out = pose @ pose_jacobians
+        out[:, :, self.ps.sensor_index] += own[:, :, self.ps.sensor_columns]
+        return out
+
+    def reading_jacobian(self, pose_jacobian: np.ndarray) -> np.ndarray:
+        """(6, 6) derivative of the solved pose (body twist) w.r.t. the six legs' readings (m).
+
+        From :meth:`pose_jacobian`: a reading enters as ``reading - zero``.
+        """
+        zeros = [self.ps.index(f"leg{i + 1}.encoder_zero_m") for i in range(6)]
+        return -pose_jacobian[:, zeros]
 
 
 def _operators(points: np.ndarray, E: np.ndarray) -> np.ndarray:

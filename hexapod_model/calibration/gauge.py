@@ -7,6 +7,12 @@ change of its leg's home length. The calibration fixes this freedom by a convent
 (``ParameterSet.gauge_constraints``); :func:`regauge` moves any other description of the same
 hexapod to that convention, so that its parameters can be compared one by one (the true
 geometry of a simulation, or another calibration).
+
+Extra sensors move with their side: a measuring leg's base anchor with the base, its platform
+anchor and the inclinometer's mounting frame with the platform (its encoder zero keeps each
+reading's physical length). An inclinometer refers to the base frame's z axis as the vertical:
+with its unknowns in the parameter set, the base side may only turn about z (the frame
+convention has no rows for the other two rotations, which the readings determine).
 """
 
 from __future__ import annotations
@@ -18,6 +24,9 @@ import pinocchio as pin
 
 from ..description.geometry import HexapodGeometry
 from ..description.legs import axes_of, fixed_axes, leg_axes
+from ..description.sensor_layout import rpy_matrix
+from ..description.sensors import Inclinometer
+from ..lie import matrix_to_rpy
 from .parameters import ParameterSet
 
 
@@ -61,7 +70,18 @@ def move(geom: HexapodGeometry, G_b: np.ndarray, G_p: np.ndarray) -> HexapodGeom
                 encoder_zero=zero,
             )
         )
-    return replace(geom, legs=tuple(legs))
+    measuring = []
+    for m in geom.measuring_legs:
+        b, p = np.asarray(m.base_anchor), np.asarray(m.platform_anchor)
+        b2, p2 = G_b[:3, :3] @ b + G_b[:3, 3], G_p[:3, :3] @ p + G_p[:3, 3]
+        change = float(np.linalg.norm(h + p2 - b2) - np.linalg.norm(h + p - b))
+        zero = m.encoder_zero + (1.0 + m.encoder_scale) * change
+        measuring.append(replace(m, base_anchor=tuple(b2), platform_anchor=tuple(p2), encoder_zero=zero))
+    incl = geom.inclinometer
+    if incl is not None:
+        roll, pitch, yaw = (float(a) for a in matrix_to_rpy(G_p[:3, :3] @ rpy_matrix(incl.rpy)))
+        incl = Inclinometer((roll, pitch, yaw), incl.sigma)
+    return replace(geom, legs=tuple(legs), measuring_legs=tuple(measuring), inclinometer=incl)
 
 
 def regauge(
@@ -70,13 +90,16 @@ def regauge(
     """The same hexapod and frames with ``ps.gauge_constraints() @ ps.delta_of(geometry) = 0``.
 
     Returns ``(geometry, T_mb, T_pm)``: the moved geometry and the frames that keep every
-    measured pose the same.
+    measured pose the same (and every extra reading; a levelled base turns about z only).
     """
     C = ps.gauge_constraints()
-    x = np.zeros(12)
+    free = [k for k in range(12) if not (ps.levelled and k in (3, 4))]  # the base's tilt stays
+    x = np.zeros(len(free))
 
     def transforms(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return pin.exp6(x[:6]).homogeneous, pin.exp6(x[6:]).homogeneous
+        full = np.zeros(12)
+        full[free] = x
+        return pin.exp6(full[:6]).homogeneous, pin.exp6(full[6:]).homogeneous
 
     def gauge(x: np.ndarray) -> np.ndarray:
         return C @ ps.delta_of(move(geom, *transforms(x)))
@@ -85,9 +108,9 @@ def regauge(
         g = gauge(x)
         if np.max(np.abs(g)) < 1e-14:
             break
-        J = np.empty((12, 12))
-        for k in range(12):
-            e = np.zeros(12)
+        J = np.empty((len(free), len(free)))
+        for k in range(len(free)):
+            e = np.zeros(len(free))
             e[k] = 1e-7
             J[:, k] = (gauge(x + e) - gauge(x - e)) / 2e-7
         x = x - np.linalg.solve(J, g)

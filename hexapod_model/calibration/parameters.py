@@ -12,6 +12,9 @@ base frame for base-side values, platform frame for platform-side ones):
 * ``legK.base_offset_m`` / ``legK.platform_offset_m``: the axis offsets;
 * ``legK.encoder_zero_m``: the reading at home; optionally ``legK.encoder_scale``.
 
+With ``sensors``, a geometry's measuring legs and inclinometer add their unknowns after the
+six legs' (:mod:`~hexapod_model.calibration.sensors`).
+
 The vector of a calibration is the *correction* ``delta`` (nominal = zeros). ``scale`` gives
 each parameter's expected magnitude (the study's tolerances), used to make the identification
 Jacobian dimensionless.
@@ -27,6 +30,7 @@ import numpy as np
 from ..description.geometry import HexapodGeometry
 from ..description.legs import fixed_axes, unit
 from ..exceptions import GeometryError
+from .sensors import derivative_column, mount_of, sensor_unknowns, sensor_value, with_sensors
 
 #: expected magnitude of each kind of parameter (SI): the tolerances of the simulated study
 SCALES = {  # in the order of a leg's slots
@@ -51,7 +55,10 @@ LEG_SIZE = 14  # per-leg slots in the order of KINDS (encoder_scale last)
 
 @dataclass(frozen=True)
 class Parameter:
-    """One unknown: leg ``leg`` (0..5), ``kind`` (see :data:`KINDS`), component ``index``."""
+    """One unknown: leg ``leg`` (0..5; 6, ... a measuring leg; -1 the inclinometer), ``kind``, component ``index``.
+
+    ``kind``: one of :data:`KINDS`, or of :data:`~hexapod_model.calibration.sensors.SENSOR_KINDS`.
+    """
 
     name: str
     leg: int
@@ -62,6 +69,8 @@ class Parameter:
 
 def _raw(geom: HexapodGeometry, p: Parameter) -> float:
     """The value (SI) of a non-axis parameter ``p`` in ``geom``."""
+    if p.leg >= 6:
+        return sensor_value(geom, p.leg, p.kind, p.index)
     leg = geom.legs[p.leg]
     if p.kind in ("base_centre", "platform_centre"):
         return float((leg.base_anchor if p.kind == "base_centre" else leg.platform_anchor)[p.index])
@@ -98,18 +107,29 @@ class ParameterSet:
     Args:
         nominal: the geometry to correct.
         encoder_scale: also identify each reading's scale error.
+        sensors: also the extra sensors' unknowns (measuring legs, an inclinometer), after the
+            six legs'; without, the sensors stay as ``nominal`` has them.
 
     Raises:
         GeometryError: the geometry is not a ``cardan`` hexapod.
     """
 
-    def __init__(self, nominal: HexapodGeometry, encoder_scale: bool = False):
+    def __init__(self, nominal: HexapodGeometry, encoder_scale: bool = False, sensors: bool = False):
         if nominal.joint_type != "cardan":
             raise GeometryError(
                 "joint_type", nominal.joint_type, "calibration identifies cardan hexapods (offset Cardan joints)"
             )
         self.nominal = nominal
-        self.parameters = tuple(p for i in range(6) for p in _leg_parameters(i, encoder_scale))
+        six = [p for i in range(6) for p in _leg_parameters(i, encoder_scale)]
+        extra = [Parameter(*u) for u in sensor_unknowns(nominal, encoder_scale)] if sensors else []
+        self.parameters = tuple(six + extra)
+        #: positions of the extra sensors' unknowns in the vector (empty without ``sensors``)
+        self.sensor_index = np.arange(len(six), len(six) + len(extra))
+        #: their columns in :meth:`SensorModel.derivatives <hexapod_model.calibration.sensors.SensorModel.derivatives>`
+        self.sensor_columns = np.array(
+            [derivative_column(p.leg, p.kind, p.index, len(nominal.measuring_legs)) for p in extra], dtype=int
+        )
+        self.levelled = sensors and nominal.inclinometer is not None
         self.names = tuple(p.name for p in self.parameters)
         self.scales = np.array([p.scale for p in self.parameters])
         self.size = len(self.parameters)
@@ -130,11 +150,20 @@ class ParameterSet:
         return self.values(np.zeros(self.size))
 
     def values(self, delta: np.ndarray) -> np.ndarray:
-        """Parameter values (SI) for the corrections ``delta``: nominal + delta (axis angles: delta)."""
+        """Parameter values (SI) for the corrections ``delta``: nominal + delta (axis and mount angles: delta)."""
         out = np.array(delta, dtype=float)
         for k, p in enumerate(self.parameters):
-            if p.kind not in ("base_axis", "platform_axis"):
+            if p.kind not in ("base_axis", "platform_axis", "mount"):
                 out[k] += _raw(self.nominal, p)
+        return out
+
+    def mount(self, delta: np.ndarray) -> np.ndarray:
+        """(3,) the inclinometer's mounting rotation correction in ``delta`` (rad; zeros without it)."""
+        out = np.zeros(3)
+        for k in self.sensor_index:
+            p = self.parameters[k]
+            if p.kind == "mount":
+                out[p.index] = delta[k]
         return out
 
     def leg_vector(self, i: int, delta: np.ndarray) -> np.ndarray:
@@ -185,13 +214,20 @@ class ParameterSet:
                     encoder_scale=float(a["scale"]),
                 )
             )
-        return replace(self.nominal, name=name or self.nominal.name, legs=tuple(legs))
+        geom = replace(self.nominal, name=name or self.nominal.name, legs=tuple(legs))
+        if not self.sensor_index.size:
+            return geom
+        extra = [self.parameters[k] for k in self.sensor_index]
+        values = self.values(delta)[self.sensor_index]
+        return with_sensors(geom, self.nominal, [(p.leg, p.kind, p.index) for p in extra], values)
 
     def delta_of(self, geom: HexapodGeometry) -> np.ndarray:
         """The corrections that turn the nominal geometry into ``geom`` (its inverse of :meth:`geometry`)."""
         out = np.zeros(self.size)
         for k, p in enumerate(self.parameters):
-            if p.kind in ("base_axis", "platform_axis"):
+            if p.kind == "mount":
+                out[k] = mount_of(self.nominal, geom)[p.index]
+            elif p.kind in ("base_axis", "platform_axis"):
                 side = 0 if p.kind == "base_axis" else 1
                 a = np.asarray(fixed_axes(geom, p.leg)[side])
                 a0 = self.axes[p.leg][side]
@@ -207,6 +243,10 @@ class ParameterSet:
         frame, and one of all platform-side joints from another marker frame. The calibrated
         frames are fixed by convention: the centre corrections have no mean translation and no
         mean rotation about the centres' centroid (rows 0-5 base, 6-11 platform).
+
+        With an inclinometer among the unknowns the base frame's z axis is the vertical its
+        readings refer to: a rotation of the base side about x or y changes them, the data
+        determine it, and rows 3-4 are dropped ((10, size)).
         """
         C = np.zeros((12, self.size))
         for side, (kind, points) in enumerate(
@@ -220,4 +260,4 @@ class ParameterSet:
                 e[p.index] = 1.0
                 C[6 * side : 6 * side + 3, k] = e
                 C[6 * side + 3 : 6 * side + 6, k] = np.cross(centred[p.leg], e)
-        return C
+        return np.delete(C, [3, 4], axis=0) if self.levelled else C

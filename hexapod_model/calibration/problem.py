@@ -4,8 +4,16 @@ The unknowns are the free scaled corrections ``z`` (the geometry is ``delta = D 
 identifiability basis times the parameter scales, so held parameters stay exactly nominal) and
 the right twists of the measuring and marker frames (in units of :data:`FRAME_SCALE`, through
 ``pin.Jexp6``). Rows are the whitened pose residuals of
-:mod:`~hexapod_model.calibration.frames`; a trial geometry that is not valid or cannot
-solve a row gets :data:`PENALTY` residuals, so the step is rejected.
+:mod:`~hexapod_model.calibration.frames` (6 per measured row), then, when the parameter set
+has the extra sensors' unknowns, the whitened residuals of the extra readings (``m`` per
+measured row): ``W_k (h(P_k) - z_k)``, ``h`` the readings the model predicts at the pose
+solved from the six legs, ``z_k`` the measured ones, and ``W_k`` the inverse Cholesky factor
+of their covariance ``diag(sigma^2) + sigma_enc^2 H_k H_k^T``: each sensor's stated noise
+(as ``Hexapod.forward`` weighs it) and the six legs' encoder noise carried through the pose
+(``H_k`` the derivative of ``h(P_k)`` w.r.t. the six readings), so that each row is in units
+of its standard deviation. ``W`` is taken at the geometry the problem starts from and held
+(:func:`sensor_whitening`). A trial geometry that is not valid or cannot solve a row gets
+:data:`PENALTY` residuals, so the step is rejected.
 """
 
 from __future__ import annotations
@@ -18,17 +26,21 @@ import pinocchio as pin
 from ..exceptions import HexapodError, InputError
 from .derivatives import CalibrationModel
 from .frames import frame_jacobian, predict, residual, twist_jacobian
+from .sensors import SensorModel, reading_sigmas
 
 FRAME_SCALE = 1e-3  # m and rad: expected size of the frame corrections after the initial alignment
+SENSOR_STEPS = 10  # Gauss-Newton steps of the sensors' start (fit_sensors)
 PENALTY = 1e8  # residual (stated sigmas) of a row a trial geometry cannot solve: the step is always rejected
 
 
 @dataclass(frozen=True)
 class MeasuredPoses:
-    """Leg readings (N, 6, m) and measured poses (N, 4, 4).
+    """Readings (N, 6 + e) and measured poses (N, 4, 4).
 
-    The measured poses are those of the marker frame in the measuring device's frame;
-    ``lines`` names each row in messages (CSV line numbers).
+    The readings are the six legs' (m), then the ``e`` extra sensors' in the geometry's
+    reading order (m for measuring legs, rad for tilts), if any. The measured poses are those
+    of the marker frame in the measuring device's frame; ``lines`` names each row in messages
+    (CSV line numbers).
     """
 
     readings: np.ndarray
@@ -38,14 +50,23 @@ class MeasuredPoses:
 
     def __post_init__(self) -> None:
         r, M = np.asarray(self.readings, dtype=float), np.asarray(self.measured, dtype=float)
-        if r.ndim != 2 or r.shape[1] != 6 or M.shape != (len(r), 4, 4):
-            raise InputError("measured poses", (r.shape, M.shape), "need readings (N, 6) and poses (N, 4, 4)")
+        if r.ndim != 2 or r.shape[1] < 6 or M.shape != (len(r), 4, 4):
+            raise InputError("measured poses", (r.shape, M.shape), "need readings (N, 6 or more) and poses (N, 4, 4)")
         if not (np.all(np.isfinite(r)) and np.all(np.isfinite(M))):
             raise InputError("measured poses", self.source, "readings and poses must be finite")
         if self.lines is not None and len(self.lines) != len(r):
             raise InputError("lines", len(self.lines), f"need one line number per row ({len(r)})")
         object.__setattr__(self, "readings", r)
         object.__setattr__(self, "measured", M)
+
+    @property
+    def extra(self) -> int:
+        """Number of extra readings a row carries (beyond the six legs')."""
+        return self.readings.shape[1] - 6
+
+    def six(self) -> MeasuredPoses:
+        """The same rows with the six legs' readings only."""
+        return MeasuredPoses(self.readings[:, :6], self.measured, self.source, self.lines)
 
     def line(self, k: int) -> str:
         """How row ``k`` is named in messages."""
@@ -67,10 +88,14 @@ class Problem:
         basis: (P, n) basis of the free scaled corrections.
         frames: ``(T_mb, T_pm)`` the frame twists are relative to.
         guesses: configurations to start each row's direct kinematics from (or ``None``).
+        whitening: (N, m, m) the extra readings' whitening (:func:`sensor_whitening`), or
+            ``None`` without the sensors' unknowns.
     """
 
-    def __init__(self, ps, data, noise, basis, frames, guesses):
+    def __init__(self, ps, data, noise, basis, frames, guesses, whitening=None):
         self.ps, self.data, self.noise, self.basis = ps, data, noise, basis
+        self.whitening = whitening
+        self.m = 0 if whitening is None else whitening.shape[1]
         self.T_mb0, self.T_pm0 = frames
         self.D = basis * ps.scales[:, None]  # delta = D @ z
         self.D[np.linalg.norm(basis, axis=1) < 1e-12] = 0.0  # held parameters stay exactly nominal
@@ -103,15 +128,23 @@ class Problem:
             self.cache = {key: (model, P, qs, Gs, ok, T_mb, T_pm)}
         return self.cache[key]
 
-    def fun(self, x: np.ndarray) -> np.ndarray:
-        """(6N,) whitened residuals at ``x``."""
-        _, P, _, _, ok, T_mb, T_pm = self.state(x)
+    def rows(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Whitened residuals at ``x``: (N, 6) of the poses and (N, m) of the extra readings."""
+        model, P, _, _, ok, T_mb, T_pm = self.state(x)
         r = np.full((len(P), 6), PENALTY)
         r[ok] = residual(predict(T_mb, P[ok], T_pm), self.data.measured[ok], self.noise)
-        return r.reshape(-1)
+        e = np.full((len(P), self.m), PENALTY)
+        if self.m and ok.any():
+            e[ok] = extra_residual(model, P[ok], self.data.readings[ok, 6:], self.whitening[ok])
+        return r, e
+
+    def fun(self, x: np.ndarray) -> np.ndarray:
+        """(6N + mN,) whitened residuals at ``x``: the poses' rows, then the extra readings'."""
+        r, e = self.rows(x)
+        return np.concatenate([r.reshape(-1), e.reshape(-1)])
 
     def jac(self, x: np.ndarray) -> np.ndarray:
-        """(6N, n) their exact derivative at ``x`` (raises when a row cannot be solved there)."""
+        """(6N + mN, n) their exact derivative at ``x`` (raises when a row cannot be solved there)."""
         model, P, qs, Gs, ok, T_mb, T_pm = self.state(x)
         if not ok.all():
             raise InputError(
@@ -121,20 +154,73 @@ class Problem:
                 "solve every row; check NOMINAL, the leg order and the units (m)",
             )
         _, _, _, mb, pm = self.unpack(x)
-        Jg, Jf = jacobians(model, P, qs, Gs, T_mb, T_pm, self.data.measured, self.noise)
+        Jg, Jf = jacobians(model, P, qs, Gs, T_mb, T_pm, self.data.measured, self.noise, self.whitening)
         Jf = Jf.copy()
         Jf[:, :6] = Jf[:, :6] @ pin.Jexp6(mb) * FRAME_SCALE
         Jf[:, 6:] = Jf[:, 6:] @ pin.Jexp6(pm) * FRAME_SCALE
         return np.hstack([Jg @ self.D, Jf])
 
 
-def jacobians(model, P, qs, Gs, T_mb, T_pm, measured, noise) -> tuple[np.ndarray, np.ndarray]:
-    """Whitened residual derivatives w.r.t. the corrections (6N, P) and the frames (6N, 12).
+def jacobians(model, P, qs, Gs, T_mb, T_pm, measured, noise, whitening=None) -> tuple[np.ndarray, np.ndarray]:
+    """Whitened residual derivatives w.r.t. the corrections (6N + mN, P) and the frames (6N + mN, 12).
 
-    The frame columns are right twists of the measuring frame, then the marker frame.
+    The frame columns are right twists of the measuring frame, then the marker frame; the
+    extra readings' rows (with ``whitening``, see :func:`sensor_whitening`) do not depend on them.
     """
     n = len(P)
     A = T_mb @ P
     Jpose = twist_jacobian(A, np.broadcast_to(T_pm, (n, 4, 4)), measured, noise)
-    Jg = np.concatenate([Jpose[k] @ model.pose_jacobian(qs[k], Gs[k]) for k in range(n)])
-    return Jg, frame_jacobian(T_mb, P, T_pm, measured, noise).reshape(6 * n, 12)
+    dP = np.array([model.pose_jacobian(qs[k], Gs[k]) for k in range(n)])  # (N, 6, P)
+    Jg = np.concatenate([Jpose[k] @ dP[k] for k in range(n)])
+    Jf = frame_jacobian(T_mb, P, T_pm, measured, noise).reshape(6 * n, 12)
+    if whitening is None or not whitening.shape[1]:
+        return Jg, Jf
+    Je = (whitening @ model.extra_jacobian(P, dP)).reshape(-1, Jg.shape[1])
+    return np.vstack([Jg, Je]), np.vstack([Jf, np.zeros((len(Je), 12))])
+
+
+def extra_residual(model: CalibrationModel, P: np.ndarray, readings: np.ndarray, whitening: np.ndarray) -> np.ndarray:
+    """(N, m) whitened residuals ``W_k (h(P_k) - z_k)`` of the extra readings ``readings`` (N, m)."""
+    return np.einsum("nij,nj->ni", whitening, model.extra_readings(P) - readings)
+
+
+def sensor_whitening(model: CalibrationModel, P: np.ndarray, qs: list, Gs: list) -> np.ndarray:
+    """(N, m, m) inverse Cholesky factors of the extra readings' covariance at each row (module doc).
+
+    The sensors' stated sigmas and the six legs' ``encoder_sigma`` of ``model.geometry``.
+    """
+    geom = model.geometry
+    sigma2 = np.diag(reading_sigmas(geom) ** 2)
+    dP = np.array([model.pose_jacobian(qs[k], Gs[k]) for k in range(len(P))])
+    pose = model.sensors.derivatives(P)[0] if model.sensors is not None else np.zeros((len(P), 0, 6))
+    H = pose @ np.array([model.reading_jacobian(J) for J in dP])  # (N, m, 6) per six-leg reading
+    C = sigma2 + geom.encoder_sigma**2 * H @ np.swapaxes(H, 1, 2)
+    return np.linalg.inv(np.linalg.cholesky(C))
+
+
+def fit_sensors(
+    ps, home: np.ndarray, P: np.ndarray, readings: np.ndarray, whitening: np.ndarray, held: tuple[int, ...]
+) -> np.ndarray:
+    """Corrections (P,) of the extra sensors' free unknowns alone that fit their ``readings`` (N, m).
+
+    At the platform poses ``P`` (N, 4, 4) solved by the nominal geometry from the six legs
+    (``home``: its 4x4 home pose), with the rows' ``whitening`` (:func:`sensor_whitening`);
+    every other correction stays zero. Gauss-Newton in the scaled unknowns (minimum norm where
+    the data do not determine them): the start of the whole fit, whose sensors' residuals are
+    otherwise hundreds of standard deviations at nominal (an inclinometer's mounting error of
+    0.3 deg is 260 of its 20 urad).
+    """
+    free = np.array([k for k in ps.sensor_index if k not in set(held)], dtype=int)
+    delta = np.zeros(ps.size)
+    if not free.size:
+        return delta
+    cols = ps.sensor_columns[np.isin(ps.sensor_index, free)]
+    for _ in range(SENSOR_STEPS):
+        model = SensorModel(ps.geometry(delta), home, ps.mount(delta))
+        r = np.einsum("nij,nj->ni", whitening, model.readings(P) - readings).reshape(-1)
+        J = (whitening @ model.derivatives(P)[1][:, :, cols]).reshape(len(r), -1) * ps.scales[free]
+        step = np.linalg.lstsq(J, -r, rcond=None)[0] * ps.scales[free]
+        delta[free] += step
+        if np.max(np.abs(step) / ps.scales[free]) < 1e-10:
+            break
+    return delta

@@ -7,7 +7,12 @@ the training set and the fold is predicted by
   training set (a rigid alignment: without it the errors would only show the unknown frames);
 * **after**: the geometry and frames identified on the training set.
 
-Every pose is predicted exactly once, so the errors cover the whole data set.
+When the rows carry a redundant hexapod's extra readings, *after* is the fit with them
+(:func:`~hexapod_model.calibration.identify.identify` uses them), and the same folds are also
+fitted from the six legs alone (``after_without_sensors``): the held-out pose errors of both,
+each pose predicted from its six legs' readings by the geometry and frames of its fit, show
+what the extra equations give. Every pose is predicted exactly once, so the errors cover the
+whole data set.
 """
 
 from __future__ import annotations
@@ -38,12 +43,15 @@ class Validation:
         folds: ``k``.
         fold: (N,) the fold each pose was held out in.
         before, after: (translation mm, rotation deg) errors of each pose, (N,) each.
+        after_without_sensors: the same errors after a fit from the six legs alone, when the
+            rows carry extra readings (else ``None``).
     """
 
     folds: int
     fold: np.ndarray
     before: tuple[np.ndarray, np.ndarray]
     after: tuple[np.ndarray, np.ndarray]
+    after_without_sensors: tuple[np.ndarray, np.ndarray] | None = None
 
 
 def folds_of(n: int, k: int, seed: int = 0) -> np.ndarray:
@@ -79,19 +87,25 @@ def cross_validate(
     _, P, _, _ = solve_nominal(ps, data)
     before = (np.zeros(n), np.zeros(n))
     after = (np.zeros(n), np.zeros(n))
+    both = data.extra > 0 and identify_options.get("sensors", True)
+    six = (np.zeros(n), np.zeros(n)) if both else None
     for f in progress(range(folds), folds, "k-fold validation"):
         test, train = np.flatnonzero(fold == f), np.flatnonzero(fold != f)
         frames = fit_frames(P[train], data.measured[train], noise)
         err = pose_errors(predict(frames[0], P[test], frames[1]), data.measured[test])
         before[0][test], before[1][test] = err
-        result = identify(nominal, data.subset(train), noise, **identify_options)
-        M, ok = result.predict(data.readings[test])
-        if not ok.all():
-            k = int(test[np.flatnonzero(~ok)[0]])
-            raise InputError("measured row", data.line(k), "the geometry calibrated on the other folds cannot solve it")
-        err = pose_errors(M, data.measured[test])
-        after[0][test], after[1][test] = err
-    return Validation(folds, fold, before, after)
+        fits = [(after, identify_options)]
+        if six is not None:
+            fits.append((six, identify_options | {"sensors": False}))
+        for out, options in fits:
+            result = identify(nominal, data.subset(train), noise, **options)
+            M, ok = result.predict(data.readings[test])
+            if not ok.all():
+                k = int(test[np.flatnonzero(~ok)[0]])
+                why = "the geometry calibrated on the other folds cannot solve it"
+                raise InputError("measured row", data.line(k), why)
+            out[0][test], out[1][test] = pose_errors(M, data.measured[test])
+    return Validation(folds, fold, before, after, six)
 
 
 IMPROVEMENT_SIGMAS = 2.0  # standard errors by which the held-out error must drop to call a calibration better

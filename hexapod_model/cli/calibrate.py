@@ -36,6 +36,9 @@ Platform with Modified Cardan Joints ...", is the reference design.
 
 measured.csv: the `hexapod reproduce --data` format: l1..l6 (m, zero at home) and the
 measured pose x,y,z (m), qx,qy,qz,qw of a marker or tool frame in the measuring device's frame.
+A hexapod with extra sensors may add their readings (l7, ... (m), tilt_x, tilt_y (rad), in its
+reading order): they become equations of the fit, their sensors' parameters are identified,
+and the held-out errors are reported with and without them (without: the six-leg fit).
 
 The calibrated geometry is written only when it predicts the held-out poses better than the
 nominal one beyond the uncertainty (mean translation error down by more than 2 standard
@@ -112,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
         sim = simulate(nominal, args.poses, args.seed, noise=noise)
         data = sim.data
     else:
-        data = load_poses(args.measured)
+        data = load_poses(args.measured, nominal)
     options = {"encoder_scale": args.encoder_scale, "hold": tuple(args.hold), "max_sigma": args.max_sigma}
     if sys.stderr.isatty():  # like the progress bars: only on a terminal
         note("calibrate", f"identifying on {len(data.readings)} poses, then {args.folds}-fold validation ...")

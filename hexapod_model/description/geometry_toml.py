@@ -3,6 +3,7 @@
 Per-leg values that all legs share go to the short, hexapod-level form (:func:`compact`), so a
 calibrated file lists per leg only what differs between legs. Numbers are written with
 ``repr`` (the shortest text that reads back to the same float): file -> geometry is exact.
+Extra sensors follow the legs as ``[[measuring_legs]]`` tables and an ``[inclinometer]`` table.
 """
 
 from __future__ import annotations
@@ -48,12 +49,10 @@ def geometry_to_toml(geom: HexapodGeometry, comment: str = "") -> str:
     measuring = data.pop("measuring_legs", [])
     inclinometer = data.pop("inclinometer", None)
     lines += [f"{k} = {_value(v)}" for k, v in data.items()]
+    for name, table in [("[[legs]]", leg) for leg in legs] + [("[[measuring_legs]]", leg) for leg in measuring]:
+        lines += ["", name] + [f"{k} = {_value(v)}" for k, v in table.items()]
     if inclinometer is not None:
         lines += ["", "[inclinometer]"] + [f"{k} = {_value(v)}" for k, v in inclinometer.items()]
-    for leg in legs:
-        lines += ["", "[[legs]]"] + [f"{k} = {_value(v)}" for k, v in leg.items()]
-    for leg in measuring:
-        lines += ["", "[[measuring_legs]]"] + [f"{k} = {_value(v)}" for k, v in leg.items()]
     return "\n".join(lines) + "\n"
 
 

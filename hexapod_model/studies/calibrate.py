@@ -9,6 +9,12 @@ platform (rotation up to 20 deg, 30-100 mm above the plate, +-50 mm sideways). P
 in the +-50 mm / +-25 deg box around home (the test box of Bem, Ude and Nemec 2026) and kept
 when the true hexapod reaches them within its stroke and joint limits. Readings get 10 um
 Gaussian noise, measured poses 0.1 mm per coordinate and 0.05 deg per rotation component.
+
+A geometry with extra sensors (measuring legs, an inclinometer) gets their errors too:
+anchors +-0.5 mm per coordinate, encoder zeros +-1 mm, the inclinometer's mounting rotation
++-0.3 deg per axis; every row carries their readings (after the six legs', in the geometry's
+reading order) and the leg encoders' noise is the geometry's ``encoder_sigma``, the tilts'
+the inclinometer's ``sigma`` (the noise the least-squares solve states).
 """
 
 from __future__ import annotations
@@ -17,7 +23,7 @@ import json
 import math
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -28,16 +34,17 @@ from ..calibration.frames import Noise, pose_errors, predict
 from ..calibration.gauge import regauge
 from ..calibration.identify import Identification, MeasuredPoses, identify
 from ..calibration.parameters import ParameterSet
+from ..calibration.sensors import reading_sigmas
 from ..calibration.validation import Validation, cross_validate
 from ..description.geometry import HexapodGeometry
 from ..description.geometry_toml import save_geometry
 from ..description.urdf_geometry import geometry_of_urdf
 from ..exceptions import InputError
 from ..files import atomic_write_text
-from ..io.tables import open_table
+from ..io.calibration_csv import load_poses as load_poses  # the calibration CSV, read here by the CLI
+from ..io.calibration_csv import save_poses
 from ..kinematics.hexapod import Hexapod, load_hexapod
 from ..lie import exp3
-from .reproduce import DATA_COLUMNS, StudyInput, load_measured, save_measured
 
 Progress = Callable[[Iterable, int, str], Iterable]
 
@@ -87,14 +94,18 @@ def simulate(
     n: int,
     seed: int = 0,
     errors: Errors = Errors(),
-    encoder_noise: float = 10e-6,
+    encoder_noise: float | None = None,
     noise: Noise = Noise(),
     truth: Simulation | None = None,
 ) -> Simulation:
     """Draw a true hexapod, frames and ``n`` reachable poses (see the module doc).
 
     With ``truth``, measure ``n`` new poses of that simulation's hexapod and frames instead.
+    ``encoder_noise``: sigma of each leg reading (m); ``None``: 10 um, or the geometry's
+    ``encoder_sigma`` when it has extra sensors.
     """
+    if encoder_noise is None:
+        encoder_noise = nominal.encoder_sigma if nominal.redundant else 10e-6
     if n < 2:
         raise InputError("poses", n, "need at least 2 poses")
     rng = np.random.default_rng(seed)
@@ -120,6 +131,11 @@ def simulate(
     measured[:, :3, 3] += rng.normal(0.0, noise.position_m, (n, 3))
     measured[:, :3, :3] = exp3(rng.normal(0.0, noise.rotation_rad, (n, 3))) @ measured[:, :3, :3]
     noisy = np.array(readings) + rng.normal(0.0, encoder_noise, (n, 6))
+    if hexa.redundancy is not None:  # the extra sensors' readings follow the six legs'
+        sigmas = reading_sigmas(true_geometry)
+        sigmas[: len(true_geometry.measuring_legs)] = encoder_noise
+        extra = np.array([hexa.redundancy.extra_readings(T) for T in P])
+        noisy = np.hstack([noisy, extra + rng.normal(0.0, 1.0, extra.shape) * sigmas])
     data = MeasuredPoses(noisy, measured, f"simulation (seed {seed}, {n} poses)")
     return Simulation(nominal, true_geometry, T_mb, T_pm, data, P)
 
@@ -128,9 +144,11 @@ def _draw_truth(
     nominal: HexapodGeometry, rng: np.random.Generator, errors: Errors
 ) -> tuple[HexapodGeometry, np.ndarray, np.ndarray]:
     """A true geometry (nominal + uniform errors) and true frames (see the module doc)."""
-    ps = ParameterSet(nominal, encoder_scale=errors.encoder_scale > 0)
+    ps = ParameterSet(nominal, encoder_scale=errors.encoder_scale > 0, sensors=True)
     half = {"centre": errors.centre_m, "axis": errors.axis_rad, "offset": errors.offset_m}
     half |= {"encoder_zero": errors.encoder_zero_m, "encoder_scale": errors.encoder_scale}
+    half |= {"measuring_base": errors.centre_m, "measuring_platform": errors.centre_m, "mount": errors.axis_rad}
+    half |= {"measuring_zero": errors.encoder_zero_m, "measuring_scale": errors.encoder_scale}
     width = np.array([half[next(k for k in half if k in p.kind)] for p in ps.parameters])
     delta = rng.uniform(-1, 1, ps.size) * width
     nominal_values = ps.nominal_values()
@@ -141,18 +159,6 @@ def _draw_truth(
     T_pm[:3, :3] = _random_rotation(rng, 20.0)
     T_pm[:3, 3] = [*rng.uniform(-0.05, 0.05, 2), rng.uniform(0.03, 0.1)]
     return ps.geometry(delta, name=f"{nominal.name}_true"), T_mb, T_pm
-
-
-def load_poses(path: str) -> MeasuredPoses:
-    """A measured CSV (the ``hexapod reproduce --data`` format) as :class:`MeasuredPoses`.
-
-    Rows are named by their file line in messages; every row is checked by
-    :func:`~hexapod_model.studies.reproduce.load_measured` (the first bad one is an error).
-    """
-    data = load_measured(path)
-    with open_table(path, DATA_COLUMNS) as table:
-        lines = tuple(int(line) for line in table.read(DATA_COLUMNS).lines)
-    return MeasuredPoses(data.readings, data.reference, str(path), lines)
 
 
 @dataclass(frozen=True)
@@ -195,9 +201,11 @@ def run_calibration(
     seconds = time.perf_counter() - start
     true_errors = truth = None
     if simulation is not None:
-        # the true geometry and frames given the same (noisy) readings: the floor any model can reach
-        hexa = Hexapod.from_geometry(simulation.true_geometry)
-        P = np.array([hexa.forward(r).pose for r in data.readings])
+        # the true geometry and frames given the same (noisy) readings: the floor any model can reach,
+        # solved from the six legs as the validation's predictions are (no consistency test to fail)
+        six = replace(simulation.true_geometry, measuring_legs=(), inclinometer=None)
+        hexa = Hexapod.from_geometry(six)
+        P = np.array([hexa.forward(r[:6]).pose for r in data.readings])
         true_errors = pose_errors(predict(simulation.measuring_frame, P, simulation.marker_frame), data.measured)
         geom, _, _ = regauge(
             ident.parameters, simulation.true_geometry, simulation.measuring_frame, simulation.marker_frame
@@ -217,12 +225,12 @@ def nominal_geometry(spec: str) -> HexapodGeometry:
 def save_simulation(sim: Simulation, folder: str | Path) -> list[Path]:
     """Write a simulation's data and its truth into ``folder``.
 
-    ``simulated_measured.csv`` (the ``--data`` format), ``true_geometry.toml`` and
-    ``true_frames.json``.
+    ``simulated_measured.csv`` (:mod:`hexapod_model.io.calibration_csv`: the ``--data``
+    format, with the extra sensors' columns), ``true_geometry.toml`` and ``true_frames.json``.
     """
     folder = Path(folder)
-    data = StudyInput(sim.data.readings, sim.data.measured, sim.data.source)
-    paths = [save_measured(folder / "simulated_measured.csv", data)]
+    names = sim.nominal.reading_names[: sim.data.readings.shape[1]]
+    paths = [save_poses(folder / "simulated_measured.csv", sim.data, names)]
     paths.append(save_geometry(sim.true_geometry, folder / "true_geometry.toml", "simulated true geometry"))
     frames = {"measuring_frame": sim.measuring_frame.tolist(), "marker_frame": sim.marker_frame.tolist()}
     paths.append(atomic_write_text(folder / "true_frames.json", json.dumps(frames, indent=2) + "\n"))

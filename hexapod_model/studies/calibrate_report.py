@@ -8,7 +8,11 @@ JSON keys (scripts rely on them): ``before``, ``after`` and, for a simulation,
 ``null`` for a parameter held at nominal). Also: ``poses``, ``validation``,
 ``identifiability``, ``decision`` (whether the calibrated geometry predicts held-out poses
 better than nominal beyond the uncertainty, both figures, and whether the file was written)
-and, for a simulation, ``truth``.
+and, for a simulation, ``truth``. For a geometry with extra sensors: ``extra_sensors``
+(their reading names, whether their readings were equations of the fit, the RMS of their
+whitened residuals) and, when they were, ``after_without_extra_sensors`` (the held-out errors
+of the same folds fitted from the six legs alone, :data:`~hexapod_model.calibration.frames.ERROR_KEYS`)
+beside ``after`` (the fit with them).
 """
 
 from __future__ import annotations
@@ -50,8 +54,16 @@ def report_json(result: CalibrationResult, written: bool | None = None) -> dict:
         "before": error_stats(val.before),
         "after": error_stats(val.after),
     }
+    if val.after_without_sensors is not None:
+        out["after_without_extra_sensors"] = error_stats(val.after_without_sensors)
     if result.true_errors is not None:
         out["true_geometry"] = error_stats(result.true_errors)
+    if ps.nominal.redundant:
+        out["extra_sensors"] = {
+            "readings": list(ps.nominal.reading_names[6:]),
+            "used": ident.sensors,
+            "residual_rms_sigmas": ident.sensor_rms,
+        }
     out["measuring_frame"] = ident.measuring_frame.tolist()
     out["marker_frame"] = ident.marker_frame.tolist()
     out["parameters"] = [
@@ -108,13 +120,26 @@ def format_report(result: CalibrationResult, noise: Noise, details: bool = False
         f"{'mean':>9s}{'std':>9s}{'max':>9s}",
         f"{'':34s}{'[mm]':>27s}  |{'[deg]':>27s}",
         _row("before: nominal, frames fitted", error_stats(val.before)),
-        _row("after: calibrated", error_stats(val.after)),
     ]
+    if val.after_without_sensors is None:
+        lines.append(_row("after: calibrated", error_stats(val.after)))
+    else:
+        lines.append(_row("after: calibrated, extra readings", error_stats(val.after)))
+        lines.append(_row("after: calibrated, six legs only", error_stats(val.after_without_sensors)))
     if result.true_errors is not None:
         lines.append(_row("true geometry (same data)", error_stats(result.true_errors)))
+    if ps.nominal.redundant:
+        extra = ", ".join(ps.nominal.reading_names[6:])
+        lines.append(
+            f"extra sensors ({extra}): their readings are equations of the fit (residual RMS "
+            f"{ident.sensor_rms:.3f} of their standard deviations)"
+            if ident.sensors and ident.sensor_rms is not None
+            else f"extra sensors ({extra}): no readings in the data; identified from the six legs, sensors kept nominal"
+        )
     held = int((~ident.identifiable).sum())
+    kind = "joint and sensor" if ident.sensors else "joint"
     lines.append(
-        f"identified {ps.size - held} of {ps.size} joint parameters and both frames; {held} held at nominal "
+        f"identified {ps.size - held} of {ps.size} {kind} parameters and both frames; {held} held at nominal "
         "(combinations the data cannot determine to their tolerance):"
     )
     shown = ident.combinations if details else ident.combinations[:6]
