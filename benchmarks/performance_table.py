@@ -1,10 +1,11 @@
 """Regenerate docs/performance.md: the benchmark scripts' quick runs as one table.
 
-    python benchmarks/performance_table.py [-o docs/performance.md] [--full]
+    python benchmarks/performance_table.py [-o docs/performance.md] [--full] [--only SCRIPT ...]
 
 Runs each benchmark script below in a fresh process with its quick settings (``--full``: the
 scripts' defaults, many minutes), reads the JSON it writes and puts one row per figure into a
-table: figure, value, the command that measured it, the machine and the date. Nothing is
+table: figure, value, the command that measured it, the machine and the date. ``--only`` reruns
+the named scripts and keeps the other scripts' rows (their load and date with them) from the page. Nothing is
 typed in by hand; rerun it after a change that moves a figure. The figures are those of the
 machine that ran it, under its load at the time (the ``load`` column: the 1-minute load average
 before each command).
@@ -98,6 +99,14 @@ def startup_rows(data: dict) -> list[tuple[str, str]]:
             f"(`import pinocchio, numpy`: {base['wall_s']:.2f} s, {base['peak_mb']:.0f} MB)",
         )
     ]
+    if "urdf" in data:
+        urdf = data["urdf"]
+        rows.append(
+            (
+                f"`{urdf['label']} -o FILE` (imports only, compiles nothing), CPU against `import pinocchio, numpy`",
+                f"{urdf['cpu_s']:.2f} s vs {base['cpu_s']:.2f} s ({urdf['cpu_s'] / base['cpu_s']:.2f}x)",
+            )
+        )
     if "cold" in data:
         c = data["cold"]
         rows.append(
@@ -205,12 +214,34 @@ def machine() -> str:
     return f"{cpu}, {os.cpu_count()} cores{mem}, Python {platform.python_version()}"
 
 
-def measure(full: bool) -> list[tuple[str, str, str, str, str]]:
-    """Run every benchmark; rows of (figure, value, command, load, date)."""
+def page_rows(text: str) -> list[tuple[str, str, str, str, str]]:
+    """The rows (figure, value, command, load, date) of a page this script wrote."""
     rows = []
+    for line in text.splitlines():
+        cells = line.removeprefix("| ").removesuffix(" |").split(" | ")
+        if line.startswith("| ") and len(cells) == 5 and cells[2].startswith("`python benchmarks/"):
+            rows.append((cells[0], cells[1], cells[2], cells[3], cells[4]))
+    return rows
+
+
+def measure(full: bool, only: set[str] | None = None, page_text: str = "") -> list[tuple[str, str, str, str, str]]:
+    """Run every benchmark, or those named in ``only`` keeping the others' rows of ``page_text``.
+
+    Returns:
+        Rows of (figure, value, command, load, date), in the order of :data:`BENCHMARKS`.
+    """
+    rows = []
+    kept = page_rows(page_text)
     with tempfile.TemporaryDirectory() as tmp:
         for quick, long, parse in BENCHMARKS:
             args = long if full else quick
+            command = "`python benchmarks/" + " ".join(shlex.quote(a) for a in args) + "`"
+            if only is not None and args[0] not in only:
+                old = [r for r in kept if r[2] == command]
+                if not old:
+                    raise SystemExit(f"the page has no rows of {command}: name {args[0]} in --only too")
+                rows += old
+                continue
             out = Path(tmp) / "out.json"
             load = f"{os.getloadavg()[0]:.1f}"
             date = datetime.now(UTC).strftime("%Y-%m-%d")
@@ -220,8 +251,7 @@ def measure(full: bool) -> list[tuple[str, str, str, str, str]]:
                 check=True,
                 stdout=subprocess.DEVNULL,
             )
-            command = "python benchmarks/" + " ".join(shlex.quote(a) for a in args)
-            rows += [(f, v, f"`{command}`", load, date) for f, v in parse(json.loads(out.read_text()))]
+            rows += [(f, v, command, load, date) for f, v in parse(json.loads(out.read_text()))]
     return rows
 
 
@@ -248,8 +278,22 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("-o", "--output", type=Path, default=ROOT / "docs" / "performance.md")
     ap.add_argument("--full", action="store_true", help="the scripts' default settings (many minutes)")
+    ap.add_argument(
+        "--only",
+        nargs="+",
+        metavar="SCRIPT",
+        help="rerun these scripts only (e.g. startup.py); the others' rows are kept from the page as they are",
+    )
     args = ap.parse_args(argv)
-    text = page(measure(args.full), machine())
+    only = None
+    if args.only:
+        if not args.output.is_file():
+            ap.error(f"--only: {args.output} does not exist; run every script")
+        only = set(args.only)
+        unknown = sorted(only - {quick[0] for quick, _, _ in BENCHMARKS})
+        if unknown:
+            ap.error(f"--only {' '.join(unknown)}: not a script of the table")
+    text = page(measure(args.full, only, args.output.read_text() if only else ""), machine())
     tmp = args.output.with_suffix(".tmp")
     tmp.write_text(text)
     tmp.replace(args.output)

@@ -1,7 +1,10 @@
 """Start-up cost of a ``hexapod`` process against ``python -c "import pinocchio, numpy"``.
 
-Runs the two commands alternately in fresh processes and prints, per command, the median wall
-time, CPU time (user + sys, from ``os.wait4``) and the largest peak RSS; ``--cold`` also runs
+Runs the commands alternately in fresh processes: the baseline, the command (default ``hexapod fk``
+on the example's rows) and ``hexapod urdf reference -o FILE`` (which compiles nothing: its cost is
+what it imports; target: at most 3x the baseline's CPU), and prints, per command, the median wall
+time, CPU time (user + sys, from ``os.wait4``), its ratio to the baseline's and the largest peak
+RSS; ``--cold`` also runs
 the command once with an empty numba cache (a temporary ``NUMBA_CACHE_DIR``: the first run after
 installation, compiling every kernel it calls) and, each in a fresh process with an empty cache,
 the CPU time of the first compiled solve (``Hexapod.from_preset("reference")``, then one
@@ -31,6 +34,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 BASELINE = [sys.executable, "-c", "import pinocchio, numpy"]
 COMMAND = [sys.executable, "-m", "hexapod_model", "fk", "reference", str(ROOT / "docs/examples/lengths.csv")]
+#: writing a URDF (the output file is appended), and its target: CPU at most this many times the baseline's
+URDF = [sys.executable, "-m", "hexapod_model", "urdf", "reference", "-o"]
+URDF_TARGET = 3.0
 FIRST_SOLVES = """
 import sys, time
 import numpy as np, numba
@@ -172,19 +178,27 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     command = args.command or COMMAND
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
-    run(command, env)  # the numba cache is warm from here on
-    results: dict[str, list[tuple[float, float, float]]] = {"baseline": [], "command": []}
-    for _ in range(args.runs):  # alternate: the machine's load affects both alike
-        results["baseline"].append(run(BASELINE, env))
-        results["command"].append(run(command, env))
+    with tempfile.TemporaryDirectory(prefix="startup-") as tmp:
+        commands = {"baseline": BASELINE, "command": command, "urdf": [*URDF, str(Path(tmp) / "reference.urdf")]}
+        run(command, env)  # the numba cache is warm from here on
+        results: dict[str, list[tuple[float, float, float]]] = {name: [] for name in commands}
+        for _ in range(args.runs):  # alternate: the machine's load affects all alike
+            for name, cmd in commands.items():
+                results[name].append(run(cmd, env))
     base = [median([r[i] for r in results["baseline"]]) for i in range(2)]
     print(f"{'':34s}{'wall s':>9s}{'CPU s':>9s}{'peak MB':>9s}   (median of {args.runs}, alternating)")
     report: dict = {}
-    for name, label in (("baseline", "python -c 'import pinocchio, numpy'"), ("command", " ".join(command[2:]))):
+    labels = {"baseline": "python -c 'import pinocchio, numpy'", "command": " ".join(command[2:])}
+    labels["urdf"] = " ".join(URDF[2:-1])
+    for name, label in labels.items():
         wall, cpu = (median([r[i] for r in results[name]]) for i in range(2))
         rss = max(r[2] for r in results[name])
-        print(f"{label[:33]:34s}{wall:9.3f}{cpu:9.3f}{rss:9.0f}   x{wall / base[0]:.2f} wall, x{cpu / base[1]:.2f} CPU")
-        report[name] = {"label": label, "wall_s": wall, "cpu_s": cpu, "peak_mb": rss}
+        target = f"   (target: x{URDF_TARGET:.0f} CPU)" if name == "urdf" else ""
+        print(
+            f"{label[:33]:34s}{wall:9.3f}{cpu:9.3f}{rss:9.0f}   x{wall / base[0]:.2f} wall, x{cpu / base[1]:.2f} CPU"
+            + target
+        )
+        report[name] = {"label": label, "wall_s": wall, "cpu_s": cpu, "peak_mb": rss, "cpu_ratio": cpu / base[1]}
     if args.cold:
         cache = tempfile.mkdtemp(prefix="numba-cold-")
         try:

@@ -322,8 +322,25 @@ def test_startup_benchmark_runs(tmp_path):
     )
     assert out.returncode == 0, out.stderr
     assert "peak MB" in out.stdout and "x1.00 wall" in out.stdout  # the baseline row
+    assert "hexapod_model urdf reference" in out.stdout and "(target: x3 CPU)" in out.stdout
     data = json.loads((tmp_path / "s.json").read_text())
     assert data["baseline"]["peak_mb"] > 0 and data["command"]["wall_s"] > 0 and "cold" not in data
+    assert data["urdf"]["cpu_ratio"] == data["urdf"]["cpu_s"] / data["baseline"]["cpu_s"] > 0
+    rows = dict(_performance_table().startup_rows(data))
+    urdf = "`hexapod_model urdf reference -o FILE` (imports only, compiles nothing)"
+    assert rows[f"{urdf}, CPU against `import pinocchio, numpy`"].endswith(f"({data['urdf']['cpu_ratio']:.2f}x)")
+
+
+def test_performance_table_only_keeps_the_other_scripts_rows():
+    """``--only`` with no script to rerun gives back the page's rows; rows of another command are refused."""
+    table = _performance_table()
+    text = (ROOT / "docs" / "performance.md").read_text()
+    rows = table.page_rows(text)
+    assert len(rows) > len(table.BENCHMARKS) and table.page_rows(table.page(rows, "here")) == rows
+    assert table.measure(False, set(), text) == rows
+    other = text.replace("`python benchmarks/startup.py --runs 3 --cold`", "`python benchmarks/startup.py --runs 9`")
+    with pytest.raises(SystemExit, match="no rows of `python benchmarks/startup.py --runs 3 --cold`"):
+        table.measure(False, set(), other)
 
 
 def test_service_benchmark_runs():
