@@ -75,6 +75,7 @@ MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma f
 BATCH_MEMORY = 64  # sets after the last two sharing a stamp during which records stay `batched_stamps`
 REPEAT = 0.25  # periods: a frame equal to its leg's last one within this is a repeat (a leg at rest sends equal ones)
 INTERVALS = 255  # frame intervals kept for the period: about 40 sets, so lost sets cannot stretch it
+LOST_BETWEEN = 1.5  # periods: a longer interval between two frames of a leg spans lost sets (counted as periods)
 
 
 class FixtureCycle:
@@ -311,6 +312,8 @@ class FixtureCycle:
             self._bad[leg], self._readings[leg] = "bad_frame", math.nan
         dt = t - self._t[leg]
         if 0.0 < dt <= self._staleness:  # the lower quartile ignores missed frames (up to 3 in 4 intervals)
+            if dt > LOST_BETWEEN * self._period:  # sets were lost between: one period of them (False for NaN),
+                dt /= round(dt / self._period)  # so that losing most sets (a busy sender) cannot double the period
             if len(self._intervals) < INTERVALS:
                 self._intervals.append(dt)
             else:
