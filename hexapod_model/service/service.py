@@ -16,6 +16,7 @@ import gc
 import logging
 import threading
 import time
+from collections import deque
 from collections.abc import Callable, Sequence
 from functools import partial
 from typing import TYPE_CHECKING
@@ -47,6 +48,7 @@ if TYPE_CHECKING:
     from .http.server import HttpServer
 
 log = logging.getLogger(__name__)
+TRANSIT_WINDOW = 1.0  # s: silence is judged allowing for the longest wait of a frame over this long
 
 
 class FixtureService:
@@ -356,6 +358,10 @@ class FixtureService:
         tick = min(0.05, max(0.002, min(f.staleness for f in self.config.fixtures) / 2))
         routes, recv, last_check = self._routes, self._bus.recv, time.time()
         behind = 0.0  # s, the most a frame waited between its stamp and its handling since the last check
+        # the most a frame waited lately: a quiet bus is quiet up to the wall clock minus this (frames stamped
+        # earlier may still be on their way: a gateway's delivery, a sender or this thread running late)
+        waits: deque[float] = deque(maxlen=max(1, round(TRANSIT_WINDOW / tick)))
+        transit = 0.0
         while not self._stop.is_set():
             asked = time.time()
             try:
@@ -365,7 +371,7 @@ class FixtureService:
                 self._stop.wait(tick)
                 continue
             if msg is None:  # nothing queued until the wait ended: quiet until then, not until this thread ran
-                clock = min(time.time(), asked + tick)  # (a stall after the wait is the service's, not the bus's)
+                clock = min(time.time(), asked + tick) - transit  # (a stall after the wait is the service's)
             else:
                 now = time.time()
                 stamp = msg.timestamp or now  # the bus's own clock: a backlog is not silence
@@ -383,6 +389,8 @@ class FixtureService:
             if clock - last_check >= tick:
                 last_check = clock
                 self.lag, behind = behind, 0.0  # the most a frame waited since the last check: the service's delay
+                waits.append(self.lag)
+                transit = max(waits)
                 for cycle in self.cycles.values():
                     rec = cycle.check_silence(clock)
                     if rec is not None:

@@ -12,6 +12,7 @@ import numpy as np
 
 GAP_INSTANTS = 3  # sampling instants without a set after which a leg's trend restarts
 STEP_SIGMAS = 5.0  # a step estimate beyond this many of its sigmas is a step (StepDetector)
+LOST_SPAN = 2  # instants: a fit window longer than its sets' own span by more (sets lost in it) fits a quintic
 
 
 class StepDetector:
@@ -20,13 +21,14 @@ class StepDetector:
     The tracker flags a reading far from its motion model (``jump``) but, for a small step, may
     take the new level as motion from the next set on. So when it flags a jump at a sampling
     instant, each named leg's readings around it, ``before`` instants before and ``after``
-    after, are fitted three times: a cubic in time plus a *step* from that instant on, a cubic
-    plus a *spike* at it, and a quartic (*smooth* motion, as many parameters). A leg is stepped
-    when the step model fits better than both, its step exceeds :data:`STEP_SIGMAS` of its own
-    uncertainty (the reading noise through the fit, or the step fit's residual where it is larger:
-    motion rougher than a cubic over the window, as at a slow sampling rate) and a quarter of the
-    largest step found. Until then
-    the caller keeps the records off ``ok``. The trend restarts after a gap of more than
+    after, are fitted twice: a cubic in time plus a *step* from that instant on, and a cubic plus
+    a *spike* at it (a quintic where sets lost in the window stretch it by more than
+    :data:`LOST_SPAN` instants: over a longer span a cubic does not follow a plate that speeds up
+    or slows down, and the step took up the difference). A leg is stepped when the step model
+    fits better, its step exceeds :data:`STEP_SIGMAS` of its own uncertainty (the reading noise
+    through the fit, or the scatter of the leg's readings about the step model where that is
+    larger) and a quarter of the largest step found. Until then the caller keeps the records off
+    ``ok``. The trend restarts after a gap of more than
     :data:`GAP_INSTANTS` instants. A step below the tracker's jump threshold (about 5 sigma of
     its prediction), one within a gap, and a creep slower than the noise are not seen.
 
@@ -81,25 +83,23 @@ class StepDetector:
         sets = self._history + self._post
         n = np.array([i for i, _ in sets], dtype=float) - k
         R = np.array([r for _, r in sets])
-        base = np.column_stack([np.ones_like(n), n, n**2, n**3])
+        # a cubic follows the motion over the window's own span; one that lost sets stretched, a quintic
+        degree = 3 if n[-1] - n[0] <= self.before + self.after + LOST_SPAN else 5
+        base = np.column_stack([n**p for p in range(degree + 1)])
         fits = {}
-        scale = max(float(np.abs(n).max()), 1.0)  # the quartic's column in units of the window
-        for name, extra in (("step", n >= 0), ("spike", n == 0), ("smooth", (n / scale) ** 4)):
+        for name, extra in (("step", n >= 0), ("spike", n == 0)):
             V = np.column_stack([base, extra.astype(float)])
             coef, *_ = np.linalg.lstsq(V, R, rcond=None)
             rss = ((R - V @ coef) ** 2).sum(axis=0)
-            gain = math.sqrt(float(np.linalg.inv(V.T @ V)[4, 4]))
-            fits[name] = (coef[4], rss, gain)
-        step, rss_step, gain = fits["step"]
-        rss_spike, rss_smooth = fits["spike"][1], fits["smooth"][1]
-        # the step's sigma: the reading noise, or the step fit's own residual where the motion is
-        # rougher than a cubic over the window (a slow sampling rate): never smaller than the noise
-        dof = max(len(sets) - 5, 1)
-        sd = gain * np.maximum(self.noise, np.sqrt(rss_step / dof))
-        found = [
-            j
-            for j in legs
-            if abs(step[j]) > STEP_SIGMAS * sd[j] and rss_step[j] < rss_spike[j] and rss_step[j] < rss_smooth[j]
-        ]
+            sd = self.noise * math.sqrt(float(np.linalg.inv(V.T @ V)[-1, -1]))
+            fits[name] = (coef[-1], rss, sd)
+        step, rss_step, sd = fits["step"]
+        rss_spike = fits["spike"][1]
+        # a leg's readings the step model leaves farther from it than the noise (a motion the polynomial does
+        # not follow) judge its step by that scatter, not by the noise
+        dof = len(sets) - degree - 2
+        scatter = np.sqrt(rss_step / dof) / self.noise if dof > 0 else np.ones(len(step))
+        sds = sd * np.maximum(1.0, scatter)
+        found = [j for j in legs if abs(step[j]) > STEP_SIGMAS * sds[j] and rss_step[j] < rss_spike[j]]
         largest = max((abs(step[j]) for j in found), default=0.0)
         return tuple(j for j in found if abs(step[j]) >= largest / 4)  # not a leg the largest step dragged along

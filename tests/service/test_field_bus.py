@@ -53,6 +53,18 @@ def test_thirty_percent_of_sets_lost_at_random_latch_nothing(tmp_path, seed):
     check_ok_poses(out)
 
 
+def test_most_sets_lost_keep_the_frame_period_and_latch_nothing(tmp_path):
+    # a sender that loses most sets (85 %: a busy machine): the intervals between a leg's frames are mostly
+    # two or more periods, which must not become the period (it merged two instants into one set, a duplicate
+    # frame on every leg, and numbered the instants wrong, a step on the moving legs)
+    lost = np.random.default_rng(3).random(1500) < 0.85
+    cycle, out = deliver(tmp_path, 1500, lambda k, frames: [] if lost[k] and k > 20 else frames, seed=3)
+    assert cycle.fault is None, cycle.fault
+    assert not any(rec.status == "duplicate_frame" for _, rec in out)
+    assert cycle.counters["duplicate_frames"] == 0
+    check_ok_poses(out)
+
+
 def test_two_consecutive_one_frame_glitches_on_one_leg_latch_nothing(tmp_path):
     faults = [
         {"kind": "spike", "leg": 4, "start": 1.0, "size": 0.002},

@@ -39,13 +39,17 @@ def serve(tmp_path, faults, seconds=4.0):
     [
         {"kind": "lost_sets", "probability": 0.3, "start": 0.3, "duration": 60},
         {"kind": "repeated_frames", "sets": 10, "start": 0.3, "duration": 60},
+        [  # two consecutive one-frame glitches on one leg
+            {"kind": "spike", "leg": 4, "start": 1.0, "size": 0.002},
+            {"kind": "spike", "leg": 4, "start": 1.01, "size": -0.0015},
+        ],
     ],
 )
-def test_lost_sets_and_repeated_frames_latch_nothing(tmp_path, fault):
-    records, cycle = serve(tmp_path, [fault])
+def test_lost_sets_repeated_frames_and_glitches_latch_nothing(tmp_path, fault):
+    records, cycle = serve(tmp_path, fault if isinstance(fault, list) else [fault])
     assert cycle.fault is None, cycle.fault
     assert sum(r.status == "ok" for r in records) > 150
-    if fault["kind"] == "repeated_frames":
+    if isinstance(fault, dict) and fault["kind"] == "repeated_frames":
         assert cycle.counters["repeated_frames"] > 9 * 6 * 150
 
 

@@ -33,6 +33,11 @@ class AheadCheck:
         #: frames dropped for running ahead, since the start
         self.frames = 0
 
+    @property
+    def held_stamp(self) -> float:
+        """The stamp (s) of the frame held, -inf when none is."""
+        return -math.inf if self._held is None else self._held[2]
+
     def repeats(self, leg: int, data: bytes | bytearray, t: float, window: float) -> bool:
         """Whether the frame repeats the held one (same leg and payload, the same stamp or within ``window`` s)."""
         held = self._held

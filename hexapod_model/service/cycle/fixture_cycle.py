@@ -75,6 +75,7 @@ MOVED_SIGMAS = 5.0  # moved_while_off: first pose farther than this many sigma f
 BATCH_MEMORY = 64  # sets after the last two sharing a stamp during which records stay `batched_stamps`
 REPEAT = 0.25  # periods: a frame equal to its leg's last one within this is a repeat (a leg at rest sends equal ones)
 INTERVALS = 255  # frame intervals kept for the period: about 40 sets, so lost sets cannot stretch it
+LOST_BETWEEN = 1.5  # periods: a longer interval between two frames of a leg spans lost sets (counted as periods)
 
 
 class FixtureCycle:
@@ -112,6 +113,8 @@ class FixtureCycle:
         self._lo, self._hi = stroke[:, 0].tolist(), stroke[:, 1].tolist()
         self._home = [leg.home_count for leg in cfg.legs]
         self._t = [-math.inf] * n  # receipt time of each channel's newest frame (lists: faster than arrays here)
+        self._heard = [-math.inf] * n  # stamp of each channel's newest frame of any kind (taken or dropped)
+        self._floor = -math.inf  # t of the last silent_leg record of check_silence: older frames come too late
         self._readings = [math.nan] * len(hexa.reading_names)  # the legs', then tilt_x and tilt_y
         self._data: list[bytes | bytearray] = [b""] * n  # each channel's newest frame (a repeat of it is dropped)
         self._counts = [0] * n
@@ -196,6 +199,8 @@ class FixtureCycle:
         instants under one stamp are buffered and split (:mod:`~hexapod_model.service.cycle.burst`):
         their records come one per call, after the burst.
         """
+        if t > self._heard[leg]:
+            self._heard[leg] = t
         if self._bursts.engaged or self._bursts.shares_instant(leg, data, t):
             return self._burst_frame(leg, data, t)
         record = self._frame(leg, data, t)
@@ -216,6 +221,10 @@ class FixtureCycle:
                 return None
             self._clock_went_back(t)
         self._late_run = 0
+        if t < self._floor:  # of an instant a silent_leg record covered: late (record times never run backwards)
+            self.counters["late_frames"] += 1
+            self._late.add(leg)
+            return None
         since, window = t - self._t[leg], REPEAT * self._period  # a repeat comes at once, not a period later
         if (since == 0.0 or since <= window) and data == self._data[leg] or self._ahead.repeats(leg, data, t, window):
             self.counters["repeated_frames"] += 1  # the same frame again (a gateway's repeat)
@@ -311,6 +320,8 @@ class FixtureCycle:
             self._bad[leg], self._readings[leg] = "bad_frame", math.nan
         dt = t - self._t[leg]
         if 0.0 < dt <= self._staleness:  # the lower quartile ignores missed frames (up to 3 in 4 intervals)
+            if dt > LOST_BETWEEN * self._period:  # sets were lost between: one period of them (False for NaN),
+                dt /= round(dt / self._period)  # so that losing most sets (a busy sender) cannot double the period
             if len(self._intervals) < INTERVALS:
                 self._intervals.append(dt)
             else:
@@ -349,6 +360,7 @@ class FixtureCycle:
         back = self._t_newest - t
         log.warning("fixture %s: frame times went back %.3g s: following the bus clock", self.cfg.name, back)
         self._t_newest, self._t_set, self._t = t, math.nan, [min(tk, t) for tk in self._t]
+        self._heard, self._floor = [min(tk, t) for tk in self._heard], -math.inf
         self._fresh, self._n_fresh = [False] * self._n, 0
         self._ahead.clear()
         self._failed.clear()
@@ -391,17 +403,31 @@ class FixtureCycle:
     def check_silence(self, now: float) -> PoseRecord | None:
         """Publish ``silent_leg`` when nothing was published for ``staleness`` and a leg is silent.
 
-        A burst still buffered ``staleness`` after its stamp is judged now (the gateway sent no more).
+        ``now`` (s) is the bus's time. A leg is silent when no frame of it came for ``staleness``
+        (one dropped as ahead, late or repeated counts: it is heard). While a set is being
+        collected, or a frame is held (:mod:`~hexapod_model.service.cycle.ahead`), within
+        ``staleness`` of ``now``, frames flow: that set's record names what is missing. Frames
+        older than a published ``silent_leg`` record are late from then on, so record times never
+        run backwards; the unfinished set it ends is counted incomplete. A burst still buffered
+        ``staleness`` after its stamp is judged now (the gateway sent no more).
         """
-        if self._bursts.frames and now - self._bursts.stamp > self.cfg.staleness:
+        staleness = self.cfg.staleness
+        if self._bursts.frames and now - self._bursts.stamp > staleness:
             self._close_burst(self._bursts.stamp)
         if self._pending:
             return self._pending.popleft()
-        if now - self.last.t <= self.cfg.staleness:
+        if now - self.last.t <= staleness:
             return None
-        silent = [k for k in range(self._n) if now - self._t[k] > self.cfg.staleness]
+        if (self._n_fresh and now - self._t_first <= staleness) or now - self._ahead.held_stamp <= staleness:
+            return None
+        silent = [k for k in range(self._n) if now - self._heard[k] > staleness]
         if not silent:
             return None
+        self._floor = now
+        if self._n_fresh:
+            self._fresh, self._n_fresh = [False] * self._n, 0
+            self._lost += 1
+            self.counters["incomplete_sets"] += 1
         return self._failure(now, "silent_leg", [f"silent:{self._names[k]}" for k in silent])
 
     def lock_stored(self, episode: int, event: LockEvent) -> None:
