@@ -118,6 +118,17 @@ def test_the_bridge_publishes_no_pose_of_an_inconsistent_set_and_its_test_on_dia
     first = next(s for s in statuses if s["status"] == "ok")
     assert first["consistency"] == "passed" and first["level"] == 0
     assert json.loads(first["consistency_readings"]) == list(hexa.reading_names) and first["consistency_dof"] == "2"
+    # the set's own statistic and the extra readings' values (rad), as the records carry them
+    by_t = {rec.t: rec for rec in recs}
+    for s in statuses:
+        rec = by_t[float(s["t"])]
+        if rec.consistency is not None:
+            assert float(s["consistency_chi2"]) == rec.consistency["chi2"]
+            assert (float(s["consistency_chi2"]) > float(s["consistency_chi2_bound"])) == (s["consistency"] == "failed")
+        for name in ("tilt_x", "tilt_y"):
+            value = (rec.extra_readings or {}).get(name)
+            assert s[f"reading_{name}_rad"] == ("" if value is None else repr(float(value)))
+    assert any(s["consistency_chi2"] for s in failed) and all(s["reading_tilt_x_rad"] for s in failed)
 
 
 def test_the_bag_of_a_redundant_fixture_carries_its_test(records, tmp_path):

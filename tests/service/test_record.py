@@ -43,7 +43,8 @@ JSON = (
     '"singularity_margin": 0.95, "load": {"leg_forces_N": [10.5, -3.25, 0.0, 7.0, -1.0, 2.5], '
     '"largest_leg_force_N": 10.5, "brake_capacity_N": 400.0, "margin_N": 389.5}, "pose_in_robot": {"pose": '
     '{"x": 0.8, "y": -0.3, "z": 0.43, "qx": 0.0, "qy": 0.0, "qz": 0.7071067811865476, "qw": 0.7071067811865476, '
-    '"roll": 0.0, "pitch": 0.0, "yaw": 90.0}, "sigma": {"translation_mm": 0.031, "rotation_deg": 0.006}}}'
+    '"roll": 0.0, "pitch": 0.0, "yaw": 90.0}, "sigma": {"translation_mm": 0.031, "rotation_deg": 0.006}}, '
+    '"extra_readings": null, "consistency": null}'
 )
 
 
@@ -56,6 +57,20 @@ def test_a_record_round_trips_through_its_json_object_and_text():
     back = PoseRecord.from_dict(json.loads(RECORD.to_json()))
     assert back.to_dict() == RECORD.to_dict() and back.to_json() == JSON
     assert back.transform is None and back.q is None  # the 4x4 pose and q are not in the JSON
+
+
+def test_a_redundant_fixtures_record_carries_its_extra_readings_and_its_test():
+    test = {"chi2": 3.25, "bound": 13.8155, "dof": 2, "alpha": 0.001}
+    rec = RECORD._replace(extra_readings={"tilt_x": 0.0125, "tilt_y": None}, consistency=test)
+    body = json.loads(rec.to_json())
+    assert body["extra_readings"] == {"tilt_x": 0.0125, "tilt_y": None} and body["consistency"] == test
+    assert PoseRecord.from_dict(body).to_dict() == rec.to_dict()
+
+
+def test_a_record_written_before_the_extra_readings_reads_back_without_them():
+    old = {k: v for k, v in json.loads(JSON).items() if k not in ("extra_readings", "consistency")}
+    back = PoseRecord.from_dict(old)
+    assert back.extra_readings is None and back.consistency is None and back.to_json() == JSON
 
 
 def test_a_nan_is_never_sent_as_json():

@@ -14,7 +14,7 @@ from hexapod_model.service import ConfigError, FixtureCycle, Simulator, geometry
 from hexapod_model.service.config.tilt import TiltCodec
 
 from ..conftest import hexapod
-from .helpers import CollectingBus, pose_error, service_config, sim_config
+from .helpers import CollectingBus, drive, pose_error, service_config, sim_config
 
 ROOT = Path(__file__).resolve().parents[2]
 SEVEN = [0x181 + k for k in range(7)]
@@ -134,6 +134,35 @@ def test_the_inclinometer_names_the_faulty_leg_and_its_estimate_is_flagged(tmp_p
         if rec.pose is not None:  # the pose of the others: an estimate near the truth
             assert "estimate" in rec.flags
             assert pose_error(rec, sent.pose)[0] < 50e-6
+
+
+@pytest.mark.parametrize("preset", ["reference7", "reference_tilt"])
+def test_the_records_carry_the_extra_readings_and_the_tests_statistic(tmp_path, preset):
+    extra = TILT if preset == "reference_tilt" else {}
+    fault = [{"kind": "step", "leg": 3, "size": 3e-4, "start": 0.5}]
+    _, out = run(tmp_path, preset, fault, seconds=1.0, **extra)
+    names = hexapod(preset).reading_names[6:]
+    for sent, rec in out:
+        assert rec.extra_readings is not None and tuple(rec.extra_readings) == names
+        if rec.status not in ("ok", "flagged", "inconsistent_readings"):
+            continue
+        truth = hexapod(preset).redundancy.extra_readings(sent.pose)
+        got = np.array([rec.extra_readings[n] for n in names])
+        assert np.all(np.abs(got - truth) < 1e-4)  # m and rad: the simulated frames' values, noise and counts
+        test = rec.consistency
+        assert test is not None and test["dof"] == len(names) and test["alpha"] == 1e-3
+        # the record's status is the test's verdict on its statistic
+        assert (test["chi2"] > test["bound"]) == (rec.status == "inconsistent_readings"), (rec.status, test)
+    failing = [rec for sent, rec in out if sent.t_sim >= 0.55 and rec.status == "inconsistent_readings"]
+    assert failing and all(r.consistency["chi2"] > r.consistency["bound"] for r in failing)
+
+
+def test_a_six_leg_fixtures_records_carry_no_extra_readings_and_no_test(tmp_path):
+    config = service_config(tmp_path, [{"name": "left", "hexapod": "reference", "can_ids": SEVEN[:6]}])
+    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A"}])
+    _, out = drive(config, sim, 0.3)
+    assert out and all(r.extra_readings is None and r.consistency is None for _, r in out)
+    assert any(r.status == "ok" for _, r in out)
 
 
 def test_the_simulator_sends_the_extra_frames_from_the_true_pose_and_faults_any_reading(tmp_path):

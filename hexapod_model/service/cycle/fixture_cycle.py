@@ -116,6 +116,8 @@ class FixtureCycle:
         self._heard = [-math.inf] * n  # stamp of each channel's newest frame of any kind (taken or dropped)
         self._floor = -math.inf  # t of the last silent_leg record of check_silence: older frames come too late
         self._readings = [math.nan] * len(hexa.reading_names)  # the legs', then tilt_x and tilt_y
+        #: each extra reading of redundant sensors: (name, index in the readings, its channel)
+        self._extra = [(name, k, min(k, self._n_legs)) for k, name in enumerate(hexa.reading_names) if k >= 6]
         self._data: list[bytes | bytearray] = [b""] * n  # each channel's newest frame (a repeat of it is dropped)
         self._counts = [0] * n
         self._err, self._warn, self._fresh = [False] * n, [False] * n, [False] * n
@@ -624,6 +626,13 @@ class FixtureCycle:
         else:
             fresh = [None if v != v or self._t[k] < old else v for k, v in enumerate(readings)]  # v != v: NaN
         locked = self.lock.state == "locked"
+        extra = test = None
+        if self._extra:  # redundant sensors: their readings by name, fresh as the legs' are
+            r, ts = self._readings, self._t
+            extra = {name: None if r[k] != r[k] or ts[c] < old else r[k] for name, k, c in self._extra}
+        if outcome is not None and outcome.consistency is not None:
+            c = outcome.consistency
+            test = {"chi2": c.statistic, "bound": c.threshold, "dof": c.dof, "alpha": c.alpha}
         record = PoseRecord(
             self.cfg.name,
             t,
@@ -640,6 +649,8 @@ class FixtureCycle:
             in_robot,
             None if pose is None else outcome.pose,  # type: ignore[union-attr]
             None if pose is None else outcome.q,  # type: ignore[union-attr]
+            extra,
+            test,
         )
         self.last = record
         return record

@@ -35,6 +35,7 @@ import numpy as np
 
 from ...analysis.sensitivity import SensitivityEvaluator
 from ...exceptions import HexapodError
+from ...kinematics.consistency import Consistency
 from ...kinematics.hexapod import Hexapod
 from ...kinematics.newton.solver import Solution
 from ...kinematics.redundant import RedundantSolution
@@ -73,6 +74,7 @@ class SolveOutcome(NamedTuple):
         uncertainty: of the pose (``None`` when failed).
         solve_time: seconds spent (prediction, solve, checks, uncertainty).
         legs: legs (0-based) the tracker's ``jump`` or ``stuck`` names.
+        consistency: the consistency test of a solve from redundant readings, else ``None``.
     """
 
     pose: np.ndarray | None
@@ -83,6 +85,7 @@ class SolveOutcome(NamedTuple):
     uncertainty: Uncertainty | None
     solve_time: float
     legs: tuple[int, ...] = ()
+    consistency: Consistency | None = None
 
 
 class PoseSolver:
@@ -173,7 +176,8 @@ class PoseSolver:
         if "inconsistent_readings" in r.flags:
             return _inconsistent(sol, r.flags, u, t0, r.legs)
         status = "flagged" if r.flags else "ok"
-        return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, time.perf_counter() - t0, r.legs)
+        test = sol.consistency if isinstance(sol, RedundantSolution) else None
+        return SolveOutcome(sol.pose, sol.q, status, r.flags, sol.iterations, u, _since(t0), r.legs, test)
 
 
 def _inconsistent(
@@ -184,9 +188,9 @@ def _inconsistent(
     named = () if test is None or test.isolated is None else (f"isolated:{test.isolated}",)
     why = named or (f"suspects:{0 if test is None else len(test.suspects)}",)
     if not named or "estimate" not in sol.flags:  # no pose the data vouch for
-        return SolveOutcome(None, None, "inconsistent", (*flags, *why), sol.iterations, None, _since(t0), legs)
+        return SolveOutcome(None, None, "inconsistent", (*flags, *why), sol.iterations, None, _since(t0), legs, test)
     out = (*flags, *why, "estimate")
-    return SolveOutcome(sol.pose, sol.q, "inconsistent", out, sol.iterations, u, _since(t0), legs)
+    return SolveOutcome(sol.pose, sol.q, "inconsistent", out, sol.iterations, u, _since(t0), legs, test)
 
 
 def _since(t0: float) -> float:

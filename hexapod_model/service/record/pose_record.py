@@ -28,6 +28,8 @@ RECORD_KEYS = (
     "singularity_margin",
     "load",
     "pose_in_robot",
+    "extra_readings",
+    "consistency",
 )
 
 
@@ -54,6 +56,11 @@ class PoseRecord(NamedTuple):
         singularity_margin: ``cond(home) / cond(here)`` (1 at home, towards 0 at a singularity), or None.
         load: a locked fixture's process-wrench loads (:func:`~hexapod_model.service.cycle.lock_load.lock_load`).
         pose_in_robot: ``{"pose", "sigma"}`` of the coupling in the robot's frame, or None.
+        extra_readings: a fixture with redundant sensors: each extra reading by name (``leg7`` in m,
+            ``tilt_x``, ``tilt_y`` in rad; None without a fresh frame); None for six legs.
+        consistency: the consistency test of a set solved from redundant readings: ``chi2`` (its
+            statistic), ``bound`` (``chi2.ppf(1 - alpha, dof)``), ``dof`` and ``alpha`` (the
+            false-alarm rate); None when no such solve ran.
         transform: the pose as a 4x4 matrix (base -> platform, m), None without a pose; not in the JSON.
         q: the Pinocchio configuration of the pose (its passive joints), None without one; not in the JSON.
     """
@@ -73,6 +80,8 @@ class PoseRecord(NamedTuple):
     pose_in_robot: dict[str, Any] | None
     transform: np.ndarray | None = None
     q: np.ndarray | None = None
+    extra_readings: dict[str, float | None] | None = None
+    consistency: dict[str, float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The record's JSON object: :data:`RECORD_KEYS` in order (the lists are the record's own)."""
@@ -90,6 +99,8 @@ class PoseRecord(NamedTuple):
             "singularity_margin": self.singularity_margin,
             "load": self.load,
             "pose_in_robot": self.pose_in_robot,
+            "extra_readings": self.extra_readings,
+            "consistency": self.consistency,
         }
 
     def to_json(self) -> str:
@@ -100,7 +111,10 @@ class PoseRecord(NamedTuple):
     def from_dict(cls, data: dict[str, Any]) -> PoseRecord:
         """The record of a JSON object made by :meth:`to_dict` (``transform`` and ``q`` None: the JSON has neither).
 
+        ``extra_readings`` and ``consistency`` may be missing (records written before they existed).
+
         Raises:
-            KeyError: a key of :data:`RECORD_KEYS` is missing.
+            KeyError: another key of :data:`RECORD_KEYS` is missing.
         """
-        return cls(**{k: data[k] for k in RECORD_KEYS})
+        values: dict[str, Any] = {k: data[k] for k in RECORD_KEYS[:-2]}
+        return cls(**values, extra_readings=data.get("extra_readings"), consistency=data.get("consistency"))
