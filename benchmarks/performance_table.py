@@ -173,6 +173,22 @@ def certificate_rows(data: dict) -> list[tuple[str, str]]:
     return rows
 
 
+def false_alarm_rows(data: list[dict]) -> list[tuple[str, str]]:
+    """``false_alarm_hour.py``: the consistency test's false alarms on clean samples, beside the stated rate."""
+    rows = []
+    for c in data:
+        lo, hi = c["ci95"]
+        verdict = "consistent" if c["consistent"] else "NOT consistent"
+        rows.append(
+            (
+                f"{c['preset']}: consistency test on clean samples at 100 Hz, {c['motion']}, false alarms",
+                f"{c['alarms']} of {c['samples']} ({c['rate']:.2e}; 95 % interval {lo:.2e}–{hi:.2e}),"
+                f" stated {c['alpha']:g}: {verdict}",
+            )
+        )
+    return rows
+
+
 #: (script and its quick arguments, its full arguments, the rows of its JSON)
 BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str]]]]] = [
     (["run_benchmarks.py", "reference", "--samples", "300"], ["run_benchmarks.py"], bench_rows),
@@ -192,6 +208,7 @@ BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str
     (["service_memory.py", "--fixtures", "1,20", "--sets", "100"], ["service_memory.py"], memory_rows),
     (["clearance.py", "--poses", "1000"], ["clearance.py"], clearance_rows),
     (["certificate.py", "reference", "3-6", "--poses", "0"], ["certificate.py"], certificate_rows),
+    (["false_alarm_hour.py", "--seconds", "900"], ["false_alarm_hour.py"], false_alarm_rows),
 ]
 
 
