@@ -79,6 +79,19 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
     return atomic_write_bytes(path, text.encode("utf-8"))
 
 
+def atomic_write_csv(path: str | Path, header: list[str], rows: list[dict[str, Any]]) -> Path:
+    """Write ``rows`` (dicts) under ``header`` as CSV, atomically: floats as ``repr``, missing keys empty."""
+    import csv
+    import io
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
+    for r in rows:
+        w.writerow([repr(float(v)) if isinstance(v, float) else v for v in (r.get(h, "") for h in header)])
+    return atomic_write_text(path, buf.getvalue())
+
+
 def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     """Write ``data`` to ``path`` atomically (temporary file in the same folder + rename)."""
     with atomic_writer(path, binary=True) as fh:

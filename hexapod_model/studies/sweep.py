@@ -24,7 +24,7 @@ from ..analysis.workspace import WORST
 from ..description.geometry import HexapodGeometry, geometry_from_dict
 from ..description.geometry_toml import geometry_to_toml
 from ..exceptions import HexapodError
-from ..files import atomic_write_text
+from ..files import atomic_write_csv, atomic_write_text
 from ..kinematics.hexapod import Hexapod
 from .evaluate import Settings, evaluate_hexapod
 from .sweep_placement import (
@@ -261,13 +261,5 @@ def _compute(
 
 def write_table(path: Path, rows: list[dict[str, Any]], parameters: list[str], extra: tuple[str, ...] = ()) -> Path:
     """``sweep.csv``: id, status, reason, the parameters, the metrics, ``extra``, pareto, geometry (atomically)."""
-    import csv
-    import io
-
     header = ["id", "status", "reason", *parameters, *METRICS, *extra, "pareto", "geometry"]
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(header)
-    for r in rows:
-        w.writerow([repr(float(v)) if isinstance(v, float) else v for v in (r.get(h, "") for h in header)])
-    return atomic_write_text(path, buf.getvalue())
+    return atomic_write_csv(path, header, rows)

@@ -19,8 +19,6 @@ two rank the same candidates identically.
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -30,7 +28,7 @@ from ..analysis.detectability import DEFAULT_HALF_WIDTH
 from ..analysis.placement import DEFAULT_PLACEMENT_GRID, check_inclinometer_rotation, score_section
 from ..description.geometry import HexapodGeometry
 from ..exceptions import InputError
-from ..files import atomic_write_text
+from ..files import atomic_write_csv
 
 #: sensor parameters: name -> meaning (SI; angles in degrees where the name says so)
 SENSOR_PARAMETERS = {
@@ -152,9 +150,4 @@ def rank_rows(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
 def write_placement_table(path: Path, ranked: list[dict[str, Any]], parameters: list[str]) -> Path:
     """``placement.csv``: the valid candidates best first: rank, id, the parameters, score, points, geometry."""
     header = ["placement_rank", "id", *parameters, "placement_worst_m", "placement_points_inside", "geometry"]
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(header)
-    for r in ranked:
-        w.writerow([repr(float(v)) if isinstance(v, float) else v for v in (r.get(h, "") for h in header)])
-    return atomic_write_text(path, buf.getvalue())
+    return atomic_write_csv(path, header, ranked)
