@@ -371,7 +371,9 @@ class FixtureService:
                 self._stop.wait(tick)
                 continue
             if msg is None:  # nothing queued until the wait ended: quiet until then, not until this thread ran
-                clock = min(time.time(), asked + tick) - transit  # (a stall after the wait is the service's)
+                # (a stall after the wait is the service's), less the longest wait lately: the frames handled
+                # since the last check count too (their wait is not in `waits` yet)
+                clock = min(time.time(), asked + tick) - max(transit, behind)
             else:
                 now = time.time()
                 stamp = msg.timestamp or now  # the bus's own clock: a backlog is not silence
