@@ -13,9 +13,12 @@ from ..conftest import hexapod
 from .helpers import fixture_table, pose_error, service_config, sim_config
 
 
-def serve(tmp_path, faults, seconds=4.0):
-    """Run the service with one simulated fixture (100 Hz, trajectory A); the records and the cycle."""
-    config = service_config(tmp_path)
+def serve(tmp_path, faults, seconds=4.0, table=None, settle=0.2):
+    """Run the service with one simulated fixture (100 Hz, trajectory A; ``table``: its fixture table).
+
+    Returns the records, the cycle and the simulator (its ``truth``).
+    """
+    config = service_config(tmp_path, None if table is None else [table])
     sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A", "faults": faults}])
     records = []
     hexa = hexapod("reference")
@@ -26,12 +29,12 @@ def serve(tmp_path, faults, seconds=4.0):
         service.start()
         simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
         simulator.run(seconds)
-        time.sleep(0.2)
+        time.sleep(settle)
         cycle = service.cycles["left"]
     finally:
         service.stop()
         bus.shutdown()
-    return records, cycle
+    return records, cycle, simulator
 
 
 @pytest.mark.parametrize(
@@ -46,7 +49,7 @@ def serve(tmp_path, faults, seconds=4.0):
     ],
 )
 def test_lost_sets_repeated_frames_and_glitches_latch_nothing(tmp_path, fault):
-    records, cycle = serve(tmp_path, fault if isinstance(fault, list) else [fault])
+    records, cycle, _ = serve(tmp_path, fault if isinstance(fault, list) else [fault])
     assert cycle.fault is None, cycle.fault
     assert sum(r.status == "ok" for r in records) > 150
     if isinstance(fault, dict) and fault["kind"] == "repeated_frames":
@@ -54,7 +57,8 @@ def test_lost_sets_repeated_frames_and_glitches_latch_nothing(tmp_path, fault):
 
 
 def test_a_leg_stamped_50_ms_ahead_is_the_one_named_and_no_record_runs_ahead(tmp_path):
-    records, cycle = serve(tmp_path, [{"kind": "ahead_stamp", "leg": 4, "seconds": 0.05, "start": 1.0, "duration": 60}])
+    ahead = {"kind": "ahead_stamp", "leg": 4, "seconds": 0.05, "start": 1.0, "duration": 60}
+    records, cycle, _ = serve(tmp_path, [ahead])
     assert cycle.fault is None, cycle.fault
     times = [r.t for r in records]
     assert all(b >= a for a, b in zip(times, times[1:])), "record times ran backwards"
@@ -68,22 +72,8 @@ def test_a_leg_stamped_50_ms_ahead_is_the_one_named_and_no_record_runs_ahead(tmp
 
 
 def test_a_batching_gateway_gives_no_wrong_ok_through_the_service(tmp_path):
-    config = service_config(tmp_path)
     fault = {"kind": "gateway_burst", "sets": 5, "start": 0.0, "duration": 60}
-    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A", "faults": [fault]}])
-    records = []
-    hexa = hexapod("reference")
-    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
-    service = FixtureService(config, hexapods={"left": hexa}, http=False)
-    service.subscribe(records.append)
-    try:
-        service.start()
-        simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
-        simulator.run(3.0)
-        time.sleep(0.2)
-    finally:
-        service.stop()
-        bus.shutdown()
+    records, _, _ = serve(tmp_path, [fault], seconds=3.0)
     assert len(records) > 100
     assert not any(r.status == "ok" for r in records), [r.flags for r in records if r.status == "ok"][:3]
     assert sum("batched_stamps" in r.flags for r in records) > 100
@@ -91,22 +81,8 @@ def test_a_batching_gateway_gives_no_wrong_ok_through_the_service(tmp_path):
 
 def test_a_batching_gateway_with_the_sampling_period_given_gives_right_poses_through_the_service(tmp_path):
     table = fixture_table(encoder={"sample_period": 0.01}, staleness=0.2)  # staleness: longer than a burst's span
-    config = service_config(tmp_path, [table])
     fault = {"kind": "gateway_burst", "sets": 5, "start": 0.0, "duration": 60}
-    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A", "faults": [fault]}])
-    records = []
-    hexa = hexapod("reference")
-    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
-    service = FixtureService(config, hexapods={"left": hexa}, http=False)
-    service.subscribe(records.append)
-    try:
-        service.start()
-        simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
-        simulator.run(3.0)
-        time.sleep(0.3)
-    finally:
-        service.stop()
-        bus.shutdown()
+    records, _, simulator = serve(tmp_path, [fault], seconds=3.0, table=table, settle=0.3)
     truth = {round(s.t_first * 100.0): s.pose for s in simulator.truth}
     ok = [r for r in records if r.status == "ok"]
     assert len(ok) > 150, sorted({(r.status, tuple(r.flags)) for r in records})[:10]
@@ -117,26 +93,11 @@ def test_a_batching_gateway_with_the_sampling_period_given_gives_right_poses_thr
 
 def test_bit_flips_and_an_intruder_on_a_checked_layout_give_no_wrong_ok_through_the_service(tmp_path):
     encoder = {"error_bit": 32, "warning_bit": 33, "counter": {"offset": 40, "bits": 4}, "crc": {"offset": 7}}
-    config = service_config(tmp_path, [fixture_table(encoder=encoder)])
     faults = [
         {"kind": "bit_flip", "probability": 0.01, "start": 0.3, "duration": 60},
         {"kind": "intruder", "leg": 2, "size": 0.0003, "start": 1.5, "duration": 1.0},
     ]
-    sim = sim_config(config, [{"name": "left", "rate": 100.0, "trajectory": "A", "faults": faults}])
-    records = []
-    hexa = hexapod("reference")
-    bus = can.Bus(interface="virtual", channel=config.bus.channel, preserve_timestamps=True)
-    service = FixtureService(config, hexapods={"left": hexa}, http=False)
-    service.subscribe(records.append)
-    try:
-        service.start()
-        simulator = Simulator(config, sim, bus, hexapods={"left": hexa})
-        simulator.run(3.5)
-        time.sleep(0.2)
-        cycle = service.cycles["left"]
-    finally:
-        service.stop()
-        bus.shutdown()
+    records, cycle, simulator = serve(tmp_path, faults, seconds=3.5, table=fixture_table(encoder=encoder))
     truth = {round(s.t_first * 100.0): s.pose for s in simulator.truth}
     ok = [r for r in records if r.status == "ok"]
     assert len(ok) > 100, (cycle.fault, sorted({(r.status, tuple(r.flags)) for r in records})[:12])
