@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 
 import can
+import numpy as np
 import pytest
 
 from hexapod_model.service import FixtureService, Simulator
@@ -35,6 +36,19 @@ def serve(tmp_path, faults, seconds=4.0, table=None, settle=0.2):
         service.stop()
         bus.shutdown()
     return records, cycle, simulator
+
+
+def sent_at(simulator, t):
+    """The simulated set whose newest frame is stamped ``t`` (a record's time), within a quarter period.
+
+    A record's ``t`` is its set's newest frame's stamp, ``t_last`` (six frames after the set's own
+    stamp ``t_first``): rounding it to the 10 ms grid named the next set whenever a run started near
+    half a period.
+    """
+    last = np.array([s.t_last for s in simulator.truth])
+    i = int(np.argmin(np.abs(last - t)))
+    assert abs(last[i] - t) < 0.25 / 100.0, (t, last[i])
+    return simulator.truth[i]
 
 
 @pytest.mark.parametrize(
@@ -83,11 +97,10 @@ def test_a_batching_gateway_with_the_sampling_period_given_gives_right_poses_thr
     table = fixture_table(encoder={"sample_period": 0.01}, staleness=0.2)  # staleness: longer than a burst's span
     fault = {"kind": "gateway_burst", "sets": 5, "start": 0.0, "duration": 60}
     records, _, simulator = serve(tmp_path, [fault], seconds=3.0, table=table, settle=0.3)
-    truth = {round(s.t_first * 100.0): s.pose for s in simulator.truth}
     ok = [r for r in records if r.status == "ok"]
     assert len(ok) > 150, sorted({(r.status, tuple(r.flags)) for r in records})[:10]
     for r in ok:  # the pose of the instant its t names
-        dp, _ = pose_error(r, truth[round(r.t * 100.0)])
+        dp, _ = pose_error(r, sent_at(simulator, r.t).pose)
         assert dp < 5 * r.sigma["translation_mm"] * 1e-3, (r.t, dp)
 
 
@@ -98,11 +111,10 @@ def test_bit_flips_and_an_intruder_on_a_checked_layout_give_no_wrong_ok_through_
         {"kind": "intruder", "leg": 2, "size": 0.0003, "start": 1.5, "duration": 1.0},
     ]
     records, cycle, simulator = serve(tmp_path, faults, seconds=3.5, table=fixture_table(encoder=encoder))
-    truth = {round(s.t_first * 100.0): s.pose for s in simulator.truth}
     ok = [r for r in records if r.status == "ok"]
     assert len(ok) > 100, (cycle.fault, sorted({(r.status, tuple(r.flags)) for r in records})[:12])
     for r in ok:
-        dp, _ = pose_error(r, truth[round(r.t * 100.0)])
+        dp, _ = pose_error(r, sent_at(simulator, r.t).pose)
         assert dp < 5 * r.sigma["translation_mm"] * 1e-3, (r.t, dp, r.flags)
     assert cycle.counters["bad_crc"] > 3 and cycle.counters["counter_gap"] > 30
     assert any("bad_crc:leg" in f for r in records for f in r.flags)
