@@ -21,7 +21,7 @@ from ..exceptions import HexapodError, InputError
 from .all_assemblies import review
 from .batch_result import FALLBACK, BatchResult, as_rows, batch_result, loop_outputs, poses_of_xyzquat
 from .certificate import NEAR_SINGULAR_FACTOR
-from .engine import SolveEngine
+from .engine import NEAR_SINGULAR, SolveEngine
 from .input_checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance
 from .newton.first_compile import announce
 from .newton.outcomes import INVALID_INPUT
@@ -62,7 +62,7 @@ def forward_batch(engine: SolveEngine, readings, guess, warm: bool, tol, max_ite
     tol, max_iter = check_tolerance(tol), check_max_iter(max_iter)
 
     def solve(x: np.ndarray, g) -> Solution:
-        return engine.forward(x, g, tol, max_iter, False, True)
+        return engine.forward(x, g, tol, max_iter, False, True, NEAR_SINGULAR)  # rows carry the certificate
 
     def retry(k: int) -> str:
         return _message_of(lambda: solve(rows[k], None))

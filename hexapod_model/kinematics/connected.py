@@ -20,6 +20,8 @@ flagged ``connected``.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .newton.proof import StepProver
@@ -31,10 +33,26 @@ MIN_STEP = 2.0**-24  # of the path: a step this short that fails ends the attemp
 MAX_STEPS = 1000  # Newton solves tried along one path
 
 
-def connected_end(
-    solver: NewtonSolver, prover: StepProver, start: np.ndarray, joints: np.ndarray, tol: float, max_iter: int
-) -> np.ndarray | None:
-    """The end of the proven readings path from ``start`` to the prismatic values ``joints`` (m), or None.
+class Chain(NamedTuple):
+    """A readings path followed in proven steps (:func:`connected_chain`)."""
+
+    before: np.ndarray  #: the last proven step's start (closed, connected to the path's start)
+    end: np.ndarray  #: the configuration the proven path ends at (closed to the solves' tolerance)
+    steps: int  #: proven steps
+    tests: int  #: Krawczyk tests run, the failed steps' included
+
+
+def connected_chain(
+    solver: NewtonSolver,
+    prover: StepProver,
+    start: np.ndarray,
+    joints: np.ndarray,
+    tol: float,
+    max_iter: int,
+    min_step: float = MIN_STEP,
+    max_steps: int = MAX_STEPS,
+) -> Chain | None:
+    """The readings path from ``start`` to the prismatic values ``joints`` (m), followed in proven steps.
 
     Args:
         solver: the direct-kinematics solver (the prismatic joints held).
@@ -43,25 +61,45 @@ def connected_end(
         joints: the six prismatic joint values at the path's end (m).
         tol: closure residual of each step's Newton solve.
         max_iter: Newton steps per step.
+        min_step: shortest step tried, as a fraction of the path (a step this short that fails
+            ends the attempt: a fold).
+        max_steps: Newton solves tried along the path.
 
     Returns:
-        The configuration (closed to ``tol``) the proven path ends at; None when a step could
-        not be proven however short, or after ``MAX_STEPS`` solves.
+        The :class:`Chain` whose ``end`` the proven path ends at; None when a step could not be
+        proven however short, or after ``max_steps`` solves.
     """
     pq = solver.clm.prismatic_q
     l0 = start[pq].copy()
-    q, t, h = start.copy(), 0.0, FIRST_STEP
-    for _ in range(MAX_STEPS):
+    q, before, t, h = start.copy(), start, 0.0, FIRST_STEP
+    steps = tests = 0
+    for _ in range(max_steps):
         if t >= 1.0:
-            return q
+            return Chain(before, q, steps, tests)
         tn = 1.0 if t + 1.2 * h >= 1.0 else t + h  # no sliver of a last step
         q0 = q.copy()
         q0[pq] = l0 + tn * (joints - l0)
         q1, status = solver.run(q0, tol, max_iter)[:2]
-        if status == "converged" and prover.prove(q, q1).proven:
-            q, t, h = q1, tn, min(2.0 * (tn - t), MAX_STEP)
+        proof = prover.prove(q, q1) if status == "converged" else None
+        tests += 0 if proof is None else proof.tests
+        if proof is not None and proof.proven:
+            before, q, t, h = q, q1, tn, min(2.0 * (tn - t), MAX_STEP)
+            steps += 1
         else:
             h = 0.5 * (tn - t)
-            if h < MIN_STEP:
+            if h < min_step:
                 return None
-    return q if t >= 1.0 else None
+    return Chain(before, q, steps, tests) if t >= 1.0 else None
+
+
+def connected_end(
+    solver: NewtonSolver, prover: StepProver, start: np.ndarray, joints: np.ndarray, tol: float, max_iter: int
+) -> np.ndarray | None:
+    """The end of the proven readings path from ``start`` to the prismatic values ``joints`` (m), or None.
+
+    :func:`connected_chain` with its default limits: the configuration (closed to ``tol``) the
+    proven path ends at; None when a step could not be proven however short, or after
+    ``MAX_STEPS`` solves.
+    """
+    chain = connected_chain(solver, prover, start, joints, tol, max_iter)
+    return None if chain is None else chain.end

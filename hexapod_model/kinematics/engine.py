@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import functools
 import threading
+from dataclasses import replace
+from typing import Literal
 
 import numpy as np
 
@@ -23,12 +25,12 @@ from . import certificate
 from .all_assemblies import AssemblyFinder, review
 from .body_check import BodyCheck
 from .certificate import Outcome
-from .connected import connected_end
+from .connected import connected_chain, connected_end
 from .input_checks import LIMIT_SLACK, MAX_TOL, check_home_conditioning, check_max_iter, check_tolerance, failure_status
 from .joint_space import JointSpace
 from .newton.kernel_sets import kernel_set
 from .newton.outcomes import new_solution
-from .newton.proof import StepProver, with_proof
+from .newton.proof import StepProver, attach_proof, with_proof
 from .newton.solver import NewtonSolver, Solution
 
 DEFAULT_MAX_ITER = 20
@@ -36,6 +38,15 @@ DEFAULT_MAX_ITER = 20
 #: (metres and radians; the presets have 9-67, a 20x smaller hexapod about 700, a singular
 #: layout with parallel, coplanar or coincident legs 1e13 and more)
 HOME_CONDITION_LIMIT = 1e6
+#: ``prove`` of :meth:`SolveEngine.forward`: the proof of a warm result near a singularity only
+NEAR_SINGULAR: Literal["near_singular"] = "near_singular"
+#: which warm results :meth:`SolveEngine.forward` proves: every one (True), none, or :data:`NEAR_SINGULAR`
+Prove = bool | Literal["near_singular"]
+#: a warm step the whole-step proof does not prove is followed in proven steps: at most this
+#: many Newton solves (each with its proof) ...
+WARM_CHAIN_SOLVES = 256
+#: ... none shorter than this fraction of the step (shorter ones fail only at a fold)
+WARM_CHAIN_MIN_STEP = 2.0**-8
 #: the error each failed status raises with ``check`` (``ConvergenceError`` for the others)
 ERRORS = {
     "singular": SingularityError,
@@ -224,7 +235,14 @@ class SolveEngine(JointSpace):
 
     # ----- solves -----
     def forward(
-        self, lengths: np.ndarray, guess: object, tol: float, max_iter: int, check: bool, fast: bool
+        self,
+        lengths: np.ndarray,
+        guess: object,
+        tol: float,
+        max_iter: int,
+        check: bool,
+        fast: bool,
+        prove: Prove = True,
     ) -> Solution:
         """Direct kinematics of checked readings ``lengths`` (m) but for their stroke, off the warm path.
 
@@ -246,10 +264,12 @@ class SolveEngine(JointSpace):
                 self.local.staged = one_call
             # the certified first attempt in one compiled call; solve_forward goes on from it
             done = one_call.certified_forward(start, joints, tol, max_iter, sign)
-            return self.attempted(solver, done, lengths, joints, start, tol, max_iter, sign, guess, check, review)
+            return self.attempted(
+                solver, done, lengths, joints, start, tol, max_iter, sign, guess, check, review, prove
+            )
         sol = self.finish(solver, start.copy(), tol, max_iter, check and not review, (joints, sign, guess is not None))
-        sol = self.proven_near(sol, guess, start, check and not review)
-        return self.reviewed(sol, lengths, guess, check) if review else sol
+        tol, max_iter = check_tolerance(tol), check_max_iter(max_iter)  # valid: finish raised otherwise
+        return self.judged(sol, lengths, joints, guess, start, tol, max_iter, check, review, prove)
 
     def attempted(
         self,
@@ -264,6 +284,7 @@ class SolveEngine(JointSpace):
         guess: object,
         check: bool,
         review: bool,
+        prove: Prove = True,
     ) -> Solution:
         """The :class:`Solution` of direct kinematics after the compiled certified attempt ``done``.
 
@@ -277,8 +298,7 @@ class SolveEngine(JointSpace):
         else:
             forward = (joints, sign, guess is not None, done)
             sol = self.finish(solver, start.copy(), tol, max_iter, check and not review, forward)
-        sol = self.proven_near(sol, guess, start, check and not review)
-        return self.reviewed(sol, lengths, guess, check) if review else sol
+        return self.judged(sol, lengths, joints, guess, start, tol, max_iter, check, review, prove)
 
     @functools.cached_property
     def prover(self) -> StepProver | None:
@@ -289,11 +309,89 @@ class SolveEngine(JointSpace):
         """``sol``, a direct-kinematics result from ``guess``, with the Krawczyk proof of its readings path."""
         return with_proof(self.prover, self.start(guess), sol)
 
-    def proven_near(self, sol: Solution, guess: object, start: np.ndarray, check: bool) -> Solution:
-        """A warm ``converged`` result near a singularity stays so only with its proof (:meth:`prove_step`)."""
-        if guess is None or sol.status != "converged" or "near_singular" not in sol.flags:
+    def judged(
+        self,
+        sol: Solution,
+        lengths: np.ndarray,
+        joints: np.ndarray,
+        guess: object,
+        start: np.ndarray,
+        tol: float,
+        max_iter: int,
+        check: bool,
+        review: bool,
+        prove: Prove = True,
+    ) -> Solution:
+        """A direct-kinematics result with its proof (:meth:`proven_warm`), a 3-6 hexapod's reviewed first.
+
+        The review against every assembly (:meth:`reviewed`) comes first: a result it replaces
+        (the candidates of several assemblies, or the only one within the limits) is the global
+        answer of the resultant, not a step from the guess, and is not proven as one.
+        ``prove`` False: no proof (:meth:`.hexapod.Hexapod.forward`); :data:`NEAR_SINGULAR`: only
+        of a result flagged ``near_singular`` (the batches' rule, :mod:`.batch`).
+        """
+        if prove == NEAR_SINGULAR:
+            prove = "near_singular" in sol.flags
+        if not review:
+            if not prove:
+                return sol
+            return self.proven_warm(sol, guess, start, joints, tol, max_iter, check)
+        reviewed = self.reviewed(sol, lengths, guess, False)
+        if reviewed is sol and prove:
+            reviewed = self.proven_warm(sol, guess, start, joints, tol, max_iter, False)
+        if check and reviewed.status != "converged":
+            raise ERRORS.get(reviewed.status, ConvergenceError)(reviewed, f"{reviewed.status}: {reviewed.message}")
+        return reviewed
+
+    def proven_warm(
+        self,
+        sol: Solution,
+        guess: object,
+        start: np.ndarray,
+        joints: np.ndarray,
+        tol: float,
+        max_iter: int,
+        check: bool,
+    ) -> Solution:
+        """A warm ``converged`` result stays so only with the Krawczyk proof of its readings path from ``start``.
+
+        One test of the whole step first (:meth:`.newton.proof.StepProver.prove`, which
+        subdivides the step when that fails); a guess that does not close at its own readings
+        is then closed there by plain Newton, and the step proven from that closure. Away from a
+        singularity a step it cannot prove (a long one) is followed from ``start`` in proven
+        steps (:func:`.connected.connected_chain`, at most ``WARM_CHAIN_SOLVES`` solves, none
+        shorter than ``WARM_CHAIN_MIN_STEP`` of the path), and the last of them is proven again to end at ``sol``. Not near a singularity
+        (flag ``near_singular``): there the straight readings path that the steps follow may
+        pass a fold that the plate's own path did not, and end at another assembly than the
+        plate's; only the step's own proof counts. Without a proof the result is
+        ``uncertified``. A hexapod without a prover (legs that are not chains of one-dof joints)
+        keeps the certificate's verdict. ``joints``: the prismatic values of the readings (m).
+        """
+        prover = self.prover
+        if guess is None or sol.status != "converged" or prover is None:
             return sol
-        sol = with_proof(self.prover, start, sol)
+        proof = prover.prove(start, sol.q)
+        solver = self.solver(self.held_forward)
+        if not proof.proven:  # a guess that does not close: from its closure at its own readings
+            closed, status = solver.run(start.copy(), tol, max_iter)[:2]
+            if status == "converged" and np.max(np.abs(closed - start)) > 0.0:
+                start, tests = closed, proof.tests
+                proof = prover.prove(start, sol.q)
+                proof = replace(proof, tests=tests + proof.tests)
+        if not proof.proven and "near_singular" not in sol.flags:
+            chain = connected_chain(
+                solver, prover, start, joints, tol, max_iter, WARM_CHAIN_MIN_STEP, WARM_CHAIN_SOLVES
+            )
+            tests = proof.tests + (0 if chain is None else chain.tests)
+            last = None if chain is None else prover.prove(chain.before, sol.q)
+            if chain is not None and last is not None and last.proven:
+                proof = replace(last, tests=tests + last.tests, subdivisions=chain.steps)
+            else:
+                proof = replace(proof, tests=tests + (0 if last is None else last.tests))
+                why = "no proven path of steps from the guess" if chain is None else "its proven steps end elsewhere"
+                sol = attach_proof(sol, proof)
+                sol = replace(sol, message=f"{sol.message}, and {why}")
+        sol = attach_proof(sol, proof)
         if check and not sol.converged:
             raise AssemblyError(sol, f"{sol.status}: {sol.message}")
         return sol

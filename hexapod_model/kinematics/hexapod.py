@@ -222,8 +222,15 @@ class Hexapod:
         max_iter: int = DEFAULT_MAX_ITER,
         check: bool = True,
         alpha: float = DEFAULT_ALPHA,
+        prove: bool = True,
     ) -> Solution:
         """Direct kinematics: platform pose from the six leg readings (m), or from all readings of redundant sensors.
+
+        From a ``guess`` (a warm solve) a ``converged`` result carries the Krawczyk proof of its
+        readings path from the guess (``proof``; docs/solver.md): it is proven to be the
+        assembly connected to the guess, within ``proof.position_m`` (m) and
+        ``proof.rotation_rad`` (rad) of the exact solution; a result that could not be proven is
+        ``uncertified``. A cold solve (from home) carries the certificate's checks instead.
 
         A hexapod with measuring legs or an inclinometer (:attr:`redundancy`) takes every
         reading, in the order of :attr:`reading_names`, and returns a
@@ -242,6 +249,9 @@ class Hexapod:
             check: raise on a result that is not ``converged`` (default). With
                 ``check=False`` the :class:`Solution` is returned and its ``status`` says why.
             alpha: false-alarm rate of the consistency test (redundant sensors only).
+            prove: False skips the proof of a warm step (``proof`` None): ``converged`` then
+                rests on the certificate's checks alone, a heuristic (docs/solver.md), for a
+                caller that measures the solve alone or proves the step otherwise.
 
         Raises:
             InputError: wrong count or shape, NaN or inf, complex or text values, a bad
@@ -252,7 +262,7 @@ class Hexapod:
         """
         tol = self.default_tol if tol is None else tol
         if self.redundancy is not None:
-            return self.redundancy.forward(lengths, guess, tol, max_iter, check, alpha)
+            return self.redundancy.forward(lengths, guess, tol, max_iter, check, alpha, prove)
         if not (isinstance(lengths, np.ndarray) and lengths.shape == (6,) and lengths.dtype == np.float64):
             lengths = check_vector("lengths", lengths, 6)
         fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
@@ -276,10 +286,16 @@ class Hexapod:
                 q, pose, jac, it, res, _ = done
                 readings = q[engine.prismatic_q]  # lengths_of(q) without an encoder model
                 sol = new_solution(pose, q, readings, "converged", it, res, jac, "", (), (), int(solver.sign))
-                return sol if engine.body is None else engine.body.judged(sol, True)
+                if engine.body is not None:
+                    sol = engine.body.judged(sol, True)
+                if guess is None or not prove:
+                    return sol
+                return engine.proven_warm(sol, guess, start, lengths, tol, max_iter, check)
             held = engine.solver(engine.held_forward)
-            return engine.attempted(held, done, lengths, lengths, start, tol, max_iter, sign, guess, check, False)
-        return engine.forward(lengths, guess, tol, max_iter, check, fast)
+            return engine.attempted(
+                held, done, lengths, lengths, start, tol, max_iter, sign, guess, check, False, prove
+            )
+        return engine.forward(lengths, guess, tol, max_iter, check, fast, prove)
 
     def assemblies(
         self, lengths: ArrayLike, *, reference: np.ndarray | None = None, starts: int = DEFAULT_STARTS, seed: int = 0

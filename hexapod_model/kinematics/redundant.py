@@ -227,7 +227,14 @@ class RedundantSensing:
         return pose, sol, A, r, steps, done
 
     def forward(
-        self, readings: object, guess: object, tol: float, max_iter: int, check: bool, alpha: float = DEFAULT_ALPHA
+        self,
+        readings: object,
+        guess: object,
+        tol: float,
+        max_iter: int,
+        check: bool,
+        alpha: float = DEFAULT_ALPHA,
+        prove: bool = True,
     ) -> RedundantSolution:
         """Direct kinematics of ``m`` readings (module doc); see :meth:`hexapod_model.Hexapod.forward`.
 
@@ -241,7 +248,7 @@ class RedundantSensing:
             raise InputError("alpha", alpha, "a false-alarm rate, a float in (0, 1)")
         z = self.check(readings)
         tol, max_iter = check_tolerance(tol), check_max_iter(max_iter)
-        six = self.engine.forward(z[:6].copy(), guess, tol, max_iter, False, False)
+        six = self.engine.forward(z[:6].copy(), guess, tol, max_iter, False, False, prove)
         if not six.converged:
             sol = self._wrap(six, z, six.status, six.message, six.flags, None)
             return self._raise_or(sol, check)

@@ -36,6 +36,32 @@ def test_a_cached_entry_is_not_announced(caplog, monkeypatch):
     assert caplog.messages == []
 
 
+class _CountingEntry(_Entry):
+    """A stand-in whose signature list counts its reads (numba builds that list anew on each read)."""
+
+    def __init__(self, name: str, signatures: list):
+        super().__init__(name, signatures)
+        self.reads = 0
+
+    @property  # type: ignore[override]
+    def signatures(self) -> list:
+        self.reads += 1
+        return self._signatures
+
+    @signatures.setter
+    def signatures(self, value: list) -> None:
+        self._signatures = value
+
+
+def test_a_ready_entry_is_judged_once(monkeypatch):
+    """A compiled entry is checked on its first call only: later calls (every proof, every batch) skip the check."""
+    monkeypatch.setattr(first_compile, "_announced", set())
+    entry = _CountingEntry("prove_configurations", ["(float64[:],)"])
+    for _ in range(5):
+        first_compile.announce(entry)
+    assert entry.reads == 1
+
+
 def test_loading_a_hexapod_imports_no_numba():
     """Numba is imported, and the kernels compiled, by the first solve: not by loading a hexapod."""
     code = (

@@ -202,3 +202,47 @@ def test_a_warm_step_to_another_assembly_is_not_proven():
     truth = hexa.inverse(np.array(case["true_pose"]), check=False)
     assert wrong.closed and truth.closed
     assert not prover.prove(guess.q, wrong.q).proven
+
+
+def _ends(prover: StepProver, q0: np.ndarray, q1: np.ndarray) -> tuple:
+    T0 = prover.platform(q1)
+    return T0, prover.unknowns(q0, T0), prover.unknowns(q1, T0), q0[prover.held_q].copy(), q1[prover.held_q].copy()
+
+
+def test_the_whole_path_test_and_the_subdividing_one_bound_the_same_end():
+    """One test of the whole step about the result, and the path halved: both hold the generating pose."""
+    from hexapod_model.kinematics.newton.krawczyk import prove_path, prove_whole
+
+    hexa, prover = hexapod("reference"), _prover("reference")
+    start = hexa.inverse(hexa.home_pose @ _moved(np.random.default_rng(5)))
+    step = np.eye(4)
+    step[:3, 3] = [4e-4, -2e-4, 2e-4]
+    truth = hexa.inverse(start.pose @ step)
+    sol = hexa.forward(truth.lengths, guess=start)
+    T0, x0, x1, l0, l1 = _ends(prover, start.q, sol.q)
+    work = prover.work()[0]
+    whole = prove_whole(prover.tables, T0, x0, x1, l0, l1, True, work)
+    whole = (whole[0], whole[1], whole[2].copy(), whole[3])
+    path = prove_path(prover.tables, T0, x0, x1, l0, l1, True, work)
+    assert whole[0] and whole[1] == 1 and whole[3] == 1
+    assert path[0] and path[1] >= 1 and path[3] >= 1  # the path's own tests and sub-intervals
+    exact = prover.unknowns(truth.q, T0)
+    for _, _, radius, _ in (whole, path):
+        assert np.all(np.abs(exact - x1) <= radius + 1e-12)
+
+
+def test_a_step_whose_leg_is_ill_conditioned_is_proven_only_subdivided():
+    """A turned pose (48 deg of yaw) where a leg's joints couple strongly: one test of the whole
+    0.8 mm step fails; the halved path proves it, and the proof's bounds hold the pose."""
+    hexa, prover = hexapod("reference"), _prover("reference")
+    T = np.eye(4)
+    T[:3, 3] = [0.05802425, 0.07538191, 0.43002195]
+    T[:3, :3] = rpy_to_matrix(0.02637685, 0.13464285, 0.83210861)
+    start = hexa.inverse(T)
+    dl = np.array([0.00509281, -0.02605381, 0.03389148, 0.01265576, -0.00728817, -0.05404263]) / 64
+    sol = hexa.forward(start.lengths + dl, guess=start, check=False)
+    one = prover.prove(start.q, sol.q, subdivide=False)
+    halved = prover.prove(start.q, sol.q)
+    assert not one.proven and one.tests == 1
+    assert halved.proven and halved.tests > 2 and halved.subdivisions > 1
+    assert sol.converged and sol.proof is not None and sol.proof.proven

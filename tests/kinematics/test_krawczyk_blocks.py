@@ -141,6 +141,7 @@ def test_the_block_kernels_run_as_python_give_the_compiled_answers():
         q0,
         q1,
         True,
+        True,
         work_p,
         ends,
     )

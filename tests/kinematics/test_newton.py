@@ -219,8 +219,10 @@ def test_one_call_forward_equals_the_python_path(name):
         joints = hexa.joints_of(readings)
         attempt = solver.certified_forward(hexa.engine.start(guess), joints, 1e-10, 50, sign)
         one_call = len(attempt) == 6  # converged certified: (q, pose, jacobian, iterations, residual, bad)
-        slow = hexa.engine.finish(solver, hexa.engine.start(guess), 1e-10, 50, False, (joints, sign, guess is not None))
-        slow = hexa.engine.reviewed(slow, readings, guess, False)  # a 3-6 hexapod's every assembly (forward does it)
+        start = hexa.engine.start(guess)
+        slow = hexa.engine.finish(solver, start.copy(), 1e-10, 50, False, (joints, sign, guess is not None))
+        review = hexa.engine.finder.exact is not None  # a 3-6 hexapod's every assembly (forward does it)
+        slow = hexa.engine.judged(slow, readings, joints, guess, start, 1e-10, 50, False, review)  # and the proof
         q_aug, state = solver.q_aug.copy(), (solver.sign, solver.det_sign, solver.certified)
         kappa = solver.kappa
         fast = hexa.forward(readings, guess, tol=1e-10, max_iter=50, check=False)

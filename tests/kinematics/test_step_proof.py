@@ -41,8 +41,9 @@ def test_prove_step_attaches_the_proof_of_a_small_warm_step(name):
     T[:3, 3] += [2e-4, 0.0, -1e-4]
     readings = hexa.inverse(T).lengths
     sol = hexa.forward(readings, start)
-    assert sol.proof is None  # not run by default away from singularities
+    assert sol.proof is not None and sol.proof.proven  # every warm converged result carries its proof
+    assert hexa.forward(readings).proof is None  # a cold one its certificate's checks
     proven = hexa.prove_step(start, sol)
-    assert proven.converged and proven.proof is not None and proven.proof.proven
+    assert proven.converged and proven.proof == sol.proof  # the same test on the same step
     assert proven.proof.subdivisions >= 1 and proven.proof.position_m < 1e-6
     np.testing.assert_array_equal(proven.pose, sol.pose)  # the proof changes no number

@@ -42,7 +42,7 @@ from .krawczyk_dense import inverse, krawczyk, preconditioned_dense
 MAX_TESTS = 32  # Krawczyk tests per path (each sub-interval that fails is halved)
 MIN_WIDTH = 1.0 / 64.0  # narrowest sub-interval of the readings path tried
 INFLATIONS = 4  # boxes tried per test (epsilon-inflation)
-FLOOR = 0.05  # a first box's radius per unknown, at least this fraction of the largest one
+FLOOR = 0.05  # a first box's radius per unknown, at least this fraction of the largest one (in units)
 
 
 @njit(cache=True)
@@ -82,7 +82,7 @@ def preconditioned_blocks(ws, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr):
 def workspace(nf: int, rows: int) -> tuple:
     """The work arrays of :func:`prove_path` for ``nf`` unknowns and legs of ``rows`` closure rows."""
     return (
-        np.zeros((21, nf)),  # vectors
+        np.vstack((np.zeros((21, nf)), np.ones((1, nf)))),  # vectors; the last: the unknowns' units (StepProver)
         np.zeros((nf, nf + 6)),  # Jm: the Jacobian's enclosure (and the held joints' columns)
         np.zeros((nf, nf + 6)),  # Jr
         np.zeros((nf, nf)),  # Y: the dense test's preconditioner
@@ -161,12 +161,13 @@ def prove_box(tables, T0, xc, spread, hm, hr, dl, half, off, rad, rho, structure
     YFm, YFr = V[7], V[8]
     nf = xc.shape[0]
     _path_enclosure(tables, hm, dl, half, structured, work)  # with J at xc and hm only: the first box's size
+    unit = V[21]  # the unknowns' units: 1 for angles, the length scale for lengths
     big = 0.0
     for a in range(nf):  # room for the end box
         rho[a] = spread[a] + 4.0 * (abs(YFm[a]) + YFr[a]) + 1e-12 * (1.0 + abs(xc[a]))
-        big = max(big, rho[a])
+        big = max(big, rho[a] / unit[a])
     for a in range(nf):  # room for the coupling |I - Y J(X)| rho of an unknown that hardly moves
-        rho[a] = max(rho[a], FLOOR * big)
+        rho[a] = max(rho[a], FLOOR * big * unit[a])
     for _ in range(INFLATIONS):
         if try_box(tables, T0, xc, rho, hm, hr, dl, half, structured, work, off, rad):
             return True
@@ -206,12 +207,11 @@ def prove_path(tables, T0, x0, x1, l0, l1, structured, work):
         proven path. ``radius`` is a row of ``work``.
     """
     nf = x0.shape[0]
-    V, Jm, Jr, Y, H, blocks, ew = work
-    Fm, Fr, zero, YFm, YFr = V[0], V[1], V[4], V[7], V[8]
+    V, H = work[0], work[4]
+    zero = V[4]
     off, rad, rho, prev_c, prev_off, prev_rad, prev_rho = V[11], V[12], V[13], V[14], V[15], V[16], V[17]
-    xc, spread, box = V[18], V[19], V[20]
+    xc, spread = V[18], V[19]
     hm, hr, dl = H[2], H[3], H[4]
-    placements, motions, closure, held, rows = tables
     for i in range(6):
         dl[i] = l1[i] - l0[i]
     tests, parts, s0, width = 0, 0, 0.0, 1.0
@@ -243,9 +243,27 @@ def prove_path(tables, T0, x0, x1, l0, l1, structured, work):
             width *= 0.5
         if tests >= MAX_TESTS and s0 < 1.0:
             return False, tests, rho, 0
-    # the end: a box about x1 inside the last one, whose Jacobian enclosure holds J over it at s = 1
-    H[1][:] = 0.0
-    enclose_into(placements, motions, closure, held, rows, T0, x1, zero, l1, H[1], False, Fm, Fr, Jm, Jr, ew)
+    proven, _, radius, _ = _prove_end(tables, T0, x1, l1, prev_c, prev_rho, True, structured, work)
+    return proven, tests, radius, parts if proven else 0
+
+
+@njit(cache=True)
+def _prove_end(tables, T0, x1, l1, c, rho, fresh, structured, work):
+    """The box about the result ``x1`` at ``s = 1`` alone, inside the last proven box ``c +- rho``.
+
+    That box's Jacobian enclosure (over a larger box and parameter interval) and preconditioner
+    are in ``work``; ``fresh``: enclose ``F(x1, l1)`` here (else ``work``'s first two rows hold
+    it). Returns :func:`prove_path`'s ``(proven, 0, radius, parts)`` with ``parts`` 1.
+    """
+    nf = x1.shape[0]
+    V, Jm, Jr, Y, H, blocks, ew = work
+    Fm, Fr, zero, YFm, YFr = V[0], V[1], V[4], V[7], V[8]
+    off, rad, box = V[11], V[12], V[20]
+    placements, motions, closure, held, rows = tables
+    zero[:] = 0.0
+    if fresh:
+        H[1][:] = 0.0
+        enclose_into(placements, motions, closure, held, rows, T0, x1, zero, l1, H[1], False, Fm, Fr, Jm, Jr, ew)
     if structured:
         apply(blocks, rows, Fm, Fr, YFm, YFr)
     else:
@@ -255,7 +273,7 @@ def prove_path(tables, T0, x0, x1, l0, l1, structured, work):
         YFr[a] = up(YFr[a] + REL * abs(YFm[a]))
         box[a] = 2.0 * (abs(YFm[a]) + YFr[a]) + 1e-15 * (1.0 + abs(x1[a]))
     for _ in range(INFLATIONS):
-        if not _inside(x1, zero, box, prev_c, prev_rho):
+        if not _inside(x1, zero, box, c, rho):
             break
         if structured:
             ok = krawczyk_blocks(YFm, YFr, Jr, rows, blocks, box, off, rad)
@@ -264,7 +282,76 @@ def prove_path(tables, T0, x0, x1, l0, l1, structured, work):
         if ok:
             for a in range(nf):
                 rad[a] = up(abs(off[a]) + rad[a])
-            return True, tests, rad, parts
+            return True, 0, rad, 1
         for a in range(nf):
             box[a] = max(box[a], 1.5 * (abs(off[a]) + rad[a]))
-    return False, tests, box, 0
+    return False, 0, box, 0
+
+
+@njit(cache=True)
+def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
+    """One Krawczyk test of the whole readings path on a box about the result ``x1``, then the end box.
+
+    The path is taken from its end: ``l(s) = l1 + (s - 1) dl``, ``dl = l1 - l0`` (``l(0)`` is ``l0``
+    up to the rounding of ``dl``, which the held joints' radius covers), and
+
+        F(x1, l(s)) in F(x1, l1) + J_held(x1, S) dl (s - 1),   s - 1 in -1/2 +- 1/2,
+
+    so that one enclosure of the residual at the result, ``F(x1, l1)``, serves the path's test
+    and the end box's, and the preconditioner is built from the Jacobian's midpoint over the
+    first box (any real matrix proves: :mod:`.krawczyk_blocks`). The box ``x1 +- rho`` must hold
+    the start ``x0``. Costs one enclosure of the residual and one of the Jacobian per box
+    instead of :func:`prove_path`'s three; a step it does not prove is left to :func:`prove_path`.
+
+    Returns:
+        :func:`prove_path`'s ``(proven, tests, radius, parts)``.
+    """
+    nf = x0.shape[0]
+    placements, motions, closure, held, rows = tables
+    V, Jm, Jr, Y, H, blocks, ew = work
+    Fm, Fr, zero = V[0], V[1], V[4]
+    gm, gr, YFm, YFr, tm, tr = V[5], V[6], V[7], V[8], V[9], V[10]
+    off, rad, rho, Sm, Sr = V[11], V[12], V[13], V[14], V[15]
+    e, zero6, hm, hr, dl = H[0], H[1], H[2], H[3], H[4]
+    zero[:] = 0.0
+    zero6[:] = 0.0
+    for i in range(6):
+        dl[i] = l1[i] - l0[i]
+        hm[i] = l1[i] - 0.5 * dl[i]
+        hr[i] = up(0.5 * abs(dl[i]) + REL * (abs(l1[i]) + abs(dl[i])))
+        e[i] = REL * (abs(l1[i]) + abs(dl[i]))  # l0 + dl against l1
+    enclose_into(placements, motions, closure, held, rows, T0, x1, zero, l1, zero6, False, Fm, Fr, Jm, Jr, ew)
+    unit = V[21]  # the unknowns' units: 1 for angles, the length scale for lengths
+    big = 0.0
+    for a in range(nf):
+        rho[a] = 1.5 * abs(x1[a] - x0[a]) + 1e-12 * (1.0 + abs(x1[a]))
+        big = max(big, rho[a] / unit[a])
+    for a in range(nf):  # room for the coupling |I - Y J(X)| rho of an unknown that hardly moves
+        rho[a] = max(rho[a], FLOOR * big * unit[a])
+    for k in range(INFLATIONS):
+        enclose_into(placements, motions, closure, held, rows, T0, x1, rho, hm, hr, True, V[2], V[3], Jm, Jr, ew)
+        if k == 0:
+            if structured:
+                if not setup(Jm, rows, blocks):
+                    return False, 1, rho, 0
+            else:
+                Y[:, :] = inverse(Jm[:, :nf])
+                if not np.all(np.isfinite(Y)):
+                    return False, 1, rho, 0
+        _path_term(Jm, Jr, dl, 1.0, e, gm, gr)  # |s - 1| <= 1 for the Jacobian's radius
+        for a in range(nf):  # the midpoint moved to s = 1/2: F(x1, l1) - gm / 2, then gm (s - 1/2)
+            Sm[a] = Fm[a] - 0.5 * gm[a]
+            Sr[a] = up(Fr[a] + REL * (abs(Fm[a]) + abs(gm[a])))
+        if structured:
+            preconditioned_blocks(blocks, rows, Sm, Sr, gm, gr, 0.5, YFm, YFr, tm, tr)
+            transform(Jm, rows, blocks)
+            ok = krawczyk_blocks(YFm, YFr, Jr, rows, blocks, rho, off, rad)
+        else:
+            YFm[:], YFr[:] = preconditioned_dense(Y, Sm, Sr, gm, gr, 0.5)
+            ok = krawczyk(YFm, YFr, Jm, Jr, rho, Y, off, rad)
+        if ok and _inside(x0, zero, zero, x1, rho):
+            proven, _, radius, parts = _prove_end(tables, T0, x1, l1, x1, rho, False, structured, work)
+            return proven, 1, radius, parts
+        for a in range(nf):
+            rho[a] = max(rho[a], 1.5 * (abs(off[a]) + rad[a]))
+    return False, 1, rho, 0

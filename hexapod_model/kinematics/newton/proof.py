@@ -29,7 +29,7 @@ from .legs import ChainTables
 from .proven import Proof
 from .solver import Solution
 
-__all__ = ["Proof", "StepProver", "chart_coordinates", "with_proof"]
+__all__ = ["Proof", "StepProver", "attach_proof", "chart_coordinates", "with_proof"]
 
 
 def chart_coordinates(T0: np.ndarray, T: np.ndarray) -> np.ndarray:
@@ -71,6 +71,11 @@ class StepProver:
         self.platform_q = int(clm.platform_q)
         self.home = tables.home
         self.nf = 6 * (n - 1) + 6
+        # the unknowns' units: lengths (the free prismatic joints, the chart's translations) in a
+        # length of the model (its largest anchor radius), so that boxes compare across scales
+        length = float(np.max(np.linalg.norm(tables.closure[:, :3, 3], axis=1))) or 1.0
+        lengths = [np.linalg.norm(tables.motions[i, k, :3]) > 0.5 for i in range(6) for k in self.free[i]]
+        self.units = np.array([length if t else 1.0 for t in lengths] + [length] * 3 + [1.0] * 3)
 
     def platform(self, q: np.ndarray) -> np.ndarray:
         """World placement (4, 4) of the platform joint at ``q`` (``home * X(q)``, as :mod:`.chains`)."""
@@ -91,9 +96,10 @@ class StepProver:
         if work is None:
             ends = (np.zeros((4, 4)), np.zeros((4, 4)), np.zeros(self.nf), np.zeros(self.nf), np.zeros(6), np.zeros(6))
             work = self._local.work = (self._workspace(self.nf, self.tables[4]), ends)
+            work[0][0][21] = self.units
         return work
 
-    def prove(self, q0: np.ndarray, q1: np.ndarray, structured: bool = True) -> Proof:
+    def prove(self, q0: np.ndarray, q1: np.ndarray, structured: bool = True, subdivide: bool = True) -> Proof:
         """The proof of the readings path from ``q0`` (closed) to the result ``q1`` (see the module doc).
 
         Args:
@@ -101,15 +107,38 @@ class StepProver:
             q1: the result.
             structured: the Krawczyk test leg by leg (:mod:`.krawczyk_blocks`); False runs the
                 dense 36 x 36 reference test (the same proof at several times the cost).
+            subdivide: when one test of the whole path fails, halve the path into sub-intervals
+                (:func:`.krawczyk.prove_path`, at most 32 tests); False: one test only (a caller
+                that shortens the step itself).
         """
         kernel = self._kernel.prove_configurations
         announce(kernel)
         work, ends = self.work()
         q0, q1 = np.asarray(q0, dtype=float), np.asarray(q1, dtype=float)
         proven, tests, position, rotation, parts = kernel(
-            self.tables, self.home, self.platform_q, self.leg_q, self.free, self.held_q, q0, q1, structured, work, ends
+            self.tables,
+            self.home,
+            self.platform_q,
+            self.leg_q,
+            self.free,
+            self.held_q,
+            q0,
+            q1,
+            structured,
+            subdivide,
+            work,
+            ends,
         )
         return Proof(bool(proven), float(position), float(rotation), int(tests), int(parts))
+
+
+def attach_proof(sol: Solution, proof: Proof) -> Solution:
+    """``sol`` carrying ``proof``; a ``converged`` result whose proof failed becomes ``uncertified``."""
+    if proof.proven or sol.status != "converged":
+        return replace(sol, proof=proof)
+    why = f"the Krawczyk proof of the readings path from the guess failed ({proof.tests} tests)"
+    message = f"{sol.message}; {why}" if sol.message else why
+    return replace(sol, status="uncertified", message=message, proof=proof)
 
 
 def with_proof(prover: StepProver | None, q0: np.ndarray, sol: Solution) -> Solution:
@@ -120,9 +149,4 @@ def with_proof(prover: StepProver | None, q0: np.ndarray, sol: Solution) -> Solu
     """
     if prover is None or sol.status not in ("converged", "uncertified"):
         return replace(sol, proof=Proof(False, np.inf, np.inf, 0, 0))
-    proof = prover.prove(np.asarray(q0, dtype=float), sol.q)
-    if proof.proven or sol.status != "converged":
-        return replace(sol, proof=proof)
-    why = f"the Krawczyk proof of the readings path from the guess failed ({proof.tests} tests)"
-    message = f"{sol.message}; {why}" if sol.message else why
-    return replace(sol, status="uncertified", message=message, proof=proof)
+    return attach_proof(sol, prover.prove(np.asarray(q0, dtype=float), sol.q))

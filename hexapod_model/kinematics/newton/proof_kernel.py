@@ -2,7 +2,8 @@
 
 :func:`prove_configurations` reads the Krawczyk unknowns of the start and the result (the legs'
 free joints and the platform's chart coordinates about the result's placement,
-:mod:`.enclosure`), runs :func:`.krawczyk.prove_path` on the readings path between them and
+:mod:`.enclosure`), runs :func:`.krawczyk.prove_whole` on the readings path between them (and
+:func:`.krawczyk.prove_path`, which subdivides it, when that fails) and
 turns the proven radius into bounds of the platform's position and rotation, in one call:
 :class:`.proof.StepProver` wraps it.
 """
@@ -12,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .krawczyk import prove_path
+from .krawczyk import prove_path, prove_whole
 
 
 @njit(cache=True)
@@ -65,7 +66,7 @@ def unknowns_into(q, T0, T, home, platform_q, leg_q, free, x):
 
 
 @njit(cache=True)
-def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, structured, work, ends):
+def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, structured, subdivide, work, ends):
     """The Krawczyk proof of the readings path from ``q0`` to ``q1`` (:meth:`.proof.StepProver.prove`).
 
     Args:
@@ -78,6 +79,7 @@ def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, 
         q0: the start configuration (closed).
         q1: the result.
         structured: the per-leg Krawczyk test (else the dense reference).
+        subdivide: when the test of the whole path fails, subdivide it (else not proven).
         work: :func:`.krawczyk.workspace`, overwritten.
         ends: ``(T0, T, x0, x1, l0, l1)`` work arrays ((4, 4), (4, 4), (nf,), (nf,), (6,), (6,))
 
@@ -98,7 +100,10 @@ def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, 
     for i in range(6):
         if not np.isfinite(l0[i] + l1[i]):
             return False, 0, np.inf, np.inf, 0
-    proven, tests, radius, parts = prove_path(tables, T0, x0, x1, l0, l1, structured, work)
+    proven, tests, radius, parts = prove_whole(tables, T0, x0, x1, l0, l1, structured, work)
+    if not proven and subdivide:  # subdivide the path (its tests counted after the whole path's)
+        proven, more, radius, parts = prove_path(tables, T0, x0, x1, l0, l1, structured, work)
+        tests += more
     if not proven:
         return False, tests, np.inf, np.inf, 0
     r = radius[-6:]
