@@ -360,12 +360,13 @@ class SolveEngine(JointSpace):
         is then closed there by plain Newton, and the step proven from that closure. Away from a
         singularity a step it cannot prove (a long one) is followed from ``start`` in proven
         steps (:func:`.connected.connected_chain`, at most ``WARM_CHAIN_SOLVES`` solves, none
-        shorter than ``WARM_CHAIN_MIN_STEP`` of the path), and the last of them is proven again to end at ``sol``. Not near a singularity
-        (flag ``near_singular``): there the straight readings path that the steps follow may
-        pass a fold that the plate's own path did not, and end at another assembly than the
-        plate's; only the step's own proof counts. Without a proof the result is
-        ``uncertified``. A hexapod without a prover (legs that are not chains of one-dof joints)
-        keeps the certificate's verdict. ``joints``: the prismatic values of the readings (m).
+        shorter than ``WARM_CHAIN_MIN_STEP`` of the path), and the last of them is proven again
+        to end at ``sol``. Not near a singularity (flag ``near_singular``): there the straight
+        readings path that the steps follow may pass a fold that the plate's own path did not,
+        and end at another assembly than the plate's; only the step's own proof counts. Without
+        a proof the result is ``uncertified``. A hexapod without a prover (legs that are not
+        chains of one-dof joints) keeps the certificate's verdict. ``joints``: the prismatic
+        values of the readings (m).
         """
         prover = self.prover
         if guess is None or sol.status != "converged" or prover is None:
