@@ -264,7 +264,8 @@ def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
         where = f"{preset}: trajectory {which} at 1 kHz"
         assert rows[f"{where}, warm steps proven (Krawczyk)"].endswith(" of 19")
         step = rows[f"{where}, warm step with its proof, time per step"]
-        assert "µs proof" in step and (("floor" in step and step.endswith("x)")) == (preset == "reference"))
+        assert "µs forward with its proof" in step and "the solve alone" in step
+        assert ("floor" in step and step.endswith("x)")) == (preset == "reference")
     assert any(args[0] == "certificate.py" and parse is table.certificate_rows for args, _, parse in table.BENCHMARKS)
 
 
@@ -311,6 +312,9 @@ def test_floor_compare_benchmark_runs(tmp_path):
     assert "ratio package / floor" in out.stdout and "target >= 0.85x" in out.stdout
     data = json.loads(report.read_text())  # what docs/performance.md's rows are made of
     assert data["warm_fk_us"]["package"] > 0 and data["warm_fk_ratio"] > 0 and len(data["batch"]) == 2
+    assert data["warm_fk_proven_us"] > data["warm_fk_us"]["package"]  # the proof costs on top of the solve
+    rows = dict(_performance_table().floor_rows(data))
+    assert "µs vs the floor's" in rows["reference: warm FK with its Krawczyk proof (the default), CPU per solve"]
 
 
 def test_startup_benchmark_runs(tmp_path):
