@@ -98,3 +98,14 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(chromium)
         if "cell" in item.keywords and not HAVE_CELL:
             item.add_marker(cell)
+
+
+def batch_rule_forward(hexa: hm.Hexapod):
+    """``forward`` as a batch row is solved (``forward(check=False)`` signature): the certificate's
+    checks, and the Krawczyk proof of a warm row near a singularity only (docs/solver.md)."""
+
+    def solve(lengths, guess=None, check=False):
+        sol = hexa.forward(lengths, guess=guess, check=check, prove=False)
+        return hexa.prove_step(guess, sol) if guess is not None and "near_singular" in sol.flags else sol
+
+    return solve

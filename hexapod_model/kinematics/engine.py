@@ -38,6 +38,8 @@ DEFAULT_MAX_ITER = 20
 #: (metres and radians; the presets have 9-67, a 20x smaller hexapod about 700, a singular
 #: layout with parallel, coplanar or coincident legs 1e13 and more)
 HOME_CONDITION_LIMIT = 1e6
+#: a guess whose closure at its own readings moves no joint further (m, rad) is proven from as it is
+GUESS_CLOSED = 1e-9
 #: ``prove`` of :meth:`SolveEngine.forward`: the proof of a warm result near a singularity only
 NEAR_SINGULAR: Literal["near_singular"] = "near_singular"
 #: which warm results :meth:`SolveEngine.forward` proves: every one (True), none, or :data:`NEAR_SINGULAR`
@@ -368,14 +370,16 @@ class SolveEngine(JointSpace):
         chains of one-dof joints) keeps the certificate's verdict. ``joints``: the prismatic
         values of the readings (m).
         """
-        prover = self.prover
-        if guess is None or sol.status != "converged" or prover is None:
+        if guess is None or sol.status != "converged":
+            return sol
+        prover = self.prover  # numba: the proof's kernels compile (or load) at the first warm solve
+        if prover is None:
             return sol
         proof = prover.prove(start, sol.q)
         solver = self.solver(self.held_forward)
         if not proof.proven:  # a guess that does not close: from its closure at its own readings
             closed, status = solver.run(start.copy(), tol, max_iter)[:2]
-            if status == "converged" and np.max(np.abs(closed - start)) > 0.0:
+            if status == "converged" and np.max(np.abs(closed - start)) > GUESS_CLOSED:
                 start, tests = closed, proof.tests
                 proof = prover.prove(start, sol.q)
                 proof = replace(proof, tests=tests + proof.tests)

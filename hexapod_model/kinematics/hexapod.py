@@ -443,7 +443,9 @@ class Hexapod:
         The proof (:class:`~.newton.proof.Proof`, rigorous in floating point) that the path of
         solutions for the readings from ``guess``'s to ``sol``'s stays on one assembly and ends
         within :attr:`~.newton.proof.Proof.position_m` / ``rotation_rad`` of ``sol.pose``. A
-        ``converged`` result whose proof fails is returned ``uncertified``.
+        ``converged`` result whose proof fails is returned ``uncertified``. :meth:`forward` runs
+        it on every warm result (with proven steps for a long one); this runs the one test of
+        the step (halved when it fails) on any result: a batch row, a ``prove=False`` solve.
 
         Args:
             guess: the closed configuration or :class:`Solution` the solve started from.

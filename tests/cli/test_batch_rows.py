@@ -25,19 +25,9 @@ from hexapod_model.io.tables import (
 from hexapod_model.kinematics.body_check import BODY_STATUSES
 from hexapod_model.studies.bench import trajectory_readings
 
-from ..conftest import PATH_TOL, hexapod
+from ..conftest import PATH_TOL, batch_rule_forward, hexapod
 
 BAD_LINES = ("0.01,abc,0,0,0,0", "0.01,0,0", "", "nan,0,0,0,0,0", "1e7,0,0,0,0,0", "0.01,0,0,0,0,0.9")
-
-
-def _forward_row(hexa: hm.Hexapod):
-    """``forward`` as a batch row is solved: the certificate's checks, the proof of a warm row near a singularity."""
-
-    def solve(lengths, guess=None, check=False):
-        sol = hexa.forward(lengths, guess=guess, check=check, prove=False)
-        return hexa.prove_step(guess, sol) if guess is not None and "near_singular" in sol.flags else sol
-
-    return solve
 
 
 def per_row(hexa: hm.Hexapod, path, kind: str) -> tuple[str, int, str]:
@@ -46,7 +36,7 @@ def per_row(hexa: hm.Hexapod, path, kind: str) -> tuple[str, int, str]:
     with open_table(path, LENGTH_COLUMNS if kind == "fk" else ()) as table:
         columns = LENGTH_COLUMNS if kind == "fk" else pose_input_columns(table.header)
         header = (POSE_COLUMNS if kind == "fk" else LENGTH_COLUMNS) + SOLVER_COLUMNS
-        writer, solve = TableWriter(out, header), _forward_row(hexa) if kind == "fk" else hexa.inverse
+        writer, solve = TableWriter(out, header), batch_rule_forward(hexa) if kind == "fk" else hexa.inverse
         total, failed, first, guess = 0, 0, "", None
         for rows in table.chunks(columns):
             inputs, errors = rows.values, list(rows.errors)

@@ -14,7 +14,7 @@ import hexapod_model as hm
 from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
 from hexapod_model.lie import rpy_to_matrix
 
-from ..conftest import PATH_TOL, PRESET_NAMES, assert_same_message, hexapod, limits_only
+from ..conftest import PATH_TOL, PRESET_NAMES, assert_same_message, batch_rule_forward, hexapod, limits_only
 from .test_newton import idle_roll_hexapod
 
 
@@ -105,13 +105,13 @@ def test_warm_batches_follow_a_time_series_like_the_cli():
     readings[40] = np.nan  # a bad row: the next row starts from the last good one
     readings[41, 3] = 1.0  # out of stroke
     result = hexa.forward_batch(readings, warm=True)
-    assert_rows_match(result, per_row(hexa.forward, readings, warm=True))
+    assert_rows_match(result, per_row(batch_rule_forward(hexa), readings, warm=True))
     good = result.converged
     assert good.sum() == len(readings) - 2 and np.nanmax(np.abs(result.poses[good] - poses[good])) < 1e-9
     assert np.median(result.iterations[good]) < result.iterations[0]  # warm rows: fewer steps than from home
     start = hexa.forward(readings[0])
     assert_rows_match(
-        hexa.forward_batch(readings[1:], start, warm=True), per_row(hexa.forward, readings[1:], start, True)
+        hexa.forward_batch(readings[1:], start, warm=True), per_row(batch_rule_forward(hexa), readings[1:], start, True)
     )
 
 
@@ -124,7 +124,7 @@ def test_singular_and_near_singular_rows():
     for guess in (None, hexa.inverse(poses[2])):
         for warm in (False, True):
             result = hexa.forward_batch(rows, guess, warm=warm)
-            assert_rows_match(result, per_row(hexa.forward, rows, guess, warm))
+            assert_rows_match(result, per_row(batch_rule_forward(hexa), rows, guess, warm))
     statuses = set(hexa.forward_batch(rows, hexa.inverse(poses[2])).status)
     flagged = hexa.forward_batch(rows, hexa.inverse(poses[2]), warm=True).flags
     assert ("near_singular",) in flagged and len(statuses) > 1
@@ -144,7 +144,7 @@ def test_a_warm_row_near_a_singularity_is_converged_only_with_its_proof(body):
     rows = np.array([readings, hexa.inverse(T).lengths, readings])
     for warm in (False, True):
         result = hexa.forward_batch(rows, guess, warm=warm)
-        expected = per_row(hexa.forward, rows, guess, warm)
+        expected = per_row(batch_rule_forward(hexa), rows, guess, warm)
         assert_rows_match(result, expected)
         assert expected[0][0] == "uncertified" and "Krawczyk" in expected[0][1] and not result.converged[0]
 
@@ -157,7 +157,7 @@ def test_general_path_batches():
     np.testing.assert_allclose(back.lengths, plain.inverse_batch(poses).lengths, rtol=0, atol=1e-10)
     rows = back.lengths.copy()
     rows[2, 0] = np.nan
-    assert_rows_match(hexa.forward_batch(rows), per_row(hexa.forward, rows))
+    assert_rows_match(hexa.forward_batch(rows), per_row(batch_rule_forward(hexa), rows))
 
 
 def test_batches_in_threads_match_one_thread():

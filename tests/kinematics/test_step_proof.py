@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import hexapod_model as hm
+from hexapod_model.lie import rpy_to_matrix
 
 from ..conftest import limits_only as hexapod  # the cones would rule out the fold poses these cases are about
 
@@ -47,3 +48,42 @@ def test_prove_step_attaches_the_proof_of_a_small_warm_step(name):
     assert proven.converged and proven.proof == sol.proof  # the same test on the same step
     assert proven.proof.subdivisions >= 1 and proven.proof.position_m < 1e-6
     np.testing.assert_array_equal(proven.pose, sol.pose)  # the proof changes no number
+
+
+@pytest.mark.parametrize("name", ["reference", "intersecting", "spherical", "guideway", "3-6"])
+def test_every_warm_converged_result_carries_its_proof(name):
+    """Along trajectory A at 1 kHz every warm converged step is proven; prove=False skips the proof."""
+    from hexapod_model.analysis.trajectories import trajectory_poses
+
+    hexa = hexapod(name)
+    _, poses = trajectory_poses("A", hexa.home_pose, hexa.base_radius / 50.0, 1000.0)
+    ik = hexa.inverse_batch(poses[:400:4])  # 4 ms steps
+    readings = ik.lengths[np.asarray(ik.converged, dtype=bool)]
+    sol, converged = hexa.forward(readings[0], check=False), 0
+    for x in readings[1:]:
+        nxt = hexa.forward(x, sol, check=False)
+        assert nxt.status != "converged" or (nxt.proof is not None and nxt.proof.proven), nxt.message
+        assert nxt.status != "uncertified" or not nxt.proof.proven
+        converged += nxt.converged
+        bare = hexa.forward(x, sol, check=False, prove=False)
+        assert bare.proof is None and bare.status == nxt.status or nxt.status == "uncertified"
+        np.testing.assert_array_equal(bare.pose, nxt.pose)  # the proof changes no number
+        sol = nxt if nxt.closed else sol
+    assert converged >= 0.9 * (len(readings) - 1)
+
+
+def test_a_long_warm_step_is_proven_in_steps():
+    """A guess 3 cm and 5 deg away: one Krawczyk test cannot prove the step; proven steps along the path can."""
+    hexa = hexapod("reference")
+    T = hexa.home_pose.copy()
+    T[:3, 3] += [0.02, -0.01, 0.01]
+    guess = hexa.inverse(T)
+    T[:3, 3] += [0.03, 0.0, -0.01]
+    T[:3, :3] = rpy_to_matrix(0.0, 0.0, np.radians(5.0))
+    truth = hexa.inverse(T)
+    one = hexa.engine.prover.prove(guess.q, hexa.forward(truth.lengths, guess, prove=False).q)
+    sol = hexa.forward(truth.lengths, guess)
+    assert not one.proven  # the step alone is too long for one test (or its halves)
+    assert sol.converged and sol.proof.proven and sol.proof.subdivisions > 1
+    assert np.linalg.norm(sol.pose[:3, 3] - T[:3, 3]) < 1e-9
+    assert sol.proof.position_m < 1e-6

@@ -121,9 +121,11 @@ class Solution:
         candidates: with status ``ambiguous_assembly``, the (4, 4) poses of the assemblies
             found (``pose`` is the first).
         det_sign: sign of the direct-kinematics Jacobian's determinant at the result (0: none).
-        proof: the Krawczyk proof of a warm step (:class:`~.proof.Proof`): set by
-            :meth:`~hexapod_model.kinematics.hexapod.Hexapod.prove_step`, and on a warm
-            ``converged`` result near a singularity; ``None`` when no proof was run.
+        proof: the Krawczyk proof of a warm step (:class:`~.proof.Proof`): set on every warm
+            ``converged`` (or ``uncertified``) result of
+            :meth:`~hexapod_model.kinematics.hexapod.Hexapod.forward` and by
+            :meth:`~hexapod_model.kinematics.hexapod.Hexapod.prove_step`; ``None`` when no
+            proof was run (a cold solve, ``prove=False``, a batch row away from a singularity).
     """
 
     pose: np.ndarray

@@ -207,7 +207,8 @@ def warm_up(hexa: Hexapod, noise: float, predictor: str = "eq22", samples: int =
     kernels a set runs only sometimes: the readings path that a solve follows in substeps when
     its first attempt does not certify (the first sets after a restart with the plate moved
     from its stored lock pose, :func:`_warm_readings_path`), and the Krawczyk proof of a warm
-    step near a singularity (:meth:`~hexapod_model.kinematics.hexapod.Hexapod.prove_step`).
+    step (:meth:`~hexapod_model.kinematics.hexapod.Hexapod.forward` proves every warm step; the
+    tracker's steps compile it already).
     """
     solver = PoseSolver(hexa, max(noise, 1e-6), predictor)
     ramp = np.linspace(0.0, 1e-4, samples)
