@@ -30,7 +30,7 @@ from .input_checks import LIMIT_SLACK, MAX_TOL, check_home_conditioning, check_m
 from .joint_space import JointSpace
 from .newton.kernel_sets import kernel_set
 from .newton.outcomes import new_solution
-from .newton.proof import StepProver, attach_proof, with_proof
+from .newton.proof import Proof, StepProver, attach_proof, with_proof
 from .newton.solver import NewtonSolver, Solution
 
 DEFAULT_MAX_ITER = 20
@@ -354,6 +354,7 @@ class SolveEngine(JointSpace):
         tol: float,
         max_iter: int,
         check: bool,
+        proof: Proof | None = None,
     ) -> Solution:
         """A warm ``converged`` result stays so only with the Krawczyk proof of its readings path from ``start``.
 
@@ -368,14 +369,15 @@ class SolveEngine(JointSpace):
         and end at another assembly than the plate's; only the step's own proof counts. Without
         a proof the result is ``uncertified``. A hexapod without a prover (legs that are not
         chains of one-dof joints) keeps the certificate's verdict. ``joints``: the prismatic
-        values of the readings (m).
+        values of the readings (m). ``proof``: the step's own proof, when the caller ran it.
         """
         if guess is None or sol.status != "converged":
             return sol
         prover = self.prover  # numba: the proof's kernels compile (or load) at the first warm solve
         if prover is None:
             return sol
-        proof = prover.prove(start, sol.q)
+        if proof is None:
+            proof = prover.prove(start, sol.q)
         solver = self.solver(self.held_forward)
         if not proof.proven:  # a guess that does not close: from its closure at its own readings
             closed, status = solver.run(start.copy(), tol, max_iter)[:2]

@@ -285,12 +285,15 @@ class Hexapod:
                 # converged certified within the limits, not near a singularity: engine.attempted()'s Solution
                 q, pose, jac, it, res, _ = done
                 readings = q[engine.prismatic_q]  # lengths_of(q) without an encoder model
-                sol = new_solution(pose, q, readings, "converged", it, res, jac, "", (), (), int(solver.sign))
+                prover = None if guess is None or not prove else engine.prover
+                proof = None if prover is None else prover.prove(start, q)  # a warm step's proof
+                good = proof is None or proof.proven
+                sol = new_solution(pose, q, readings, "converged", it, res, jac, "", (), (), int(solver.sign), proof)
                 if engine.body is not None:
                     sol = engine.body.judged(sol, True)
-                if guess is None or not prove:
+                if good:
                     return sol
-                return engine.proven_warm(sol, guess, start, lengths, tol, max_iter, check)
+                return engine.proven_warm(sol, guess, start, lengths, tol, max_iter, check, proof)
             held = engine.solver(engine.held_forward)
             return engine.attempted(
                 held, done, lengths, lengths, start, tol, max_iter, sign, guess, check, False, prove
