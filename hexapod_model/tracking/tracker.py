@@ -309,10 +309,15 @@ class Tracker(PassageMixin):
         return predict(self.hexa.model, self._hist, self.predictor)  # reads P0, P1, P2 only
 
     def _solve(self, l: np.ndarray, guess: np.ndarray) -> Solution:
+        # a step within continuation_step carries its Krawczyk proof; a longer one (the first
+        # sample, after a gap: flagged settling) the certificate's checks, not the proven steps
+        # that would hold the cycle for tens of milliseconds
+        joints = l if self.hexa.engine.encoder is None else self.hexa.joints_of(l[:6])  # m, as the guess's
+        prove = bool(np.max(np.abs(joints[:6] - guess[self._prism_q])) <= self.settings.continuation_step)
         try:
             if self.hexa.redundancy is not None:  # the six legs' solve of a hexapod with redundant sensors
-                return self.hexa.engine.forward(l, guess, self.tol, self.max_iter, False, False)
-            return self.hexa.forward(l, guess=guess, tol=self.tol, max_iter=self.max_iter, check=False)
+                return self.hexa.engine.forward(l, guess, self.tol, self.max_iter, False, False, prove)
+            return self.hexa.forward(l, guess=guess, tol=self.tol, max_iter=self.max_iter, check=False, prove=prove)
         except HexapodError as exc:  # a reading outside the stroke
             q = self._last_q
             return Solution(self.hexa.pose_of(q), q.copy(), l.copy(), "invalid_input", 0, math.nan, None, str(exc))
