@@ -378,13 +378,15 @@ class SolveEngine(JointSpace):
             return sol
         if proof is None:
             proof = prover.prove(start, sol.q)
+        if proof.proven:  # the usual case: nothing more to look up or solve
+            return attach_proof(sol, proof)
         solver = self.solver(self.held_forward)
-        if not proof.proven:  # a guess that does not close: from its closure at its own readings
-            closed, status = solver.run(start.copy(), tol, max_iter)[:2]
-            if status == "converged" and np.max(np.abs(closed - start)) > GUESS_CLOSED:
-                start, tests = closed, proof.tests
-                proof = prover.prove(start, sol.q)
-                proof = replace(proof, tests=tests + proof.tests)
+        # a guess that does not close: from its closure at its own readings
+        closed, status = solver.run(start.copy(), tol, max_iter)[:2]
+        if status == "converged" and np.max(np.abs(closed - start)) > GUESS_CLOSED:
+            start, tests = closed, proof.tests
+            proof = prover.prove(start, sol.q)
+            proof = replace(proof, tests=tests + proof.tests)
         if not proof.proven and "near_singular" not in sol.flags:
             chain = connected_chain(
                 solver, prover, start, joints, tol, max_iter, WARM_CHAIN_MIN_STEP, WARM_CHAIN_SOLVES
