@@ -195,6 +195,9 @@ class FixtureService:
             # thread for ~100 ms (the p99 latency); the records' garbage is still collected
             gc.collect()
             gc.freeze()
+            listening = time.time()  # the warm-up's time was no silence of the legs
+            for cycle in cycles.values():
+                cycle.listen(listening)
             self._thread = NamedThread(target=self._loop, name="hx-cycle")
             self._thread.start()
             self.phase = "running"

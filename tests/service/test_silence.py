@@ -139,3 +139,39 @@ def test_frames_delivered_up_to_48_ms_after_their_stamps_are_no_silent_leg_throu
     assert not any(r.status == "silent_leg" for r in records), [r.flags for r in records if r.status == "silent_leg"]
     times = [r.t for r in records]
     assert all(b >= a for a, b in zip(times, times[1:])), "record times ran backwards"
+
+
+def test_no_leg_is_silent_before_staleness_has_passed_since_the_cycle_began_listening(tmp_path):
+    # the service builds its cycles, warms the kernels up (up to a minute after installation), then reads the bus
+    cycle, frames, _ = frames_of(tmp_path, 3)
+    cycle.listen(T0 + 2.0)
+    assert cycle.check_silence(T0 + 2.04) is None
+    rec = cycle.check_silence(T0 + 2.06)
+    assert rec is not None and rec.status == "silent_leg" and len(rec.flags) == 6, rec
+
+
+class ListeningBus(DelayedBus):
+    """A DelayedBus whose first set is due after the service began listening (the warm-up's drain reads nothing)."""
+
+    def recv(self, timeout=None):
+        if self.start is None and not timeout:
+            return None
+        return super().recv(timeout)
+
+
+def test_the_warm_up_before_the_first_frame_is_no_silence_through_the_service(tmp_path):
+    # the first set comes 45 ms after the cycle began reading, within the staleness of 0.05 s; the service's
+    # warm-up before it took longer than that, and its time was judged as the legs' silence
+    config = service_config(tmp_path)
+    bus = ListeningBus(config, lambda k: 0.045 if k == 0 else 0.001)
+    records = []
+    service = FixtureService(config, bus=bus, hexapods={"left": hexapod("reference")}, http=False)  # type: ignore[arg-type]
+    service.subscribe(records.append)
+    try:
+        service.start()
+        time.sleep(0.6)
+    finally:
+        service.stop()
+    assert bus.start is not None and bus.start - service.started > 0.05  # the warm-up took longer than staleness
+    assert sum(r.status == "ok" for r in records) > 10
+    assert not any(r.status == "silent_leg" for r in records), [r.flags for r in records if r.status == "silent_leg"]

@@ -185,6 +185,15 @@ class FixtureCycle:
         self._in_robot = None if cfg.cell is None else InRobot(cfg.cell, cfg.noise, self.solver.propagation)
         #: the latest record
         self.last: PoseRecord = self._record(t0, "no_data", [], None)
+        self._listening = t0  # s: since when the bus is read (see listen)
+
+    def listen(self, t: float) -> None:
+        """The bus is read from ``t`` on (s, the bus's time): no leg is silent before ``t + staleness``.
+
+        The service calls it when its cycle starts reading: the kernels' warm-up before it (up
+        to a minute after installation) is no silence of the fixture's legs.
+        """
+        self._listening = t
 
     # ----- input -----
     def on_frame(self, leg: int, data: bytes | bytearray, t: float) -> PoseRecord | None:
@@ -418,7 +427,7 @@ class FixtureCycle:
             self._close_burst(self._bursts.stamp)
         if self._pending:
             return self._pending.popleft()
-        if now - self.last.t <= staleness:
+        if now - max(self.last.t, self._listening) <= staleness:
             return None
         if (self._n_fresh and now - self._t_first <= staleness) or now - self._ahead.held_stamp <= staleness:
             return None
