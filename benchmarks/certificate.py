@@ -1,7 +1,7 @@
 """What the assembly check of direct kinematics costs and how often it refuses, per preset.
 
     python benchmarks/certificate.py [PRESET ...] [--poses N] [--seed S] [--warm-offset M] [--trajectory-samples K]
-        [--json FILE]
+        [--rest-samples R] [--json FILE]
 
 For ``N`` random poses per preset (home +- 50 mm, roll/pitch/yaw +- 25 deg, within the limits),
 the readings are solved cold (from home) and warm (from the pose moved by ``warm-offset`` m) by
@@ -24,6 +24,10 @@ and of the solve alone (``prove=False``), of the proof by itself (the per-leg te
 the dense reference test on the same solves, with its proven fraction), and the
 floor (``floor_newton.fk_newton``, the reference Newton iteration in one njit function, on the
 offset-Cardan presets whose legs it reads) on the same readings.
+
+Then a fixture **at rest** (``R`` samples of one pose with 1 um of noise on each reading): the
+proven fraction, the fraction proven in a region an earlier step proved, and the warm
+``forward`` with its proof beside the same with every step proven by its own test.
 
 ``--json`` also writes the figures (``benchmarks/performance_table.py`` reads it); ``--poses 0``
 measures the proof alone.
@@ -170,6 +174,55 @@ def trajectory_proofs(name: str, which: str, samples: int) -> dict:
     }
 
 
+def rest_proofs(name: str, samples: int, noise: float = 1e-6) -> dict:
+    """Per-step medians (us) of warm solves of a fixture at rest: readings with ``noise`` m of noise.
+
+    Side by side, step after step on the same solves: ``forward`` with its proof as it runs
+    (regions: the steps whose readings lie in a region an earlier step proved test only their
+    end box) and with every step proven by its own test (``StepProver.regions`` False), the
+    solve alone, and the floor on the same readings.
+    """
+    hexa = Hexapod.load(name)
+    prover = hexa.engine.prover
+    pose = hexa.home_pose.copy()
+    pose[:3, 3] += np.array([0.2, 0.0, 0.4]) * hexa.base_radius / 10.0  # a pose off home
+    rest = hexa.inverse(pose, check=False)
+    readings = rest.lengths + np.random.default_rng(7).normal(scale=noise, size=(samples, 6))
+    sol = hexa.forward(readings[0], rest, check=False)
+    solve_t, region_t, own_t, in_region, proven = [], [], [], 0, 0
+    for x in readings[1:]:
+        t0 = time.perf_counter()
+        nxt = hexa.forward(x, sol, check=False, prove=False)
+        t1 = time.perf_counter()
+        if prover is not None:
+            prover.regions = False
+        own = hexa.forward(x, sol, check=False)
+        t2 = time.perf_counter()
+        if prover is not None:
+            prover.regions = True
+        checked = hexa.forward(x, sol, check=False)
+        t3 = time.perf_counter()
+        solve_t.append(t1 - t0)
+        own_t.append(t2 - t1)
+        region_t.append(t3 - t2)
+        if checked.proof is not None and checked.proof.proven and own.proof is not None and own.proof.proven:
+            proven += 1
+            in_region += checked.proof.in_region
+        sol = nxt
+    floor = floor_times(hexa, readings)
+    n = len(solve_t)
+    return {
+        "steps": n,
+        "noise_m": noise,
+        "proven_fraction": proven / n,
+        "in_region_fraction": in_region / n,
+        "solve_median_us": float(np.median(solve_t) * 1e6),
+        "forward_proven_median_us": float(np.median(region_t) * 1e6),
+        "forward_own_test_median_us": float(np.median(own_t) * 1e6),
+        "floor_median_us": float(np.median(floor) * 1e6) if floor else float("nan"),
+    }
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("presets", nargs="*", default=[n for n in PRESETS if not get_preset(n).redundant])  # six readings
@@ -177,6 +230,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--warm-offset", type=float, default=1e-4, help="m (default 1e-4: a 1 kHz sample at 0.1 m/s)")
     ap.add_argument("--trajectory-samples", type=int, default=4001, help="1 kHz samples of A and B (4001: all)")
+    ap.add_argument("--rest-samples", type=int, default=2001, help="samples of the fixture at rest")
     ap.add_argument("--json", type=Path, help="also write the figures as JSON")
     args = ap.parse_args(argv)
     report: dict = {"trajectories": [], "solves": []}
@@ -196,6 +250,17 @@ def main(argv=None) -> int:
                 f"floor {t['floor_median_us']:.1f} us (medians); with the proof / floor {ratio:.1f}x",
                 flush=True,
             )
+    for name in args.presets:
+        r = rest_proofs(name, args.rest_samples)
+        report["rest"] = [*report.get("rest", []), {"preset": name, **r}]
+        print(
+            f"{name:12s} at rest (1 um noise): {r['steps']} warm steps, proven {100 * r['proven_fraction']:.2f} % "
+            f"({100 * r['in_region_fraction']:.2f} % in a region); warm forward with its proof "
+            f"{r['forward_proven_median_us']:.1f} us "
+            f"(each step its own test: {r['forward_own_test_median_us']:.1f} us; "
+            f"the solve alone {r['solve_median_us']:.1f} us); floor {r['floor_median_us']:.1f} us (medians)",
+            flush=True,
+        )
     for name in args.presets:
         if args.poses <= 0:
             break

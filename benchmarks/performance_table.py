@@ -178,6 +178,17 @@ def certificate_rows(data: dict) -> list[tuple[str, str]]:
         else:
             value += "; no floor for this preset"
         rows.append((f"{where}, warm step with its proof, time per step", value))
+    for r in data.get("rest", []):
+        where = f"{r['preset']}: at rest, {r['noise_m'] * 1e6:g} µm noise"
+        value = (
+            f"{100 * r['proven_fraction']:.2f} % proven, {100 * r['in_region_fraction']:.2f} % in a region; "
+            f"{r['forward_proven_median_us']:.0f} µs forward with its proof (each step its own test: "
+            f"{r['forward_own_test_median_us']:.0f} µs), {r['solve_median_us']:.0f} µs the solve alone (medians)"
+        )
+        if not math.isnan(r["floor_median_us"]):
+            ratio = r["forward_proven_median_us"] / r["floor_median_us"]
+            value += f"; floor {r['floor_median_us']:.1f} µs ({ratio:.1f}x)"
+        rows.append((f"{where}, warm step with its proof (regions), time per step", value))
     return rows
 
 

@@ -40,6 +40,7 @@ from .krawczyk_blocks import workspace as workspace_blocks
 from .krawczyk_dense import inverse, krawczyk, preconditioned_dense
 
 MAX_TESTS = 32  # Krawczyk tests per path (each sub-interval that fails is halved)
+V_ROWS = 24  # rows of the work's vectors: 0-20 scratch, 21 the unknowns' units, 22-23 a region's box
 MIN_WIDTH = 1.0 / 64.0  # narrowest sub-interval of the readings path tried
 INFLATIONS = 4  # boxes tried per test (epsilon-inflation)
 FLOOR = 0.05  # a first box's radius per unknown, at least this fraction of the largest one (in units)
@@ -82,11 +83,12 @@ def preconditioned_blocks(ws, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr):
 def workspace(nf: int, rows: int) -> tuple:
     """The work arrays of :func:`prove_path` for ``nf`` unknowns and legs of ``rows`` closure rows."""
     return (
-        np.vstack((np.zeros((21, nf)), np.ones((1, nf)))),  # vectors; the last: the unknowns' units (StepProver)
+        # vectors: 21 scratch, the unknowns' units (StepProver), a region's centre and radius (prove_region)
+        np.vstack((np.zeros((21, nf)), np.ones((1, nf)), np.zeros((V_ROWS - 22, nf)))),
         np.zeros((nf, nf + 6)),  # Jm: the Jacobian's enclosure (and the held joints' columns)
         np.zeros((nf, nf + 6)),  # Jr
         np.zeros((nf, nf)),  # Y: the dense test's preconditioner
-        np.zeros((5, 6)),  # six-vectors
+        np.zeros((7, 6)),  # six-vectors (the last two: a region's readings box)
         workspace_blocks(rows),
         enclosure_workspace(nf // 6),  # legs of nf / 6 joints (6 (n - 1) + 6 unknowns)
     )
@@ -355,3 +357,111 @@ def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
         for a in range(nf):
             rho[a] = max(rho[a], 1.5 * (abs(off[a]) + rad[a]))
     return False, 1, rho, 0
+
+
+@njit(cache=True, inline="always")
+def in_readings(l, hm, hr):
+    """Whether the readings ``l`` (6,) lie in the box ``hm +- hr`` (the rounding of ``l - hm`` allowed for)."""
+    for i in range(6):
+        d = abs(l[i] - hm[i])
+        if not up(d + REL * d) <= hr[i]:
+            return False
+    return True
+
+
+@njit(cache=True)
+def prove_region(tables, T0, x0, x1, l0, l1, hm, hr, work, c, rho):
+    """One Krawczyk test over a box of readings ``P = hm +- hr`` (6,) on a box ``X = x1 +- rho`` (per-leg test).
+
+    With the readings as interval parameters,
+
+        K(X, P) = c - Y F(c, P) + (I - Y J(X, P)) (X - c),   F(c, P) in F(c, hm) + J_held(X, P) (P - hm),
+
+    (the mean value theorem in the readings, ``c = x1``); ``K(X, P)`` inside ``X`` proves, for
+    **every** reading ``l`` in ``P``, exactly one solution ``x(l)`` in ``X`` with the Jacobian
+    regular there, so that ``x(l)`` is continuous on ``P`` (the implicit function theorem): any
+    straight readings path within ``P`` (a convex box) from a start in ``X`` stays on that start's
+    assembly. ``Y J_held`` is formed column by column (the solution's sensitivity to each
+    reading), which keeps ``K`` as narrow as a path's test of the same width. Each try widens
+    ``X`` (epsilon-inflation, :data:`INFLATIONS` boxes).
+
+    Args:
+        tables: as :func:`prove_path`.
+        T0: (4, 4) the platform chart's origin.
+        x0: (nf,) the step's start (must lie in ``X``).
+        x1: (nf,) the step's result, the box's centre.
+        l0: (6,) the step's start readings (m), in ``P``.
+        l1: (6,) its end readings (m), in ``P``.
+        hm: (6,) the readings box's midpoint (m).
+        hr: (6,) its radius (m).
+        work: :func:`workspace` ``(nf, rows)``: on success it holds the Jacobian's enclosure over
+            ``X`` and ``P`` and its preconditioner (per leg), for :func:`_prove_end` at any
+            reading in ``P`` and any box in ``X``.
+        c: (nf,) written: the box's centre.
+        rho: (nf,) written: its radius.
+
+    Returns:
+        True when proven.
+    """
+    nf = x1.shape[0]
+    placements, motions, closure, held, rows = tables
+    V, Jm, Jr, Y, H, blocks, ew = work
+    Fm, Fr, zero, YFm, YFr = V[0], V[1], V[4], V[7], V[8]
+    col, t, cm, cr, acc, tot, off, rad = V[5], V[6], V[9], V[10], V[14], V[15], V[11], V[12]
+    zero6 = H[1]
+    zero[:] = 0.0
+    zero6[:] = 0.0
+    if not (in_readings(l0, hm, hr) and in_readings(l1, hm, hr)):
+        return False
+    c[:] = x1
+    enclose_into(placements, motions, closure, held, rows, T0, c, zero, hm, zero6, True, Fm, Fr, Jm, Jr, ew)
+    if not setup(Jm, rows, blocks):
+        return False
+    apply(blocks, rows, Fm, Fr, YFm, YFr)  # Y F(c, hm): the same at every box
+    unit = V[21]
+    for k in range(INFLATIONS + 1):
+        # Y J_held(X, P) (P - hm): each reading's column through Y, then |Y| (rad J_held) hr
+        acc[:] = 0.0
+        for i in range(6):
+            for a in range(nf):
+                col[a] = Jm[a, nf + i]
+            apply(blocks, rows, col, zero, cm, cr)
+            for a in range(nf):
+                acc[a] += (abs(cm[a]) + cr[a]) * hr[i]
+        for a in range(nf):
+            s = 0.0
+            for i in range(6):
+                s += Jr[a, nf + i] * hr[i]
+            t[a] = up(s)
+        apply(blocks, rows, zero, t, cm, cr)
+        for a in range(nf):
+            tot[a] = up(up(YFr[a] + up(acc[a] + REL * acc[a])) + cr[a])
+        if k == 0:  # the first box (from the Jacobian at c): room for the readings box and the step
+            big = 0.0
+            for a in range(nf):
+                rho[a] = 2.0 * (abs(YFm[a]) + tot[a]) + 1.5 * abs(x1[a] - x0[a]) + 1e-12 * (1.0 + abs(x1[a]))
+                big = max(big, rho[a] / unit[a])
+            for a in range(nf):
+                rho[a] = max(rho[a], FLOOR * big * unit[a])
+        else:
+            transform(Jm, rows, blocks)
+            if krawczyk_blocks(YFm, tot, Jr, rows, blocks, rho, off, rad) and _inside(x0, zero, zero, c, rho):
+                return True
+            for a in range(nf):
+                rho[a] = max(rho[a], 1.5 * (abs(off[a]) + rad[a]))
+        enclose_into(placements, motions, closure, held, rows, T0, c, rho, hm, hr, True, V[2], V[3], Jm, Jr, ew)
+    return False
+
+
+@njit(cache=True)
+def prove_in_region(tables, T0, x0, x1, l0, l1, hm, hr, work, c, rho):
+    """The end box of a step whose readings lie in a proven region (:func:`prove_region`) and starts in its box.
+
+    ``work`` holds that region's Jacobian enclosure and preconditioner: no path test is run.
+    Returns :func:`prove_path`'s ``(proven, tests, radius, parts)`` (``tests`` 0).
+    """
+    zero = work[0][4]
+    zero[:] = 0.0
+    if not (in_readings(l0, hm, hr) and in_readings(l1, hm, hr) and _inside(x0, zero, zero, c, rho)):
+        return False, 0, rho, 0
+    return _prove_end(tables, T0, x1, l1, c, rho, True, True, work)

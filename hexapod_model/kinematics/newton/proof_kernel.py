@@ -13,7 +13,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .krawczyk import prove_path, prove_whole
+from .krawczyk import prove_in_region, prove_path, prove_region, prove_whole
+
+REGION = 4e-4  # a region's readings box: half-width per reading, in the model's length (its anchor radius)
+REGION_STEP = 0.25  # a region is built about a step of at most this fraction of its half-width
+MIN_SCALE = 1.0 / 64.0  # the narrowest region tried (its width halves after each failure)
+COOLDOWN = 16  # steps without a region try after one at the narrowest width failed
 
 
 @njit(cache=True)
@@ -66,8 +71,77 @@ def unknowns_into(q, T0, T, home, platform_q, leg_q, free, x):
 
 
 @njit(cache=True)
+def _in_region(tables, home, platform_q, leg_q, free, held_q, q0, q1, work, ends):
+    """The proof of a step inside the thread's proven region (``ends``' state), or not proven (then no region)."""
+    T0, T, x0, x1, l0, l1, Tc, state = ends
+    V, H = work[0], work[4]
+    unknowns_into(q0, Tc, T, home, platform_q, leg_q, free, x0)
+    unknowns_into(q1, Tc, T, home, platform_q, leg_q, free, x1)
+    for i in range(6):
+        l0[i], l1[i] = q0[held_q[i]], q1[held_q[i]]
+    if not _finite(x0, x1, l0, l1):
+        return False, 0, V[23]
+    proven, _, radius, _ = prove_in_region(tables, Tc, x0, x1, l0, l1, H[5], H[6], work, V[22], V[23])
+    return proven, 0, radius
+
+
+@njit(cache=True, inline="always")
+def _finite(x0, x1, l0, l1):
+    for a in range(x0.shape[0]):
+        if not (np.isfinite(x0[a]) and np.isfinite(x1[a])):
+            return False
+    for i in range(6):
+        if not np.isfinite(l0[i] + l1[i]):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _build_region(tables, T0, x0, x1, l0, l1, work, state):
+    """A region about the step (:func:`.krawczyk.prove_region`) and the step's end box in it; state updated.
+
+    The readings box is ``REGION * scale`` model lengths wide per reading, centred half a width
+    ahead of ``l1`` along the step (the readings' direction of travel); ``scale`` halves after a
+    failure (down to :data:`MIN_SCALE`, then no try for :data:`COOLDOWN` steps) and doubles
+    after a success.
+    """
+    V, H = work[0], work[4]
+    hm, hr = H[5], H[6]
+    nf = x0.shape[0]
+    length = V[21][nf - 6]  # the chart translations' unit: the model's length
+    step = 0.0
+    for i in range(6):
+        step = max(step, abs(l1[i] - l0[i]))
+    half = REGION * state[1] * length
+    if state[2] > 0.0 or step > REGION_STEP * half:
+        state[2] = max(0.0, state[2] - 1.0)
+        return False, V[23]
+    for i in range(6):
+        hr[i] = half
+        hm[i] = l1[i] + (0.5 * half * (l1[i] - l0[i]) / step if step > 0.0 else 0.0)
+    if prove_region(tables, T0, x0, x1, l0, l1, hm, hr, work, V[22], V[23]):
+        proven, _, radius, _ = prove_in_region(tables, T0, x0, x1, l0, l1, hm, hr, work, V[22], V[23])
+        if proven:
+            state[0], state[1] = 1.0, min(1.0, 2.0 * state[1])
+            return True, radius
+    state[0] = 0.0
+    if state[1] > MIN_SCALE:
+        state[1] *= 0.5
+    else:
+        state[2] = COOLDOWN
+    return False, V[23]
+
+
+@njit(cache=True)
 def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, structured, subdivide, work, ends):
     """The Krawczyk proof of the readings path from ``q0`` to ``q1`` (:meth:`.proof.StepProver.prove`).
+
+    The per-leg test (``structured``) first looks for a **region** proven by an earlier step
+    (:func:`.krawczyk.prove_region`: one solution for every reading of a box, in one box of the
+    unknowns): a step whose readings lie in it and whose start lies in its box needs only the
+    box about its result. Else a short step builds a region about itself; a longer one, or one
+    whose region fails, gets the test of its whole path (:func:`.krawczyk.prove_whole`), then the
+    subdivided path (:func:`.krawczyk.prove_path`).
 
     Args:
         tables: ``(placements, motions, closure, held, rows)`` (:func:`.enclosure.enclose_into`).
@@ -78,36 +152,59 @@ def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, 
         held_q: (6,) configuration indices of the held joints.
         q0: the start configuration (closed).
         q1: the result.
-        structured: the per-leg Krawczyk test (else the dense reference).
+        structured: the per-leg Krawczyk test (else the dense reference, without regions).
         subdivide: when the test of the whole path fails, subdivide it (else not proven).
-        work: :func:`.krawczyk.workspace`, overwritten.
-        ends: ``(T0, T, x0, x1, l0, l1)`` work arrays ((4, 4), (4, 4), (nf,), (nf,), (6,), (6,))
+        work: :func:`.krawczyk.workspace`, overwritten (but a region's rows while it holds).
+        ends: ``(T0, T, x0, x1, l0, l1, Tc, state)`` work arrays ((4, 4), (4, 4), (nf,), (nf,),
+            (6,), (6,), (4, 4), (4,)): ``Tc`` the region's chart origin, ``state`` (region held,
+            its width's scale, steps before the next try, whether this step was proven in a
+            region).
 
     Returns:
         ``(proven, tests, position, rotation, parts)``: ``position`` (m) and ``rotation`` (rad)
         bound the distance and the rotation angle between ``q1``'s platform and the exact one
         the path ends at (``inf`` when not proven).
     """
-    T0, T, x0, x1, l0, l1 = ends
-    platform_placement(home, q1, platform_q, T0)
-    unknowns_into(q0, T0, T, home, platform_q, leg_q, free, x0)
-    unknowns_into(q1, T0, T, home, platform_q, leg_q, free, x1)
-    for i in range(6):
-        l0[i], l1[i] = q0[held_q[i]], q1[held_q[i]]
-    for a in range(x0.shape[0]):
-        if not (np.isfinite(x0[a]) and np.isfinite(x1[a])):
-            return False, 0, np.inf, np.inf, 0
-    for i in range(6):
-        if not np.isfinite(l0[i] + l1[i]):
-            return False, 0, np.inf, np.inf, 0
-    proven, tests, radius, parts = prove_whole(tables, T0, x0, x1, l0, l1, structured, work)
-    if not proven and subdivide:  # subdivide the path (its tests counted after the whole path's)
-        proven, more, radius, parts = prove_path(tables, T0, x0, x1, l0, l1, structured, work)
-        tests += more
+    T0, T, x0, x1, l0, l1, Tc, state = ends
+    state[3] = 0.0
+    proven, tests = False, 0
+    radius = work[0][23]
+    if structured and state[0] > 0.0:
+        proven, tests, radius = _in_region(tables, home, platform_q, leg_q, free, held_q, q0, q1, work, ends)
+        state[0] = 1.0 if proven else 0.0
     if not proven:
-        return False, tests, np.inf, np.inf, 0
+        platform_placement(home, q1, platform_q, T0)
+        unknowns_into(q0, T0, T, home, platform_q, leg_q, free, x0)
+        unknowns_into(q1, T0, T, home, platform_q, leg_q, free, x1)
+        for i in range(6):
+            l0[i], l1[i] = q0[held_q[i]], q1[held_q[i]]
+        if not _finite(x0, x1, l0, l1):
+            return False, 0, np.inf, np.inf, 0
+        if structured:
+            proven, radius = _build_region(tables, T0, x0, x1, l0, l1, work, state)
+            if proven:
+                Tc[:, :] = T0
+                tests = 1
+        if not proven:
+            proven, more, radius, parts = prove_whole(tables, T0, x0, x1, l0, l1, structured, work)
+            tests += more
+            if not proven and subdivide:  # subdivide the path (its tests counted after the whole path's)
+                proven, more, radius, parts = prove_path(tables, T0, x0, x1, l0, l1, structured, work)
+                tests += more
+            if not proven:
+                return False, tests, np.inf, np.inf, 0
+            position, rotation = _bounds(radius)
+            return True, tests, position, rotation, parts
+    state[3] = 1.0
+    position, rotation = _bounds(radius)
+    return True, tests, position, rotation, 1
+
+
+@njit(cache=True, inline="always")
+def _bounds(radius):
+    """The platform's position (m) and rotation (rad) bounds from the unknowns' proven radius."""
     r = radius[-6:]
     slack = 1e-15  # the chart coordinates of q1 itself, computed in floating point
     position = np.sqrt(r[0] ** 2 + r[1] ** 2 + r[2] ** 2) * (1.0 + 1e-12) + slack
     rotation = (r[3] + r[4] + r[5]) * (1.0 + 1e-12) + slack
-    return True, tests, position, rotation, parts
+    return position, rotation

@@ -20,8 +20,13 @@ class Proof:
         rotation_rad: bound of the rotation angle (rad) between the returned platform
             orientation and the exact one (``inf`` when not proven).
         tests: Krawczyk tests of the readings path run (one per sub-interval tried; the final
-            box about the result reuses the last one's Jacobian enclosure).
+            box about the result reuses the last one's Jacobian enclosure); 0 when the step
+            lay in a region an earlier step proved (``in_region``).
         subdivisions: sub-intervals the proven path was split into (0 when not proven).
+        in_region: the path was proven by the test of a **region**, a box of readings that holds
+            the step's (built by this step or an earlier one of the same thread): one solution
+            for every reading in it, in one box of the unknowns that holds the start
+            (:func:`~hexapod_model.kinematics.newton.krawczyk.prove_region`).
     """
 
     proven: bool
@@ -29,3 +34,4 @@ class Proof:
     rotation_rad: float
     tests: int
     subdivisions: int
+    in_region: bool = False

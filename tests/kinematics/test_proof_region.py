@@ -1,0 +1,105 @@
+"""A region's proof (:func:`hexapod_model.kinematics.newton.krawczyk.prove_region`) and the steps it proves.
+
+A region is a box of readings ``P`` and a box of unknowns ``X``: proven, every reading in ``P``
+has exactly one solution in ``X``. Checked here against solves that know nothing of the proof:
+Newton's solutions of readings drawn in ``P`` (its corners too) lie in ``X``; steps at rest are
+proven in one region with end bounds that hold the exact pose; a start on another assembly,
+or readings outside the box, are never proven by it.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from hexapod_model.kinematics.newton.krawczyk import prove_region
+from hexapod_model.kinematics.newton.proof import StepProver
+
+from ..conftest import limits_only as hexapod
+
+
+def _pose(hexa):
+    T = hexa.home_pose.copy()
+    T[:3, 3] += [0.01, 0.0, 0.02]
+    return hexa.inverse(T)
+
+
+def _region(prover: StepProver, q, half: float):
+    """A region about ``q`` whose readings box is ``half`` m wide each way: ``(T0, c, rho, hm, hr)`` or None."""
+    T0 = prover.platform(q)
+    x = prover.unknowns(q, T0)
+    l = q[prover.held_q].copy()
+    hm, hr = l.copy(), np.full(6, half)
+    work = prover.work()[0]
+    c, rho = np.empty(prover.nf), np.empty(prover.nf)
+    if not prove_region(prover.tables, T0, x, x, l, l, hm, hr, work, c, rho):
+        return None
+    return T0, c, rho, hm, hr
+
+
+def test_every_reading_of_a_proven_region_has_its_solution_in_the_region_box():
+    hexa = hexapod("reference")
+    prover = StepProver.of(hexa.closed_loop)
+    start = _pose(hexa)
+    proven = [h for h in (2e-4, 1e-4, 5e-5, 2e-5) if _region(prover, start.q, h) is not None]
+    assert proven, "no region proven about a pose 22 mm from home"
+    half = proven[0]  # the widest: where a bound too narrow would show first
+    T0, c, rho, hm, hr = _region(prover, start.q, half)
+    rng = np.random.default_rng(3)
+    corners = [hm + hr * np.array(s) * (1 - 1e-9) for s in itertools.product((-1.0, 1.0), repeat=6)]
+    inside = [hm + hr * rng.uniform(-1, 1, 6) for _ in range(32)]
+    widest = 0.0
+    for readings in corners + inside:
+        sol = hexa.forward(readings, guess=start, check=False, prove=False)
+        assert sol.converged
+        x = prover.unknowns(sol.q, T0)
+        assert np.all(np.abs(x - c) < rho), (np.max(np.abs(x - c) / rho), half)
+        widest = max(widest, float(np.max(np.abs(x - c) / rho)))
+    assert widest > 0.05  # the box is no wider than the solutions need by much
+
+
+def test_steps_at_rest_are_proven_in_one_region_with_bounds_that_hold_the_exact_pose():
+    hexa = hexapod("reference")
+    prover = StepProver.of(hexa.closed_loop)
+    start = _pose(hexa)
+    rng = np.random.default_rng(4)
+    q0, proofs = start.q, []
+    for _ in range(40):  # 1 um of noise on each reading, at rest
+        truth = start.lengths + rng.normal(scale=1e-6, size=6)
+        sol = hexa.forward(truth, guess=q0, check=False, prove=False)
+        proof = prover.prove(q0, sol.q)
+        assert proof.proven
+        proofs.append(proof)
+        T0 = prover.platform(sol.q)
+        exact = hexa.forward(truth, guess=sol, check=False, tol=1e-14, prove=False)
+        assert np.linalg.norm(exact.pose[:3, 3] - sol.pose[:3, 3]) <= proof.position_m + 1e-15
+        assert np.allclose(prover.unknowns(exact.q, T0)[-3:], prover.unknowns(sol.q, T0)[-3:], atol=proof.rotation_rad)
+        q0 = sol.q
+    assert proofs[0].in_region and proofs[0].tests == 1  # the first step built the region
+    assert all(p.in_region and p.tests == 0 for p in proofs[1:])  # the others only tested their end box
+    assert max(p.position_m for p in proofs) < 1e-9
+
+
+def test_a_start_on_another_assembly_is_not_proven_by_a_region():
+    hexa = hexapod("spherical")  # two assemblies within the limits here
+    prover = StepProver.of(hexa.closed_loop)
+    start = _pose(hexa)
+    found = hexa.assemblies(start.lengths)
+    other = [s for s in found.solutions if np.linalg.norm(s.pose[:3, 3] - start.pose[:3, 3]) > 1e-3]
+    assert other, "the readings have one assembly only"
+    moved = hexa.forward(start.lengths + 1e-6, guess=start, check=False, prove=False)
+    assert prover.prove(start.q, moved.q).in_region  # the region about the pose holds
+    proof = prover.prove(other[0].q, moved.q)  # same readings, the start on another assembly
+    assert not proof.proven and not proof.in_region
+
+
+def test_readings_outside_the_region_are_proven_by_a_test_of_their_own():
+    hexa = hexapod("reference")
+    prover = StepProver.of(hexa.closed_loop)
+    start = _pose(hexa)
+    near = hexa.forward(start.lengths + 1e-6, guess=start, check=False, prove=False)
+    assert prover.prove(start.q, near.q).in_region
+    far = hexa.forward(near.lengths + 2e-4, guess=near, check=False, prove=False)  # 0.2 mm: out of the box
+    proof = prover.prove(near.q, far.q)
+    assert proof.proven and not proof.in_region and proof.tests >= 1
