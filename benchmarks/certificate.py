@@ -174,13 +174,13 @@ def trajectory_proofs(name: str, which: str, samples: int) -> dict:
     }
 
 
-def rest_proofs(name: str, samples: int, noise: float = 1e-6) -> dict:
+def rest_proofs(name: str, samples: int, noise: float = 1e-6, block: int = 50) -> dict:
     """Per-step medians (us) of warm solves of a fixture at rest: readings with ``noise`` m of noise.
 
-    Side by side, step after step on the same solves: ``forward`` with its proof as it runs
-    (regions: the steps whose readings lie in a region an earlier step proved test only their
-    end box) and with every step proven by its own test (``StepProver.regions`` False), the
-    solve alone, and the floor on the same readings.
+    Side by side, in alternating blocks of ``block`` steps of the same noise: ``forward``
+    with its proof as it runs (regions: the steps whose readings lie in a region an earlier step
+    proved test only their end box) and with every step proven by its own test
+    (``StepProver.regions`` False); the solve alone; the floor on the same readings.
     """
     hexa = Hexapod.load(name)
     prover = hexa.engine.prover
@@ -188,37 +188,37 @@ def rest_proofs(name: str, samples: int, noise: float = 1e-6) -> dict:
     pose[:3, 3] += np.array([0.2, 0.0, 0.4]) * hexa.base_radius / 10.0  # a pose off home
     rest = hexa.inverse(pose, check=False)
     readings = rest.lengths + np.random.default_rng(7).normal(scale=noise, size=(samples, 6))
-    sol = hexa.forward(readings[0], rest, check=False)
-    solve_t, region_t, own_t, in_region, proven = [], [], [], 0, 0
-    for x in readings[1:]:
-        t0 = time.perf_counter()
-        nxt = hexa.forward(x, sol, check=False, prove=False)
-        t1 = time.perf_counter()
+    first = hexa.forward(readings[0], rest, check=False)
+    times: dict[bool, list[float]] = {True: [], False: []}
+    solve_t, in_region, proven = [], 0, 0
+    for k, start in enumerate(range(1, samples, block)):
+        regions = k % 2 == 0  # the two alternate, block by block
         if prover is not None:
-            prover.regions = False
-        own = hexa.forward(x, sol, check=False)
-        t2 = time.perf_counter()
-        if prover is not None:
-            prover.regions = True
-        checked = hexa.forward(x, sol, check=False)
-        t3 = time.perf_counter()
-        solve_t.append(t1 - t0)
-        own_t.append(t2 - t1)
-        region_t.append(t3 - t2)
-        if checked.proof is not None and checked.proof.proven and own.proof is not None and own.proof.proven:
-            proven += 1
-            in_region += checked.proof.in_region
-        sol = nxt
+            prover.regions = regions
+        sol = first
+        for x in readings[start : start + block]:
+            t0 = time.perf_counter()
+            checked = hexa.forward(x, sol, check=False)
+            times[regions].append(time.perf_counter() - t0)
+            if regions:
+                proven += checked.proof is not None and checked.proof.proven
+                in_region += checked.proof is not None and checked.proof.in_region
+                t1 = time.perf_counter()
+                hexa.forward(x, sol, check=False, prove=False)
+                solve_t.append(time.perf_counter() - t1)
+            sol = checked
+    if prover is not None:
+        prover.regions = True
     floor = floor_times(hexa, readings)
-    n = len(solve_t)
+    n = len(times[True])
     return {
-        "steps": n,
+        "steps": n + len(times[False]),
         "noise_m": noise,
         "proven_fraction": proven / n,
         "in_region_fraction": in_region / n,
         "solve_median_us": float(np.median(solve_t) * 1e6),
-        "forward_proven_median_us": float(np.median(region_t) * 1e6),
-        "forward_own_test_median_us": float(np.median(own_t) * 1e6),
+        "forward_proven_median_us": float(np.median(times[True]) * 1e6),
+        "forward_own_test_median_us": float(np.median(times[False]) * 1e6),
         "floor_median_us": float(np.median(floor) * 1e6) if floor else float("nan"),
     }
 
