@@ -14,7 +14,7 @@ When it succeeds it is a **proof**, with every floating-point rounding bounded
   (platform origin) and :attr:`Proof.rotation_rad` (platform orientation) of ``q1``.
 
 A fixture at rest or moving slowly sends readings that hardly change: the per-leg test first
-proves a **region** about a short step, a box of readings (about 0.06 mm a reading on a model
+proves a **region** about a short step, a box of readings (about +-0.1 mm a reading on a model
 of 0.15 m anchor radius, narrowed where that fails) with one solution for every reading in it
 (:func:`.krawczyk.prove_region`). The next steps of the same thread whose readings lie in it
 and whose start lies in its box of unknowns are proven by it: only the box about their result

@@ -15,8 +15,8 @@ from numba import njit
 
 from .krawczyk import prove_in_region, prove_path, prove_region, prove_whole
 
-REGION = 4e-4  # a region's readings box: half-width per reading, in the model's length (its anchor radius)
-REGION_STEP = 0.25  # a region is built about a step of at most this fraction of its half-width
+REGION = 7e-4  # a region's readings box: half-width per reading, in the model's length (its anchor radius)
+REGION_STEP = 0.35  # a region is built about a step of at most this fraction of its half-width
 MIN_SCALE = 1.0 / 64.0  # the narrowest region tried (its width halves after each failure)
 COOLDOWN = 16  # steps without a region try after one at the narrowest width failed
 
@@ -100,7 +100,7 @@ def _finite(x0, x1, l0, l1):
 def _build_region(tables, T0, x0, x1, l0, l1, work, state):
     """A region about the step (:func:`.krawczyk.prove_region`) and the step's end box in it; state updated.
 
-    The readings box is ``REGION * scale`` model lengths wide per reading, centred half a width
+    The readings box is ``REGION * scale`` model lengths each way per reading, centred half that
     ahead of ``l1`` along the step (the readings' direction of travel); ``scale`` halves after a
     failure (down to :data:`MIN_SCALE`, then no try for :data:`COOLDOWN` steps) and doubles
     after a success.
