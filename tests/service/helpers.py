@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 import uuid
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import pinocchio as pin
 
 from hexapod_model.service import (
     FixtureCycle,
+    FixtureService,
     PoseRecord,
     Simulator,
     config_from_dict,
@@ -40,6 +42,21 @@ def service_config(tmp_path: Path, fixtures: list[dict] | None = None, channel: 
 
 def sim_config(service, fixtures: list[dict], seed: int = 3):
     return simulation_from_dict({"seed": seed, "fixtures": fixtures}, service)
+
+
+def served(config, bus, seconds: float, during=None) -> tuple[list[PoseRecord], object]:
+    """The records of a service (reference hexapod, no HTTP) reading ``bus`` for ``seconds``, and ``during()``'s
+    answer (called before the service stops)."""
+    records: list[PoseRecord] = []
+    service = FixtureService(config, bus=bus, hexapods={"left": hexapod("reference")}, http=False)
+    service.subscribe(records.append)
+    try:
+        service.start()
+        time.sleep(seconds)
+        answer = during(service) if during is not None else service
+    finally:
+        service.stop()
+    return records, answer
 
 
 class CollectingBus:

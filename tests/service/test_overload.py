@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import time
 
-from hexapod_model.service import FixtureService, Simulator
+from hexapod_model.service import Simulator
 
 from ..conftest import hexapod
-from .helpers import CollectingBus, service_config, sim_config
+from .helpers import CollectingBus, served, service_config, sim_config
 
 
 class StallingBus:
@@ -50,14 +50,7 @@ class StallingBus:
 def test_a_stall_of_the_service_thread_is_no_silent_leg(tmp_path):
     config = service_config(tmp_path)
     bus = StallingBus(config)
-    records = []
-    service = FixtureService(config, bus=bus, hexapods={"left": hexapod("reference")}, http=False)  # type: ignore[arg-type]
-    service.subscribe(records.append)
-    try:
-        service.start()
-        time.sleep(2.0)
-    finally:
-        service.stop()
+    records, _ = served(config, bus, 2.0)
     assert bus.stalled
     assert not any(r.status == "silent_leg" for r in records), [r.flags for r in records if r.status == "silent_leg"]
 
@@ -79,16 +72,7 @@ class BacklogBus(StallingBus):
 
 def test_a_service_behind_the_bus_says_service_overloaded_and_blames_no_leg(tmp_path):
     config = service_config(tmp_path)
-    bus = BacklogBus(config)
-    records = []
-    service = FixtureService(config, bus=bus, hexapods={"left": hexapod("reference")}, http=False)  # type: ignore[arg-type]
-    service.subscribe(records.append)
-    try:
-        service.start()
-        time.sleep(2.0)
-        health = service.health()
-    finally:
-        service.stop()
+    records, health = served(config, BacklogBus(config), 2.0, lambda service: service.health())
     assert any(p.startswith("service_overloaded: ") for p in health["problems"]), health["problems"]
     assert health["lag_s"] > 0.25
     assert not any(r.status == "silent_leg" for r in records)

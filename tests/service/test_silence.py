@@ -11,10 +11,10 @@ import time
 
 import numpy as np
 
-from hexapod_model.service import FixtureCycle, FixtureService, Simulator, geometry_hash
+from hexapod_model.service import FixtureCycle, Simulator, geometry_hash
 
 from ..conftest import hexapod
-from .helpers import CollectingBus, fixture_table, service_config, sim_config
+from .helpers import CollectingBus, fixture_table, served, service_config, sim_config
 from .test_cycle import RATE, check_ok_poses
 
 T0 = 1.0e9
@@ -126,15 +126,7 @@ def test_frames_delivered_up_to_48_ms_after_their_stamps_are_no_silent_leg_throu
     # staleness 0.05 s: every fourth set comes 48 ms late (the next ones queue behind it), the others at once;
     # the wall clock ran ahead of the frames on their way, which read as a silent fixture
     config = service_config(tmp_path)
-    bus = DelayedBus(config, lambda k: 0.048 if k % 4 == 0 else 0.001)
-    records = []
-    service = FixtureService(config, bus=bus, hexapods={"left": hexapod("reference")}, http=False)  # type: ignore[arg-type]
-    service.subscribe(records.append)
-    try:
-        service.start()
-        time.sleep(2.5)
-    finally:
-        service.stop()
+    records, _ = served(config, DelayedBus(config, lambda k: 0.048 if k % 4 == 0 else 0.001), 2.5)
     assert sum(r.status == "ok" for r in records) > 100
     assert not any(r.status == "silent_leg" for r in records), [r.flags for r in records if r.status == "silent_leg"]
     times = [r.t for r in records]
@@ -164,14 +156,7 @@ def test_the_warm_up_before_the_first_frame_is_no_silence_through_the_service(tm
     # warm-up before it took longer than that, and its time was judged as the legs' silence
     config = service_config(tmp_path)
     bus = ListeningBus(config, lambda k: 0.045 if k == 0 else 0.001)
-    records = []
-    service = FixtureService(config, bus=bus, hexapods={"left": hexapod("reference")}, http=False)  # type: ignore[arg-type]
-    service.subscribe(records.append)
-    try:
-        service.start()
-        time.sleep(0.6)
-    finally:
-        service.stop()
+    records, service = served(config, bus, 0.6)
     assert bus.start is not None and bus.start - service.started > 0.05  # the warm-up took longer than staleness
     assert sum(r.status == "ok" for r in records) > 10
     assert not any(r.status == "silent_leg" for r in records), [r.flags for r in records if r.status == "silent_leg"]
