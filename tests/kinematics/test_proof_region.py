@@ -103,3 +103,19 @@ def test_readings_outside_the_region_are_proven_by_a_test_of_their_own():
     far = hexa.forward(near.lengths + 2e-4, guess=near, check=False, prove=False)  # 0.2 mm: out of the box
     proof = prover.prove(near.q, far.q)
     assert proof.proven and not proof.in_region and proof.tests >= 1
+
+
+def test_a_test_run_on_the_work_arrays_meanwhile_drops_the_region():
+    # the dense test and a caller of StepProver.work() overwrite the region's enclosure: the next step builds anew
+    hexa = hexapod("reference")
+    prover = StepProver.of(hexa.closed_loop)
+    start = _pose(hexa)
+    steps = [hexa.forward(start.lengths + k * 1e-6, guess=start, check=False, prove=False) for k in range(1, 5)]
+    assert prover.prove(start.q, steps[0].q).in_region
+    assert prover.prove(steps[0].q, steps[1].q).tests == 0  # in the region
+    far = hexa.forward(start.lengths + 3e-3, guess=start, check=False, prove=False)
+    assert prover.prove(start.q, far.q, structured=False).proven  # the dense test, on another box
+    again = prover.prove(steps[1].q, steps[2].q)
+    assert again.proven and again.in_region and again.tests == 1  # built anew, not the stale region
+    prover.work()
+    assert prover.prove(steps[2].q, steps[3].q).tests == 1

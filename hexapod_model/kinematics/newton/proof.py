@@ -100,7 +100,16 @@ class StepProver:
         return x
 
     def work(self) -> tuple:
-        """The calling thread's work arrays: :func:`.krawczyk.workspace` and the path's ends."""
+        """The calling thread's work arrays: :func:`.krawczyk.workspace` and the path's ends.
+
+        A caller that runs the kernels on them itself overwrites the region they hold: it is
+        dropped here.
+        """
+        work = self._work()
+        work[1][7][0] = 0.0
+        return work
+
+    def _work(self) -> tuple:
         work = getattr(self._local, "work", None)
         if work is None:
             nf = self.nf
@@ -126,7 +135,7 @@ class StepProver:
         """
         kernel = self._kernel.prove_configurations
         announce(kernel)
-        work, ends = self.work()
+        work, ends = self._work()
         if not self.regions:  # no region held, none tried
             ends[7][0], ends[7][2] = 0.0, np.inf
         elif ends[7][2] == np.inf:
@@ -146,7 +155,7 @@ class StepProver:
             work,
             ends,
         )
-        in_region = bool(proven) and ends[7][3] > 0.0
+        in_region = bool(proven) and bool(ends[7][3] > 0.0)
         return Proof(bool(proven), float(position), float(rotation), int(tests), int(parts), in_region)
 
 

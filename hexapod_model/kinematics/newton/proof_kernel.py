@@ -167,6 +167,8 @@ def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, 
     """
     T0, T, x0, x1, l0, l1, Tc, state = ends
     state[3] = 0.0
+    if not structured:  # the dense test overwrites the region's enclosure
+        state[0] = 0.0
     proven, tests = False, 0
     radius = work[0][23]
     if structured and state[0] > 0.0:
