@@ -249,7 +249,10 @@ def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
     report = tmp_path / "certificate.json"
     cmd = [sys.executable, str(ROOT / "benchmarks" / "certificate.py"), "reference", "3-6", "--poses", "0"]
     out = subprocess.run(
-        [*cmd, "--trajectory-samples", "20", "--json", str(report)], capture_output=True, text=True, timeout=600
+        [*cmd, "--trajectory-samples", "20", "--rest-samples", "201", "--json", str(report)],
+        capture_output=True,
+        text=True,
+        timeout=600,
     )
     assert out.returncode == 0, out.stdout + out.stderr
     data = json.loads(report.read_text())
@@ -259,13 +262,18 @@ def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
     assert all(0 <= t["proven_fraction"] <= 1 and t["steps"] > 0 for t in data["trajectories"]) and not data["solves"]
     table = _performance_table()
     rows = dict(table.certificate_rows(data))
-    assert len(rows) == 8
+    assert len(rows) == 10
     for preset, which in (("reference", "A"), ("reference", "B"), ("3-6", "A"), ("3-6", "B")):
         where = f"{preset}: trajectory {which} at 1 kHz"
         assert rows[f"{where}, warm steps proven (Krawczyk)"].endswith(" of 19")
         step = rows[f"{where}, warm step with its proof, time per step"]
         assert "µs forward with its proof" in step and "the solve alone" in step
         assert ("floor" in step and step.endswith("x)")) == (preset == "reference")
+    for rest in data["rest"]:  # at rest, 200 steps: half with regions, half each step its own test
+        assert rest["steps"] == 200 and rest["proven_fraction"] == 1.0 and rest["in_region_fraction"] > 0.9
+        row = rows[f"{rest['preset']}: at rest, 1 µm noise, warm step with its proof (regions), time per step"]
+        assert "in a region" in row and "each step its own test" in row
+        assert ("floor" in row) == (rest["preset"] == "reference")
     assert any(args[0] == "certificate.py" and parse is table.certificate_rows for args, _, parse in table.BENCHMARKS)
 
 
