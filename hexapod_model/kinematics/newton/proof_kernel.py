@@ -75,14 +75,21 @@ def _in_region(tables, home, platform_q, leg_q, free, held_q, q0, q1, work, ends
     """The proof of a step inside the thread's proven region (``ends``' state), or not proven (then no region)."""
     T0, T, x0, x1, l0, l1, Tc, state = ends
     V, H = work[0], work[4]
-    unknowns_into(q0, Tc, T, home, platform_q, leg_q, free, x0)
-    unknowns_into(q1, Tc, T, home, platform_q, leg_q, free, x1)
-    for i in range(6):
-        l0[i], l1[i] = q0[held_q[i]], q1[held_q[i]]
-    if not _finite(x0, x1, l0, l1):
+    if not _step_ends(home, platform_q, leg_q, free, held_q, q0, q1, Tc, ends):
         return False, 0, V[23]
     proven, _, radius, _ = prove_in_region(tables, Tc, x0, x1, l0, l1, H[5], H[6], work, V[22], V[23])
     return proven, 0, radius
+
+
+@njit(cache=True)
+def _step_ends(home, platform_q, leg_q, free, held_q, q0, q1, chart, ends):
+    """Write the step's unknowns about ``chart`` and its readings into ``ends``; False when not finite."""
+    _, T, x0, x1, l0, l1, _, _ = ends
+    unknowns_into(q0, chart, T, home, platform_q, leg_q, free, x0)
+    unknowns_into(q1, chart, T, home, platform_q, leg_q, free, x1)
+    for i in range(6):
+        l0[i], l1[i] = q0[held_q[i]], q1[held_q[i]]
+    return _finite(x0, x1, l0, l1)
 
 
 @njit(cache=True, inline="always")
@@ -176,11 +183,7 @@ def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, 
         state[0] = 1.0 if proven else 0.0
     if not proven:
         platform_placement(home, q1, platform_q, T0)
-        unknowns_into(q0, T0, T, home, platform_q, leg_q, free, x0)
-        unknowns_into(q1, T0, T, home, platform_q, leg_q, free, x1)
-        for i in range(6):
-            l0[i], l1[i] = q0[held_q[i]], q1[held_q[i]]
-        if not _finite(x0, x1, l0, l1):
+        if not _step_ends(home, platform_q, leg_q, free, held_q, q0, q1, T0, ends):
             return False, 0, np.inf, np.inf, 0
         if structured:
             proven, radius = _build_region(tables, T0, x0, x1, l0, l1, work, state)
