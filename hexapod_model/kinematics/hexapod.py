@@ -268,18 +268,29 @@ class Hexapod:
         fast = type(tol) is float and 0.0 < tol <= MAX_TOL and type(max_iter) is int and max_iter >= 0
         engine = self.engine
         solver: OneCallSolver | None = getattr(engine.local, "staged", None)  # the warm path's, once this thread has it
+        # a configuration array (a tracker's prediction) starts with no determinant sign, as in engine.forward
+        array = type(guess) is np.ndarray
         fits = (
-            guess is None or type(guess) is Solution and type(guess.q) is np.ndarray and guess.q.shape == engine.q_shape
+            guess is None
+            or array
+            or type(guess) is Solution
+            and type(guess.q) is np.ndarray
+            and guess.q.shape == engine.q_shape
         )
         if solver is not None and fast and fits:
             # the hot path of a warm solve: the stroke check and the attempt's settings in one compiled call
-            start, sign = (self.closed_loop.q_home, solver.home_sign) if guess is None else (guess.q, guess.det_sign)
+            if guess is None:
+                start, sign = self.closed_loop.q_home, solver.home_sign
+            else:
+                start, sign = (guess, 0) if array else (guess.q, guess.det_sign)
             settings = solver.forward_settings
             k = solver.stage(
                 lengths, engine.stroke_lo, engine.stroke_hi, LIMIT_SLACK, settings, tol, float(max_iter), float(sign)
             )
             if k >= 0:
                 raise engine.stroke_error(lengths, k)
+            if array:  # checked after the stroke, as engine.forward does (a new array: InputError when bad)
+                start = engine.start(guess, copy=False)
             done = solver.attempt(start, tol)
             if len(done) == 6 and done[5] < 0 and solver.kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
                 # converged certified within the limits, not near a singularity: engine.attempted()'s Solution

@@ -85,6 +85,62 @@ def test_the_hot_path_gives_the_first_solves_solution(name):
     assert str(hot_error.value) == str(first_error.value)
 
 
+@pytest.mark.parametrize("name", ["reference", "guideway"])
+def test_a_configuration_guess_takes_the_hot_path_with_the_first_solves_answer(name, monkeypatch):
+    """A configuration array as the guess (a tracker's prediction: not closed, no determinant sign).
+
+    The hot path answers as the thread's first solve does, bit for bit; a bad array is the same
+    one-line input error on both paths, and a reading outside its stroke is named first on both.
+    """
+    hexa = hm.Hexapod.from_preset(name)
+    hexa.engine.prover.regions = False  # each step proven by its own test (see above)
+    rng = np.random.default_rng(5)
+    lo, hi = hexa.stroke[:, 0], hexa.stroke[:, 1]
+    near = hexa.forward(0.2 * lo + 0.2 * hi)
+    predicted = [near.q.copy()]
+    for k in range(3):  # off the closure: joints moved 0.1-0.3 mm / mrad, as a prediction is
+        q = near.q.copy()
+        legs = np.setdiff1d(np.arange(q.size), np.arange(hexa.closed_loop.platform_q, hexa.closed_loop.platform_q + 7))
+        q[legs] += rng.normal(0.0, 1e-4 * (k + 1), legs.size)
+        predicted.append(q)
+    steps = [near.lengths + 1e-4 * k for k in range(1, 4)]
+    jumps = list(rng.uniform(lo, hi, (6, 6)))
+    statuses = set()
+    hexa.forward(steps[0], near, check=False)  # this thread takes the hot path from here on
+    for x in steps + jumps:
+        for guess in predicted:
+            hot = hexa.forward(x, guess, check=False)
+            first = _in_new_thread(lambda x=x, guess=guess: hexa.forward(x, guess, check=False))
+            assert _same(hot, first), (x, hot.status, first.status)
+            assert hot.det_sign == first.det_sign
+            statuses.add(hot.status)
+    assert "converged" in statuses and len(statuses) > 1
+    general = []  # calls of the general path on this thread
+    engine_forward = hexa.engine.forward
+    monkeypatch.setattr(hexa.engine, "forward", lambda *a: general.append(a) or engine_forward(*a))
+    assert all(hexa.forward(x, p, check=False).proof.proven for x in steps for p in predicted)
+    assert general == []  # every one a warm step on the hot path
+    monkeypatch.undo()
+    bad = near.q.copy()
+    bad[hexa.closed_loop.platform_q + 3] += 0.5  # not a unit quaternion
+    for guess in (bad, np.full(near.q.size, np.nan), near.q[:-1].copy()):
+        with pytest.raises(hm.InputError, match="guess") as hot_error:
+            hexa.forward(steps[0], guess)
+        first_error = _in_new_thread(lambda guess=guess: _raised(lambda: hexa.forward(steps[0], guess)))
+        assert str(hot_error.value) == str(first_error)
+    with pytest.raises(hm.LimitError):
+        hexa.forward(hi + 0.01, bad)  # the stroke is checked before the guess, as on the first solve
+    assert isinstance(_in_new_thread(lambda: _raised(lambda: hexa.forward(hi + 0.01, bad))), hm.LimitError)
+
+
+def _raised(call) -> Exception | None:
+    try:
+        call()
+    except Exception as exc:  # noqa: BLE001 - returned for the test to compare
+        return exc
+    return None
+
+
 def test_batch_status_column_is_as_wide_as_its_longest_status():
     """``status`` is the string array ``astype(str)`` of the names gives: as wide as the longest name present."""
     hexa = hm.Hexapod.from_preset("reference")
