@@ -60,7 +60,8 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
     return [
         (
             f"pose service, {r['fixtures']} fixture(s) × {r['rate_hz']:.0f} Hz",
-            f"{r['service_cpu_pct']:.0f} % of a core ({r['service_cpu_us_per_set']:.0f} µs a set), latency median "
+            f"{r['service_cpu_pct']:.0f} % of a core ({r['service_cpu_us_per_set']:.0f} µs a set, "
+            f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x its solve's {r['solve_us']:.0f} µs), latency median "
             f"{r['latency_ms_median']:.2f} ms, p99 {r['latency_ms_p99']:.1f} ms, "
             f"{'sustained' if r['sustained'] else 'not sustained'}",
         )

@@ -36,6 +36,7 @@ import tempfile
 import threading
 import time
 import uuid
+from collections import deque
 from pathlib import Path
 
 import can
@@ -45,6 +46,7 @@ from hexapod_model import Hexapod
 from hexapod_model.service import FixtureService, PoseSolver, config_from_dict
 from hexapod_model.service.sim.config import trajectory_sequence
 from hexapod_model.service.threads import NamedThread
+from hexapod_model.tracking.types import predict
 
 SETS = 2000  # one there-and-back of trajectory A, whatever the rate
 
@@ -120,54 +122,66 @@ def make_config(fixtures: int, folder: Path):
 def capacity(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, sets: int, folder: Path) -> float:
     """Cycle-thread CPU (us) per set when the frames of ``sets`` periods are queued before they are read.
 
-    No feeder thread and no idle gaps: every frame is encoded into a queue of its own first, then
-    that queue replaces the receiving bus's at once, so the thread runs from a full queue, as it
-    would under a sustained load; the frames carry the timestamps of ``rate`` sets per second per
-    fixture. (Queued while the thread read them, the frames came slower than the thread took
-    them: the count started late and the thread's CPU included waiting for the producer.)
+    No feeder thread and no idle gaps: the frames of a warm-up and of the measured sets are
+    encoded first, stamped as ``rate`` sets per second per fixture from a moment just ahead of
+    the clock (a frame stamped before the service began listening, or before a ``silent_leg``
+    record it published meanwhile, would be late), and put in a queue of their own that then
+    replaces the receiving bus's at once: the thread runs from a full queue, as it would under a
+    sustained load. The thread's CPU clock is read by the subscriber (in the thread) at the last
+    warm-up set's record and at the last measured set's; meanwhile no other thread of the
+    process runs but the service's own (a thread of the process that wakes even every 10 ms
+    slows the cycle thread's work by a third on this 2-core machine: the interpreter's lock
+    passes between cores; the fed runs' feeder is such a thread, so their CPU per set is higher).
     """
     channel, config = make_config(fixtures, folder)
     bus = can.Bus(interface="virtual", channel=channel)
     service = FixtureService(config, bus=bus, hexapods={f.name: hexa for f in config.fixtures})
-    count = [0]
-    service.subscribe(lambda rec: count.__setitem__(0, count[0] + (rec.status != "silent_leg")))
-    wall = time.time()
+    warm = 200
+    first, last = warm * fixtures, (warm + sets) * fixtures
+    count, cpu, done = [0], [0.0, 0.0], threading.Event()
 
-    def frames(k0: int, k1: int) -> queue.Queue:
-        q: queue.Queue = queue.Queue()
-        for k in range(k0, k1):
-            for fl in (f.legs for f in config.fixtures):
-                for j, leg in enumerate(fl):
-                    m = leg.message(float(readings[k % len(readings), j]))
-                    m.timestamp = wall + k / rate + j * 130e-6
-                    q.put(m)
-        return q
+    def on_record(rec) -> None:  # runs in the cycle thread
+        if rec.status == "silent_leg":
+            return
+        count[0] += 1
+        if count[0] in (first, last):
+            cpu[count[0] == last] = time.thread_time()
+            if count[0] == last:
+                done.set()
 
-    def settle(target: float) -> None:
-        end = time.monotonic() + 60.0
-        while count[0] < target and time.monotonic() < end:
-            time.sleep(0.002)
-
-    warm, receiving = 200, bus.queue
-    bus.queue = frames(0, warm)
-    service.start()
+    service.subscribe(on_record)
+    msgs = [
+        (k, j, leg.message(float(readings[k % len(readings), j])))
+        for k in range(warm + sets)
+        for fl in (f.legs for f in config.fixtures)
+        for j, leg in enumerate(fl)
+    ]
+    receiving = bus.queue
+    service.start()  # warms the kernels up, then listens
     try:
-        settle(warm * fixtures)  # warm-up: caches, first solves
-        full = frames(warm, warm + sets)
-        clock = time.pthread_getcpuclockid(service._thread.ident)
-        r0, c0 = count[0], time.clock_gettime(clock)
-        bus.queue = full  # the thread's next read takes from the full queue
-        settle(r0 + sets * fixtures)
-        done, cpu = count[0] - r0, time.clock_gettime(clock) - c0
+        full: queue.Queue = queue.Queue()
+        wall = time.time() + 0.5
+        for k, j, m in msgs:
+            m.timestamp = wall + k / rate + j * 130e-6
+            full.put(m)
+        bus.queue = full  # the thread's next read (within a tick) takes from the full queue
+        done.wait(120.0)  # this thread sleeps throughout: no polling that takes the GIL from the cycle thread
     finally:
         service.stop()
         bus.queue = receiving
         bus.shutdown()
-    return 1e6 * cpu / max(done, 1)
+    if count[0] < last:
+        raise RuntimeError(f"capacity: {count[0] - first} of {last - first} sets solved within 120 s")
+    return 1e6 * (cpu[1] - cpu[0]) / (last - first)
 
 
 def solve_cost(hexa: Hexapod, readings: np.ndarray, noise: float = 10e-6) -> tuple[float, float]:
-    """CPU (us) a set of the tracker's step (solve, checks, uncertainty) and of the solve alone (``forward``)."""
+    """CPU (us) a set of the tracker's step (solve, checks, uncertainty) and of its solve alone.
+
+    The solve alone is the one the tracker makes: ``forward`` from the motion model's
+    prediction (its ``eq22`` predictor over the last two poses) with the Krawczyk proof of that
+    short step, each timed by itself.
+    """
     solver = PoseSolver(hexa, noise)
     for k in range(200):
         solver.step(readings[k], k)
@@ -175,12 +189,15 @@ def solve_cost(hexa: Hexapod, readings: np.ndarray, noise: float = 10e-6) -> tup
     for k in range(200, len(readings)):
         solver.step(readings[k], k)
     c1 = time.thread_time()
-    q, tol = hexa.q_home, solver.tracker.tol
-    for k in range(200, len(readings)):
-        q = hexa.forward(readings[k], guess=q, tol=tol, max_iter=20, check=False).q
-    c2 = time.thread_time()
+    tol, history, spent = solver.tracker.tol, deque([hexa.q_home], maxlen=2), 0.0
+    for k in range(len(readings)):
+        guess = predict(hexa.model, history, "eq22")
+        t = time.thread_time()
+        sol = hexa.forward(readings[k], guess, tol=tol, max_iter=20, check=False)
+        spent += time.thread_time() - t if k >= 200 else 0.0
+        history.appendleft(sol.q)
     n = len(readings) - 200
-    return 1e6 * (c1 - c0) / n, 1e6 * (c2 - c1) / n
+    return 1e6 * (c1 - c0) / n, 1e6 * spent / n
 
 
 def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> dict:
@@ -295,7 +312,8 @@ def line(r: dict) -> str:
         f"{r['fixtures']:3d} x {r['rate_hz']:6.0f} Hz  sets {r['sets_sent']:7d}  solved {r['records']:7d}  "
         f"latency median {r['latency_ms_median']:6.2f} ms  p99 {r['latency_ms_p99']:7.2f} ms  "
         f"CPU service {r['service_cpu_pct']:5.1f} % ({r['service_cpu_us_per_set']:4.0f} us a set, "
-        f"cycle thread {r['cycle_cpu_us_per_set']:4.0f})  "
+        f"cycle thread {r['cycle_cpu_us_per_set']:4.0f}; "
+        f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x the solve)  "
         f"process {r['process_cpu_pct']:5.1f} % (by OS thread name: service {r['os_service_cpu_pct']:.1f}, "
         f"hx-sim {r['os_sim_cpu_pct']:.1f}, other {r['os_other_cpu_pct']:.1f})  "
         f"{'sustained' if r['sustained'] else 'NOT sustained'}  {r['statuses']}"
@@ -318,21 +336,24 @@ def main(argv=None) -> int:
     step_us, solve_us = solve_cost(hexa, readings)
     print(
         f"a set alone: tracker step {step_us:.0f} us CPU (solve, checks, uncertainty), of which the solve "
-        f"(forward) {solve_us:.0f} us; load average {Path('/proc/loadavg').read_text().split()[0]}",
+        f"(forward from the prediction, with its proof) {solve_us:.0f} us; "
+        f"load average {Path('/proc/loadavg').read_text().split()[0]}",
         flush=True,
     )
     reports = []
     with tempfile.TemporaryDirectory() as tmp:
         for n, rates in ((1, args.one), (args.fixtures, args.many)):
             for rate in (float(v) for v in rates.split(",") if v):
-                reports.append(run(hexa, readings, n, rate, args.seconds, Path(tmp)))
+                reports.append(run(hexa, readings, n, rate, args.seconds, Path(tmp)) | {"solve_us": solve_us})
                 print(line(reports[-1]), flush=True)
         if args.capacity:
             for n, rate in ((1, 1000.0), (args.fixtures, 100.0)):
                 us = capacity(hexa, readings, n, rate, int(3 * rate), Path(tmp))
                 share = us * n * rate / 1e4  # percent of one core at that rate
                 print(
-                    f"capacity {n:3d} x {rate:6.0f} Hz  cycle thread CPU {us:5.0f} us a set  ({share:.0f} % of a core)"
+                    f"capacity {n:3d} x {rate:6.0f} Hz  cycle thread CPU {us:5.0f} us a set, "
+                    f"{us / solve_us:.1f}x the solve "
+                    f"({share:.0f} % of a core)"
                     f"  against the solve's {solve_us:.0f} us and the tracker step's {step_us:.0f} us"
                 )
     for n in (1, args.fixtures):

@@ -313,7 +313,8 @@ class Tracker(PassageMixin):
         # sample, after a gap: flagged settling) the certificate's checks, not the proven steps
         # that would hold the cycle for tens of milliseconds
         joints = l if self.hexa.engine.encoder is None else self.hexa.joints_of(l[:6])  # m, as the guess's
-        prove = bool(np.max(np.abs(joints[:6] - guess[self._prism_q])) <= self.settings.continuation_step)
+        step = np.abs(joints[:6] - guess[self._prism_q]).max()  # the method: without np.max's dispatch
+        prove = bool(step <= self.settings.continuation_step)
         try:
             if self.hexa.redundancy is not None:  # the six legs' solve of a hexapod with redundant sensors
                 return self.hexa.engine.forward(l, guess, self.tol, self.max_iter, False, False, prove)
