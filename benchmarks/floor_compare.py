@@ -9,7 +9,8 @@ Alternating rounds (the machine is shared: the load affects both alike), CPU tim
   alone (``prove=False``), then with the Krawczyk proof every warm ``converged`` carries by default;
 * ``forward_batch`` of box poses from home (cold) and of trajectory A (``warm=True``) against
   ``fk_batch_cold`` / ``fk_batch_warm``: solves per CPU second and the ratio (target: at least
-  0.85x the floor).
+  0.85x the floor), the solve alone (``prove=False``); then the warm rows with the Krawczyk
+  proof each carries by default, beside it.
 
 Both solve to ``BENCH_TOL``. The package solves without the body check (cones, clearance) unless
 ``--check-body``: the floor checks neither. Then where the package's time goes beside the floor's: the warm
@@ -125,11 +126,16 @@ def main(argv=None) -> int:
 
     cases = {
         "forward_batch, box poses from home": (
-            lambda: hexa.forward_batch(cold, tol=BENCH_TOL),
+            lambda: hexa.forward_batch(cold, tol=BENCH_TOL, prove=False),  # from home: no row is proven
             lambda: floor_batch(cold, False),
             len(cold),
         ),
         "forward_batch, trajectory A warm": (
+            lambda: hexa.forward_batch(warm, warm=True, tol=BENCH_TOL, prove=False),
+            lambda: floor_batch(warm, True),
+            len(warm),
+        ),
+        "forward_batch, trajectory A warm, each row with its proof (the default)": (
             lambda: hexa.forward_batch(warm, warm=True, tol=BENCH_TOL),
             lambda: floor_batch(warm, True),
             len(warm),
@@ -172,7 +178,8 @@ def main(argv=None) -> int:
     for name, r in rates.items():
         pkg, ref = max(r["package"]), max(r["floor"])
         label = f"{name} (solves/s)"
-        print(f"{label:38s} package {pkg:8.0f}  floor {ref:8.0f}  ratio {pkg / ref:.2f}x (target >= 0.85x)")
+        target = "" if "proof" in name else " (target >= 0.85x)"  # the proof is counted beside the solve
+        print(f"{label:38s} package {pkg:8.0f}  floor {ref:8.0f}  ratio {pkg / ref:.2f}x{target}")
         a, b = steps[name]
         per_step = (pkg * a) / (ref * b)
         print(f"{'':38s} Newton steps per row: package {a:.2f}, floor {b:.2f}; steps/s ratio {per_step:.2f}x")

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import hexapod_model as hm
+from hexapod_model.kinematics.batch import PROOF_STEP
 from hexapod_model.viz.render import CHROMIUM_NAMES
 
 #: the presets solved from six readings (those with redundant sensors: tests/kinematics/test_redundant.py)
@@ -100,11 +101,19 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(cell)
 
 
-def batch_rule_forward(hexa: hm.Hexapod):
-    """``forward`` as a batch row is solved (``forward(check=False)`` signature): the certificate's
-    checks, and the Krawczyk proof of a warm row near a singularity only (docs/solver.md)."""
+def batch_rule_forward(hexa: hm.Hexapod, prove: bool = True):
+    """``forward`` as a batch row is solved (``forward(check=False)`` signature): with ``prove``
+    (the batches' default) ``forward`` itself, a warm row with its Krawczyk proof; without, the
+    certificate's checks and the proof of a warm row near a singularity only (docs/solver.md).
+    A row's step longer than ``PROOF_STEP`` keeps the certificate's checks in both."""
 
     def solve(lengths, guess=None, check=False):
+        if prove:  # a step within PROOF_STEP with its proof, a longer one with the certificate's checks
+            short = False
+            if guess is not None:
+                start, held = np.asarray(getattr(guess, "q", guess), dtype=float), hexa.closed_loop.prismatic_q
+                short = bool(np.abs(hexa.joints_of(np.asarray(lengths, dtype=float)) - start[held]).max() <= PROOF_STEP)
+            return hexa.forward(lengths, guess=guess, check=check, prove=short)
         sol = hexa.forward(lengths, guess=guess, check=check, prove=False)
         return hexa.prove_step(guess, sol) if guess is not None and "near_singular" in sol.flags else sol
 

@@ -319,8 +319,11 @@ def test_floor_compare_benchmark_runs(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "ratio package / floor" in out.stdout and "target >= 0.85x" in out.stdout
     data = json.loads(report.read_text())  # what docs/performance.md's rows are made of
-    assert data["warm_fk_us"]["package"] > 0 and data["warm_fk_ratio"] > 0 and len(data["batch"]) == 2
+    assert data["warm_fk_us"]["package"] > 0 and data["warm_fk_ratio"] > 0 and len(data["batch"]) == 3
     assert data["warm_fk_proven_us"] > data["warm_fk_us"]["package"]  # the proof costs on top of the solve
+    batch = data["batch"]
+    proven = batch["forward_batch, trajectory A warm, each row with its proof (the default)"]["package"]
+    assert proven < batch["forward_batch, trajectory A warm"]["package"]  # solves/s: the proofs cost on top
     rows = dict(_performance_table().floor_rows(data))
     assert "µs vs the floor's" in rows["reference: warm FK with its Krawczyk proof (the default), CPU per solve"]
 

@@ -69,6 +69,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         add_hexapod_argument(p)
         p.add_argument("input", metavar=inp, help="input CSV, or - for standard input")
         p.add_argument("-o", "--output", metavar=out, help="output CSV (default, or -: standard output)")
+        if name == "fk":
+            p.add_argument(
+                "--prove",
+                action="store_true",
+                help="prove each row's step from the row before (Krawczyk; up to a 2 mm step): a row not proven "
+                "is uncertified. Loads the proof's compiled kernels (after installation they compile once: ~1 min)",
+            )
         p.set_defaults(func=func)
 
     p = sub.add_parser(
@@ -133,7 +140,8 @@ def _solve_rows(args: argparse.Namespace, kind: str) -> int:
         out_header = (POSE_COLUMNS if kind == "fk" else LENGTH_COLUMNS) + SOLVER_COLUMNS
         with atomic_writer(out_path) if out_path is not None else nullcontext(sys.stdout) as out:
             hexa, chunks = compiled_for_long(hexa, table.chunks(columns))
-            total, failed, first = _stream(hexa, chunks, columns, kind, out, out_header)
+            prove = bool(getattr(args, "prove", False))
+            total, failed, first = _stream(hexa, chunks, columns, kind, out, out_header, prove)
     if failed:
         note(kind, f"{failed} of {total} rows failed; first: {first}")
         return 1
@@ -141,21 +149,28 @@ def _solve_rows(args: argparse.Namespace, kind: str) -> int:
 
 
 def _stream(
-    hexa: Hexapod, chunks: Iterator[Rows], columns: list[str], kind: str, out: IO[str], out_header: list[str]
+    hexa: Hexapod,
+    chunks: Iterator[Rows],
+    columns: list[str],
+    kind: str,
+    out: IO[str],
+    out_header: list[str],
+    prove: bool = False,
 ) -> tuple[int, int, str]:
     """Solve and write every row, each from the previous good solution, a chunk at a time.
 
     Each chunk goes through ``forward_batch`` / ``inverse_batch`` with ``warm=True``, from the
     last good solution of the chunks before: per row what ``forward`` / ``inverse`` with the
-    previous good row's solution as guess gives. Returns (rows, failed rows, the first failure
-    as one line).
+    previous good row's solution as guess gives; ``prove``: each fk row with the Krawczyk proof
+    of its step (``forward_batch(prove=True)``), else with the certificate's checks (and the
+    proof of a row near a singularity). Returns (rows, failed rows, the first failure as one line).
     """
     writer = TableWriter(out, out_header)
     width = len(out_header) - len(SOLVER_COLUMNS)
     total, failed, first, guess = 0, 0, "", None
     with stream_bar(kind) as bar:
         for rows in chunks:
-            res, errors = _solve_chunk(hexa, kind, columns, rows, guess)
+            res, errors = _solve_chunk(hexa, kind, columns, rows, guess, prove)
             bad = np.array([bool(e) for e in errors], dtype=bool)
             status = np.where(bad, "invalid_input", res.status)
             good = status == "converged"
@@ -180,7 +195,9 @@ def _stream(
     return total, failed, first
 
 
-def _solve_chunk(hexa: Hexapod, kind: str, columns: list[str], rows: Rows, guess) -> tuple[BatchResult, list[str]]:
+def _solve_chunk(
+    hexa: Hexapod, kind: str, columns: list[str], rows: Rows, guess, prove: bool = False
+) -> tuple[BatchResult, list[str]]:
     """One chunk solved warm from ``guess``, and per row the reason it was not read (``""``: read).
 
     Rows that were not read go to the batch as NaN (``invalid_input``), so that they never
@@ -193,8 +210,9 @@ def _solve_chunk(hexa: Hexapod, kind: str, columns: list[str], rows: Rows, guess
         scale = [position_problem(T[:3, 3], hexa.base_radius) for T in inputs]  # a table in mm: said per row
         errors = [a or b or c for a, b, c in zip(rows.errors, pose_errors, scale)]
     inputs[[k for k, e in enumerate(errors) if e]] = np.nan
-    solve = hexa.forward_batch if kind == "fk" else hexa.inverse_batch
-    return solve(inputs, guess, warm=True), errors
+    if kind == "fk":
+        return hexa.forward_batch(inputs, guess, warm=True, prove=prove), errors
+    return hexa.inverse_batch(inputs, guess, warm=True), errors
 
 
 def cmd_fk(args: argparse.Namespace) -> int:

@@ -13,6 +13,7 @@ are solved row by row. :mod:`.batch_result` holds the result and how the loops' 
 
 from __future__ import annotations
 
+import functools
 from dataclasses import replace
 
 import numpy as np
@@ -25,9 +26,13 @@ from .engine import NEAR_SINGULAR, SolveEngine
 from .input_checks import MAX_POSITION, POSE_TOLERANCE, check_max_iter, check_tolerance
 from .newton.first_compile import announce
 from .newton.outcomes import INVALID_INPUT
+from .newton.proven import Proof
 from .newton.solver import Solution
 
-__all__ = ["BatchResult", "as_rows", "forward_batch", "inverse_batch", "poses_of_xyzquat"]
+__all__ = ["PROOF_STEP", "BatchResult", "as_rows", "forward_batch", "inverse_batch", "poses_of_xyzquat"]
+
+#: m: the longest step (largest change of a reading from the row's start) a batch row is proven over
+PROOF_STEP = 0.002
 
 
 def _per_row(engine: SolveEngine, solve, rows, guess, warm: bool, retry, forward: bool) -> BatchResult:
@@ -56,7 +61,7 @@ def _message_of(call) -> str:
     return "invalid input"  # not reached: the compiled checks are the per-row checks
 
 
-def forward_batch(engine: SolveEngine, readings, guess, warm: bool, tol, max_iter) -> BatchResult:
+def forward_batch(engine: SolveEngine, readings, guess, warm: bool, tol, max_iter, prove: bool = True) -> BatchResult:
     """:meth:`.hexapod.Hexapod.forward_batch`."""
     rows = as_rows("lengths", readings, (6,))
     tol, max_iter = check_tolerance(tol), check_max_iter(max_iter)
@@ -70,7 +75,8 @@ def forward_batch(engine: SolveEngine, readings, guess, warm: bool, tol, max_ite
     solver = engine.solver(engine.held_forward)
     one_call = solver.one_call
     if one_call is None:
-        return _per_row(engine, solve, rows, guess, warm, retry, True)
+        res = _per_row(engine, solve, rows, guess, warm, retry, True)
+        return _proven(engine, res, rows, guess, warm, tol, max_iter) if prove else res
     from .newton.batch_kernels import forward_rows  # numba: only for a compiled solver
 
     announce(forward_rows)
@@ -108,23 +114,105 @@ def forward_batch(engine: SolveEngine, readings, guess, warm: bool, tol, max_ite
                 start[:], carry[:2] = sol.q, (sol.det_sign, 1.0)
             k += 1
     res = batch_result(engine, out, tol, retry, fallback, True, max_iter)
-    return _reviewed(engine, res, rows, guess, warm, solve, set(fallback))
+    if prove:  # a row the review's redo solves is proven by forward() itself
+        solve = functools.partial(_solve_proven, engine, tol, max_iter)
+    res, replaced = _reviewed(engine, res, rows, guess, warm, solve, set(fallback))
+    return _proven(engine, res, rows, guess, warm, tol, max_iter, replaced) if prove else res
+
+
+def _solve_proven(engine: SolveEngine, tol: float, max_iter: int, x: np.ndarray, g) -> Solution:
+    """``forward(x, g, check=False)``: a warm result with its proof."""
+    return engine.forward(x, g, tol, max_iter, False, True, True)
+
+
+def _proven(
+    engine: SolveEngine,
+    res: BatchResult,
+    rows: np.ndarray,
+    guess,
+    warm: bool,
+    tol: float,
+    max_iter: int,
+    replaced: frozenset[int] = frozenset(),
+) -> BatchResult:
+    """Each ``converged`` row solved from a guess with the Krawczyk proof of its step, as ``forward`` gives it.
+
+    A row's start is ``guess``, or with ``warm`` the last converged row (home, unproven, for
+    the rows before the first when ``guess`` is None). A step longer than :data:`PROOF_STEP`
+    (a reading's change; rows of unrelated poses) keeps the certificate's checks (``proof``
+    None), as the tracker's longer steps do: following it in proven steps would cost tenths of
+    a second a row. A shorter step that cannot be proven goes
+    the way ``forward``'s does (:meth:`.engine.SolveEngine.proven_warm`: from the guess's
+    closure, then in proven steps) and ends ``uncertified`` when that fails too; once a warm
+    row's answer changed, the rows after it are solved by ``forward`` one by one (their starts
+    changed). A row ``forward`` solved already (a blocked path, near a singularity) keeps its
+    proof. A 3-6 hexapod's rows are its review's (every assembly accounted for: the global
+    answer, as ``forward`` gives a replaced result), and are proven only where the review kept
+    the solve's result (``replaced``: the others).
+    """
+    prover = engine.prover
+    if prover is None:
+        return replace(res, proofs=(None,) * len(rows))
+    try:
+        start = None if guess is None else (guess if isinstance(guess, Solution) else engine.start(guess))
+    except HexapodError:  # a bad guess: every row is invalid_input already (the row-by-row path)
+        return replace(res, proofs=(None,) * len(rows))
+    status, messages, flags = res.status.astype(object), list(res.messages), list(res.flags)
+    poses, lengths, q, signs = res.poses.copy(), res.lengths.copy(), res.q.copy(), res.det_sign.copy()
+    iterations, residual = res.iterations.copy(), res.residual.copy()
+    proofs: list[Proof | None] = [None] * len(rows)
+    held, redo = engine.closed_loop.prismatic_q, False
+    for k in range(len(rows)):
+        if status[k] == "invalid_input":
+            continue
+        if redo:  # a start changed: forward() solves and proves the row itself
+            new = engine.forward(rows[k], start, tol, max_iter, False, True, True)
+        else:
+            new = res.solution(k)
+            if new.converged and start is not None and new.proof is None and k not in replaced:
+                s0 = start.q if isinstance(start, Solution) else start
+                joints = rows[k] if engine.encoder is None else engine.joints_of(rows[k])
+                if np.abs(joints - s0[held]).max() <= PROOF_STEP:
+                    new = engine.proven_warm(new, start, s0, joints, tol, max_iter, False)
+                    redo = warm and (new.status != "converged" or not np.array_equal(new.q, q[k]))
+        proofs[k] = new.proof
+        status[k], messages[k], flags[k], signs[k], q[k] = new.status, new.message, new.flags, new.det_sign, new.q
+        iterations[k], residual[k] = new.iterations, new.residual
+        poses[k] = new.pose if new.converged else np.nan
+        lengths[k] = new.lengths if new.converged else np.nan
+        if warm and new.converged:
+            start = new
+    return replace(
+        res,
+        poses=poses,
+        lengths=lengths,
+        q=q,
+        status=status.astype(str),
+        iterations=iterations,
+        residual=residual,
+        messages=tuple(messages),
+        flags=tuple(flags),
+        det_sign=signs,
+        proofs=tuple(proofs),
+    )
 
 
 def _reviewed(
     engine: SolveEngine, res: BatchResult, rows: np.ndarray, guess, warm: bool, solve, done: set[int]
-) -> BatchResult:
+) -> tuple[BatchResult, frozenset[int]]:
     """A 3-6 hexapod's rows checked against every assembly, as :meth:`.hexapod.Hexapod.forward` checks them.
 
     Each row from its own start (``guess``, or with ``warm`` the last converged row); the rows
     in ``done`` were solved by ``forward`` already. Once a warm row's status changes, the rows
-    after it are solved by ``solve`` (``forward``) one by one.
+    after it are solved by ``solve`` (``forward``) one by one. Returns the result and the rows
+    whose answer the review replaced.
     """
     if engine.finder.exact is None:
-        return res
+        return res, frozenset()
     status, messages, flags = res.status.astype(object), list(res.messages), list(res.flags)
     poses, lengths, q, signs = res.poses.copy(), res.lengths.copy(), res.q.copy(), res.det_sign.copy()
-    start, redo = guess, False
+    start, redo, replaced = guess, False, set()
+    proofs = list(res.proofs) if res.proofs else [None] * len(rows)
     for k in range(len(rows)):
         if status[k] == "invalid_input":
             continue
@@ -136,14 +224,17 @@ def _reviewed(
             sol = res.solution(k)
             new = review(engine.finder, sol, rows[k], start)
             changed, redo = new is not sol, warm and new.status != sol.status
+            if changed:
+                replaced.add(k)
         if changed:
+            proofs[k] = new.proof
             status[k], messages[k], flags[k], signs[k], q[k] = new.status, new.message, new.flags, new.det_sign, new.q
             res.iterations[k], res.residual[k] = new.iterations, new.residual
             poses[k] = new.pose if new.converged else np.nan
             lengths[k] = new.lengths if new.converged else np.nan
         if warm and new.converged:
             start = new
-    return replace(
+    out = replace(
         res,
         poses=poses,
         lengths=lengths,
@@ -152,7 +243,9 @@ def _reviewed(
         messages=tuple(messages),
         flags=tuple(flags),
         det_sign=signs,
+        proofs=tuple(proofs),
     )
+    return out, frozenset(replaced)
 
 
 def inverse_batch(engine: SolveEngine, poses, guess, warm: bool, tol, max_iter) -> BatchResult:

@@ -21,6 +21,7 @@ from .certificate import NEAR_SINGULAR_FACTOR
 from .engine import SolveEngine
 from .input_checks import failure_status
 from .newton.outcomes import INVALID_INPUT, OUT_OF_LIMITS, outcome
+from .newton.proven import Proof
 from .newton.solver import Solution
 
 FALLBACK = -1  # code of a row solved by forward() itself
@@ -46,6 +47,11 @@ class BatchResult:
         messages: (N,) each row's ``Solution.message`` (or the error a per-row call raises).
         flags: (N,) each row's ``Solution.flags`` (``("near_singular",)``, ``("connected",)``, ... or ``()``).
         det_sign: (N,) each row's ``Solution.det_sign``.
+        proofs: (N,) each row's ``Solution.proof``: the Krawczyk proof of a ``converged`` row
+            solved from a guess (the batch's ``guess``, or with ``warm`` the last converged
+            row; docs/solver.md), None for a row from home or one not proven because it is not
+            ``converged``. With ``prove=False`` empty, or None but for the rows ``forward``
+            solved itself (near a singularity: proven as ``forward`` proves them).
     """
 
     poses: np.ndarray
@@ -57,6 +63,7 @@ class BatchResult:
     messages: tuple[str, ...]
     flags: tuple[tuple[str, ...], ...]
     det_sign: np.ndarray
+    proofs: tuple[Proof | None, ...] = ()
 
     @property
     def converged(self) -> np.ndarray:
@@ -67,8 +74,17 @@ class BatchResult:
         """Row ``k`` as a :class:`Solution` (no Jacobian, no candidates): a guess for the next solve."""
         pose = self.poses[k] if self.status[k] == "converged" else np.full((4, 4), np.nan)
         row = (self.q[k].copy(), self.lengths[k].copy(), str(self.status[k]), int(self.iterations[k]))
+        proof = self.proofs[k] if self.proofs else None
         return Solution(
-            pose.copy(), *row, float(self.residual[k]), None, self.messages[k], self.flags[k], (), int(self.det_sign[k])
+            pose.copy(),
+            *row,
+            float(self.residual[k]),
+            None,
+            self.messages[k],
+            self.flags[k],
+            (),
+            int(self.det_sign[k]),
+            proof,
         )
 
 
@@ -174,7 +190,13 @@ def batch_result(
     if failed.any():  # a boolean assignment costs tens of microseconds even when it selects nothing
         poses[failed] = np.nan
         lengths[failed] = np.nan
-    return BatchResult(poses, lengths, Q, status.column(), iterations, residuals, tuple(messages), tuple(flags), signs)
+    proofs: list[Proof | None] = []  # the proofs of rows forward() solved, when it proved one
+    if any(sol.proof is not None for sol in fallback.values()):
+        proofs = [None] * len(Q)
+        for j, sol in fallback.items():
+            proofs[j] = sol.proof
+    column, messages_, flags_ = status.column(), tuple(messages), tuple(flags)
+    return BatchResult(poses, lengths, Q, column, iterations, residuals, messages_, flags_, signs, tuple(proofs))
 
 
 def _judge_rows(

@@ -397,6 +397,7 @@ class Hexapod:
         warm: bool = False,
         tol: float | None = None,
         max_iter: int = DEFAULT_MAX_ITER,
+        prove: bool = True,
     ) -> BatchResult:
         """Direct kinematics of N rows of readings in one call (a compiled loop; row by row if not ``compiled``).
 
@@ -407,6 +408,11 @@ class Hexapod:
                 ``hexapod fk`` reads its rows), the first from ``guess``.
             tol: closure residual to reach, as :meth:`forward`.
             max_iter: Newton step limit per row, as :meth:`forward`.
+            prove: as :meth:`forward`: a ``converged`` row solved from a guess (``guess``, or
+                the last converged row with ``warm``) carries the Krawczyk proof of its step
+                (:attr:`~.batch.BatchResult.proofs`), and one that cannot be proven is
+                ``uncertified``. False keeps the certificate's checks alone (and proves a row
+                near a singularity only), for a caller that measures the solve alone.
 
         Returns:
             A :class:`~.batch.BatchResult`: per row what :meth:`forward` with ``check=False``
@@ -423,7 +429,7 @@ class Hexapod:
                 f"this hexapod takes its {len(self.reading_names)} readings ({names}) in forward()",
             )
         tol = self.default_tol if tol is None else tol
-        return batch.forward_batch(self.engine, lengths, guess, warm, tol, max_iter)
+        return batch.forward_batch(self.engine, lengths, guess, warm, tol, max_iter, bool(prove))
 
     def inverse_batch(
         self,

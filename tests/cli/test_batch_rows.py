@@ -30,13 +30,13 @@ from ..conftest import PATH_TOL, batch_rule_forward, hexapod
 BAD_LINES = ("0.01,abc,0,0,0,0", "0.01,0,0", "", "nan,0,0,0,0,0", "1e7,0,0,0,0,0", "0.01,0,0,0,0,0.9")
 
 
-def per_row(hexa: hm.Hexapod, path, kind: str) -> tuple[str, int, str]:
-    """The output, failure count and first failure of the row-by-row loop the CLI ran before."""
+def per_row(hexa: hm.Hexapod, path, kind: str, prove: bool = False) -> tuple[str, int, str]:
+    """The output, failure count and first failure of the row-by-row loop the CLI ran before (``prove``: fk --prove)."""
     out = io.StringIO()
     with open_table(path, LENGTH_COLUMNS if kind == "fk" else ()) as table:
         columns = LENGTH_COLUMNS if kind == "fk" else pose_input_columns(table.header)
         header = (POSE_COLUMNS if kind == "fk" else LENGTH_COLUMNS) + SOLVER_COLUMNS
-        writer, solve = TableWriter(out, header), batch_rule_forward(hexa) if kind == "fk" else hexa.inverse
+        writer, solve = TableWriter(out, header), batch_rule_forward(hexa, prove) if kind == "fk" else hexa.inverse
         total, failed, first, guess = 0, 0, "", None
         for rows in table.chunks(columns):
             inputs, errors = rows.values, list(rows.errors)
@@ -111,13 +111,13 @@ def ik_file(hexa: hm.Hexapod, path) -> None:
     path.write_text("x,y,z,qx,qy,qz,qw\n" + "\n".join(lines) + "\n")
 
 
-@pytest.mark.parametrize("kind", ["fk", "ik"])
-def test_cli_output_is_the_row_by_row_output(kind, tmp_path, capsys):
+@pytest.mark.parametrize(("kind", "prove"), [("fk", False), ("fk", True), ("ik", False)])
+def test_cli_output_is_the_row_by_row_output(kind, prove, tmp_path, capsys):
     hexa = hexapod("reference")
     inp, out = tmp_path / f"{kind}.csv", tmp_path / "out.csv"
     (fk_file if kind == "fk" else ik_file)(hexa, inp)
-    expected, failed, first = per_row(hexa, inp, kind)
-    code = main([kind, "reference", str(inp), "-o", str(out)])
+    expected, failed, first = per_row(hexa, inp, kind, prove)
+    code = main([kind, "reference", str(inp), "-o", str(out), *(["--prove"] if prove else [])])
     err = capsys.readouterr().err
     assert_same_table(out.read_text(), expected)
     assert expected.count("\n") > 3000 and "invalid_input" in expected

@@ -19,15 +19,16 @@ from .test_newton import idle_roll_hexapod
 
 
 def per_row(solve, rows, guess=None, warm=False) -> list[tuple]:
-    """(status, message, flags, det_sign, iterations, pose, lengths, q) per row, with check=False."""
+    """(status, message, flags, det_sign, iterations, pose, lengths, q, proof) per row, with check=False."""
     out = []
     for x in rows:
         try:
             sol = solve(x, guess, check=False)
         except hm.HexapodError as exc:
-            out.append(("invalid_input", str(exc), (), 0, 0, None, None, None))
+            out.append(("invalid_input", str(exc), (), 0, 0, None, None, None, None))
             continue
-        out.append((sol.status, sol.message, sol.flags, sol.det_sign, sol.iterations, sol.pose, sol.lengths, sol.q))
+        row = (sol.status, sol.message, sol.flags, sol.det_sign, sol.iterations, sol.pose, sol.lengths, sol.q)
+        out.append((*row, getattr(sol, "proof", None)))
         if warm and sol.converged:
             guess = sol
     return out
@@ -35,8 +36,11 @@ def per_row(solve, rows, guess=None, warm=False) -> list[tuple]:
 
 def assert_rows_match(result: hm.BatchResult, expected: list[tuple]) -> None:
     assert len(result.status) == len(expected)
-    for k, (status, message, flags, det_sign, iterations, pose, lengths, q) in enumerate(expected):
+    for k, (status, message, flags, det_sign, iterations, pose, lengths, q, proof) in enumerate(expected):
         assert (result.status[k], result.flags[k], result.det_sign[k]) == (status, flags, det_sign), k
+        if status == "converged":  # a proof where the row's forward has one
+            got = result.proofs[k] if result.proofs else None
+            assert (got is None, got is not None and got.proven) == (proof is None, proof is not None), k
         assert_same_message(result.messages[k], message, numbers=status != "max_iterations")
         if status == "invalid_input":
             assert (
@@ -123,8 +127,9 @@ def test_singular_and_near_singular_rows():
     rows = hexa.inverse_batch(poses).lengths
     for guess in (None, hexa.inverse(poses[2])):
         for warm in (False, True):
-            result = hexa.forward_batch(rows, guess, warm=warm)
-            assert_rows_match(result, per_row(batch_rule_forward(hexa), rows, guess, warm))
+            for prove in (True, False):
+                result = hexa.forward_batch(rows, guess, warm=warm, prove=prove)
+                assert_rows_match(result, per_row(batch_rule_forward(hexa, prove), rows, guess, warm))
     statuses = set(hexa.forward_batch(rows, hexa.inverse(poses[2])).status)
     flagged = hexa.forward_batch(rows, hexa.inverse(poses[2]), warm=True).flags
     assert ("near_singular",) in flagged and len(statuses) > 1
@@ -143,10 +148,11 @@ def test_a_warm_row_near_a_singularity_is_converged_only_with_its_proof(body):
     T[:3, 3] += [0.01, 0.0, 0.0]
     rows = np.array([readings, hexa.inverse(T).lengths, readings])
     for warm in (False, True):
-        result = hexa.forward_batch(rows, guess, warm=warm)
-        expected = per_row(batch_rule_forward(hexa), rows, guess, warm)
-        assert_rows_match(result, expected)
-        assert expected[0][0] == "uncertified" and "Krawczyk" in expected[0][1] and not result.converged[0]
+        for prove in (True, False):
+            result = hexa.forward_batch(rows, guess, warm=warm, prove=prove)
+            expected = per_row(batch_rule_forward(hexa, prove), rows, guess, warm)
+            assert_rows_match(result, expected)
+            assert expected[0][0] == "uncertified" and "Krawczyk" in expected[0][1] and not result.converged[0]
 
 
 def test_general_path_batches():
