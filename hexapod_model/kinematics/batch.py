@@ -154,34 +154,40 @@ def _proven(
     if prover is None:
         return replace(res, proofs=(None,) * len(rows))
     try:
-        start = None if guess is None else (guess if isinstance(guess, Solution) else engine.start(guess))
+        start_guess = None if guess is None else (guess if isinstance(guess, Solution) else engine.start(guess))
     except HexapodError:  # a bad guess: every row is invalid_input already (the row-by-row path)
         return replace(res, proofs=(None,) * len(rows))
     status, messages, flags = res.status.astype(object), list(res.messages), list(res.flags)
     poses, lengths, q, signs = res.poses.copy(), res.lengths.copy(), res.q.copy(), res.det_sign.copy()
     iterations, residual = res.iterations.copy(), res.residual.copy()
-    proofs: list[Proof | None] = [None] * len(rows)
+    proofs: list[Proof | None] = list(res.proofs) if res.proofs else [None] * len(rows)
     held, redo = engine.closed_loop.prismatic_q, False
+    joints = rows if engine.encoder is None else engine.joints_of(rows)
+    arrays = (status, messages, flags, signs, q, iterations, residual, poses, lengths)
+    # the start: a guess (Solution or array) or the index of the last converged row (its Solution made when needed)
+    start: Solution | np.ndarray | int | None = start_guess
+    written: dict[int, Solution] = {}  # the rows rewritten here (a later row's start)
     for k in range(len(rows)):
         if status[k] == "invalid_input":
             continue
         if redo:  # a start changed: forward() solves and proves the row itself
-            new = engine.forward(rows[k], start, tol, max_iter, False, True, True)
-        else:
-            new = res.solution(k)
-            if new.converged and start is not None and new.proof is None and k not in replaced:
-                s0 = start.q if isinstance(start, Solution) else start
-                joints = rows[k] if engine.encoder is None else engine.joints_of(rows[k])
-                if np.abs(joints - s0[held]).max() <= PROOF_STEP:
-                    new = engine.proven_warm(new, start, s0, joints, tol, max_iter, False)
-                    redo = warm and (new.status != "converged" or not np.array_equal(new.q, q[k]))
-        proofs[k] = new.proof
-        status[k], messages[k], flags[k], signs[k], q[k] = new.status, new.message, new.flags, new.det_sign, new.q
-        iterations[k], residual[k] = new.iterations, new.residual
-        poses[k] = new.pose if new.converged else np.nan
-        lengths[k] = new.lengths if new.converged else np.nan
-        if warm and new.converged:
-            start = new
+            guess_k = (written.get(start) or res.solution(start)) if isinstance(start, int) else start
+            written[k] = new = engine.forward(rows[k], guess_k, tol, max_iter, False, True, True)
+            _write(new, k, arrays, proofs)
+        elif status[k] == "converged" and start is not None and proofs[k] is None and k not in replaced:
+            s0 = q[start] if isinstance(start, int) else (start.q if isinstance(start, Solution) else start)
+            if np.abs(joints[k] - s0[held]).max() <= PROOF_STEP:
+                proof = prover.prove(s0, q[k])
+                if proof.proven:  # the usual case: nothing to build
+                    proofs[k] = proof
+                else:  # forward's way on: from the guess's closure, then in proven steps
+                    guess_k = (written.get(start) or res.solution(start)) if isinstance(start, int) else start
+                    new = engine.proven_warm(res.solution(k), guess_k, s0, joints[k], tol, max_iter, False, proof)
+                    written[k] = new
+                    _write(new, k, arrays, proofs)
+                    redo = warm and new.status != "converged"
+        if warm and status[k] == "converged":
+            start = k
     return replace(
         res,
         poses=poses,
@@ -195,6 +201,16 @@ def _proven(
         det_sign=signs,
         proofs=tuple(proofs),
     )
+
+
+def _write(new: Solution, k: int, arrays: tuple, proofs: list[Proof | None]) -> None:
+    """Row ``k`` of the batch's columns (``arrays``, written in place) from the Solution ``new``."""
+    status, messages, flags, signs, q, iterations, residual, poses, lengths = arrays
+    status[k], messages[k], flags[k], signs[k], q[k] = new.status, new.message, new.flags, new.det_sign, new.q
+    iterations[k], residual[k] = new.iterations, new.residual
+    poses[k] = new.pose if new.converged else np.nan
+    lengths[k] = new.lengths if new.converged else np.nan
+    proofs[k] = new.proof
 
 
 def _reviewed(
