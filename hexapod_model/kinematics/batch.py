@@ -157,22 +157,23 @@ def _proven(
         start_guess = None if guess is None else (guess if isinstance(guess, Solution) else engine.start(guess))
     except HexapodError:  # a bad guess: every row is invalid_input already (the row-by-row path)
         return replace(res, proofs=(None,) * len(rows))
-    status, messages, flags = res.status.astype(object), list(res.messages), list(res.flags)
-    poses, lengths, q, signs = res.poses.copy(), res.lengths.copy(), res.q.copy(), res.det_sign.copy()
-    iterations, residual = res.iterations.copy(), res.residual.copy()
+    arrays = _columns(res)
+    status, q = arrays[0], arrays[4]
     proofs: list[Proof | None] = list(res.proofs) if res.proofs else [None] * len(rows)
     held, redo = engine.closed_loop.prismatic_q, False
     joints = rows if engine.encoder is None else engine.joints_of(rows)
-    arrays = (status, messages, flags, signs, q, iterations, residual, poses, lengths)
     # the start: a guess (Solution or array) or the index of the last converged row (its Solution made when needed)
     start: Solution | np.ndarray | int | None = start_guess
     written: dict[int, Solution] = {}  # the rows rewritten here (a later row's start)
+
+    def guess_of(start: Solution | np.ndarray | int | None) -> Solution | np.ndarray | None:
+        return (written.get(start) or res.solution(start)) if isinstance(start, int) else start
+
     for k in range(len(rows)):
         if status[k] == "invalid_input":
             continue
         if redo:  # a start changed: forward() solves and proves the row itself
-            guess_k = (written.get(start) or res.solution(start)) if isinstance(start, int) else start
-            written[k] = new = engine.forward(rows[k], guess_k, tol, max_iter, False, True, True)
+            written[k] = new = engine.forward(rows[k], guess_of(start), tol, max_iter, False, True, True)
             _write(new, k, arrays, proofs)
         elif status[k] == "converged" and start is not None and proofs[k] is None and k not in replaced:
             s0 = q[start] if isinstance(start, int) else (start.q if isinstance(start, Solution) else start)
@@ -181,13 +182,36 @@ def _proven(
                 if proof.proven:  # the usual case: nothing to build
                     proofs[k] = proof
                 else:  # forward's way on: from the guess's closure, then in proven steps
-                    guess_k = (written.get(start) or res.solution(start)) if isinstance(start, int) else start
-                    new = engine.proven_warm(res.solution(k), guess_k, s0, joints[k], tol, max_iter, False, proof)
-                    written[k] = new
+                    sol, guess_k = res.solution(k), guess_of(start)
+                    written[k] = new = engine.proven_warm(sol, guess_k, s0, joints[k], tol, max_iter, False, proof)
                     _write(new, k, arrays, proofs)
                     redo = warm and new.status != "converged"
         if warm and status[k] == "converged":
             start = k
+    return _with_columns(res, arrays, proofs)
+
+
+def _columns(res: BatchResult) -> tuple:
+    """Copies of ``res``'s columns to rewrite rows in (:func:`_write`).
+
+    In this order: status (object), messages, flags, det_sign, q, iterations, residual, poses, lengths.
+    """
+    return (
+        res.status.astype(object),
+        list(res.messages),
+        list(res.flags),
+        res.det_sign.copy(),
+        res.q.copy(),
+        res.iterations.copy(),
+        res.residual.copy(),
+        res.poses.copy(),
+        res.lengths.copy(),
+    )
+
+
+def _with_columns(res: BatchResult, arrays: tuple, proofs: list[Proof | None]) -> BatchResult:
+    """``res`` with the columns of :func:`_columns` (rewritten) and ``proofs``."""
+    status, messages, flags, signs, q, iterations, residual, poses, lengths = arrays
     return replace(
         res,
         poses=poses,
@@ -225,10 +249,10 @@ def _reviewed(
     """
     if engine.finder.exact is None:
         return res, frozenset()
-    status, messages, flags = res.status.astype(object), list(res.messages), list(res.flags)
-    poses, lengths, q, signs = res.poses.copy(), res.lengths.copy(), res.q.copy(), res.det_sign.copy()
+    arrays = _columns(res)
+    status = arrays[0]
     start, redo, replaced = guess, False, set()
-    proofs = list(res.proofs) if res.proofs else [None] * len(rows)
+    proofs: list[Proof | None] = list(res.proofs) if res.proofs else [None] * len(rows)
     for k in range(len(rows)):
         if status[k] == "invalid_input":
             continue
@@ -243,25 +267,10 @@ def _reviewed(
             if changed:
                 replaced.add(k)
         if changed:
-            proofs[k] = new.proof
-            status[k], messages[k], flags[k], signs[k], q[k] = new.status, new.message, new.flags, new.det_sign, new.q
-            res.iterations[k], res.residual[k] = new.iterations, new.residual
-            poses[k] = new.pose if new.converged else np.nan
-            lengths[k] = new.lengths if new.converged else np.nan
+            _write(new, k, arrays, proofs)
         if warm and new.converged:
             start = new
-    out = replace(
-        res,
-        poses=poses,
-        lengths=lengths,
-        q=q,
-        status=status.astype(str),
-        messages=tuple(messages),
-        flags=tuple(flags),
-        det_sign=signs,
-        proofs=tuple(proofs),
-    )
-    return out, frozenset(replaced)
+    return _with_columns(res, arrays, proofs), frozenset(replaced)
 
 
 def inverse_batch(engine: SolveEngine, poses, guess, warm: bool, tol, max_iter) -> BatchResult:
