@@ -108,12 +108,10 @@ def batch_rule_forward(hexa: hm.Hexapod, prove: bool = True):
     A row's step longer than ``PROOF_STEP`` keeps the certificate's checks in both."""
 
     def solve(lengths, guess=None, check=False):
-        if prove:  # a step within PROOF_STEP with its proof, a longer one with the certificate's checks
-            short = False
-            if guess is not None:
-                start, held = np.asarray(getattr(guess, "q", guess), dtype=float), hexa.closed_loop.prismatic_q
-                short = bool(np.abs(hexa.joints_of(np.asarray(lengths, dtype=float)) - start[held]).max() <= PROOF_STEP)
-            return hexa.forward(lengths, guess=guess, check=check, prove=short)
+        if prove and guess is not None:  # a step within PROOF_STEP with its proof, a longer one as without prove
+            start, held = np.asarray(getattr(guess, "q", guess), dtype=float), hexa.closed_loop.prismatic_q
+            if np.abs(hexa.joints_of(np.asarray(lengths, dtype=float)) - start[held]).max() <= PROOF_STEP:
+                return hexa.forward(lengths, guess=guess, check=check)
         sol = hexa.forward(lengths, guess=guess, check=check, prove=False)
         return hexa.prove_step(guess, sol) if guess is not None and "near_singular" in sol.flags else sol
 

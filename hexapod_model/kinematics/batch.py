@@ -121,8 +121,20 @@ def forward_batch(engine: SolveEngine, readings, guess, warm: bool, tol, max_ite
 
 
 def _solve_proven(engine: SolveEngine, tol: float, max_iter: int, x: np.ndarray, g) -> Solution:
-    """``forward(x, g, check=False)``: a warm result with its proof."""
-    return engine.forward(x, g, tol, max_iter, False, True, True)
+    """``forward(x, g, check=False)`` as a proven batch's row.
+
+    A warm step within :data:`PROOF_STEP` with its proof; a longer one, or a cold row, with the
+    certificate's checks (proven near a singularity).
+    """
+    start = None if g is None else (g.q if isinstance(g, Solution) else g)
+    joints = x if engine.encoder is None else engine.joints_of(x)
+    short = start is not None and _short(engine, joints, start)
+    return engine.forward(x, g, tol, max_iter, False, True, True if short else NEAR_SINGULAR)
+
+
+def _short(engine: SolveEngine, joints: np.ndarray, start: np.ndarray) -> bool:
+    """Whether the step from configuration ``start`` to the held joints ``joints`` (m) is within :data:`PROOF_STEP`."""
+    return bool(np.abs(joints - start[engine.closed_loop.prismatic_q]).max() <= PROOF_STEP)
 
 
 def _proven(
@@ -160,7 +172,7 @@ def _proven(
     arrays = _columns(res)
     status, q = arrays[0], arrays[4]
     proofs: list[Proof | None] = list(res.proofs) if res.proofs else [None] * len(rows)
-    held, redo = engine.closed_loop.prismatic_q, False
+    redo = False
     joints = rows if engine.encoder is None else engine.joints_of(rows)
     # the start: a guess (Solution or array) or the index of the last converged row (its Solution made when needed)
     start: Solution | np.ndarray | int | None = start_guess
@@ -172,12 +184,12 @@ def _proven(
     for k in range(len(rows)):
         if status[k] == "invalid_input":
             continue
-        if redo:  # a start changed: forward() solves and proves the row itself
-            written[k] = new = engine.forward(rows[k], guess_of(start), tol, max_iter, False, True, True)
+        if redo:  # a start changed: forward() solves and proves the row itself (the same rule)
+            written[k] = new = _solve_proven(engine, tol, max_iter, rows[k], guess_of(start))
             _write(new, k, arrays, proofs)
         elif status[k] == "converged" and start is not None and proofs[k] is None and k not in replaced:
             s0 = q[start] if isinstance(start, int) else (start.q if isinstance(start, Solution) else start)
-            if np.abs(joints[k] - s0[held]).max() <= PROOF_STEP:
+            if _short(engine, joints[k], s0):
                 proof = prover.prove(s0, q[k])
                 if proof.proven:  # the usual case: nothing to build
                     proofs[k] = proof

@@ -92,3 +92,26 @@ def test_a_warm_row_not_proven_is_uncertified_and_the_next_rows_start_before_it(
         assert (res.proofs[k] is None) == (expected[k].proof is None), k
     # the row after the failed one started from the row before it, as forward's would
     assert res.iterations[bad + 1] == expected[bad + 1].iterations
+
+
+def test_a_long_step_after_a_row_not_proven_keeps_the_certificate(monkeypatch):
+    """The rows solved again after a failed proof follow the batch's rule: a step over PROOF_STEP is not proven."""
+    hexa = hm.Hexapod.from_preset("reference")
+    rows = _walk(hexa, 8, seed=4)
+    rows[6:] += 0.005  # a 5 mm step from row 5 to row 6
+    bad = 3
+    target = hexa.forward_batch(rows, warm=True, prove=False).q[bad].copy()
+    prover = hexa.engine.prover
+    prove = prover.prove
+
+    def failing(q0, q1, *args, **kwargs):
+        if np.allclose(q1, target, rtol=0, atol=1e-9):
+            return Proof(False, np.inf, np.inf, 1, 0)
+        return prove(q0, q1, *args, **kwargs)
+
+    monkeypatch.setattr(prover, "prove", failing)
+    res = hexa.forward_batch(rows, warm=True)
+    assert res.status[bad] == "uncertified" and res.converged[bad + 1 :].all()
+    assert all(res.proofs[k] is not None and res.proofs[k].proven for k in (1, 2, 4, 5, 7))  # short steps
+    assert res.proofs[6] is None  # the long step: the certificate's checks, as in a batch without a failure
+    assert hexa.forward_batch(rows, warm=True, prove=False).converged[6]
