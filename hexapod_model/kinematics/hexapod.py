@@ -411,8 +411,10 @@ class Hexapod:
             prove: as :meth:`forward`: a ``converged`` row solved from a guess (``guess``, or
                 the last converged row with ``warm``) carries the Krawczyk proof of its step
                 (:attr:`~.batch.BatchResult.proofs`), and one that cannot be proven is
-                ``uncertified``. False keeps the certificate's checks alone (and proves a row
-                near a singularity only), for a caller that measures the solve alone.
+                ``uncertified``; a step longer than :data:`~.batch.PROOF_STEP` (2 mm of a
+                reading) keeps the certificate's checks. False keeps the certificate's checks
+                alone (and proves a row near a singularity only), for a caller that measures the
+                solve alone.
 
         Returns:
             A :class:`~.batch.BatchResult`: per row what :meth:`forward` with ``check=False``
