@@ -129,9 +129,8 @@ def capacity(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, se
     replaces the receiving bus's at once: the thread runs from a full queue, as it would under a
     sustained load. The thread's CPU clock is read by the subscriber (in the thread) at the last
     warm-up set's record and at the last measured set's; meanwhile no other thread of the
-    process runs but the service's own (another thread of the process that wakes periodically,
-    even every 10 ms, slows the cycle thread's work on a machine of several cores, and the fed
-    runs' feeder is such a thread: their CPU per set is higher).
+    process runs but the service's own (the fed runs' feeder is one more thread that takes the
+    interpreter lock, and their sets wait for frames between bursts: their CPU per set is higher).
     """
     channel, config = make_config(fixtures, folder)
     bus = can.Bus(interface="virtual", channel=channel)

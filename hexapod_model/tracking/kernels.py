@@ -1,4 +1,6 @@
-"""Compiled per-sample arithmetic of the stream tracker: the reading statistics and the branch check's pose residual.
+"""Compiled per-sample arithmetic of the stream tracker: reading statistics, motion model, branch residual.
+
+None of it releases the interpreter lock, as NumPy's ``dot`` would (:func:`motion_readings`).
 
 :func:`reading_checks` replaces a dozen NumPy calls on 6-vectors per sample (finite readings,
 frozen runs, normalised innovations, their maximum and sum of squares) with one call, in the
@@ -46,6 +48,10 @@ def branch_residual(F, n, w, fs, Jinv, l, lhat, e):
         l: (6,) the readings.
         lhat: (6,) the motion model's readings.
         e: (6,) out: ``log6(Mm^-1 Ms) - Jinv (l - lhat)``, ``Mm`` the motion model's pose.
+
+    Returns:
+        ``(|e[:3]|, |e[3:]|)``: the Euclidean norms of the residual's translation (m) and
+        rotation (rad) parts.
     """
     p, q, xi = np.empty(3), np.empty(4), np.empty(6)
     dv = np.zeros(6)
@@ -67,6 +73,27 @@ def branch_residual(F, n, w, fs, Jinv, l, lhat, e):
         for k in range(6):
             s += Jinv[i, k] * (l[k] - lhat[k])
         e[i] = xi[i] - s
+    return math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]), math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
+
+
+@njit(cache=True)
+def motion_readings(w, L, lhat):
+    """The motion model's readings ``lhat = w @ L[:n]`` (``n = w.size``), written into ``lhat``.
+
+    In compiled code because NumPy's ``dot`` and ``@`` hand these products to BLAS, which
+    releases the interpreter lock around them: with another thread of the process waiting for
+    the lock, each release wakes it, and the tracker's step costs a fifth more.
+
+    Args:
+        w: (n,) the motion model's weights (newest first).
+        L: (>= n, 6) readings of the trusted samples, newest first (m).
+        lhat: (6,) out: the weighted readings (m).
+    """
+    for k in range(6):
+        s = 0.0
+        for j in range(w.size):
+            s += w[j] * L[j, k]
+        lhat[k] = s
 
 
 @njit(cache=True)

@@ -41,7 +41,7 @@ from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
 from ..lie import pose_distance
 from .extra_readings import step_with_extra_readings
-from .kernels import branch_residual, reading_checks
+from .kernels import branch_residual, motion_readings, reading_checks
 from .passage import PassageMixin
 from .reading_tests import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
 from .types import (
@@ -142,7 +142,7 @@ class Tracker(PassageMixin):
         self._L = self._Lr.rows  # readings of the trusted samples, newest first
         self._F = self._Fr.rows  # free-flyer coordinates of _hist, newest first
         self._e = np.zeros(6)  # the branch check's residual
-        self._et, self._er = self._e[:3], self._e[3:]  # its translation and rotation parts (views)
+        self._lhat = np.zeros(6)  # the motion model's readings (m)
         self._bound = s.branch_sigmas * s.noise  # the branch check's bound per scale and spread
         self._z = np.zeros(6)  # the sample's normalised innovations
         self._born: list[int] = [0] * s.window  # sample number of each trusted one, newest first
@@ -232,7 +232,8 @@ class Tracker(PassageMixin):
             else:
                 ages = tuple([k - b for b in self._born[:n]])
             w, spread = self._motion.weights(ages)
-            lhat = w.dot(self._L[:n])  # as w @ L, without the matmul ufunc's dispatch
+            lhat = self._lhat
+            motion_readings(w, self._L, lhat)  # w @ L[:n], compiled: BLAS would release the GIL
         # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
         last = self._raw[-1] if self._raw else _NONE
         sigma_nu = s.innovation_sigma(spread)
@@ -354,10 +355,9 @@ class Tracker(PassageMixin):
         if sens.det_sign != self._sign and not (self._near or cond > self.cond_limit):
             return False  # across a singularity without passing near one: another assembly
         e = self._e  # log6(Mm^-1 Ms) - J^-1 (l - l^), Mm the motion model's pose
-        branch_residual(self._F, w.size, w, sol.q[self._ffq], self._sens.Jinv, l, lhat, e)
-        et, er = self._et, self._er  # norms as np.linalg.norm computes them (dot), without its dispatch
+        et, er = branch_residual(self._F, w.size, w, sol.q[self._ffq], self._sens.Jinv, l, lhat, e)
         length = self.length
-        size = math.hypot(math.sqrt(et.dot(et)), length * math.sqrt(er.dot(er)))
+        size = math.hypot(et, length * er)
         return size <= bound * math.hypot(sens.translation, length * sens.rotation) + 1e-9 * length
 
     def _model_q(self, w: np.ndarray) -> np.ndarray:

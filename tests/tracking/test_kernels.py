@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from hexapod_model.tracking.kernels import branch_residual, reading_checks
+from hexapod_model.tracking.kernels import branch_residual, motion_readings, reading_checks
 
 
 def _free_flyer() -> pin.Model:
@@ -43,8 +43,21 @@ def test_branch_residual_matches_pinocchio_difference_and_integrate(step, turn):
         expected = pin.difference(model, pin.integrate(model, q0, dv), fs) - Jinv @ (l - lhat)
         padded = np.vstack([F, np.full((2, 7), np.nan)])  # rows beyond n are never read
         e = np.zeros(6)
-        branch_residual(padded, n, w, fs, Jinv, l, lhat, e)
+        norms = branch_residual(padded, n, w, fs, Jinv, l, lhat, e)
         assert np.abs(e - expected).max() <= 1e-12 * (1.0 + np.abs(w).sum())
+        # the parts' norms (m, rad), as np.linalg.norm gives them to rounding
+        assert np.allclose(norms, [np.linalg.norm(e[:3]), np.linalg.norm(e[3:])], rtol=1e-15, atol=0.0)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 5])
+def test_motion_readings_are_the_weighted_rows(n):
+    """``lhat = w @ L[:n]`` over the newest ``n`` rows, to rounding (m); rows beyond ``n`` are never read."""
+    rng = np.random.default_rng(n)
+    w = rng.normal(0.0, 1.0, n)
+    L = np.vstack([rng.uniform(0.5, 0.9, (n, 6)), np.full((2, 6), np.nan)])
+    lhat = np.full(6, np.nan)
+    motion_readings(w, L, lhat)
+    assert np.allclose(lhat, w @ L[:n], rtol=0.0, atol=1e-15 * np.abs(w).sum())
 
 
 def test_branch_residual_is_zero_on_a_constant_twist_motion():
