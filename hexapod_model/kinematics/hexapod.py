@@ -289,8 +289,11 @@ class Hexapod:
             )
             if k >= 0:
                 raise engine.stroke_error(lengths, k)
-            if array:  # checked after the stroke, as engine.forward does (a new array: InputError when bad)
-                start = engine.start(guess, copy=False)
+            if array:  # checked after the stroke, as engine.forward does: a new array, InputError when bad
+                ok = guess.dtype == np.float64 and guess.shape == engine.q_shape
+                start = guess.copy() if ok else guess
+                if not (ok and solver.check_start(start, self.closed_loop.platform_q, POSE_TOLERANCE)):
+                    start = engine.start(guess, copy=False)
             done = solver.attempt(start, tol)
             if len(done) == 6 and done[5] < 0 and solver.kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
                 # converged certified within the limits, not near a singularity: engine.attempted()'s Solution

@@ -41,7 +41,7 @@ from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.solver import Solution
 from ..lie import pose_distance
 from .extra_readings import step_with_extra_readings
-from .kernels import branch_residual, motion_readings, reading_checks
+from .kernels import branch_residual, largest_step, motion_readings, reading_checks
 from .passage import PassageMixin
 from .reading_tests import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
 from .types import (
@@ -314,7 +314,7 @@ class Tracker(PassageMixin):
         # sample, after a gap: flagged settling) the certificate's checks, not the proven steps
         # that would hold the cycle for tens of milliseconds
         joints = l if self.hexa.engine.encoder is None else self.hexa.joints_of(l[:6])  # m, as the guess's
-        step = np.abs(joints[:6] - guess[self._prism_q]).max()  # the method: without np.max's dispatch
+        step = largest_step(joints, guess, self._prism_q)  # m, compiled: NumPy's would be four dispatches
         prove = bool(step <= self.settings.continuation_step)
         try:
             if self.hexa.redundancy is not None:  # the six legs' solve of a hexapod with redundant sensors

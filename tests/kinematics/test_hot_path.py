@@ -128,6 +128,12 @@ def test_a_configuration_guess_takes_the_hot_path_with_the_first_solves_answer(n
             hexa.forward(steps[0], guess)
         first_error = _in_new_thread(lambda guess=guess: _raised(lambda: hexa.forward(steps[0], guess)))
         assert str(hot_error.value) == str(first_error)
+    for guess in (predicted[1].astype(np.float32), predicted[1].astype(object), predicted[1][::-1][::-1]):
+        hot = hexa.forward(steps[0], guess, check=False)  # another dtype or layout: checked and copied as before
+        assert _same(hot, _in_new_thread(lambda guess=guess: hexa.forward(steps[0], guess, check=False)))
+    kept = predicted[1].copy()
+    hot = hexa.forward(steps[0], predicted[1])
+    assert np.array_equal(predicted[1], kept) and not np.shares_memory(hot.q, predicted[1])  # the guess is not written
     with pytest.raises(hm.LimitError):
         hexa.forward(hi + 0.01, bad)  # the stroke is checked before the guess, as on the first solve
     assert isinstance(_in_new_thread(lambda: _raised(lambda: hexa.forward(hi + 0.01, bad))), hm.LimitError)
@@ -153,3 +159,33 @@ def test_batch_status_column_is_as_wide_as_its_longest_status():
         solved = [hexa.forward(x, check=False).status if np.all(np.isfinite(x)) else "invalid_input" for x in batch]
         assert list(res.status) == solved
     assert hexa.forward_batch(np.empty((0, 6))).status.dtype == np.array([], dtype=object).astype(str).dtype
+
+
+def test_the_compiled_start_check_takes_what_check_configuration_takes():
+    """:func:`valid_start` against :func:`check_configuration` at the edges of its rule (finite, unit quaternion)."""
+    from hexapod_model.kinematics.input_checks import POSE_TOLERANCE, check_configuration
+    from hexapod_model.kinematics.newton.compiled import valid_start
+
+    hexa = hm.Hexapod.from_preset("reference")
+    i = hexa.closed_loop.platform_q
+    q0 = hexa.q_home.copy()
+    cases = []
+    for change in (0.0, 0.5, -0.5, 0.9 * POSE_TOLERANCE, 1.1 * POSE_TOLERANCE, -1.1 * POSE_TOLERANCE):
+        q = q0.copy()
+        q[i + 3 : i + 7] *= 1.0 + change  # the quaternion's norm 1 + change
+        cases.append(q)
+    for k, value in ((0, np.nan), (i + 6, np.inf), (q0.size - 1, -np.inf), (0, 1e200)):  # 1e200: q @ q overflows
+        q = q0.copy()
+        q[k] = value
+        cases.append(q)
+    verdicts = []
+    for q in cases:
+        try:
+            with np.errstate(over="ignore"):  # its q @ q overflows at 1e200 (then its full check runs)
+                check_configuration("guess", q, q.size, i)
+            taken = True
+        except hm.InputError:
+            taken = False
+        assert valid_start(q, i, POSE_TOLERANCE) == taken, q
+        verdicts.append(taken)
+    assert verdicts.count(True) == 3 and verdicts.count(False) == 7

@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from hexapod_model.tracking.kernels import branch_residual, motion_readings, reading_checks
+from hexapod_model.tracking.kernels import branch_residual, largest_step, motion_readings, reading_checks
 
 
 def _free_flyer() -> pin.Model:
@@ -111,3 +111,18 @@ def test_reading_checks_stop_at_a_non_finite_reading():
     l = np.array([0.0, np.nan, 0.0, 0.0, 0.0, 0.0])
     out = reading_checks(l, np.zeros(6), 0.0, frozen, np.zeros(6, dtype=bool), np.zeros(6), 1.0, np.zeros(6))
     assert out[0] is False and list(frozen) == [1, 2, 3, 0, 0, 0]  # nothing updated
+
+
+def test_largest_step_is_numpys_and_keeps_a_nan():
+    """``max |joints - guess[idx]|`` (m) as NumPy computes it, bit for bit (a maximum rounds nothing); NaN stays NaN."""
+    rng = np.random.default_rng(7)
+    idx = np.array([3, 9, 15, 21, 27, 33])
+    for _ in range(200):
+        guess = rng.normal(0.0, 0.1, 40)
+        joints = guess[idx] + rng.normal(0.0, 10.0 ** rng.uniform(-7, -1), 6)
+        assert largest_step(joints, guess, idx) == np.abs(joints - guess[idx]).max()
+    for k in range(6):
+        joints = guess[idx].copy()
+        joints[k] = np.nan
+        assert np.isnan(largest_step(joints, guess, idx))
+    assert largest_step(guess[idx], guess, idx) == 0.0

@@ -7,11 +7,14 @@ on the packed tables and buffers of :mod:`.packing`; it adds the one-call solves
 :meth:`~.hexapod.Hexapod.forward` and :meth:`~.hexapod.Hexapod.inverse`
 (:meth:`CompiledSolver.certified_forward`, :meth:`CompiledSolver.run_checked`). A warm ``forward``
 checks its readings and fills the attempt's settings in one compiled call (:func:`stage_forward`),
-then makes the attempt (:meth:`CompiledSolver.attempt`).
+then makes the attempt (:meth:`CompiledSolver.attempt`); a configuration array as its guess is
+checked by one compiled call too (:func:`valid_start`).
 :func:`solver_for` picks it when the model's layout allows.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
@@ -42,6 +45,24 @@ def stage_forward(readings, lower, upper, slack, settings, tol, max_iter, sign):
     return k
 
 
+@njit(cache=True)
+def valid_start(q, platform_q, tol):
+    """Whether ``q`` is a start :func:`.input_checks.check_configuration` takes: finite, unit platform quaternion.
+
+    Every entry finite and ``| |q[platform_q + 3 : platform_q + 7]| - 1 | <= tol``, in one
+    compiled call (NumPy's ``q @ q`` costs two dispatches; ``dot`` would release the GIL). The
+    caller checks dtype and shape first; a False start goes to ``check_configuration`` for its
+    error.
+    """
+    for k in range(q.shape[0]):
+        if not math.isfinite(q[k]):
+            return False
+    s = 0.0
+    for k in range(platform_q + 3, platform_q + 7):
+        s += q[k] * q[k]
+    return abs(math.sqrt(s) - 1.0) <= tol
+
+
 _BUFFERS = ("J", "R", "p", "E", "r", "x", "G", "dv", "LB", "PB", "A", "M", "pm", "nb", "wb")
 
 
@@ -56,6 +77,8 @@ class CompiledSolver(NewtonSolver):
     #: :func:`stage_forward`, for :meth:`.hexapod.Hexapod.forward` to check its readings and fill
     #: :attr:`forward_settings` in one compiled call before :meth:`attempt`
     stage = staticmethod(stage_forward)
+    #: :func:`valid_start`, for :meth:`.hexapod.Hexapod.forward` to check a configuration array as its guess
+    check_start = staticmethod(valid_start)
 
     def __init__(
         self, clm: ClosedLoopModel, held_joints: tuple[int, ...], tables: ChainTables, limits: tuple | None = None

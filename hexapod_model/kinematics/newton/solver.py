@@ -197,6 +197,8 @@ class OneCallSolver(Protocol):
 
     #: checks the readings (m) against the stroke and fills :attr:`forward_settings`; the first reading outside or -1
     stage: Callable[..., int]
+    #: whether a float64 configuration ``(q, platform_q, tol)`` is finite with a unit platform quaternion
+    check_start: Callable[..., bool]
     #: the settings of the next certified attempt (:data:`.packing.SETTINGS`)
     forward_settings: np.ndarray
     #: ``(ints, floats, work, iwork)``: the packed tables and buffers the compiled loops take
