@@ -93,17 +93,14 @@ def check_pose(pose: Any, rigid_error: Callable[[np.ndarray], float] = numpy_ker
 def check_configuration(name: str, q: Any, nq: int, platform_q: int) -> np.ndarray:
     """A start configuration: ``nq`` finite numbers whose platform quaternion has unit norm."""
     if type(q) is np.ndarray and q.dtype == np.float64 and q.shape == (nq,):  # the trackers' guesses
-        quat = q[platform_q + 3 : platform_q + 7]
-        # q @ q is finite when every entry is (and overflows only where the full check below passes)
-        if math.isfinite(float(q @ q)) and abs(math.sqrt(float(quat @ quat)) - 1.0) <= POSE_TOLERANCE:
-            return q.copy()
-    arr = real_array(name, q, f"expected a Solution or a configuration of {nq} real numbers")
-    if arr.shape != (nq,):
-        raise InputError(name, q, f"expected a Solution or a configuration of {nq} numbers, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+        arr = q
+    else:
+        arr = real_array(name, q, f"expected a Solution or a configuration of {nq} real numbers")
+        if arr.shape != (nq,):
+            raise InputError(name, q, f"expected a Solution or a configuration of {nq} numbers, got shape {arr.shape}")
+    if not np.isfinite(arr).all():
         raise InputError(name, q, "values must be finite (found NaN or inf)")
-    quat = arr[platform_q + 3 : platform_q + 7]
-    norm = float(np.sqrt(quat @ quat))
+    norm = math.hypot(*arr[platform_q + 3 : platform_q + 7].tolist())  # no overflow (and no warning) at 1e200
     if not abs(norm - 1.0) <= POSE_TOLERANCE:
         raise InputError(
             name,

@@ -174,18 +174,35 @@ def test_the_compiled_start_check_takes_what_check_configuration_takes():
         q = q0.copy()
         q[i + 3 : i + 7] *= 1.0 + change  # the quaternion's norm 1 + change
         cases.append(q)
-    for k, value in ((0, np.nan), (i + 6, np.inf), (q0.size - 1, -np.inf), (0, 1e200)):  # 1e200: q @ q overflows
+    for k, value in ((0, np.nan), (i + 6, np.inf), (q0.size - 1, -np.inf), (0, 1e200)):  # 1e200: finite, |q| overflows
         q = q0.copy()
         q[k] = value
         cases.append(q)
     verdicts = []
     for q in cases:
         try:
-            with np.errstate(over="ignore"):  # its q @ q overflows at 1e200 (then its full check runs)
-                check_configuration("guess", q, q.size, i)
+            check_configuration("guess", q, q.size, i)
             taken = True
         except hm.InputError:
             taken = False
         assert valid_start(q, i, POSE_TOLERANCE) == taken, q
         verdicts.append(taken)
     assert verdicts.count(True) == 3 and verdicts.count(False) == 7
+
+
+def test_a_finite_guess_of_huge_entries_is_checked_without_a_warning():
+    """A guess entry of 1e200 is finite: taken (or not) by the quaternion rule alone, and no overflow warning escapes."""
+    import warnings
+
+    from hexapod_model.kinematics.input_checks import check_configuration
+
+    hexa = hm.Hexapod.from_preset("reference")
+    i = hexa.closed_loop.platform_q
+    q = hexa.q_home.copy()
+    q[0] = 1e200
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a RuntimeWarning would raise here
+        assert np.array_equal(check_configuration("guess", q, q.size, i), q)
+        q[i + 3] = 1e200  # the quaternion is not of norm 1: the one-line error with its norm, no warning
+        with pytest.raises(hm.InputError, match=r"has norm 1e\+200"):
+            check_configuration("guess", q, q.size, i)
