@@ -191,7 +191,7 @@ def test_the_compiled_start_check_takes_what_check_configuration_takes():
 
 
 def test_a_finite_guess_of_huge_entries_is_checked_without_a_warning():
-    """A guess entry of 1e200 is finite: taken (or not) by the quaternion rule alone, and no overflow warning escapes."""
+    """A guess entry of 1e200 is finite: taken or not by the quaternion rule alone; no overflow warning escapes."""
     import warnings
 
     from hexapod_model.kinematics.input_checks import check_configuration
