@@ -80,9 +80,9 @@ def branch_residual(F, n, w, fs, Jinv, l, lhat, e):
 def motion_readings(w, L, lhat):
     """The motion model's readings ``lhat = w @ L[:n]`` (``n = w.size``), written into ``lhat``.
 
-    In compiled code because NumPy's ``dot`` and ``@`` hand these products to BLAS, which
-    releases the interpreter lock around them: with another thread of the process waiting for
-    the lock, each release wakes it, and the tracker's step costs a fifth more.
+    In compiled code because NumPy's ``ndarray.dot`` hands this product to BLAS and releases
+    the interpreter lock around it (``@`` does not, at more dispatch): with another thread of the
+    process waiting for the lock, each release wakes it, and the tracker's step costs a fifth more.
 
     Args:
         w: (n,) the motion model's weights (newest first).

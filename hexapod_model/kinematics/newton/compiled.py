@@ -50,7 +50,7 @@ def valid_start(q, platform_q, tol):
     """Whether ``q`` is a start :func:`.input_checks.check_configuration` takes: finite, unit platform quaternion.
 
     Every entry finite and ``| |q[platform_q + 3 : platform_q + 7]| - 1 | <= tol``, in one
-    compiled call (NumPy's ``q @ q`` costs two dispatches; ``dot`` would release the GIL). The
+    compiled call (NumPy's ``q @ q`` costs two dispatches; ``q.dot(q)`` would release the GIL). The
     caller checks dtype and shape first; a False start goes to ``check_configuration`` for its
     error.
     """
