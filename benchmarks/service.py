@@ -325,7 +325,7 @@ def main(argv=None) -> int:
     ap.add_argument("--one", default="250,500,1000,2000", help="set rates (Hz) for one fixture")
     ap.add_argument("--many", default="50,100,200", help="set rates (Hz) per fixture for --fixtures fixtures")
     ap.add_argument("--fixtures", type=int, default=20)
-    ap.add_argument("--json", help="also write the runs as JSON")
+    ap.add_argument("--json", help="also write the runs (and the capacity figures, kind 'capacity') as JSON")
     ap.add_argument(
         "--capacity", action="store_true", help="also the cycle thread's CPU per set from a full queue (no idle gaps)"
     )
@@ -349,6 +349,10 @@ def main(argv=None) -> int:
             for n, rate in ((1, 1000.0), (args.fixtures, 100.0)):
                 us = capacity(hexa, readings, n, rate, int(3 * rate), Path(tmp))
                 share = us * n * rate / 1e4  # percent of one core at that rate
+                reports.append(
+                    {"kind": "capacity", "fixtures": n, "rate_hz": rate, "cycle_cpu_us_per_set": us}
+                    | {"solve_us": solve_us, "step_us": step_us}
+                )
                 print(
                     f"capacity {n:3d} x {rate:6.0f} Hz  cycle thread CPU {us:5.0f} us a set, "
                     f"{us / solve_us:.1f}x the solve "
@@ -356,7 +360,7 @@ def main(argv=None) -> int:
                     f"  against the solve's {solve_us:.0f} us and the tracker step's {step_us:.0f} us"
                 )
     for n in (1, args.fixtures):
-        ok = [r["rate_hz"] for r in reports if r["fixtures"] == n and r["sustained"]]
+        ok = [r["rate_hz"] for r in reports if r["fixtures"] == n and r.get("sustained")]
         print(f"highest sustained set rate, {n} fixture(s): {max(ok):.0f} Hz" if ok else f"{n} fixture(s): none")
     if args.json:
         Path(args.json).write_text(json.dumps(reports, indent=2) + "\n")

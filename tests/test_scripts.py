@@ -358,15 +358,26 @@ def test_performance_table_only_keeps_the_other_scripts_rows():
         table.measure(False, set(), other)
 
 
-def test_service_benchmark_runs():
-    """A short run of both modes: a fed run per fixture count and the full-queue capacity."""
+def test_service_benchmark_runs(tmp_path):
+    """A short run of both modes: a fed run per fixture count and the full-queue capacity, in the JSON and table too."""
     cmd = [sys.executable, str(ROOT / "benchmarks" / "service.py"), "--seconds", "0.5", "--one", "100"]
     out = subprocess.run(
-        [*cmd, "--many", "20", "--fixtures", "2", "--capacity"], capture_output=True, text=True, timeout=600
+        [*cmd, "--many", "20", "--fixtures", "2", "--capacity", "--json", str(tmp_path / "s.json")],
+        capture_output=True,
+        text=True,
+        timeout=600,
     )
     assert out.returncode == 0, out.stderr
     assert "1 x    100 Hz" in out.stdout and "2 x     20 Hz" in out.stdout
     assert "capacity   1 x   1000 Hz" in out.stdout and "capacity   2 x    100 Hz" in out.stdout
+    data = json.loads((tmp_path / "s.json").read_text())
+    full = [r for r in data if r.get("kind") == "capacity"]
+    assert [(r["fixtures"], r["rate_hz"]) for r in full] == [(1, 1000.0), (2, 100.0)]
+    assert all(0.0 < r["solve_us"] < r["step_us"] < r["cycle_cpu_us_per_set"] for r in full)  # CPU µs a set
+    rows = dict(_performance_table().service_rows(data))
+    assert len(rows) == 4 and "pose service, 2 fixture(s) × 20 Hz" in rows
+    cell = rows["pose service, 2 fixture(s) × 100 Hz from a full queue (`--capacity`)"]
+    assert cell.startswith(f"cycle thread {full[1]['cycle_cpu_us_per_set']:.0f} µs CPU a set")
 
 
 def test_coverage_table_sums_every_module_per_package(tmp_path):
