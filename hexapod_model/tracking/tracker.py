@@ -125,6 +125,9 @@ class Tracker(PassageMixin):
         s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
         if s.resolution == 0.0 and hexa.encoder_resolution > 0.0 and "resolution" not in options:
             s = dataclasses.replace(s, resolution=hexa.encoder_resolution)  # the geometry's encoder count
+        # the stuck test's run length, computed now: its first use comes at a leg's first frozen
+        # run, mid-stream, and would stall that sample (it imports scipy: ~0.2 s once a process)
+        s.frozen_run  # noqa: B018 - a cached property, evaluated for its side effect
         self.settings = s
         self.length = characteristic_length(hexa) if length is None else float(length)
         self._motion = MotionModel()

@@ -39,6 +39,15 @@ def test_the_geometry_resolution_is_the_tracker_default():
     assert "encoder_resolution" not in hm.get_preset("reference").to_dict()
 
 
+def test_the_stuck_run_length_is_computed_with_the_tracker_not_at_the_first_frozen_run():
+    """Its first computation imports scipy (~0.2 s): at a leg's first frozen run it stalled that sample."""
+    from hexapod_model.tracking.false_alarms import stuck_run
+
+    tracker = Tracker(counted_hexapod(), noise=NOISE)
+    assert "frozen_run" in vars(tracker.settings)  # the cached property, evaluated at construction
+    assert tracker.settings.frozen_run == stuck_run(NOISE, COUNT, tracker.settings.stuck_samples) > 3
+
+
 def test_a_bad_resolution_names_the_value_and_the_limit():
     with pytest.raises(GeometryError, match="encoder_resolution.*-1e-06"):
         dataclasses.replace(hm.get_preset("reference"), encoder_resolution=-1e-6)
