@@ -235,10 +235,11 @@ class BranchResolver:
             B = np.kron(v, np.eye(6))
             sd = math.sqrt(max(float(d @ B @ cov @ B.T @ d), 0.0)) / float(d @ d)
             sides.append((value, lam, sd))
-        from scipy.stats import chi2, norm
+        from scipy.special import chdtri, ndtri  # loaded with the tracker (Tracker.__init__): no import here
 
-        z, dof = float(norm.isf(self.alpha)), 6 * (len(self.before.ks) + len(ks)) - 24
-        limit = float(chi2.isf(self.alpha, dof)) if dof > 0 else -math.inf
+        # scipy.stats's norm.isf and chi2.isf are these functions (the same numbers)
+        z, dof = float(-ndtri(self.alpha)), 6 * (len(self.before.ks) + len(ks)) - 24
+        limit = float(chdtri(dof, self.alpha)) if dof > 0 else -math.inf
         margin = 2.0 * math.log(1.0 / self.alpha)
         for name, own, other, target in (("main", sides[0], sides[1], 0.0), ("alt", sides[1], sides[0], 1.0)):
             value, lam, sd = own

@@ -125,8 +125,11 @@ class Tracker(PassageMixin):
         s = TrackerSettings.with_options(settings, options) if options or settings is None else settings
         if s.resolution == 0.0 and hexa.encoder_resolution > 0.0 and "resolution" not in options:
             s = dataclasses.replace(s, resolution=hexa.encoder_resolution)  # the geometry's encoder count
-        # the stuck test's run length, computed now: its first use comes at a leg's first frozen
-        # run, mid-stream, and would stall that sample (it imports scipy: ~0.2 s once a process)
+        # what the stream needs only now and then is loaded now, not in the middle of it: the
+        # stuck test's run length (computed at a leg's first frozen run) and scipy.special (the
+        # passage test's quantiles); loading them mid-stream stalled a sample (~0.2 s a process)
+        import scipy.special  # noqa: F401
+
         s.frozen_run  # noqa: B018 - a cached property, evaluated for its side effect
         self.settings = s
         self.length = characteristic_length(hexa) if length is None else float(length)

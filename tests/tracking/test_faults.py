@@ -4,6 +4,10 @@ has a test here, on a quick subset of trajectory B (benchmarks/tracker_faults.py
 from __future__ import annotations
 
 import functools
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -156,3 +160,29 @@ def test_stuck_leg_at_50um_noise_and_1x_is_flagged_within_5_samples_on_guideway(
     res, _ = track("guideway", 1, stuck(noisy, 1, 800, 60), noise=50e-6)
     assert not any(alarm(r, k) for k, r in enumerate(res[:800]))
     assert any("stuck" in r.flags for r in res[800:805])
+
+
+def test_a_tracked_stream_loads_no_scipy_module_once_the_tracker_is_made():
+    """scipy loaded mid-stream stalled that sample: the passage test's quantiles were imported at the
+    first decision (scipy.stats, ~0.5 s), the stuck test's run length at a leg's first frozen run.
+    A fresh interpreter tracks the noisy 3-6 passages of trajectory B with counted readings."""
+    code = textwrap.dedent(
+        """
+        import sys
+        import numpy as np
+        from tests.tracking.test_faults import hexapod, trajectory_b
+        from hexapod_model.tracking.tracker import Tracker
+        poses, clean = trajectory_b("3-6", 8)
+        noisy = np.round((clean + np.random.default_rng(0).normal(0.0, 10e-6, clean.shape)) / 1e-6) * 1e-6
+        hexa = hexapod("3-6")
+        tracker = Tracker(hexa, "eq22", initial=hexa.inverse(poses[0], check=False), resolution=1e-6)
+        before = set(sys.modules)
+        flags = [tracker.step(x).flags for x in noisy]
+        assert any("branch_uncertain" in f for f in flags)  # passages, and the tests that decide them
+        print(sorted(m for m in set(sys.modules) - before if m.split(".")[0] == "scipy"))
+        """
+    )
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]", out.stdout
