@@ -39,10 +39,14 @@ OBSERVABLE = 1e-9  # P_jj below this: a fault on reading j leaves no trace in th
 
 @functools.cache
 def threshold(alpha: float, dof: int) -> float:
-    """The chi-square test's bound ``chi2.ppf(1 - alpha, dof)`` (0 for ``dof = 0``)."""
-    from scipy.stats import chi2
+    """The chi-square test's bound ``chi2.ppf(1 - alpha, dof)`` (0 for ``dof = 0``).
 
-    return float(chi2.isf(alpha, dof)) if dof > 0 else 0.0
+    ``scipy.special.chdtri``, the function behind ``scipy.stats.chi2.isf``: the same number, at
+    a fifth of the import (the first redundant solve of a process pays it).
+    """
+    from scipy.special import chdtri
+
+    return float(chdtri(dof, alpha)) if dof > 0 else 0.0
 
 
 @functools.cache

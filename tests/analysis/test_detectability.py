@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.stats import ncx2
+from scipy.stats import chi2, ncx2
 
 import hexapod_model as hm
 from hexapod_model.analysis.detectability import detectability_map
@@ -50,3 +50,12 @@ def test_cli_hook_prints_the_table_and_writes_the_figure(tmp_path, capsys):
     out = capsys.readouterr().out
     assert png.stat().st_size > 0 and "tilt_y" in out and "leg6" in out
     assert main(["evaluate", "reference", "--detectability", str(png)]) == 2
+
+
+def test_the_consistency_bound_is_scipy_stats_chi2_isf():
+    """``threshold`` takes scipy.special's ``chdtri`` (no scipy.stats import): the same numbers as ``chi2.isf``."""
+    for alpha in (1e-9, 1e-6, 1e-3, 0.05):
+        for dof in (1, 2, 3, 6, 12, 40):
+            threshold.cache_clear()
+            assert threshold(alpha, dof) == float(chi2.isf(alpha, dof))
+    assert threshold(1e-3, 0) == 0.0
