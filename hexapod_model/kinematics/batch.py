@@ -126,9 +126,8 @@ def _solve_proven(engine: SolveEngine, tol: float, max_iter: int, x: np.ndarray,
     A warm step within :data:`PROOF_STEP` with its proof; a longer one, or a cold row, with the
     certificate's checks (proven near a singularity).
     """
-    start = None if g is None else (g.q if isinstance(g, Solution) else g)
     joints = x if engine.encoder is None else engine.joints_of(x)
-    short = start is not None and _short(engine, joints, start)
+    short = g is not None and _short(engine, joints, engine.start(g, copy=False))  # any guess forward takes
     return engine.forward(x, g, tol, max_iter, False, True, True if short else NEAR_SINGULAR)
 
 

@@ -115,3 +115,19 @@ def test_a_long_step_after_a_row_not_proven_keeps_the_certificate(monkeypatch):
     assert all(res.proofs[k] is not None and res.proofs[k].proven for k in (1, 2, 4, 5, 7))  # short steps
     assert res.proofs[6] is None  # the long step: the certificate's checks, as in a batch without a failure
     assert hexa.forward_batch(rows, warm=True, prove=False).converged[6]
+
+
+def test_a_row_solved_again_takes_any_guess_forward_takes():
+    """The review's redo of a 3-6 batch hands the batch's own guess to each row: a list is a guess there too.
+
+    The step's length was read from ``guess[prismatic_q]``, which a list cannot index (TypeError).
+    """
+    from hexapod_model.kinematics.batch import _solve_proven
+
+    hexa = hm.Hexapod.from_preset("3-6")
+    sol = hexa.forward(hexa.inverse(hexa.home_pose).lengths + 1e-4)
+    x = sol.lengths + 1e-4
+    from_list = _solve_proven(hexa.engine, 1e-10, 20, x, list(sol.q))
+    from_array = _solve_proven(hexa.engine, 1e-10, 20, x, sol.q.copy())
+    assert from_list.status == from_array.status == "converged"
+    assert np.array_equal(from_list.q, from_array.q) and from_list.proof == from_array.proof
