@@ -29,6 +29,20 @@ def _forward_rows(hexa: hm.Hexapod, rows: np.ndarray, guess) -> list[hm.Solution
     return out
 
 
+def _fail_proof_of_row(hexa: hm.Hexapod, rows: np.ndarray, bad: int, monkeypatch) -> None:
+    """Make the prover fail on the step that ends at warm row ``bad``'s answer (every other step as before)."""
+    target = hexa.forward_batch(rows, warm=True, prove=False).q[bad].copy()
+    prover = hexa.engine.prover
+    prove = prover.prove
+
+    def failing(q0, q1, *args, **kwargs):
+        if np.allclose(q1, target, rtol=0, atol=1e-9):
+            return Proof(False, np.inf, np.inf, 1, 0)
+        return prove(q0, q1, *args, **kwargs)
+
+    monkeypatch.setattr(prover, "prove", failing)
+
+
 @pytest.mark.parametrize("name", ["reference", "guideway"])
 def test_warm_rows_carry_the_proof_forward_gives_them(name):
     hexa = hm.Hexapod.from_preset(name)
@@ -72,16 +86,7 @@ def test_a_warm_row_not_proven_is_uncertified_and_the_next_rows_start_before_it(
     hexa.engine.prover.regions = False
     rows = _walk(hexa, 10, seed=3)
     bad = 4
-    target = hexa.forward_batch(rows, warm=True, prove=False).q[bad].copy()  # the row whose proof will fail
-    prover = hexa.engine.prover
-    prove = prover.prove
-
-    def failing(q0, q1, *args, **kwargs):
-        if np.allclose(q1, target, rtol=0, atol=1e-9):
-            return Proof(False, np.inf, np.inf, 1, 0)
-        return prove(q0, q1, *args, **kwargs)
-
-    monkeypatch.setattr(prover, "prove", failing)
+    _fail_proof_of_row(hexa, rows, bad, monkeypatch)
     res = hexa.forward_batch(rows, warm=True)
     expected = _forward_rows(hexa, rows, None)
     assert expected[bad].status == "uncertified" and "Krawczyk" in expected[bad].message
@@ -100,16 +105,7 @@ def test_a_long_step_after_a_row_not_proven_keeps_the_certificate(monkeypatch):
     rows = _walk(hexa, 8, seed=4)
     rows[6:] += 0.005  # a 5 mm step from row 5 to row 6
     bad = 3
-    target = hexa.forward_batch(rows, warm=True, prove=False).q[bad].copy()
-    prover = hexa.engine.prover
-    prove = prover.prove
-
-    def failing(q0, q1, *args, **kwargs):
-        if np.allclose(q1, target, rtol=0, atol=1e-9):
-            return Proof(False, np.inf, np.inf, 1, 0)
-        return prove(q0, q1, *args, **kwargs)
-
-    monkeypatch.setattr(prover, "prove", failing)
+    _fail_proof_of_row(hexa, rows, bad, monkeypatch)
     res = hexa.forward_batch(rows, warm=True)
     assert res.status[bad] == "uncertified" and res.converged[bad + 1 :].all()
     assert all(res.proofs[k] is not None and res.proofs[k].proven for k in (1, 2, 4, 5, 7))  # short steps
