@@ -97,25 +97,6 @@ def motion_readings(w, L, lhat):
 
 
 @njit(cache=True)
-def largest_step(joints, guess, idx):
-    """``max_k |joints[k] - guess[idx[k]]|`` (m): the held joints' step from the guess; NaN if one is NaN.
-
-    Args:
-        joints: (n,) the held joints' values (m).
-        guess: the guess configuration.
-        idx: (n,) int64, the held joints' configuration indices.
-    """
-    s = 0.0
-    for k in range(idx.shape[0]):
-        d = abs(joints[k] - guess[idx[k]])
-        if d > s or d != d:
-            s = d
-        if s != s:
-            return s
-    return s
-
-
-@njit(cache=True)
 def reading_checks(l, last, tol, frozen, stuck, lhat, sd, z):
     """One sample's reading statistics in one call (:meth:`~hexapod_model.tracking.tracker.Tracker.step`).
 

@@ -38,10 +38,11 @@ import pinocchio as pin
 from ..analysis.sensitivity import SensitivityEvaluator
 from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
+from ..kinematics.newton.kernels import largest_step
 from ..kinematics.newton.solver import Solution
 from ..lie import pose_distance
 from .extra_readings import step_with_extra_readings
-from .kernels import branch_residual, largest_step, motion_readings, reading_checks
+from .kernels import branch_residual, motion_readings, reading_checks
 from .passage import PassageMixin
 from .reading_tests import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
 from .types import (

@@ -6,7 +6,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from hexapod_model.tracking.kernels import branch_residual, largest_step, motion_readings, reading_checks
+from hexapod_model.kinematics.newton.kernels import largest_step
+from hexapod_model.tracking.kernels import branch_residual, motion_readings, reading_checks
 
 
 def _free_flyer() -> pin.Model:

@@ -177,6 +177,28 @@ def first_outside_at(q, idx, lower, upper, slack):
 
 
 @njit(cache=True)
+def largest_step(joints, guess, idx):
+    """``max_k |joints[k] - guess[idx[k]]|`` (m): the held joints' step from the guess; NaN if one is NaN.
+
+    The step a warm solve is proven over or not (the tracker's ``continuation_step``, a batch's
+    :data:`~hexapod_model.kinematics.batch.PROOF_STEP`).
+
+    Args:
+        joints: (n,) the held joints' values (m).
+        guess: the guess configuration.
+        idx: (n,) int64, the held joints' configuration indices.
+    """
+    s = 0.0
+    for k in range(idx.shape[0]):
+        d = abs(joints[k] - guess[idx[k]])
+        if d > s or d != d:
+            s = d
+        if s != s:
+            return s
+    return s
+
+
+@njit(cache=True)
 def rigid_error(T):
     """Distance of a 4x4 matrix from a rigid transform.
 
