@@ -34,10 +34,11 @@ platform columns re-centred on ``G``), ``E11`` its own block minus ``I``, ``E21`
 rows' own columns, ``S`` their platform columns: all small. :func:`krawczyk_blocks` evaluates
 ``|I - Y J(X)| rho <= |I - Y2 Mm| rho + |Y2| Mr rho + |Y| (rad(J) rho)`` with non-negative
 products of the 6 legs' blocks and 6 x 6 matrices, ``rad(J) rho`` by the block-arrow pattern and
-``|Y|`` (a bound of each entry of the exact ``Y2 L``, formed once per test in O(nf^2)): the
-radius term is as tight as the dense test's ``|Y| rad(J)``. ``Y F(xc)`` goes through ``L`` and
-``Y2`` in midpoint-radius arithmetic (:func:`apply`). Every sum is raised by the rounding
-allowance of :mod:`.intervals`. The cost is a few small blocks and O(nf^2) products instead of
+``|Y|`` (a bound of the magnitudes of the exact ``Y2 L``, :func:`_magnitudes`: off the legs' own
+blocks its entries are products ``W n`` and ``Z n`` of two floats, so ``|Y| v`` factors through
+one sum per leg): the radius term is as tight as the dense test's ``|Y| rad(J)``. ``Y F(xc)``
+goes through ``L`` and ``Y2`` in midpoint-radius arithmetic (:func:`apply`). Every sum is raised
+by the rounding allowance of :mod:`.intervals`. The cost is a few small blocks and O(nf) products instead of
 36 x 36 matrix products and a dense inverse (Rump, "Verification methods: rigorous results
 using floating-point arithmetic", Acta Numerica 19, 2010, sec. 10, on preconditioning with any
 approximate inverse). Work arrays come from :func:`workspace`.
@@ -48,8 +49,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .intervals import REL, UP, up
-from .linalg import lu_factor_in_place, lu_solve_in_place
+from .intervals import REL, up
 
 
 def workspace(rows: int) -> tuple:
@@ -61,9 +61,8 @@ def workspace(rows: int) -> tuple:
         np.zeros((6, 6)),  # Z ~ S^-1
         np.zeros((6, rows, m + 6)),  # Mm: L mid(J) (own columns, then the platform's)
         np.zeros((6, rows, m + 6)),  # Mr: its rounding (and re-centring)
-        np.zeros((6, 6)),  # LU scratch
-        np.zeros(6, dtype=np.int64),  # pivots
-        np.zeros(6),  # a column
+        np.zeros((6, 6)),  # the inversion's scratch
+        np.zeros(6),  # sigma (:func:`_magnitudes`)
         np.zeros((6, 6)),  # R: |I - Z S| bound
         np.zeros((6, rows)),  # u: L v
         np.zeros((6, rows)),  # its rounding
@@ -71,23 +70,45 @@ def workspace(rows: int) -> tuple:
         np.zeros(6),
         np.zeros(nf),
         np.zeros((6, m, 6)),  # G: midpoints of L_i B_i's own rows
-        np.zeros((nf, nf)),  # |Y|: a bound of Y2 L's magnitudes
+        np.zeros((6, m, rows)),  # |Y|'s diagonal blocks: a bound of |L_i - W_ii n_i| (the rest is |W| |n|, |Z| |n|)
         np.zeros((6, m, 6)),  # D: |G - W S| bound
     )
 
 
 @njit(cache=True)
-def _invert(A, n, LU, piv, col, out):
-    """``out[:n, :n] = A[:n, :n]^-1`` (pivoted LU of :mod:`.linalg`); False when singular."""
-    LU[:n, :n] = A[:n, :n]
-    if not lu_factor_in_place(LU, piv, n) > 0.0:
-        return False
+def _invert(A, n, LU, out):
+    """``out[:n, :n] = A[:n, :n]^-1``, Gauss-Jordan with partial pivoting (``LU`` scratch); False when singular.
+
+    Any matrix serves as the preconditioner (see the module doc): this one only needs to be close
+    to the inverse, and is what the test then bounds, as computed.
+    """
     for a in range(n):
-        col[:n] = 0.0
-        col[a] = 1.0
-        lu_solve_in_place(LU, piv, col, n)
         for b in range(n):
-            out[b, a] = col[b]
+            LU[a, b] = A[a, b]
+            out[a, b] = 1.0 if a == b else 0.0
+    for k in range(n):
+        p, best = k, abs(LU[k, k])
+        for i in range(k + 1, n):
+            v = abs(LU[i, k])
+            if v > best:
+                best, p = v, i
+        if not best > 0.0:  # zero pivot, or NaN entries
+            return False
+        if p != k:
+            for j in range(n):
+                LU[k, j], LU[p, j] = LU[p, j], LU[k, j]
+                out[k, j], out[p, j] = out[p, j], out[k, j]
+        inv = 1.0 / LU[k, k]
+        for j in range(n):
+            LU[k, j] *= inv
+            out[k, j] *= inv
+        for i in range(n):
+            f = LU[i, k]
+            if i != k and f != 0.0:
+                for j in range(k, n):
+                    LU[i, j] -= f * LU[k, j]
+                for j in range(n):
+                    out[i, j] -= f * out[k, j]
     for a in range(n):
         for b in range(n):
             if not np.isfinite(out[a, b]):
@@ -99,9 +120,10 @@ def _invert(A, n, LU, piv, col, out):
 def setup(Jm, rows, ws):
     """The preconditioner ``Y = Y2 L`` from the Jacobian's midpoints ``Jm`` (nf x nf + 6); False when singular.
 
-    Also ``|Y|``: an upper bound of the magnitude of each entry of the exact product ``Y2 L``.
+    Also the diagonal blocks of ``|Y|`` (:func:`_magnitudes`): an upper bound of the magnitude of
+    each entry of the exact product ``Y2 L`` in a leg's own rows and columns.
     """
-    L, W, Z, _, _, LU, piv, col, R, _, _, _, _, _, G, aY, _ = ws
+    L, W, Z, _, _, LU, _, R, _, _, _, _, _, G, aY, _ = ws
     m = rows - 1
     nf = Jm.shape[0]
     nl = 6 * m
@@ -112,7 +134,7 @@ def setup(Jm, rows, ws):
             for b in range(m):
                 A[a, b] = Jm[o + a, c + b]
             A[a, m] = Jm[o + a, nf + i]  # the held joint's column
-        if not _invert(A, rows, LU, piv, col, L[i]):
+        if not _invert(A, rows, LU, L[i]):
             return False
     S = R  # scratch: Z's inverse
     for i in range(6):
@@ -126,7 +148,7 @@ def setup(Jm, rows, ws):
                     G[i, a, b] = s
                 else:
                     S[i, b] = s
-    if not _invert(S, 6, LU, piv, col, Z):
+    if not _invert(S, 6, LU, Z):
         return False
     for i in range(6):
         for a in range(m):
@@ -135,24 +157,18 @@ def setup(Jm, rows, ws):
                 for k in range(6):
                     s += G[i, a, k] * Z[k, j]
                 W[i, a, j] = s
-    for j in range(6):  # Y's columns of leg j's rows: own rows L_j - W L_n, platform rows Z L_n
-        for k in range(rows):
-            y = j * rows + k
-            n = L[j, m, k]
-            for i in range(6):
-                for a in range(m):
-                    t = W[i, a, j] * n
-                    d = L[j, a, k] if i == j else 0.0
-                    aY[i * m + a, y] = up(abs(d - t) + REL * (abs(d) + abs(t)))
-            for p in range(6):
-                aY[nl + p, y] = up(abs(Z[p, j] * n) * UP)
+    for i in range(6):  # the diagonal blocks of Y: leg i's own rows and columns, L_i - W_ii n_i
+        for a in range(m):
+            for k in range(rows):
+                d, t = L[i, a, k], W[i, a, i] * L[i, m, k]
+                aY[i, a, k] = up(abs(d - t) + REL * (abs(d) + abs(t)))
     return True
 
 
 @njit(cache=True)
 def transform(Jm, rows, ws):
     """``L mid(J)`` leg by leg with its rounding (own rows' platform columns centred on ``G``), and ``R``, ``D``."""
-    L, W, Z, Mm, Mr, _, _, _, R, _, _, _, _, _, G, _, D = ws
+    L, W, Z, Mm, Mr, _, _, R, _, _, _, _, _, G, _, D = ws
     m = rows - 1
     nl = 6 * m
     for i in range(6):
@@ -191,23 +207,46 @@ def transform(Jm, rows, ws):
 
 
 @njit(cache=True)
-def _magnitudes(aY, v, w):
-    """``w = |Y| v`` (upper bound; ``v >= 0``)."""
-    n = v.shape[0]
-    for a in range(n):
+def _magnitudes(ws, rows, v, w):
+    """``w >= |Y| v`` for ``v >= 0`` (nf,): an upper bound of the exact ``Y2 L``'s magnitudes times ``v``.
+
+    ``Y``'s entries are ``L_i[a, k] - W[i, a, i] n_i[k]`` in leg ``i``'s own rows and columns (the
+    bound :func:`setup` keeps), ``-W[i, a, j] n_j[k]`` in its own rows and leg ``j``'s columns, and
+    ``Z[p, j] n_j[k]`` in the platform's rows (``n_j`` the last row of ``L_j``): the last two are
+    products of two floats, whose exact magnitudes ``|W| |n|`` and ``|Z| |n|`` factor through
+    ``sigma_j = sum_k |n_j[k]| v_j[k]``. O(nf * 6) instead of the dense ``nf x nf`` product.
+    """
+    L, W, Z, _, _, _, sigma, _, _, _, _, _, _, _, aY, _ = ws
+    m = rows - 1
+    nl = 6 * m
+    for j in range(6):
         s = 0.0
-        for b in range(n):
-            s += aY[a, b] * v[b]
-        w[a] = up(s)
+        for k in range(rows):
+            s += abs(L[j, m, k]) * v[j * rows + k]
+        sigma[j] = up(s)
+    for p in range(6):
+        s = 0.0
+        for j in range(6):
+            s += abs(Z[p, j]) * sigma[j]
+        w[nl + p] = up(s)
+    for i in range(6):
+        for a in range(m):
+            s = 0.0
+            for k in range(rows):
+                s += aY[i, a, k] * v[i * rows + k]
+            for j in range(6):
+                if j != i:
+                    s += abs(W[i, a, j]) * sigma[j]
+            w[i * m + a] = up(s)
 
 
 @njit(cache=True)
 def apply(ws, rows, vm, vr, wm, wr):
     """``wm +- wr`` (nf,) encloses ``Y v`` for every ``v`` in ``vm +- vr`` (nf,)."""
-    L, W, Z, _, _, _, _, _, _, um, ur, _, _, _, _, aY, _ = ws
+    L, W, Z, _, _, _, _, _, um, ur, _, _, _, _, _, _ = ws
     m = rows - 1
     nl = 6 * m
-    _magnitudes(aY, vr, wr)
+    _magnitudes(ws, rows, vr, wr)
     for i in range(6):  # u = L vm, with its rounding
         o = i * rows
         for a in range(rows):
@@ -246,7 +285,7 @@ def krawczyk_blocks(YFm, YFr, Jr, rows, ws, rho, off, rad):
     Needs :func:`transform` of the Jacobian's midpoint. Writes ``K = xc + off +- rad`` and
     returns True when ``K`` lies in the interior of the box.
     """
-    _, W, Z, Mm, Mr, _, _, _, R, _, _, u, zu, t, _, aY, D = ws
+    _, W, Z, Mm, Mr, _, _, R, _, _, u, zu, t, _, _, D = ws
     m = rows - 1
     nl = 6 * m
     for i in range(6):  # t = rad(J) rho (the block-arrow pattern), then |Y| t into rad
@@ -258,7 +297,7 @@ def krawczyk_blocks(YFm, YFr, Jr, rows, ws, rho, off, rad):
             for b in range(6):
                 s += Jr[o + a, nl + b] * rho[nl + b]
             t[o + a] = up(s)
-    _magnitudes(aY, t, rad)
+    _magnitudes(ws, rows, t, rad)
     for j in range(6):  # u = |E21| rho_own + the n rows' rounding times rho
         s = 0.0
         for b in range(m):
