@@ -156,3 +156,106 @@ def test_the_proof_of_a_configuration_with_a_nan_is_not_run():
     bad[prover.held_q[0]] = np.nan
     proof = prover.prove(q, bad)
     assert not proof.proven and proof.tests == 0
+
+
+def _exact_magnitudes(ws, rows: int, v: np.ndarray) -> list:
+    """``|Y| v`` in exact rational arithmetic, ``Y = Y2 L`` formed entry by entry from the block workspace."""
+    from fractions import Fraction
+
+    L, W, Z = ws[0], ws[1], ws[2]
+    m, nf = rows - 1, 6 * rows
+    F = [Fraction(float(x)) for x in v]
+    out = []
+    for i in range(6):  # the legs' own rows: L_i (own columns) - W[i, :, j] n_j
+        for a in range(m):
+            s = Fraction(0)
+            for j in range(6):
+                for k in range(rows):
+                    y = -Fraction(float(W[i, a, j])) * Fraction(float(L[j, m, k]))
+                    if i == j:
+                        y += Fraction(float(L[i, a, k]))
+                    s += abs(y) * F[j * rows + k]
+            out.append(s)
+    for p in range(6):  # the platform's rows: Z n
+        s = sum(
+            abs(Fraction(float(Z[p, j])) * Fraction(float(L[j, m, k]))) * F[j * rows + k]
+            for j in range(6)
+            for k in range(rows)
+        )
+        out.append(s)
+    assert len(out) == nf
+    return out
+
+
+@pytest.mark.parametrize("name", ["reference", "3-6"])
+def test_the_factored_magnitudes_of_the_preconditioner_bound_the_exact_ones(name):
+    """``_magnitudes`` (|Y| v through one sum per leg) is at least the exact |Y2 L| v, and hardly more."""
+    from fractions import Fraction
+
+    prover = _prover(name)
+    nf, rows = prover.nf, prover.tables[4]
+    ((q0, q1),) = _steps(name, 11, 1, 1e-4)
+    T0, xc, spread, hm, hr, dl = _box(prover, q0, q1)
+    work = krawczyk.workspace(nf, rows)
+    assert krawczyk.precondition(prover.tables, T0, xc, hm, True, work)
+    ws = work[5]
+    rng = np.random.default_rng(3)
+    for v in (np.ones(nf), rng.uniform(0.0, 1.0, nf), rng.uniform(0.0, 1e-9, nf) * (rng.uniform(size=nf) < 0.3)):
+        w = np.empty(nf)
+        krawczyk_blocks._magnitudes(ws, rows, v, w)
+        for bound, exact in zip(w, _exact_magnitudes(ws, rows, v), strict=True):
+            assert Fraction(float(bound)) >= exact
+            assert float(bound) <= float(exact) * (1 + 1e-9) + 1e-290
+
+
+def test_the_preconditioner_blocks_are_inverted_and_a_singular_block_is_refused():
+    rng = np.random.default_rng(4)
+    LU, out = np.empty((6, 6)), np.empty((6, 6))
+    for n in (3, 6):
+        A = rng.normal(size=(6, 6))
+        assert krawczyk_blocks._invert(A, n, LU, out)
+        np.testing.assert_allclose(out[:n, :n] @ A[:n, :n], np.eye(n), atol=1e-12)
+    singular = rng.normal(size=(6, 6))
+    singular[:, 2] = 0.0
+    assert not krawczyk_blocks._invert(singular, 6, LU, out)
+    singular[:, 2] = np.nan
+    assert not krawczyk_blocks._invert(singular, 6, LU, out)
+
+
+def test_the_packed_work_arrays_are_the_ones_the_kernels_unpack():
+    """``StepProver``'s arrays and ``proof_kernel.unpack`` of its two buffers: the same memory, the same shapes."""
+    prover = StepProver.of(hexapod("reference").closed_loop)  # its arrays are written below
+    assert prover is not None
+    (work, ends), (floats, ints, spec) = prover.work(), prover.buffers()
+    unpacked_work, unpacked_ends, model = proof_kernel.unpack(floats, ints, spec)
+    leaves = [*work[:5], *work[5], *work[6], *ends]
+    unpacked = [*unpacked_work[:5], *unpacked_work[5], *unpacked_work[6], *unpacked_ends]
+    assert len(leaves) == len(unpacked) == 36
+    for k, (a, b) in enumerate(zip(leaves, unpacked, strict=True)):
+        assert a.shape == b.shape and a.dtype == b.dtype, k
+        assert np.shares_memory(a, floats) and np.shares_memory(b, floats), k
+        a.flat[0] = k + 0.5  # a write through one is read through the other
+        assert b.flat[0] == k + 0.5, k
+    placements, motions, closure, held, _ = prover.tables
+    for a, b in zip(
+        (placements, motions, closure, held, prover.home, prover.leg_q, prover.free, prover.held_q), model, strict=True
+    ):
+        np.testing.assert_array_equal(b, a)
+        assert b.dtype == a.dtype
+    with pytest.raises(ValueError, match="layout"):
+        proof_kernel.pack((np.zeros(3),))
+
+
+@pytest.mark.parametrize("name", ["reference", "3-6"])
+def test_the_packed_entry_proves_what_the_unpacked_one_proves(name):
+    prover = _prover(name)
+    for q0, q1 in _steps(name, 12, 4, 1e-4) + _steps(name, 13, 2, 2e-2):
+        packed = prover.prove(q0, q1)
+        work, ends = prover.work()
+        p = proof_kernel.prove_configurations(
+            prover.tables, prover.home, prover.platform_q, prover.leg_q, prover.free, prover.held_q,
+            q0, q1, True, True, work, ends,
+        )  # fmt: skip
+        assert (packed.proven, packed.tests, packed.subdivisions) == (bool(p[0]), p[1], p[4])
+        if packed.proven:  # the same test: bounds of about 1e-10 m, equal to 1e-18 m
+            assert abs(packed.position_m - p[2]) <= 1e-18 and abs(packed.rotation_rad - p[3]) <= 1e-17

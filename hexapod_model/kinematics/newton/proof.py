@@ -33,7 +33,7 @@ import numpy as np
 from ...description.model import ClosedLoopModel
 from .first_compile import announce
 from .legs import ChainTables
-from .proven import Proof
+from .proven import Proof, new_proof
 from .solver import Solution
 
 __all__ = ["Proof", "StepProver", "attach_proof", "chart_coordinates", "with_proof"]
@@ -105,21 +105,31 @@ class StepProver:
         A caller that runs the kernels on them itself overwrites the region they hold: it is
         dropped here.
         """
-        work = self._work()
+        work = self._packed()[0]
         work[1][7][0] = 0.0
         return work
 
-    def _work(self) -> tuple:
-        work = getattr(self._local, "work", None)
-        if work is None:
+    def buffers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The calling thread's ``(floats, ints, spec)``: the buffers that :meth:`work` views."""
+        return self._packed()[1]
+
+    def _packed(self) -> tuple:
+        """The calling thread's ``((work, ends), (floats, ints, spec))``: the arrays, and the buffers they view."""
+        packed = getattr(self._local, "packed", None)
+        if packed is None:
             nf = self.nf
             # the path's ends; a proven region's chart origin and its state (held, width scale, steps
             # before a try, whether the last step lay in it)
             path = (np.zeros((4, 4)), np.zeros((4, 4)), np.zeros(nf), np.zeros(nf), np.zeros(6), np.zeros(6))
             ends = (*path, np.zeros((4, 4)), np.array([0.0, 1.0, 0.0, 0.0]))
-            work = self._local.work = (self._workspace(self.nf, self.tables[4]), ends)
-            work[0][0][21] = self.units
-        return work
+            V, Jm, Jr, Y, H, blocks, ew = self._workspace(self.nf, self.tables[4])
+            placements, motions, closure, held, _ = self.tables
+            model = (placements, motions, closure, held, self.home, self.leg_q, self.free, self.held_q)
+            floats, ints, spec, views = self._kernel.pack((V, Jm, Jr, Y, H, *blocks, *ew, *ends, *model))
+            views[0][21] = self.units
+            work = (*views[:5], tuple(views[5:21]), tuple(views[21:28]))
+            packed = self._local.packed = ((work, tuple(views[28:36])), (floats, ints, spec))
+        return packed
 
     def prove(self, q0: np.ndarray, q1: np.ndarray, structured: bool = True, subdivide: bool = True) -> Proof:
         """The proof of the readings path from ``q0`` (closed) to the result ``q1`` (see the module doc).
@@ -133,30 +143,20 @@ class StepProver:
                 (:func:`.krawczyk.prove_path`, at most 32 tests); False: one test only (a caller
                 that shortens the step itself).
         """
-        kernel = self._kernel.prove_configurations
+        kernel = self._kernel.prove_packed
         announce(kernel)
-        work, ends = self._work()
+        (_, ends), (floats, ints, spec) = self._packed()
+        state = ends[7]
         if not self.regions:  # no region held, none tried
-            ends[7][0], ends[7][2] = 0.0, np.inf
-        elif ends[7][2] == np.inf:
-            ends[7][2] = 0.0
+            state[0], state[2] = 0.0, np.inf
+        elif state[2] == np.inf:
+            state[2] = 0.0
         q0, q1 = np.asarray(q0, dtype=float), np.asarray(q1, dtype=float)
         proven, tests, position, rotation, parts = kernel(
-            self.tables,
-            self.home,
-            self.platform_q,
-            self.leg_q,
-            self.free,
-            self.held_q,
-            q0,
-            q1,
-            structured,
-            subdivide,
-            work,
-            ends,
+            floats, ints, spec, self.tables[4], self.platform_q, q0, q1, structured, subdivide
         )
-        in_region = bool(proven) and bool(ends[7][3] > 0.0)
-        return Proof(bool(proven), float(position), float(rotation), int(tests), int(parts), in_region)
+        in_region = bool(proven) and bool(state[3] > 0.0)
+        return new_proof(bool(proven), float(position), float(rotation), int(tests), int(parts), in_region)
 
 
 def attach_proof(sol: Solution, proof: Proof) -> Solution:

@@ -4,8 +4,10 @@
 free joints and the platform's chart coordinates about the result's placement,
 :mod:`.enclosure`), runs :func:`.krawczyk.prove_whole` on the readings path between them (and
 :func:`.krawczyk.prove_path`, which subdivides it, when that fails) and
-turns the proven radius into bounds of the platform's position and rotation, in one call:
-:class:`.proof.StepProver` wraps it.
+turns the proven radius into bounds of the platform's position and rotation, in one call.
+:class:`.proof.StepProver` calls it through :func:`prove_packed`, which takes the model's tables
+and the work arrays packed in two buffers (:func:`pack`): numba unboxes each array an entry is
+handed (about 70 ns each), and the unpacked call takes some fifty.
 """
 
 from __future__ import annotations
@@ -14,6 +16,13 @@ import numpy as np
 from numba import njit
 
 from .krawczyk import prove_in_region, prove_path, prove_region, prove_whole
+
+#: the dimensions of :func:`.krawczyk.workspace`'s arrays (V, Jm, Jr, Y, H, the 16 of the per-leg
+#: test's workspace, the 7 of the enclosure's)
+WORK = (2, 2, 2, 2, 2) + (3, 3, 2, 3, 3, 2, 1, 2, 2, 2, 1, 1, 1, 3, 3, 3) + (3, 5, 4, 4, 3, 2, 2)
+#: the dimensions of the arrays :func:`pack` takes: the work, the path's ends, the model's tables
+LAYOUT = WORK + (2, 2, 1, 1, 1, 1, 2, 1) + (4, 3, 3, 1, 2, 2, 2, 1)
+INTEGER = (39, 41, 42, 43)  # the int64 arrays among them (the rest are float64)
 
 REGION = 7e-4  # a region's readings box: half-width per reading, in the model's length (its anchor radius)
 REGION_STEP = 0.35  # a region is built about a step of at most this fraction of its half-width
@@ -213,3 +222,106 @@ def _bounds(radius):
     position = np.sqrt(r[0] ** 2 + r[1] ** 2 + r[2] ** 2) * (1.0 + 1e-12) + slack
     rotation = (r[3] + r[4] + r[5]) * (1.0 + 1e-12) + slack
     return position, rotation
+
+
+def pack(arrays: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The arrays of :data:`LAYOUT` copied into one float64 and one int64 buffer.
+
+    Returns ``(floats, ints, spec, views)``: ``spec`` (k, 6) holds each array's offset in its
+    buffer and its shape, ``views`` the arrays as views of the buffers (what :func:`unpack`
+    makes of them in compiled code), in the order given.
+    """
+    if tuple(a.ndim for a in arrays) != LAYOUT:
+        raise ValueError("the arrays do not have the packed layout")
+    sizes = [0, 0]
+    spec = np.zeros((len(arrays), 6), dtype=np.int64)
+    for k, a in enumerate(arrays):
+        which = int(k in INTEGER)
+        spec[k, 0] = sizes[which]
+        spec[k, 1 : 1 + a.ndim] = a.shape
+        sizes[which] += a.size
+    buffers = (np.zeros(sizes[0]), np.zeros(sizes[1], dtype=np.int64))
+    views = []
+    for k, a in enumerate(arrays):
+        buffer = buffers[int(k in INTEGER)]
+        view = buffer[spec[k, 0] : spec[k, 0] + a.size].reshape(a.shape)
+        view[...] = a
+        views.append(view)
+    return buffers[0], buffers[1], spec, views
+
+
+@njit(cache=True, inline="always")
+def _v1(b, s, k):
+    return b[s[k, 0] : s[k, 0] + s[k, 1]]
+
+
+@njit(cache=True, inline="always")
+def _v2(b, s, k):
+    o, a, c = s[k, 0], s[k, 1], s[k, 2]
+    return b[o : o + a * c].reshape((a, c))
+
+
+@njit(cache=True, inline="always")
+def _v3(b, s, k):
+    o, a, c, d = s[k, 0], s[k, 1], s[k, 2], s[k, 3]
+    return b[o : o + a * c * d].reshape((a, c, d))
+
+
+@njit(cache=True, inline="always")
+def _v4(b, s, k):
+    o, a, c, d, e = s[k, 0], s[k, 1], s[k, 2], s[k, 3], s[k, 4]
+    return b[o : o + a * c * d * e].reshape((a, c, d, e))
+
+
+@njit(cache=True, inline="always")
+def _v5(b, s, k):
+    o, a, c, d, e, f = s[k, 0], s[k, 1], s[k, 2], s[k, 3], s[k, 4], s[k, 5]
+    return b[o : o + a * c * d * e * f].reshape((a, c, d, e, f))
+
+
+@njit(cache=True)
+def unpack(fb, ib, s):
+    """The work arrays, the ends and the model's tables of :func:`pack`'s buffers, as views (see :data:`LAYOUT`)."""
+    f, i = fb, ib
+    blocks = (
+        *(_v3(f, s, 5), _v3(f, s, 6), _v2(f, s, 7), _v3(f, s, 8), _v3(f, s, 9), _v2(f, s, 10), _v1(f, s, 11)),
+        *(_v2(f, s, 12), _v2(f, s, 13), _v2(f, s, 14), _v1(f, s, 15), _v1(f, s, 16), _v1(f, s, 17)),
+        *(_v3(f, s, 18), _v3(f, s, 19), _v3(f, s, 20)),
+    )
+    ew = (_v3(f, s, 21), _v5(f, s, 22), _v4(f, s, 23), _v4(f, s, 24), _v3(f, s, 25), _v2(f, s, 26), _v2(f, s, 27))
+    work = (_v2(f, s, 0), _v2(f, s, 1), _v2(f, s, 2), _v2(f, s, 3), _v2(f, s, 4), blocks, ew)
+    ends = (
+        *(_v2(f, s, 28), _v2(f, s, 29), _v1(f, s, 30), _v1(f, s, 31), _v1(f, s, 32), _v1(f, s, 33)),
+        *(_v2(f, s, 34), _v1(f, s, 35)),
+    )
+    model = (
+        *(_v4(f, s, 36), _v3(f, s, 37), _v3(f, s, 38), _v1(i, s, 39), _v2(f, s, 40)),
+        *(_v2(i, s, 41), _v2(i, s, 42), _v1(i, s, 43)),
+    )
+    return work, ends, model
+
+
+@njit(cache=True)
+def prove_packed(fb, ib, spec, rows, platform_q, q0, q1, structured, subdivide):
+    """:func:`prove_configurations` with the tables, work arrays and ends in :func:`pack`'s buffers.
+
+    Args:
+        fb: the float64 buffer.
+        ib: the int64 buffer.
+        spec: the arrays' offsets and shapes in them.
+        rows: 6 (6-D closures) or 3 (point closures).
+        platform_q: configuration index of the platform's free flyer.
+        q0: the start configuration (closed).
+        q1: the result.
+        structured: as :func:`prove_configurations`.
+        subdivide: as :func:`prove_configurations`.
+
+    Returns:
+        :func:`prove_configurations`'s ``(proven, tests, position, rotation, parts)``.
+    """
+    work, ends, model = unpack(fb, ib, spec)
+    placements, motions, closure, held, home, leg_q, free, held_q = model
+    tables = (placements, motions, closure, held, rows)
+    return prove_configurations(
+        tables, home, platform_q, leg_q, free, held_q, q0, q1, structured, subdivide, work, ends
+    )
