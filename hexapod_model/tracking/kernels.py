@@ -23,6 +23,11 @@ formulas Pinocchio's free-flyer joint uses:
 Rotations are handled as unit quaternions (:mod:`hexapod_model.lie.compiled_quaternion`). The
 results agree with Pinocchio's to rounding (a test checks 1e-12), not to the bit: the tracker
 uses them only to judge the pose, never as a pose or a Newton guess.
+
+:func:`predict_into` is the predictor's ``pin.integrate(q0, a1 pin.difference(q0, q1) + a2
+pin.difference(q0, q2))`` on a model of one-dof joints and one free flyer (the platform), with
+the matrix formulas of :mod:`hexapod_model.lie.compiled` (as the compiled readings path's
+predictor): the Newton guess of the next sample, to rounding of Pinocchio's (a test checks).
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..lie.compiled import difference_free_flyer, integrate_free_flyer
 from ..lie.compiled_quaternion import exp6_quat, log6_quat, quat_mul, quat_rotate, relative_free_flyer
 
 
@@ -133,3 +139,43 @@ def reading_checks(l, last, tol, frozen, stuck, lhat, sd, z):
         fmax = max(fmax, frozen[k])
         any_stuck = any_stuck or stuck[k]
     return True, zmax, zz, fmax, any_stuck
+
+
+@njit(cache=True)
+def _difference_into(q0, q1, q_idx, v_idx, ffq, ffv, dv, R0, R1, Rd, pd):
+    """``dv = q1 (-) q0``: the one-dof joints subtract, the free flyer by ``log6(M0^-1 M1)``."""
+    for k in range(q_idx.shape[0]):
+        dv[v_idx[k]] = q1[q_idx[k]] - q0[q_idx[k]]
+    difference_free_flyer(q0[ffq : ffq + 7], q1[ffq : ffq + 7], dv[ffv : ffv + 6], R0, R1, Rd, pd)
+
+
+@njit(cache=True)
+def predict_into(q0, q1, a1, q2, a2, layout, out, work):
+    """``out = q0 (+) (a1 (q1 (-) q0) + a2 (q2 (-) q0))``, the second term only when ``a2 != 0``.
+
+    Args:
+        q0: the newest configuration (nq,).
+        q1: an earlier one, weighted ``a1``.
+        a1: its weight (nonzero).
+        q2: another, weighted ``a2``.
+        a2: its weight (0: no second term).
+        layout: ``(q_idx, v_idx, ffq, ffv)``: the one-dof joints' configuration and velocity
+            indices (int64 arrays), the free flyer's first configuration and velocity index.
+        out: (nq,) written.
+        work: ``(dv, d2, R0, R1, Rd, Re, pd, pe, quat)``: (nv,), (nv,), 3 x (3, 3), (3, 3), (3,),
+            (3,), (4,) scratch.
+    """
+    q_idx, v_idx, ffq, ffv = layout
+    dv, d2, R0, R1, Rd, Re, pd, pe, quat = work
+    _difference_into(q0, q1, q_idx, v_idx, ffq, ffv, dv, R0, R1, Rd, pd)
+    for i in range(dv.shape[0]):
+        dv[i] = dv[i] * a1 + 0.0  # -0.0 becomes +0.0, as the NumPy path's "+= 0.0"
+    if a2 != 0.0:
+        _difference_into(q0, q2, q_idx, v_idx, ffq, ffv, d2, R0, R1, Rd, pd)
+        for i in range(dv.shape[0]):
+            dv[i] += d2[i] * a2
+    for i in range(out.shape[0]):
+        out[i] = q0[i]
+    for k in range(q_idx.shape[0]):
+        out[q_idx[k]] += dv[v_idx[k]]
+    integrate_free_flyer(out[ffq : ffq + 7], dv[ffv : ffv + 6], R0, R1, Re, pe, quat)

@@ -42,7 +42,7 @@ from ..kinematics.newton.kernels import largest_step
 from ..kinematics.newton.solver import Solution
 from ..lie import pose_distance
 from .extra_readings import step_with_extra_readings
-from .kernels import branch_residual, motion_readings, reading_checks
+from .kernels import branch_residual, motion_readings, predict_into, reading_checks
 from .passage import PassageMixin
 from .reading_tests import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
 from .types import (
@@ -53,6 +53,8 @@ from .types import (
     characteristic_length,
     posed,
     predict,
+    predictor_layout,
+    predictor_weights,
     track_result,
 )
 
@@ -145,6 +147,11 @@ class Tracker(PassageMixin):
         self.home_condition = home.condition_number
         self.cond_limit = float(s.cond_limit) if s.cond_limit is not None else s.cond_factor * self.home_condition
         self._hist: deque[np.ndarray] = deque(maxlen=s.window)
+        # the predictor compiled (:func:`.kernels.predict_into`; None: Pinocchio's, :func:`.types.predict`)
+        self._layout = predictor_layout(hexa.model)
+        nv = hexa.model.nv
+        mats, vecs = [np.zeros((3, 3)) for _ in range(4)], (np.zeros(3), np.zeros(3), np.zeros(4))
+        self._predict_work = (np.zeros(nv), np.zeros(nv), *mats, *vecs)
         self._Lr, self._Fr = _NewestFirst(s.window, 6), _NewestFirst(s.window, 7)
         self._L = self._Lr.rows  # readings of the trusted samples, newest first
         self._F = self._Fr.rows  # free-flyer coordinates of _hist, newest first
@@ -314,7 +321,19 @@ class Tracker(PassageMixin):
     def _guess(self) -> np.ndarray:
         if self._gap > self.settings.max_gap:
             return self._last_q
-        return predict(self.hexa.model, self._hist, self.predictor)  # reads P0, P1, P2 only
+        hist = self._hist  # reads P0, P1, P2 only
+        if self._layout is None:  # a model of other joints: Pinocchio's
+            return predict(self.hexa.model, hist, self.predictor)
+        a1, a2 = predictor_weights(self.predictor, len(hist))
+        q0 = hist[0]
+        if a1 == 0.0 and a2 == 0.0:
+            return q0.copy()
+        out = np.empty(q0.shape[0])
+        if a1 != 0.0:
+            predict_into(q0, hist[1], a1, hist[2] if a2 != 0.0 else q0, a2, self._layout, out, self._predict_work)
+        else:
+            predict_into(q0, hist[2], a2, q0, 0.0, self._layout, out, self._predict_work)
+        return out
 
     def _solve(self, l: np.ndarray, guess: np.ndarray) -> Solution:
         # a step within continuation_step carries its Krawczyk proof; a longer one (the first

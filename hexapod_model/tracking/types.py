@@ -54,19 +54,28 @@ def characteristic_length(hexa: Hexapod) -> float:
     return float(np.max(np.linalg.norm(pts[:, :2], axis=1))) or 0.25
 
 
-def predict(model: pin.Model, history, predictor: str) -> np.ndarray:
-    """Predicted configuration from ``history = [P0, P1, P2, ...]`` (newest first).
+def predictor_weights(predictor: str, samples: int) -> tuple[float, float]:
+    """``(a1, a2)`` of ``X - P0 = a1 (P1 - P0) + a2 (P2 - P0)`` for ``predictor`` with ``samples`` in the history.
 
     With fewer samples than the predictor needs, the highest-order predictor the history
     allows is used (``eq24``/``eq23`` fall back to ``eq22``, which falls back to ``none``).
     """
     if predictor not in _COEFFS:
         raise InputError("predictor", predictor, f"choose one of {PREDICTORS}")
-    if len(history) < 3 and predictor in ("eq23", "eq24"):
+    if samples < 3 and predictor in ("eq23", "eq24"):
         predictor = "eq22"
-    if len(history) < 2:
+    if samples < 2:
         predictor = "none"
-    a1, a2 = _COEFFS[predictor]
+    return _COEFFS[predictor]
+
+
+def predict(model: pin.Model, history, predictor: str) -> np.ndarray:
+    """Predicted configuration from ``history = [P0, P1, P2, ...]`` (newest first).
+
+    With fewer samples than the predictor needs, the highest-order predictor the history
+    allows is used (:func:`predictor_weights`).
+    """
+    a1, a2 = predictor_weights(predictor, len(history))
     p0 = history[0]
     if a1 == 0.0 and a2 == 0.0:
         return p0.copy()
@@ -79,6 +88,27 @@ def predict(model: pin.Model, history, predictor: str) -> np.ndarray:
         d2 *= a2
         dv += d2
     return pin.integrate(model, p0, dv)
+
+
+def predictor_layout(model: pin.Model) -> tuple[np.ndarray, np.ndarray, int, int] | None:
+    """``(q_idx, v_idx, ffq, ffv)`` of :func:`.kernels.predict_into` for ``model``, or None.
+
+    None when ``model`` has any joint but one-dof ones (``nq == nv == 1``: the difference and
+    the integration add) and exactly one free flyer: :func:`predict` (Pinocchio's) serves it.
+    """
+    q_idx, v_idx, free_flyers = [], [], []
+    for joint in list(model.joints)[1:]:
+        if joint.nq == 1 and joint.nv == 1:
+            q_idx.append(joint.idx_q)
+            v_idx.append(joint.idx_v)
+        elif joint.shortname() == "JointModelFreeFlyer":
+            free_flyers.append((joint.idx_q, joint.idx_v))
+        else:
+            return None
+    if len(free_flyers) != 1:
+        return None
+    (ffq, ffv), ints = free_flyers[0], np.int64
+    return np.array(q_idx, dtype=ints), np.array(v_idx, dtype=ints), int(ffq), int(ffv)
 
 
 @dataclass(frozen=True)
