@@ -206,3 +206,17 @@ def test_a_finite_guess_of_huge_entries_is_checked_without_a_warning():
         q[i + 3] = 1e200  # the quaternion is not of norm 1: the one-line error with its norm, no warning
         with pytest.raises(hm.InputError, match=r"has norm 1e\+200"):
             check_configuration("guess", q, q.size, i)
+
+
+def test_the_compiled_copy_keeps_the_interpreter_lock():
+    """``kernels.copied`` (the certificate's copy of the reduced Jacobian) never lets another thread in."""
+    from hexapod_model.kinematics.newton.kernels import copied
+
+    from ..lock_watch import LockWatch
+
+    G = np.random.default_rng(0).normal(size=(36, 42))  # the presets' reduced Jacobian
+    copied(G)  # compiled (or loaded) before the watch
+    with LockWatch() as watch:
+        copies = [copied(G) for _ in range(200)]
+        ran = watch.ran
+    assert ran == 0 and all(np.array_equal(c, G) for c in copies)

@@ -109,9 +109,10 @@ def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
 def copied(a):
     """A copy of ``a`` made in compiled code, which keeps the GIL.
 
-    numpy's own copy of more than 500 elements releases the GIL for the copy loop: in a
-    threaded service another thread then takes it, and getting it back can cost a scheduler
-    round (milliseconds on a loaded machine) in the middle of a solve.
+    numpy's own copy releases the GIL around its copy loop for some arrays: a (36, 42) array
+    (the reduced Jacobian's size on the presets) does, a one-dimensional one of 5000 elements
+    did not (numpy 2.4). In a threaded service another thread then takes it, and getting it
+    back can cost a scheduler round (milliseconds on a loaded machine) in the middle of a solve.
     """
     return a.copy()
 
