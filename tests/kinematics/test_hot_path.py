@@ -26,6 +26,21 @@ def test_new_solution_is_the_dataclass_built_by_its_init():
     assert repr(a) == repr(b)
 
 
+def test_new_proof_is_the_dataclass_built_by_its_init():
+    from hexapod_model.kinematics.newton.proven import Proof, new_proof
+
+    for values in (
+        (True, 3.6e-11, 2.8e-10, 1, 1, False),
+        (False, np.inf, np.inf, 3, 0, False),
+        (True, 1e-9, 1e-8, 0, 1, True),
+    ):
+        a, b = Proof(*values), new_proof(*values)
+        assert type(b) is Proof and a == b and repr(a) == repr(b)
+        assert list(vars(b)) == [f.name for f in fields(Proof)] == list(vars(a))
+        with pytest.raises(FrozenInstanceError):
+            b.proven = False  # type: ignore[misc]
+
+
 def _in_new_thread(call):
     """``call()`` on a thread of its own: a thread's first solve takes the general path (it builds its solver)."""
     out: list = []

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .proven import Proof
+from .proven import Proof, built
 from .solver import SINGULAR_PIVOT_RATIO, Solution
 
 #: codes of one Newton iteration (:func:`.newton.iterate_schur`, :func:`.newton.iterate_blocks`)
@@ -33,10 +33,6 @@ def outcome(code: int, tol: float, iterations: int, norm: float, ratio: float) -
     return "uncertified", "contraction or determinant sign check failed"
 
 
-_new = object.__new__
-_set = object.__setattr__
-
-
 def new_solution(
     pose: np.ndarray,
     q: np.ndarray,
@@ -56,7 +52,6 @@ def new_solution(
     For the solves' hot paths (a warm solve is tens of microseconds): the fields go into the
     instance's ``__dict__`` at once instead of one frozen ``__setattr__`` each.
     """
-    sol = _new(Solution)
     fields = {
         "pose": pose,
         "q": q,
@@ -71,5 +66,4 @@ def new_solution(
         "det_sign": det_sign,
         "proof": proof,
     }
-    _set(sol, "__dict__", fields)
-    return sol
+    return built(Solution, fields)
