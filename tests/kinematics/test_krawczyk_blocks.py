@@ -201,8 +201,10 @@ def test_the_factored_magnitudes_of_the_preconditioner_bound_the_exact_ones(name
     ws = work[5]
     rng = np.random.default_rng(3)
     for v in (np.ones(nf), rng.uniform(0.0, 1.0, nf), rng.uniform(0.0, 1e-9, nf) * (rng.uniform(size=nf) < 0.3)):
-        w = np.empty(nf)
+        w, wp = np.empty(nf), np.empty(nf)
         krawczyk_blocks._magnitudes(ws, rows, v, w)
+        krawczyk_blocks._magnitudes.py_func(ws, rows, v, wp)  # run as Python: the same bounds
+        np.testing.assert_allclose(wp, w, rtol=1e-12, atol=0.0)
         for bound, exact in zip(w, _exact_magnitudes(ws, rows, v), strict=True):
             assert Fraction(float(bound)) >= exact
             assert float(bound) <= float(exact) * (1 + 1e-9) + 1e-290
@@ -211,15 +213,21 @@ def test_the_factored_magnitudes_of_the_preconditioner_bound_the_exact_ones(name
 def test_the_preconditioner_blocks_are_inverted_and_a_singular_block_is_refused():
     rng = np.random.default_rng(4)
     LU, out = np.empty((6, 6)), np.empty((6, 6))
-    for n in (3, 6):
-        A = rng.normal(size=(6, 6))
-        assert krawczyk_blocks._invert(A, n, LU, out)
-        np.testing.assert_allclose(out[:n, :n] @ A[:n, :n], np.eye(n), atol=1e-12)
-    singular = rng.normal(size=(6, 6))
-    singular[:, 2] = 0.0
-    assert not krawczyk_blocks._invert(singular, 6, LU, out)
-    singular[:, 2] = np.nan
-    assert not krawczyk_blocks._invert(singular, 6, LU, out)
+    for invert in (krawczyk_blocks._invert, krawczyk_blocks._invert.py_func):  # compiled, then as Python
+        for n in (3, 6):
+            A = rng.normal(size=(6, 6))
+            assert invert(A, n, LU, out)
+            np.testing.assert_allclose(out[:n, :n] @ A[:n, :n], np.eye(n), atol=1e-12)
+        singular = rng.normal(size=(6, 6))
+        singular[:, 2] = 0.0
+        assert not invert(singular, 6, LU, out)
+        singular[:, 2] = np.nan
+        assert not invert(singular, 6, LU, out)
+
+
+def _leaves(nested) -> list:
+    """The arrays of a nested tuple, depth first."""
+    return [leaf for item in nested for leaf in (_leaves(item) if isinstance(item, tuple) else [item])]
 
 
 def test_the_packed_work_arrays_are_the_ones_the_kernels_unpack():
@@ -228,6 +236,9 @@ def test_the_packed_work_arrays_are_the_ones_the_kernels_unpack():
     assert prover is not None
     (work, ends), (floats, ints, spec) = prover.work(), prover.buffers()
     unpacked_work, unpacked_ends, model = proof_kernel.unpack(floats, ints, spec)
+    as_python = proof_kernel.unpack.py_func(floats, ints, spec)  # the same views, made by NumPy
+    for a, b in zip(_leaves(as_python), _leaves((unpacked_work, unpacked_ends, model)), strict=True):
+        assert a.shape == b.shape and np.shares_memory(a, b)
     leaves = [*work[:5], *work[5], *work[6], *ends]
     unpacked = [*unpacked_work[:5], *unpacked_work[5], *unpacked_work[6], *unpacked_ends]
     assert len(leaves) == len(unpacked) == 36

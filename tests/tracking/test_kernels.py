@@ -163,7 +163,10 @@ def test_the_compiled_predictor_is_pinocchios_to_rounding(name, predictor, step)
         assert np.max(np.abs(pin.difference(model, want, out))) <= 1e-13
         ffq = layout[2]
         assert abs(np.linalg.norm(out[ffq + 3 : ffq + 7]) - 1.0) <= 1e-14  # a unit quaternion
-    out = np.empty(model.nq)
+    out, as_python = np.empty(model.nq), np.empty(model.nq)
+    predict_into(q0, hist[1], 0.5, hist[2], -0.75, layout, out, work)
+    predict_into.py_func(q0, hist[1], 0.5, hist[2], -0.75, layout, as_python, work)  # run as Python
+    np.testing.assert_allclose(as_python, out, rtol=0.0, atol=1e-15)
     predict_into(q0, q0, -1.0, q0, 0.0, layout, out, work)
     assert np.array_equal(out[layout[0]], q0[layout[0]])
 
