@@ -270,3 +270,17 @@ def test_the_packed_entry_proves_what_the_unpacked_one_proves(name):
         assert (packed.proven, packed.tests, packed.subdivisions) == (bool(p[0]), p[1], p[4])
         if packed.proven:  # the same test: bounds of about 1e-10 m, equal to 1e-18 m
             assert abs(packed.position_m - p[2]) <= 1e-18 and abs(packed.rotation_rad - p[3]) <= 1e-17
+
+
+def test_a_strided_configuration_is_proven_by_the_one_compiled_signature():
+    """A strided start (a column of a 2-D array) compiles no second proof: a minute and more, unannounced."""
+    prover = _prover("reference")
+    ((q0, q1),) = _steps("reference", 14, 1, 1e-4)
+    want = prover.prove(q0, q1)
+    kernel = proof_kernel.prove_packed
+    before = len(kernel.signatures)
+    columns = np.stack([q0, q1], axis=1)  # (nq, 2): each column a strided view
+    assert not columns[:, 0].flags.c_contiguous
+    got = prover.prove(columns[:, 0], columns[:, 1])
+    assert len(kernel.signatures) == before
+    assert got == want

@@ -151,7 +151,9 @@ class StepProver:
             state[0], state[2] = 0.0, np.inf
         elif state[2] == np.inf:
             state[2] = 0.0
-        q0, q1 = np.asarray(q0, dtype=float), np.asarray(q1, dtype=float)
+        # one compiled signature: contiguous float64 configurations (a strided one, a row of a
+        # Fortran array or a column, would compile the proof again, unannounced: a minute and more)
+        q0, q1 = np.ascontiguousarray(q0, dtype=np.float64), np.ascontiguousarray(q1, dtype=np.float64)
         proven, tests, position, rotation, parts = kernel(
             floats, ints, spec, self.tables[4], self.platform_q, q0, q1, structured, subdivide
         )
