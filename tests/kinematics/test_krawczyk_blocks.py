@@ -259,11 +259,15 @@ def test_the_packed_work_arrays_are_the_ones_the_kernels_unpack():
 
 @pytest.mark.parametrize("name", ["reference", "3-6"])
 def test_the_packed_entry_proves_what_the_unpacked_one_proves(name):
+    """``prove_packed`` against ``prove_configurations`` run as Python on the arrays it unpacks.
+
+    (Run as Python: compiled, the unpacked entry would compile the whole proof once more.)
+    """
     prover = _prover(name)
     for q0, q1 in _steps(name, 12, 4, 1e-4) + _steps(name, 13, 2, 2e-2):
         packed = prover.prove(q0, q1)
         work, ends = prover.work()
-        p = proof_kernel.prove_configurations(
+        p = proof_kernel.prove_configurations.py_func(
             prover.tables, prover.home, prover.platform_q, prover.leg_q, prover.free, prover.held_q,
             q0, q1, True, True, work, ends,
         )  # fmt: skip

@@ -139,11 +139,12 @@ def test_the_compiled_predictor_is_pinocchios_to_rounding(name, predictor, step)
     compiled guess agrees to 1e-13 (m, rad: rounding of the two Lie formulas, not a tolerance
     of the prediction), and a repeated configuration predicts itself exactly.
     """
-    import hexapod_model as hm
     from hexapod_model.tracking.kernels import predict_into
     from hexapod_model.tracking.types import predict, predictor_layout, predictor_weights
 
-    hexa = hm.Hexapod.from_preset(name, check_body=False)
+    from ..conftest import limits_only
+
+    hexa = limits_only(name)
     model = hexa.model
     layout = predictor_layout(model)
     assert layout is not None
