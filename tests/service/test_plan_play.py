@@ -275,8 +275,10 @@ def test_the_dashboard_shows_the_plans_progress_and_its_mismatch(tmp_path, cell_
     shown = page.found
     assert shown[(None, "plan.coupling_mismatch")][1] == "left"
     assert "coupling_mismatch: left (carry)" in shown[(None, "plan.coupling_mismatch")][0]
-    assert shown[(None, "plan.phase")][1] in PHASES
-    assert 0.0 < float(shown[(None, "plan.fraction")][1]) <= 1.0
+    # the plan's clock runs on while the page renders: a slow machine may render after its end
+    phase, fraction = shown[(None, "plan.phase")][1], float(shown[(None, "plan.fraction")][1])
+    assert phase in PHASES or phase == "done" and fraction == 1.0, (phase, fraction)
+    assert 0.0 < fraction <= 1.0
     assert 0.0 < float(shown[(None, "plan.t_s")][1]) <= plan.total_time + 10.0
 
 
