@@ -93,8 +93,8 @@ def predict(model: pin.Model, history, predictor: str) -> np.ndarray:
 def predictor_layout(model: pin.Model) -> tuple[np.ndarray, np.ndarray, int, int] | None:
     """``(q_idx, v_idx, ffq, ffv)`` of :func:`.kernels.predict_into` for ``model``, or None.
 
-    None when ``model`` has any joint but one-dof ones (``nq == nv == 1``: the difference and
-    the integration add) and exactly one free flyer: :func:`predict` (Pinocchio's) serves it.
+    None unless every joint of ``model`` is a one-dof one (``nq == nv == 1``: the difference and
+    the integration add) or its one free flyer: :func:`predict` (Pinocchio's) serves the others.
     """
     q_idx, v_idx, free_flyers = [], [], []
     for joint in list(model.joints)[1:]:
