@@ -110,12 +110,39 @@ def test_a_test_run_on_the_work_arrays_meanwhile_drops_the_region():
     hexa = hexapod("reference")
     prover = StepProver.of(hexa.closed_loop)
     start = _pose(hexa)
-    steps = [hexa.forward(start.lengths + k * 1e-6, guess=start, check=False, prove=False) for k in range(1, 5)]
+    steps = [hexa.forward(start.lengths + k * 1e-6, guess=start, check=False, prove=False) for k in range(1, 6)]
     assert prover.prove(start.q, steps[0].q).in_region
     assert prover.prove(steps[0].q, steps[1].q).tests == 0  # in the region
     far = hexa.forward(start.lengths + 3e-3, guess=start, check=False, prove=False)
     assert prover.prove(start.q, far.q, structured=False).proven  # the dense test, on another box
-    again = prover.prove(steps[1].q, steps[2].q)
+    # 3 mm from the dense test's readings: a test of its own, and a region only at the next step
+    assert prover.prove(steps[1].q, steps[2].q).tests == 1
+    again = prover.prove(steps[2].q, steps[3].q)
     assert again.proven and again.in_region and again.tests == 1  # built anew, not the stale region
     prover.work()
-    assert prover.prove(steps[2].q, steps[3].q).tests == 1
+    assert prover.prove(steps[3].q, steps[4].q).tests == 1
+
+
+def test_a_short_step_of_fast_moving_readings_builds_no_region():
+    # a tracker's step: from a closed prediction 2 um from the result, while the readings move
+    # 0.1 mm a sample; a region (+-0.1 mm) about the step would be left at the next sample
+    hexa = hexapod("reference")
+    prover = StepProver.of(hexa.closed_loop)
+    previous = _pose(hexa)
+    direction = np.array([1.0, -0.5, 0.8, 0.3, -1.0, 0.6])
+    for k in range(1, 9):
+        readings = previous.lengths + 1e-4 * direction
+        sol = hexa.forward(readings, guess=previous, check=False, prove=False)
+        guess = hexa.forward(readings + 2e-6, guess=sol, check=False, prove=False)  # the prediction
+        proof = prover.prove(guess.q, sol.q)
+        assert proof.proven and proof.tests == 1, (k, proof)
+        assert k == 1 or not proof.in_region, (k, proof)  # the first: no motion known yet
+        previous = sol
+    # the same steps at rest (readings moving 1 um a sample) are proven in a region
+    for k in range(1, 5):
+        readings = previous.lengths + 1e-6 * direction
+        sol = hexa.forward(readings, guess=previous, check=False, prove=False)
+        guess = hexa.forward(readings + 2e-6, guess=sol, check=False, prove=False)
+        proof = prover.prove(guess.q, sol.q)
+        assert proof.proven and proof.in_region and proof.tests == int(k == 1), (k, proof)
+        previous = sol

@@ -44,6 +44,10 @@ V_ROWS = 24  # rows of the work's vectors: 0-20 scratch, 21 the unknowns' units,
 MIN_WIDTH = 1.0 / 64.0  # narrowest sub-interval of the readings path tried
 INFLATIONS = 4  # boxes tried per test (epsilon-inflation)
 FLOOR = 0.05  # a first box's radius per unknown, at least this fraction of the largest one (in units)
+# the same for the whole path's first box (:func:`prove_whole`), sized by the start's distance alone: a
+# start predicted from earlier samples (a tracker's guess) lies close to the result in unknowns that
+# the readings path moves several times as far (at 0.05, a second box at most steps on trajectory A)
+WHOLE_FLOOR = 0.35
 
 
 @njit(cache=True)
@@ -329,7 +333,7 @@ def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
         rho[a] = 1.5 * abs(x1[a] - x0[a]) + 1e-12 * (1.0 + abs(x1[a]))
         big = max(big, rho[a] / unit[a])
     for a in range(nf):  # room for the coupling |I - Y J(X)| rho of an unknown that hardly moves
-        rho[a] = max(rho[a], FLOOR * big * unit[a])
+        rho[a] = max(rho[a], WHOLE_FLOOR * big * unit[a])
     for k in range(INFLATIONS):
         enclose_into(placements, motions, closure, held, rows, T0, x1, rho, hm, hr, True, V[2], V[3], Jm, Jr, ew)
         if k == 0:

@@ -118,9 +118,10 @@ class StepProver:
         packed = getattr(self._local, "packed", None)
         if packed is None:
             nf = self.nf
-            # the path's ends; a proven region's chart origin and its state (held, width scale, steps
-            # before a try, whether the last step lay in it)
-            path = (np.zeros((4, 4)), np.zeros((4, 4)), np.zeros(nf), np.zeros(nf), np.zeros(6), np.zeros(6))
+            # the path's ends (the readings at the end: NaN until a step was proven, then its own, the
+            # readings' motion to the next); a proven region's chart origin and its state (held, width
+            # scale, steps before a try, whether the last step lay in it)
+            path = (np.zeros((4, 4)), np.zeros((4, 4)), np.zeros(nf), np.zeros(nf), np.zeros(6), np.full(6, np.nan))
             ends = (*path, np.zeros((4, 4)), np.array([0.0, 1.0, 0.0, 0.0]))
             V, Jm, Jr, Y, H, blocks, ew = self._workspace(self.nf, self.tables[4])
             placements, motions, closure, held, _ = self.tables

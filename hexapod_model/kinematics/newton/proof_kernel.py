@@ -25,7 +25,7 @@ LAYOUT = WORK + (2, 2, 1, 1, 1, 1, 2, 1) + (4, 3, 3, 1, 2, 2, 2, 1)
 INTEGER = (39, 41, 42, 43)  # the int64 arrays among them (the rest are float64)
 
 REGION = 7e-4  # a region's readings box: half-width per reading, in the model's length (its anchor radius)
-REGION_STEP = 0.35  # a region is built about a step of at most this fraction of its half-width
+REGION_STEP = 0.35  # a region is built about a step (and after a motion) of at most this fraction of its half-width
 MIN_SCALE = 1.0 / 64.0  # the narrowest region tried (its width halves after each failure)
 COOLDOWN = 16  # steps without a region try after one at the narrowest width failed
 
@@ -113,8 +113,14 @@ def _finite(x0, x1, l0, l1):
 
 
 @njit(cache=True)
-def _build_region(tables, T0, x0, x1, l0, l1, work, state):
+def _build_region(tables, T0, x0, x1, l0, l1, work, state, motion):
     """A region about the step (:func:`.krawczyk.prove_region`) and the step's end box in it; state updated.
+
+    Tried when the step and ``motion`` (how far the readings moved since the last step proven on
+    these arrays, m; 0 when unknown) are both at most :data:`REGION_STEP` of the region's
+    half-width: only then can the next step's readings fall in it. A step from a prediction (a
+    tracker's guess) is short while the readings move fast: its motion says the region would be
+    left at once, and it would cost two tests at every step instead of one.
 
     The readings box is ``REGION * scale`` model lengths each way per reading, centred half that
     ahead of ``l1`` along the step (the readings' direction of travel); ``scale`` halves after a
@@ -129,7 +135,7 @@ def _build_region(tables, T0, x0, x1, l0, l1, work, state):
     for i in range(6):
         step = max(step, abs(l1[i] - l0[i]))
     half = REGION * state[1] * length
-    if state[2] > 0.0 or step > REGION_STEP * half:
+    if state[2] > 0.0 or max(step, motion) > REGION_STEP * half:
         state[2] = max(0.0, state[2] - 1.0)
         return False, V[23]
     for i in range(6):
@@ -155,9 +161,10 @@ def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, 
     The per-leg test (``structured``) first looks for a **region** proven by an earlier step
     (:func:`.krawczyk.prove_region`: one solution for every reading of a box, in one box of the
     unknowns): a step whose readings lie in it and whose start lies in its box needs only the
-    box about its result. Else a short step builds a region about itself; a longer one, or one
-    whose region fails, gets the test of its whole path (:func:`.krawczyk.prove_whole`), then the
-    subdivided path (:func:`.krawczyk.prove_path`).
+    box about its result. Else a short step of readings that move slowly (since the last step:
+    ``l1`` holds its readings) builds a region about itself; a longer one, or one whose region
+    fails, gets the test of its whole path (:func:`.krawczyk.prove_whole`), then the subdivided
+    path (:func:`.krawczyk.prove_path`).
 
     Args:
         tables: ``(placements, motions, closure, held, rows)`` (:func:`.enclosure.enclose_into`).
@@ -172,7 +179,8 @@ def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, 
         subdivide: when the test of the whole path fails, subdivide it (else not proven).
         work: :func:`.krawczyk.workspace`, overwritten (but a region's rows while it holds).
         ends: ``(T0, T, x0, x1, l0, l1, Tc, state)`` work arrays ((4, 4), (4, 4), (nf,), (nf,),
-            (6,), (6,), (4, 4), (4,)): ``Tc`` the region's chart origin, ``state`` (region held,
+            (6,), (6,), (4, 4), (4,)): ``l1`` the last step's end readings on entry (NaN: none),
+            this step's on return, ``Tc`` the region's chart origin, ``state`` (region held,
             its width's scale, steps before the next try, whether this step was proven in a
             region).
 
@@ -182,6 +190,11 @@ def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, 
         the path ends at (``inf`` when not proven).
     """
     T0, T, x0, x1, l0, l1, Tc, state = ends
+    motion = 0.0  # how far the readings moved since the last step (l1 still holds its readings; NaN before any)
+    for i in range(6):
+        d = abs(q1[held_q[i]] - l1[i])
+        if d > motion:
+            motion = d
     state[3] = 0.0
     if not structured:  # the dense test overwrites the region's enclosure
         state[0] = 0.0
@@ -195,7 +208,7 @@ def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, 
         if not _step_ends(home, platform_q, leg_q, free, held_q, q0, q1, T0, ends):
             return False, 0, np.inf, np.inf, 0
         if structured:
-            proven, radius = _build_region(tables, T0, x0, x1, l0, l1, work, state)
+            proven, radius = _build_region(tables, T0, x0, x1, l0, l1, work, state, motion)
             if proven:
                 Tc[:, :] = T0
                 tests = 1
