@@ -29,6 +29,10 @@ Then a fixture **at rest** (``R`` samples of one pose with 1 um of noise on each
 proven fraction, the fraction proven in a region an earlier step proved, and the warm
 ``forward`` with its proof beside the same with every step proven by its own test.
 
+Then the **tracker** (:class:`hexapod_model.tracking.tracker.Tracker`, its default predictor) along
+trajectory A at 1 kHz: the proven fraction of its samples, the median step, and the solve it
+makes (from the prediction) with its proof and alone.
+
 ``--json`` also writes the figures (``benchmarks/performance_table.py`` reads it); ``--poses 0``
 measures the proof alone.
 """
@@ -38,7 +42,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from collections import Counter
+from collections import Counter, deque
 from pathlib import Path
 
 import numpy as np
@@ -47,6 +51,7 @@ from hexapod_model import Hexapod
 from hexapod_model.analysis.trajectories import box_poses, trajectory_poses
 from hexapod_model.description.presets import PRESETS, get_preset
 from hexapod_model.kinematics.newton.solver import MAX_STEP
+from hexapod_model.tracking.tracker import Tracker, predict
 
 
 def run(name: str, n: int, seed: int, offset: float) -> dict:
@@ -223,6 +228,52 @@ def rest_proofs(name: str, samples: int, noise: float = 1e-6, block: int = 50) -
     }
 
 
+def tracker_proofs(name: str, samples: int) -> dict:
+    """The tracker (its default predictor, ``eq22``) along trajectory A at 1 kHz: proven fraction, medians (us).
+
+    Each sample's step as :meth:`Tracker.step` runs it; then the solve it makes, from the
+    prediction (:func:`hexapod_model.tracking.tracker.predict` over the last two results), with
+    its proof (the default) and alone (``prove=False``), side by side. The proof's path runs
+    from the prediction: a short step while the readings move, so no region is built about it.
+    """
+    hexa = Hexapod.load(name)
+    _, poses = trajectory_poses("A", hexa.home_pose, hexa.base_radius / 50.0, 1000.0)
+    ik = hexa.inverse_batch(poses[:samples])
+    inside = np.asarray(ik.converged, dtype=bool)
+    readings = ik.lengths[: int(np.argmin(inside)) if not inside.all() else len(inside)]
+    skip = min(20, len(readings) // 2)  # the first samples: the history fills, the first steps load
+    tracker = Tracker(hexa)
+    step_t, proven, in_region = [], 0, 0
+    for k, x in enumerate(readings):
+        t0 = time.perf_counter()
+        result = tracker.step(x)
+        if k >= skip:
+            step_t.append(time.perf_counter() - t0)
+            proof = result.solution.proof
+            proven += proof is not None and proof.proven
+            in_region += proof is not None and proof.in_region
+    history: deque[np.ndarray] = deque([hexa.q_home], maxlen=3)
+    solve_t, proof_t = [], []
+    for k, x in enumerate(readings):
+        guess = predict(hexa.model, history, "eq22")
+        t0 = time.perf_counter()
+        hexa.forward(x, guess, tol=tracker.tol, max_iter=20, check=False, prove=False)
+        t1 = time.perf_counter()
+        sol = hexa.forward(x, guess, tol=tracker.tol, max_iter=20, check=False)
+        if k >= skip:
+            solve_t.append(t1 - t0)
+            proof_t.append(time.perf_counter() - t1)
+        history.appendleft(sol.q)
+    return {
+        "steps": len(step_t),
+        "proven_fraction": proven / len(step_t),
+        "in_region_fraction": in_region / len(step_t),
+        "step_median_us": float(np.median(step_t) * 1e6),
+        "forward_proven_median_us": float(np.median(proof_t) * 1e6),
+        "solve_median_us": float(np.median(solve_t) * 1e6),
+    }
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("presets", nargs="*", default=[n for n in PRESETS if not get_preset(n).redundant])  # six readings
@@ -259,6 +310,16 @@ def main(argv=None) -> int:
             f"{r['forward_proven_median_us']:.1f} us "
             f"(each step its own test: {r['forward_own_test_median_us']:.1f} us; "
             f"the solve alone {r['solve_median_us']:.1f} us); floor {r['floor_median_us']:.1f} us (medians)",
+            flush=True,
+        )
+    for name in args.presets:
+        r = tracker_proofs(name, args.trajectory_samples)
+        report["tracker"] = [*report.get("tracker", []), {"preset": name, **r}]
+        print(
+            f"{name:12s} tracker (eq22) along trajectory A at 1 kHz: {r['steps']} steps, proven "
+            f"{100 * r['proven_fraction']:.2f} % ({100 * r['in_region_fraction']:.2f} % in a region); a step "
+            f"{r['step_median_us']:.1f} us; its solve from the prediction with its proof "
+            f"{r['forward_proven_median_us']:.1f} us, alone {r['solve_median_us']:.1f} us (medians)",
             flush=True,
         )
     for name in args.presets:

@@ -202,6 +202,14 @@ def certificate_rows(data: dict) -> list[tuple[str, str]]:
             ratio = r["forward_proven_median_us"] / r["floor_median_us"]
             value += f"; floor {r['floor_median_us']:.1f} µs ({ratio:.1f}x)"
         rows.append((f"{where}, warm step with its proof (regions), time per step", value))
+    for r in data.get("tracker", []):
+        where = f"{r['preset']}: trajectory A at 1 kHz, the tracker (eq22)"
+        value = (
+            f"{r['step_median_us']:.0f} µs a step; its solve from the prediction "
+            f"{r['forward_proven_median_us']:.0f} µs with its proof, {r['solve_median_us']:.0f} µs alone (medians); "
+            f"{100 * r['proven_fraction']:.2f} % proven, {100 * r['in_region_fraction']:.2f} % in a region"
+        )
+        rows.append((f"{where}, time per step", value))
     return rows
 
 

@@ -262,7 +262,7 @@ def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
     assert all(0 <= t["proven_fraction"] <= 1 and t["steps"] > 0 for t in data["trajectories"]) and not data["solves"]
     table = _performance_table()
     rows = dict(table.certificate_rows(data))
-    assert len(rows) == 10
+    assert len(rows) == 12
     for preset, which in (("reference", "A"), ("reference", "B"), ("3-6", "A"), ("3-6", "B")):
         where = f"{preset}: trajectory {which} at 1 kHz"
         assert rows[f"{where}, warm steps proven (Krawczyk)"].endswith(" of 19")
@@ -274,6 +274,10 @@ def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
         row = rows[f"{rest['preset']}: at rest, 1 µm noise, warm step with its proof (regions), time per step"]
         assert "in a region" in row and "each step its own test" in row
         assert ("floor" in row) == (rest["preset"] == "reference")
+    for tracked in data["tracker"]:  # the tracker's short steps from its prediction build no region while moving
+        assert tracked["steps"] == 10 and tracked["proven_fraction"] == 1.0 and tracked["in_region_fraction"] == 0.0
+        row = rows[f"{tracked['preset']}: trajectory A at 1 kHz, the tracker (eq22), time per step"]
+        assert "µs a step" in row and "with its proof" in row and row.endswith("0.00 % in a region")
     assert any(args[0] == "certificate.py" and parse is table.certificate_rows for args, _, parse in table.BENCHMARKS)
 
 
