@@ -44,7 +44,7 @@ MAX_ITER = 50
 def call_breakdown(hexa: Hexapod, readings: np.ndarray, first) -> dict[str, float]:
     """Median CPU microseconds of the warm solve's compiled call along ``readings``, with and without its finish.
 
-    The call :meth:`Hexapod.forward` makes (the certified attempt, into new output arrays), from
+    The call :meth:`Hexapod.forward` makes (the stroke check and the certified attempt, into new output arrays), from
     the previous solve's configuration; ``finish`` off leaves the Jacobian, pose and limit
     check out (the iteration alone).
     """
@@ -55,11 +55,11 @@ def call_breakdown(hexa: Hexapod, readings: np.ndarray, first) -> dict[str, floa
     times: dict[str, list[float]] = {"compiled_call": [], "iteration": []}
     for x, start in zip(readings, starts):
         for key, finish in (("compiled_call", 1.0), ("iteration", 0.0)):
-            settings = solver.forward_settings.copy()
-            settings[:3], settings[5], settings[7:] = (BENCH_TOL, MAX_ITER, start.det_sign), finish, x
+            settings = solver._readings_settings.copy()  # the stroke held, as forward's call (attempt_readings)
+            settings[:3], settings[5] = (BENCH_TOL, MAX_ITER, start.det_sign), finish
             outputs = solver._outputs()  # new arrays, as a Solution keeps them
             t0 = time.thread_time_ns()
-            solver._kernel(start.q, solver._no_offset, settings, outputs)
+            solver._kernel(start.q, x, settings, outputs)
             times[key].append((time.thread_time_ns() - t0) / 1e3)
     return {key: float(np.median(t)) for key, t in times.items()}
 

@@ -263,6 +263,7 @@ class SolveEngine(JointSpace):
         one_call = solver.one_call
         if fast and one_call is not None:
             if self.encoder is None and not review:  # the next solves on this thread take the warm path
+                one_call.hold_stroke(self.stroke_lo, self.stroke_hi, LIMIT_SLACK)
                 self.local.staged = one_call
             # the certified first attempt in one compiled call; solve_forward goes on from it
             done = one_call.certified_forward(start, joints, tol, max_iter, sign)

@@ -278,23 +278,19 @@ class Hexapod:
             and guess.q.shape == engine.q_shape
         )
         if solver is not None and fast and fits:
-            # the hot path of a warm solve: the stroke check and the attempt's settings in one compiled call
+            # the hot path of a warm solve: the stroke check and the certified attempt in one compiled call
             if guess is None:
                 start, sign = self.closed_loop.q_home, solver.home_sign
-            else:
-                start, sign = (guess, 0) if array else (guess.q, guess.det_sign)
-            settings = solver.forward_settings
-            k = solver.stage(
-                lengths, engine.stroke_lo, engine.stroke_hi, LIMIT_SLACK, settings, tol, float(max_iter), float(sign)
-            )
-            if k >= 0:
-                raise engine.stroke_error(lengths, k)
-            if array:  # checked after the stroke, as engine.forward does: a new array, InputError when bad
+            elif array:  # a new array; one that is not a valid start goes the general way (the stroke first)
                 ok = guess.dtype == np.float64 and guess.shape == engine.q_shape
-                start = guess.copy() if ok else guess
+                start, sign = (guess.copy() if ok else guess), 0
                 if not (ok and solver.check_start(start, self.closed_loop.platform_q, POSE_TOLERANCE)):
-                    start = engine.start(guess, copy=False)
-            done = solver.attempt(start, tol)
+                    return engine.forward(lengths, guess, tol, max_iter, check, fast, prove)
+            else:
+                start, sign = guess.q, guess.det_sign
+            done = solver.attempt_readings(start, lengths, tol, max_iter, sign)
+            if isinstance(done, int):
+                raise engine.stroke_error(lengths, done)
             if len(done) == 6 and done[5] < 0 and solver.kappa <= NEAR_SINGULAR_FACTOR * solver.home_kappa:
                 # converged certified within the limits, not near a singularity: engine.attempted()'s Solution
                 q, pose, jac, it, res, _ = done

@@ -6,9 +6,9 @@ compiled entries of :mod:`.newton` (:func:`.newton.solve_schur`, :func:`.newton.
 on the packed tables and buffers of :mod:`.packing`; it adds the one-call solves of
 :meth:`~.hexapod.Hexapod.forward` and :meth:`~.hexapod.Hexapod.inverse`
 (:meth:`CompiledSolver.certified_forward`, :meth:`CompiledSolver.run_checked`). A warm ``forward``
-checks its readings and fills the attempt's settings in one compiled call (:func:`stage_forward`),
-then makes the attempt (:meth:`CompiledSolver.attempt`); a configuration array as its guess is
-checked by one compiled call too (:func:`valid_start`).
+checks its readings against the stroke and makes the attempt in one compiled call
+(:meth:`CompiledSolver.attempt_readings`); a configuration array as its guess is checked by one
+compiled call too (:func:`valid_start`).
 :func:`solver_for` picks it when the model's layout allows.
 """
 
@@ -22,27 +22,11 @@ from numba import njit
 from ...description.model import ClosedLoopModel
 from .first_compile import announce
 from .iteration import solve_blocks, solve_schur
-from .kernels import first_outside, jacobian
+from .kernels import jacobian
 from .legs import ChainTables
-from .outcomes import CONVERGED, outcome
-from .packing import SETTINGS, Packed
+from .outcomes import CONVERGED, INVALID_INPUT, outcome
+from .packing import SETTINGS, STROKE, Packed
 from .solver import MAX_STEP, ONE_STEP, SINGULAR_PIVOT_RATIO, THETA_FLOOR, THETA_MAX, Attempt, NewtonSolver
-
-
-@njit(cache=True)
-def stage_forward(readings, lower, upper, slack, settings, tol, max_iter, sign):
-    """:func:`.kernels.first_outside` of the readings and, when all are inside, the settings of the certified attempt.
-
-    ``settings`` (:data:`.packing.SETTINGS`) gets ``tol``, ``max_iter``, ``sign`` and the
-    readings as the held joints' values (a hexapod without an encoder model). Returns the index
-    of the first reading outside ``[lower - slack, upper + slack]`` (or NaN), -1 if none.
-    """
-    k = first_outside(readings, lower, upper, slack)
-    if k < 0:
-        settings[0], settings[1], settings[2] = tol, max_iter, sign
-        for i in range(readings.shape[0]):
-            settings[7 + i] = readings[i]
-    return k
 
 
 @njit(cache=True)
@@ -74,9 +58,6 @@ class CompiledSolver(NewtonSolver):
     ``_solve_step``) sees the compiled path's values; ``q_aug[:nq]`` holds the last iterate.
     """
 
-    #: :func:`stage_forward`, for :meth:`.hexapod.Hexapod.forward` to check its readings and fill
-    #: :attr:`forward_settings` in one compiled call before :meth:`attempt`
-    stage = staticmethod(stage_forward)
     #: :func:`valid_start`, for :meth:`.hexapod.Hexapod.forward` to check a configuration array as its guess
     check_start = staticmethod(valid_start)
 
@@ -123,6 +104,11 @@ class CompiledSolver(NewtonSolver):
         self._fixed = (*packed.arrays, self.last_q)  # then an entry's outputs q, pose, G
         self._nq, self._g_shape = self.last_q.shape[0], self.G.shape
         self._forward_joints = self.forward_settings[7:]  # the held joints' entries, a view
+        # the settings of attempt_readings: the readings are the entry's offset (given 2), the stroke follows
+        self._readings_settings = np.zeros(SETTINGS + STROKE)
+        self._readings_settings[3:7] = (0.0, 1.0, 1.0, 2.0)
+        self._readings_settings[25] = -np.inf  # no stroke held yet (hold_stroke): every reading is refused
+        self._staged = (math.nan, math.nan, math.nan)  # tol, max_iter and sign in _readings_settings
         self._scratch = self._outputs()
         if schur:  # home's sign and condition bound, now from the compiled path
             self.iterate(clm.q_home, np.inf, 0)
@@ -179,8 +165,52 @@ class CompiledSolver(NewtonSolver):
         self._forward_joints[:] = joints  # any float dtype or stride: the entry's one signature
         return self.attempt(start, tol)
 
+    def hold_stroke(self, lower: np.ndarray, upper: np.ndarray, slack: float) -> None:
+        """The stroke :meth:`attempt_readings` checks its readings against: ``[lower - slack, upper + slack]`` (m)."""
+        settings = self._readings_settings
+        settings[13:19], settings[19:25], settings[25] = lower, upper, slack
+
+    def attempt_readings(self, start: np.ndarray, readings: np.ndarray, tol: float, max_iter: int, sign: float):
+        """The stroke check of ``readings`` and :meth:`certified_forward` holding them, in one compiled call.
+
+        For :meth:`.hexapod.Hexapod.forward`'s warm path on a hexapod without an encoder model
+        (the readings are the prismatic joints' values). The stroke is :meth:`hold_stroke`'s.
+
+        Args:
+            start: configuration to start from (not modified).
+            readings: the six readings (m), float64 of shape (6,).
+            tol: closure residual to reach (checked by the caller).
+            max_iter: Newton step limit (checked by the caller).
+            sign: determinant sign of the start's assembly (0 when unknown).
+
+        Returns:
+            The index of the first reading outside the stroke or NaN (an int: no solve), or
+            :meth:`certified_forward`'s result.
+        """
+        settings = self._readings_settings
+        if (tol, max_iter, sign) != self._staged:  # a warm stream keeps them: no write into the array
+            settings[0], settings[1], settings[2] = tol, max_iter, sign
+            self._staged = (tol, max_iter, sign)
+        # one compiled signature: contiguous float64 arrays (a strided or float32 one would compile another)
+        if not readings.flags.c_contiguous:
+            readings = readings.copy()
+        if start.dtype != np.float64 or not start.flags.c_contiguous:
+            start = np.ascontiguousarray(start, dtype=np.float64)
+        q, pose, G = np.empty(self._nq), np.empty((4, 4)), np.empty(self._g_shape)
+        code, it, norm, ratio, self.theta, self.det_sign, certified, bad = self._kernel(
+            start, readings, settings, (*self._fixed, q, pose, G)
+        )
+        if code == INVALID_INPUT:
+            return bad
+        self.certified = certified
+        self.sign, self.kappa = self.state.tolist()
+        if code == CONVERGED and certified:
+            return q, pose, G, it, norm, bad
+        status, message = outcome(code, tol, it, norm, ratio)
+        return status, it, norm, message
+
     def attempt(self, start: np.ndarray, tol: float) -> Attempt:
-        """:meth:`certified_forward` with the settings in :attr:`forward_settings` already (see :meth:`stage`)."""
+        """:meth:`certified_forward` with the settings in :attr:`forward_settings` already."""
         # the hot path of a warm solve: :meth:`_call` and :meth:`_outputs` written out
         q, pose, G = np.empty(self._nq), np.empty((4, 4)), np.empty(self._g_shape)
         # one compiled signature: a contiguous float64 start (a strided or float32 array would compile another)

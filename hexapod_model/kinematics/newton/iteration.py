@@ -43,12 +43,13 @@ from .chains import evaluate_chains
 from .kernels import (
     closure_residual,
     copy_into,
+    first_outside,
     first_outside_at,
     jacobian,
     scatter_step,
     shift_residual,
 )
-from .outcomes import CONVERGED, FLIPPED, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED
+from .outcomes import CONVERGED, FLIPPED, INVALID_INPUT, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED
 from .packing import FHEADER, LENGTH_SCALE, unpack_floats, unpack_ints, unpack_iwork, unpack_work
 from .structured import blocks_solve, schur_solve
 
@@ -161,9 +162,17 @@ def _entries(schur: bool, step: str) -> tuple:
         prismatic_q, limited = ints[oc : oc + 6], ints[oc + 6 : oc + 6 + nl]
         lower, upper, slack = floats[fc : fc + nl], floats[fc + nl : fc + 2 * nl], floats[fc + 2 * nl]
         home = floats[fc - 16 : fc].reshape((4, 4))
+        given = settings[6]
+        if given == 2.0:  # the readings are `offset`: outside the stroke (or NaN), no solve
+            k = first_outside(offset, settings[13:19], settings[19:25], settings[25])
+            if k >= 0:
+                return INVALID_INPUT, 0, np.nan, np.nan, 0.0, 0.0, False, k
         for k in range(q.shape[0]):
             q[k] = start[k]
-        if settings[6] != 0.0:
+        if given == 2.0:
+            for i in range(prismatic_q.shape[0]):
+                q[prismatic_q[i]] = offset[i]
+        elif given != 0.0:
             for i in range(prismatic_q.shape[0]):
                 q[prismatic_q[i]] = settings[7 + i]
         tables, frames = unpack_ints(ints)[0], unpack_floats(ints, floats)[0]
@@ -206,7 +215,9 @@ def _entries(schur: bool, step: str) -> tuple:
     The prismatic joints are set from ``settings`` if given.
 
     ``settings = (tol, max_iter, sign, scale, certify, finish, given, joints...)``
-    (:data:`.packing.SETTINGS`); ``arrays = (ints, floats, work, iwork, q_solver, q, pose, G)``:
+    (:data:`.packing.SETTINGS`; with ``given`` 2 the joints are ``offset``, six readings checked
+    against the stroke bounds that follow in ``settings``: one outside, or NaN, returns
+    ``INVALID_INPUT`` and its index, with no solve); ``arrays = (ints, floats, work, iwork, q_solver, q, pose, G)``:
     the packed tables and buffers, the solver's iterate and the outputs. The iteration runs from
     ``q`` (``start``'s copy) and leaves its last iterate in ``q_solver``. With ``finish``, unless
     a ``certify``-ing solve did not converge certified, it also writes the configuration into

@@ -31,7 +31,10 @@ all C order):
   (``NewtonSolver.sign``, ``kappa``);
 * ``iwork``: ``PB`` (6, n), ``pm`` (6,);
 * ``settings`` (float): ``(tol, max_iter, sign, scale, certify, finish, given)`` then the six
-  prismatic joint values to hold when ``given`` is not 0 (:data:`SETTINGS` in all; flags as 0 or 1).
+  prismatic joint values to hold when ``given`` is 1 (:data:`SETTINGS` in all; flags as 0 or 1).
+  ``given`` 2: the values to hold are the entry's ``offset`` argument (six readings, no homotopy),
+  checked first against the stroke that follows in ``settings``: its lower (6,) and upper (6,)
+  bounds and their slack (1,) (:data:`STROKE` entries more).
 """
 
 from __future__ import annotations
@@ -46,6 +49,8 @@ FHEADER = 6
 LENGTH_SCALE = 5  # index of the geometry's length scale in ``floats`` (after the five step constants)
 #: entries of the per-call ``settings`` array: seven values, then six joint values
 SETTINGS = 13
+#: entries after :data:`SETTINGS` of a solve that checks its readings against the stroke (``given`` 2)
+STROKE = 13
 WORK_NAMES = tuple("oR op J R p E r x dv G LB A M nb wb Rs ps quat state".split())
 
 

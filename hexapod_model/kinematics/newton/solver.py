@@ -195,8 +195,6 @@ class OneCallSolver(Protocol):
     choice between the two paths.
     """
 
-    #: checks the readings (m) against the stroke and fills :attr:`forward_settings`; the first reading outside or -1
-    stage: Callable[..., int]
     #: whether a float64 configuration ``(q, platform_q, tol)`` is finite with a unit platform quaternion
     check_start: Callable[..., bool]
     #: the settings of the next certified attempt (:data:`.packing.SETTINGS`)
@@ -214,8 +212,14 @@ class OneCallSolver(Protocol):
         """The certified first attempt of direct kinematics from ``start`` holding ``joints`` (m)."""
         ...
 
-    def attempt(self, start: np.ndarray, tol: float) -> Attempt:
-        """:meth:`certified_forward` with its settings staged already."""
+    def hold_stroke(self, lower: np.ndarray, upper: np.ndarray, slack: float) -> None:
+        """The stroke (m) that :meth:`attempt_readings` checks its readings against."""
+        ...
+
+    def attempt_readings(
+        self, start: np.ndarray, readings: np.ndarray, tol: float, max_iter: int, sign: float
+    ) -> Attempt | int:
+        """The stroke check of six readings (m) and the certified attempt holding them; an int: the first outside."""
         ...
 
     def run_checked(self, q0: np.ndarray, tol: float, max_iter: int) -> tuple[tuple, np.ndarray, int] | None:
