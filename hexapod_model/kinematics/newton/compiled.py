@@ -96,7 +96,7 @@ class CompiledSolver(NewtonSolver):
         announce(self._kernel)  # the first solve after installation compiles it
         # the entries' settings (.packing.SETTINGS), filled in place: per kind of call, the constant ones set here
         self._settings = np.zeros(SETTINGS)
-        #: the settings of the next certified attempt of direct kinematics (:meth:`attempt`)
+        #: the settings of the next certified attempt of direct kinematics (:meth:`certified_forward`)
         self.forward_settings = np.zeros(SETTINGS)
         self.forward_settings[3:7] = (0.0, 1.0, 1.0, 1.0)  # no homotopy, certify, finish, joints given
         self._checked_settings = np.zeros(SETTINGS)
@@ -163,7 +163,9 @@ class CompiledSolver(NewtonSolver):
         settings[1] = max_iter
         settings[2] = sign
         self._forward_joints[:] = joints  # any float dtype or stride: the entry's one signature
-        return self.attempt(start, tol)
+        done = self._attempt(start, self._no_offset, settings, tol)
+        assert not isinstance(done, int)  # no stroke in these settings
+        return done
 
     def hold_stroke(self, lower: np.ndarray, upper: np.ndarray, slack: float) -> None:
         """The stroke :meth:`attempt_readings` checks its readings against: ``[lower - slack, upper + slack]`` (m)."""
@@ -194,31 +196,20 @@ class CompiledSolver(NewtonSolver):
         # one compiled signature: contiguous float64 arrays (a strided or float32 one would compile another)
         if not readings.flags.c_contiguous:
             readings = readings.copy()
-        if start.dtype != np.float64 or not start.flags.c_contiguous:
-            start = np.ascontiguousarray(start, dtype=np.float64)
-        q, pose, G = np.empty(self._nq), np.empty((4, 4)), np.empty(self._g_shape)
-        code, it, norm, ratio, self.theta, self.det_sign, certified, bad = self._kernel(
-            start, readings, settings, (*self._fixed, q, pose, G)
-        )
-        if code == INVALID_INPUT:
-            return bad
-        self.certified = certified
-        self.sign, self.kappa = self.state.tolist()
-        if code == CONVERGED and certified:
-            return q, pose, G, it, norm, bad
-        status, message = outcome(code, tol, it, norm, ratio)
-        return status, it, norm, message
+        return self._attempt(start, readings, settings, tol)
 
-    def attempt(self, start: np.ndarray, tol: float) -> Attempt:
-        """:meth:`certified_forward` with the settings in :attr:`forward_settings` already."""
+    def _attempt(self, start: np.ndarray, offset: np.ndarray, settings: np.ndarray, tol: float) -> Attempt | int:
+        """The certified attempt with ``settings`` into new output arrays (an int: the reading outside the stroke)."""
         # the hot path of a warm solve: :meth:`_call` and :meth:`_outputs` written out
         q, pose, G = np.empty(self._nq), np.empty((4, 4)), np.empty(self._g_shape)
         # one compiled signature: a contiguous float64 start (a strided or float32 array would compile another)
         if start.dtype != np.float64 or not start.flags.c_contiguous:
             start = np.ascontiguousarray(start, dtype=np.float64)
         code, it, norm, ratio, self.theta, self.det_sign, certified, bad = self._kernel(
-            start, self._no_offset, self.forward_settings, (*self._fixed, q, pose, G)
+            start, offset, settings, (*self._fixed, q, pose, G)
         )
+        if code == INVALID_INPUT:  # only where settings hold a stroke (attempt_readings)
+            return bad
         self.certified = certified
         self.sign, self.kappa = self.state.tolist()
         if code == CONVERGED and certified:
