@@ -172,7 +172,9 @@ class CompiledSolver(NewtonSolver):
         settings = self._readings_settings
         settings[13:19], settings[19:25], settings[25] = lower, upper, slack
 
-    def attempt_readings(self, start: np.ndarray, readings: np.ndarray, tol: float, max_iter: int, sign: float):
+    def attempt_readings(
+        self, start: np.ndarray, readings: np.ndarray, tol: float, max_iter: int, sign: float
+    ) -> Attempt | int:
         """The stroke check of ``readings`` and :meth:`certified_forward` holding them, in one compiled call.
 
         For :meth:`.hexapod.Hexapod.forward`'s warm path on a hexapod without an encoder model
@@ -205,12 +207,12 @@ class CompiledSolver(NewtonSolver):
         # one compiled signature: a contiguous float64 start (a strided or float32 array would compile another)
         if start.dtype != np.float64 or not start.flags.c_contiguous:
             start = np.ascontiguousarray(start, dtype=np.float64)
-        code, it, norm, ratio, self.theta, self.det_sign, certified, bad = self._kernel(
+        code, it, norm, ratio, theta, det_sign, certified, bad = self._kernel(
             start, offset, settings, (*self._fixed, q, pose, G)
         )
-        if code == INVALID_INPUT:  # only where settings hold a stroke (attempt_readings)
+        if code == INVALID_INPUT:  # refused before the solve (attempt_readings' stroke): the state is kept
             return bad
-        self.certified = certified
+        self.theta, self.det_sign, self.certified = theta, det_sign, certified
         self.sign, self.kappa = self.state.tolist()
         if code == CONVERGED and certified:
             return q, pose, G, it, norm, bad
