@@ -79,6 +79,8 @@ def test_the_planned_changeover_ends_locked_in_tolerance_without_coupling_mismat
         port = served.wait_port()
         activate(port)
 
+        ended_with: dict[str, dict] = {}  # each fixture's guidance when the plan was seen ended
+
         def finished():
             time.sleep(0.5)  # a light poll, to leave the machine to the service
             health = served.get("/health")
@@ -86,6 +88,8 @@ def test_the_planned_changeover_ends_locked_in_tolerance_without_coupling_mismat
                 return False
             guidance = [served.get(f"/fixtures/{n}/guidance") for n in ("left", "right")]
             ended = health["plan"]["phase"] == "done" and all(g["in_tolerance"] and g["stored"] for g in guidance)
+            if ended:
+                ended_with.update({g["fixture"]: g for g in guidance})
             return ended or health["plan"]["coupling_mismatch"] is not None
 
         served.wait_for(finished, plan.total_time + 60.0)
@@ -98,8 +102,13 @@ def test_the_planned_changeover_ends_locked_in_tolerance_without_coupling_mismat
             expected += rates[name] * (held[-1] - held[0])
         assert health["plan"]["checked"] > 0.8 * expected  # the records of those seconds were compared
         for name in ("left", "right"):
-            g = served.get(f"/fixtures/{name}/guidance")
+            g = ended_with[name]  # in tolerance then: a later record's may not be (below)
             assert g["in_tolerance"] and g["state"] == "locked" and g["target"]["recipe"] == "bracket", g
+            # a locked plate's records scatter with the readings' noise: the deviation plus two sigma
+            # (about 0.06-0.09 mm here against 0.1 mm) leaves the tolerance now and then, so the
+            # record after the end is held to staying locked with its lock stored, not in tolerance
+            now = served.get(f"/fixtures/{name}/guidance")
+            assert now["state"] == "locked" and now["stored"] and now["target"]["recipe"] == "bracket", now
             assert health["fixtures"][name]["fault"] is None, health["fixtures"][name]  # no latched discontinuity
     finally:
         assert served.finish(signal.SIGINT) == 0, "".join(served.err)
