@@ -122,6 +122,20 @@ def floor_times(hexa: Hexapod, readings: np.ndarray) -> list[float]:
     return out
 
 
+def limited_readings(hexa: Hexapod, which: str, samples: int) -> tuple[np.ndarray, int | None]:
+    """Readings of trajectory ``which`` at 1 kHz (its first ``samples``) up to the first pose outside the limits.
+
+    Returns the (n, 6) readings (m) and the index of that first pose (None when all are inside).
+    """
+    _, poses = trajectory_poses(which, hexa.home_pose, hexa.base_radius / 50.0, 1000.0)
+    ik = hexa.inverse_batch(poses[:samples])
+    inside = np.asarray(ik.converged, dtype=bool)
+    if inside.all():
+        return ik.lengths, None
+    stop = int(np.argmin(inside))
+    return ik.lengths[:stop], stop
+
+
 def trajectory_proofs(name: str, which: str, samples: int) -> dict:
     """Proven fractions and per-step medians (us) of warm solves along trajectory ``which`` at 1 kHz.
 
@@ -131,11 +145,7 @@ def trajectory_proofs(name: str, which: str, samples: int) -> dict:
     """
     hexa = Hexapod.load(name)
     prover = hexa.engine.prover
-    _, poses = trajectory_poses(which, hexa.home_pose, hexa.base_radius / 50.0, 1000.0)
-    ik = hexa.inverse_batch(poses[:samples])
-    inside = np.asarray(ik.converged, dtype=bool)
-    stop = int(np.argmin(inside)) if not inside.all() else len(inside)  # up to the first pose outside the limits
-    readings = ik.lengths[:stop]
+    readings, outside_from = limited_readings(hexa, which, samples)
     sol = hexa.forward(readings[0], check=False)
     first = hexa.forward(readings[1], sol, check=False)  # compile / warm up
     hexa.forward(readings[1], sol, check=False, prove=False)
@@ -167,7 +177,7 @@ def trajectory_proofs(name: str, which: str, samples: int) -> dict:
     n = len(solve_t)
     return {
         "steps": n,
-        "outside_from": stop if stop < len(inside) else None,
+        "outside_from": outside_from,
         "proven_fraction": proven / n if n else float("nan"),
         "dense_proven_fraction": dense_proven / n if n else float("nan"),
         "median_subdivisions": float(np.median(parts)) if parts else float("nan"),
@@ -237,10 +247,7 @@ def tracker_proofs(name: str, samples: int) -> dict:
     from the prediction: a short step while the readings move, so no region is built about it.
     """
     hexa = Hexapod.load(name)
-    _, poses = trajectory_poses("A", hexa.home_pose, hexa.base_radius / 50.0, 1000.0)
-    ik = hexa.inverse_batch(poses[:samples])
-    inside = np.asarray(ik.converged, dtype=bool)
-    readings = ik.lengths[: int(np.argmin(inside)) if not inside.all() else len(inside)]
+    readings, _ = limited_readings(hexa, "A", samples)
     skip = min(20, len(readings) // 2)  # the first samples: the history fills, the first steps load
     tracker = Tracker(hexa)
     step_t, proven, in_region = [], 0, 0
