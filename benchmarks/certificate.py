@@ -1,7 +1,7 @@
 """What the assembly check of direct kinematics costs and how often it refuses, per preset.
 
     python benchmarks/certificate.py [PRESET ...] [--poses N] [--seed S] [--warm-offset M] [--trajectory-samples K]
-        [--rest-samples R] [--json FILE]
+        [--rest-samples R] [--far-guesses F] [--json FILE]
 
 For ``N`` random poses per preset (home +- 50 mm, roll/pitch/yaw +- 25 deg, within the limits),
 the readings are solved cold (from home) and warm (from the pose moved by ``warm-offset`` m) by
@@ -32,6 +32,11 @@ proven fraction, the fraction proven in a region an earlier step proved, and the
 Then the **tracker** (:class:`hexapod_model.tracking.tracker.Tracker`, its default predictor) along
 trajectory A at 1 kHz: the proven fraction of its samples, the median step, and the solve it
 makes (from the prediction) with its proof and alone.
+
+Then **far guesses**: ``F`` random poses (as above) solved in turn, each warm from the one before (a
+guess about 0.1 m and 0.2 rad away): the whole step cannot be proven by one test, so ``forward``
+follows it in proven steps (:func:`hexapod_model.kinematics.connected.connected_chain`): the
+median time of such a ``forward``, its proven steps and Krawczyk tests, and the tests per step.
 
 ``--json`` also writes the figures (``benchmarks/performance_table.py`` reads it); ``--poses 0``
 measures the proof alone.
@@ -281,6 +286,36 @@ def tracker_proofs(name: str, samples: int) -> dict:
     }
 
 
+def far_guess_proofs(name: str, poses: int, seed: int = 12) -> dict:
+    """Warm ``forward`` of random poses in turn, each from the one before: medians (ms), steps and tests.
+
+    The guesses lie about 0.1 m and 0.2 rad away: each result is proven along its readings path
+    in steps (:meth:`hexapod_model.kinematics.engine.SolveEngine.proven_warm`).
+    """
+    hexa = Hexapod.load(name)
+    sols = [hexa.inverse(T, check=False) for T in box_poses(hexa.home_pose, poses + 1, seed=seed)]
+    sols = [s for s in sols if s.converged]
+    hexa.forward(sols[1].lengths, sols[0], check=False)  # the proof's kernels load
+    times, steps, tests, converged = [], [], [], 0
+    pairs = list(zip(sols, sols[1:]))
+    for before, after in pairs:
+        t0 = time.perf_counter()
+        sol = hexa.forward(after.lengths, before, check=False)
+        times.append(time.perf_counter() - t0)
+        converged += sol.converged
+        steps.append(sol.proof.subdivisions if sol.proof is not None else 0)
+        tests.append(sol.proof.tests if sol.proof is not None else 0)
+    return {
+        "solves": len(times),
+        "converged_fraction": converged / len(times),
+        "forward_median_ms": float(np.median(times) * 1e3),
+        "median_steps": float(np.median(steps)),
+        "median_tests": float(np.median(tests)),
+        "tests_per_step": float(np.sum(tests) / max(np.sum(steps), 1)),
+        "median_reading_change_m": float(np.median([np.abs(b.lengths - a.lengths).max() for a, b in pairs])),
+    }
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("presets", nargs="*", default=[n for n in PRESETS if not get_preset(n).redundant])  # six readings
@@ -289,6 +324,7 @@ def main(argv=None) -> int:
     ap.add_argument("--warm-offset", type=float, default=1e-4, help="m (default 1e-4: a 1 kHz sample at 0.1 m/s)")
     ap.add_argument("--trajectory-samples", type=int, default=4001, help="1 kHz samples of A and B (4001: all)")
     ap.add_argument("--rest-samples", type=int, default=2001, help="samples of the fixture at rest")
+    ap.add_argument("--far-guesses", type=int, default=30, help="random poses solved in turn, each from the one before")
     ap.add_argument("--json", type=Path, help="also write the figures as JSON")
     args = ap.parse_args(argv)
     report: dict = {"trajectories": [], "solves": []}
@@ -327,6 +363,19 @@ def main(argv=None) -> int:
             f"{100 * r['proven_fraction']:.2f} % ({100 * r['in_region_fraction']:.2f} % in a region); a step "
             f"{r['step_median_us']:.1f} us; its solve from the prediction with its proof "
             f"{r['forward_proven_median_us']:.1f} us, alone {r['solve_median_us']:.1f} us (medians)",
+            flush=True,
+        )
+    for name in args.presets:
+        if args.far_guesses <= 0:
+            break
+        r = far_guess_proofs(name, args.far_guesses)
+        report["far"] = [*report.get("far", []), {"preset": name, **r}]
+        apart = 1e3 * r["median_reading_change_m"]
+        print(
+            f"{name:12s} far guesses (random poses in turn, readings {apart:.0f} mm apart): "
+            f"{r['solves']} warm solves, {100 * r['converged_fraction']:.0f} % converged; forward with its proof "
+            f"{r['forward_median_ms']:.1f} ms, {r['median_steps']:g} proven steps, "
+            f"{r['median_tests']:g} tests (medians); {r['tests_per_step']:.1f} tests a step",
             flush=True,
         )
     for name in args.presets:

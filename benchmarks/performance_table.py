@@ -210,6 +210,16 @@ def certificate_rows(data: dict) -> list[tuple[str, str]]:
             f"{100 * r['proven_fraction']:.2f} % proven, {100 * r['in_region_fraction']:.2f} % in a region"
         )
         rows.append((f"{where}, time per step", value))
+    for r in data.get("far", []):
+        rows.append(
+            (
+                f"{r['preset']}: warm FK from a far guess (random poses in turn, readings "
+                f"{1e3 * r['median_reading_change_m']:.0f} mm apart), proven in steps",
+                f"{r['forward_median_ms']:.1f} ms a solve, {r['median_steps']:g} proven steps, "
+                f"{r['median_tests']:g} Krawczyk tests (medians); {r['tests_per_step']:.1f} tests a step; "
+                f"{100 * r['converged_fraction']:.0f} % of {r['solves']} converged",
+            )
+        )
     return rows
 
 

@@ -249,7 +249,7 @@ def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
     report = tmp_path / "certificate.json"
     cmd = [sys.executable, str(ROOT / "benchmarks" / "certificate.py"), "reference", "3-6", "--poses", "0"]
     out = subprocess.run(
-        [*cmd, "--trajectory-samples", "20", "--rest-samples", "201", "--json", str(report)],
+        [*cmd, "--trajectory-samples", "20", "--rest-samples", "201", "--far-guesses", "4", "--json", str(report)],
         capture_output=True,
         text=True,
         timeout=600,
@@ -262,7 +262,7 @@ def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
     assert all(0 <= t["proven_fraction"] <= 1 and t["steps"] > 0 for t in data["trajectories"]) and not data["solves"]
     table = _performance_table()
     rows = dict(table.certificate_rows(data))
-    assert len(rows) == 12
+    assert len(rows) == 14
     for preset, which in (("reference", "A"), ("reference", "B"), ("3-6", "A"), ("3-6", "B")):
         where = f"{preset}: trajectory {which} at 1 kHz"
         assert rows[f"{where}, warm steps proven (Krawczyk)"].endswith(" of 19")
@@ -278,6 +278,10 @@ def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
         assert tracked["steps"] == 10 and tracked["proven_fraction"] == 1.0 and tracked["in_region_fraction"] == 0.0
         row = rows[f"{tracked['preset']}: trajectory A at 1 kHz, the tracker (eq22), time per step"]
         assert "µs a step" in row and "with its proof" in row and row.endswith("0.00 % in a region")
+    for far in data["far"]:  # a guess 0.1 m away: proven in steps, a few tests each (a failed step: 32)
+        assert far["solves"] >= 3 and far["converged_fraction"] == 1.0 and far["median_steps"] > 1
+        assert far["tests_per_step"] < 20, far
+        assert any(k.startswith(f"{far['preset']}: warm FK from a far guess") for k in rows)
     assert any(args[0] == "certificate.py" and parse is table.certificate_rows for args, _, parse in table.BENCHMARKS)
 
 

@@ -11,11 +11,16 @@ and accepts a step only with the Krawczyk proof of :class:`.newton.proof.StepPro
 solutions for the readings between the step's ends form one continuous path in boxes where
 each is unique, from the assembly of the step's start to the exact solution next to its end
 (within about 1e-10 m). A step whose Newton solve or proof fails is halved, down to
-``MIN_STEP`` of the path (a fold: none goes through); a proven step lets the next one double,
-up to ``MAX_STEP``. Consecutive steps share their end configuration (the end of one is the
-start of the next), so the chain of proofs leads from the start's assembly to the end's: the
-assembly connected to the start, which :mod:`.certificate` puts first among the candidates,
-flagged ``connected``.
+``MIN_STEP`` of the path (a fold: none goes through). A proven step sets the next one's length
+from the sub-intervals its proof split the readings path into (:func:`.krawczyk.prove_path`),
+aiming at ``TARGET_PARTS``: at most twice and at least half as long, up to ``MAX_STEP``. A step
+longer than its proof reaches fails after ``MAX_TESTS`` tests (:mod:`.newton.krawczyk`) and
+is tried again at half the length; a step that proves in one test costs a Newton solve and two
+enclosures (the path's and its end's) for a short piece of the path: between the two, a few
+sub-intervals a step cost the fewest tests along the presets' paths. Consecutive steps share
+their end configuration (the end of one is the start of the next), so the chain of proofs
+leads from the start's assembly to the end's: the assembly connected to the start, which
+:mod:`.certificate` puts first among the candidates, flagged ``connected``.
 """
 
 from __future__ import annotations
@@ -28,7 +33,8 @@ from .newton.proof import StepProver
 from .newton.solver import NewtonSolver
 
 FIRST_STEP = 1.0 / 64.0  # of the path: the first step tried
-MAX_STEP = 1.0 / 16.0  # of the path: steps grow no longer than this
+MAX_STEP = 1.0 / 4.0  # of the path: steps grow no longer than this
+TARGET_PARTS = 6  # sub-intervals of the readings path a step's proof aims at (the next step's length)
 MIN_STEP = 2.0**-24  # of the path: a step this short that fails ends the attempt (a fold)
 MAX_STEPS = 1000  # Newton solves tried along one path
 
@@ -82,8 +88,9 @@ def connected_chain(
         q1, status = solver.run(q0, tol, max_iter)[:2]
         proof = prover.prove(q, q1) if status == "converged" else None
         tests += 0 if proof is None else proof.tests
-        if proof is not None and proof.proven:
-            before, q, t, h = q, q1, tn, min(2.0 * (tn - t), MAX_STEP)
+        if proof is not None and proof.proven:  # the next step's proof aims at TARGET_PARTS sub-intervals
+            grow = min(2.0, max(0.5, TARGET_PARTS / max(proof.subdivisions, 1)))
+            before, q, t, h = q, q1, tn, min(max(grow * (tn - t), min_step), MAX_STEP)
             steps += 1
         else:
             h = 0.5 * (tn - t)
