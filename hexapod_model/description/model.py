@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import functools
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -259,11 +260,19 @@ class ClosedLoopModel:
 
     def joint_name_of_q(self, iq: int) -> str:
         """URDF joint name owning configuration index ``iq``."""
+        if not 0 <= iq < len(self._q_joint_names):
+            raise IndexError(iq)
+        return self._q_joint_names[iq]
+
+    @functools.cached_property
+    def _q_joint_names(self) -> tuple[str, ...]:
+        """The joint name of each configuration index (the joints' layout is fixed once loaded)."""
         m = self.model
+        names = [""] * m.nq
         for j in range(1, m.njoints):
-            if m.joints[j].idx_q <= iq < m.joints[j].idx_q + m.joints[j].nq:
-                return m.names[j]
-        raise IndexError(iq)
+            joint = m.joints[j]
+            names[joint.idx_q : joint.idx_q + joint.nq] = [m.names[j]] * joint.nq
+        return tuple(names)
 
     def visual_model(self) -> pin.GeometryModel:
         """Pinocchio's visual geometry of the hexapod, from its URDF or MJCF text."""

@@ -254,7 +254,7 @@ class FixtureService:
         ends on its own and closes the store it opened (see :attr:`preparing`).
         """
         self._stop.set()
-        if self._preparing is not None:
+        if self._preparing is not None and self._preparing.ident is not None:  # Ctrl-C may land before it starts
             self._preparing.join(0.3)
         with self._lock:  # the preparation either finished or will see _stop and clean up itself
             self._ready.clear()

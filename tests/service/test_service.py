@@ -166,6 +166,18 @@ def test_stop_before_the_cycle_thread_started_is_clean(tmp_path):
     assert service._thread is None
 
 
+def test_stop_before_the_preparation_thread_started_is_clean(tmp_path):
+    """Ctrl-C between creating the preparation thread (``start(wait=False)``) and starting it."""
+    import threading
+
+    from hexapod_model.service import service as service_module
+
+    service = service_module.FixtureService(service_config(tmp_path, [fixture_table()]))
+    service._preparing = threading.Thread(target=lambda: None)  # created, not started
+    service.stop()  # a RuntimeError (join of a thread not started) was the process's exit 1
+    assert not service.preparing
+
+
 def test_simulator_stop_before_its_thread_started_is_clean(tmp_path):
     import threading
 
