@@ -93,7 +93,7 @@ def test_a_long_warm_step_is_proven_in_steps():
 def test_a_far_guess_is_followed_in_proven_steps_sized_from_their_proofs(name):
     """A guess about 0.1 m away is proven in steps; each step's length comes from the sub-intervals
     of the proof before, so few steps are tried longer than a proof reaches (each such costs 32
-    failed tests): about 14 tests a step on these presets, where doubling every proven step spent 57."""
+    failed tests): about 14 tests a step on these presets, where doubling every proven step spent about 50."""
     from hexapod_model.analysis.trajectories import box_poses
 
     hexa = hexapod(name)
