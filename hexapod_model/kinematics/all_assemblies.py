@@ -198,6 +198,9 @@ class AssemblyFinder:
         #: m, how far each prismatic joint may lie from the measured readings' (the noise reach of
         #: :func:`.noise_assemblies.noise_reach`, the geometry's ``encoder_sigma``, through the encoder model)
         self.reach = np.abs(hexa.joints_of(np.full(6, noise_reach(sigma))) - hexa.joints_of(np.zeros(6)))
+        #: the multi-start search's start configurations per ``(starts, seed)``: they depend on the
+        #: hexapod alone, not on the readings (read-only; the last few kept)
+        self._starts: dict[tuple[int, int], tuple[np.ndarray, ...]] = {}
 
     def find(
         self, readings: np.ndarray, reference: np.ndarray | None = None, starts: int = DEFAULT_STARTS, seed: int = 0
@@ -227,12 +230,18 @@ class AssemblyFinder:
         near.sort(key=lambda s: pose_distance(ref, s.pose, self.length))
         return Assemblies(tuple(inside), len(poses) - len(inside), complete, method, tuple(near))
 
-    def _search(self, readings: np.ndarray, starts: int, seed: int) -> list[np.ndarray]:
-        """Poses of the distinct closed configurations plain Newton reaches from home and ``starts`` random poses."""
+    def start_configurations(self, starts: int, seed: int) -> tuple[np.ndarray, ...]:
+        """Home and the closed configurations of ``starts`` random poses (seeded by ``seed``): the search's starts.
+
+        The poses lie within the stroke's span of home in position and ``SAMPLE_ANGLE`` in each
+        angle; each is solved by inverse kinematics once per ``(starts, seed)`` and kept
+        (read-only arrays).
+        """
+        key = (starts, seed)
+        kept = self._starts.get(key)
+        if kept is not None:
+            return kept
         hexa = self.hexa
-        solver = hexa.solver(hexa.held_forward)
-        pq = hexa.closed_loop.prismatic_q
-        joints = hexa.joints_of(readings)
         rng = np.random.default_rng(seed)
         span = float(np.max(np.abs(hexa.stroke)))
         configurations = [hexa.closed_loop.q_home.copy()]
@@ -242,9 +251,22 @@ class AssemblyFinder:
             T[:3, :3] = T[:3, :3] @ rpy_to_matrix(*rng.uniform(-SAMPLE_ANGLE, SAMPLE_ANGLE, 3))
             start = hexa.inverse(T, check=False)
             if np.all(np.isfinite(start.q)) and start.closed:
-                configurations.append(start.q)
-        found: list[np.ndarray] = []
+                configurations.append(start.q.copy())
         for q in configurations:
+            q.setflags(write=False)
+        if len(self._starts) >= 4:  # a few seeds at a time: the others made again when asked
+            self._starts.clear()
+        self._starts[key] = kept = tuple(configurations)
+        return kept
+
+    def _search(self, readings: np.ndarray, starts: int, seed: int) -> list[np.ndarray]:
+        """Poses of the distinct closed configurations plain Newton reaches from home and ``starts`` random poses."""
+        hexa = self.hexa
+        solver = hexa.solver(hexa.held_forward)
+        pq = hexa.closed_loop.prismatic_q
+        joints = hexa.joints_of(readings)
+        found: list[np.ndarray] = []
+        for q in self.start_configurations(starts, seed):
             q0 = q.copy()
             q0[pq] = joints
             q1, status = solver.run(q0, hexa.default_tol, 30)[:2]

@@ -123,6 +123,24 @@ def test_the_multi_start_search_finds_the_generating_pose_and_says_it_is_not_com
         hexa.assemblies(np.zeros(6), starts=-1)
 
 
+def test_the_multi_start_search_solves_its_starts_once_and_finds_what_fresh_starts_find():
+    """The starts depend on the hexapod and the seed alone: solved once, kept read-only, the same assemblies."""
+    hexa, fresh = hexapod("reference"), hm.Hexapod.from_preset("reference")
+    finder = hexa.engine.finder
+    starts = finder.start_configurations(16, 3)
+    assert finder.start_configurations(16, 3) is starts and len(starts) > 10  # home and the closed random poses
+    assert not any(q.flags.writeable for q in starts)
+    assert finder.start_configurations(16, 4) is not starts
+    for T in box_poses(hexa.home_pose, 3, seed=8):
+        x = hexa.inverse(T).lengths
+        kept = hexa.assemblies(x, starts=16, seed=3)
+        assert finder.start_configurations(16, 3) is starts
+        new = fresh.assemblies(x, starts=16, seed=3)  # another hexapod object: its own starts, solved anew
+        assert len(kept.poses) == len(new.poses) and kept.outside == new.outside
+        for a, b in zip(kept.poses, new.poses):
+            np.testing.assert_array_equal(a, b)  # the same code path: bit for bit
+
+
 @pytest.mark.parametrize("kind", ["urdf", "mjcf"])
 def test_a_3_6_hexapod_loaded_from_a_file_checks_every_assembly_as_the_preset_does(kind, tmp_path):
     """A URDF or MJCF file carries no geometry: the 3-6 layout is read off the model, so the same
