@@ -13,11 +13,12 @@ each is unique, from the assembly of the step's start to the exact solution next
 (within about 1e-10 m). A step whose Newton solve or proof fails is halved, down to
 ``MIN_STEP`` of the path (a fold: none goes through). A proven step sets the next one's length
 from the sub-intervals its proof split the readings path into (:func:`.krawczyk.prove_path`),
-aiming at ``TARGET_PARTS``: at most twice and at least half as long, up to ``MAX_STEP``. A step
-longer than its proof reaches fails after ``MAX_TESTS`` tests (:mod:`.newton.krawczyk`) and
-is tried again at half the length; a step that proves in one test costs a Newton solve and two
-enclosures (the path's and its end's) for a short piece of the path: between the two, a few
-sub-intervals a step cost the fewest tests along the presets' paths. Consecutive steps share
+aiming at ``TARGET_PARTS``: at most twice and at least half as long, up to ``MAX_STEP``. Both
+extremes cost more: a step longer than its proof reaches fails after ``MAX_TESTS`` tests
+(:mod:`.newton.krawczyk`) and is tried again at half the length, and a step that one test
+proves costs a Newton solve and two enclosures (the path's and its end's) for a short piece
+of the path; about six sub-intervals a step took the fewest tests along the presets' paths
+(``benchmarks/certificate.py``, far guesses). Consecutive steps share
 their end configuration (the end of one is the start of the next), so the chain of proofs
 leads from the start's assembly to the end's: the assembly connected to the start, which
 :mod:`.certificate` puts first among the candidates, flagged ``connected``.
