@@ -231,6 +231,56 @@ def test_the_whole_path_test_and_the_subdividing_one_bound_the_same_end():
         assert np.all(np.abs(exact - x1) <= radius + 1e-12)
 
 
+def _whole(prover: StepProver, work: tuple, q0: np.ndarray, q1: np.ndarray, truth: np.ndarray) -> None:
+    """``prove_whole`` of the step ``q0`` -> ``q1`` on ``work``: proven, its bound holding the generating ``truth``."""
+    from hexapod_model.kinematics.newton.krawczyk import prove_whole
+
+    T0, x0, x1, l0, l1 = _ends(prover, q0, q1)
+    proven, tests, radius, parts = prove_whole(prover.tables, T0, x0, x1, l0, l1, True, work)
+    assert proven and tests == 1 and parts == 1
+    assert np.all(np.abs(prover.unknowns(truth, T0) - x1) <= radius + 1e-12)
+
+
+def test_the_whole_path_test_reuses_its_preconditioner_and_never_a_stale_or_broken_one():
+    """Step after step the per-leg preconditioner is built once and then reused (its blocks kept
+    bit for bit); one held from a distant pose is rebuilt when it does not prove; one a failed
+    setup left partly written is never used: the step's blocks are those a fresh work builds."""
+    from hexapod_model.kinematics.newton.krawczyk import HELD, held_setup
+
+    hexa, prover = hexapod("reference"), _prover("reference")
+    rng = np.random.default_rng(11)
+    step = np.eye(4)
+    step[:3, 3] = [2e-5, -1e-5, 1e-5]  # a 1 kHz sample's motion
+    work = prover.work()[0]
+    L = work[5][0]  # the legs' left factors
+    assert work[0][HELD][0] == 0.0
+    prev, held = hexa.inverse(hexa.home_pose @ _moved(rng)), None
+    for _ in range(5):
+        truth = hexa.inverse(prev.pose @ step)
+        sol = hexa.forward(truth.lengths, guess=prev, prove=False)
+        _whole(prover, work, prev.q, sol.q, truth.q)
+        assert work[0][HELD][0] == 1.0
+        if held is not None:
+            assert np.array_equal(L, held)  # reused
+        held, prev = L.copy(), sol
+
+    far = hexa.inverse(hexa.home_pose @ _moved(rng) @ _moved(rng))  # another pose: its Jacobian unlike the held one's
+    truth = hexa.inverse(far.pose @ step)
+    sol = hexa.forward(truth.lengths, guess=far, prove=False)
+    _whole(prover, work, far.q, sol.q, truth.q)
+    assert not np.array_equal(L, held)  # rebuilt
+
+    Jm = work[1]
+    assert not held_setup(np.zeros_like(Jm), prover.tables[4], work)  # singular: the blocks partly written
+    assert work[0][HELD][0] == 0.0
+    _whole(prover, work, far.q, sol.q, truth.q)
+    fresh = StepProver.of(hexa.closed_loop)
+    assert fresh is not None
+    fresh_work = fresh.work()[0]
+    _whole(fresh, fresh_work, far.q, sol.q, truth.q)
+    assert np.array_equal(L, fresh_work[5][0])
+
+
 def test_a_step_whose_leg_is_ill_conditioned_is_proven_only_subdivided():
     """A turned pose (48 deg of yaw) where a leg's joints couple strongly: one test of the whole
     0.8 mm step fails; the halved path proves it, and the proof's bounds hold the pose."""

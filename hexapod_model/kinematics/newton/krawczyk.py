@@ -40,7 +40,8 @@ from .krawczyk_blocks import workspace as workspace_blocks
 from .krawczyk_dense import inverse, krawczyk, preconditioned_dense
 
 MAX_TESTS = 32  # Krawczyk tests per path (each sub-interval that fails is halved)
-V_ROWS = 24  # rows of the work's vectors: 0-20 scratch, 21 the unknowns' units, 22-23 a region's box
+V_ROWS = 25  # rows of the work's vectors: 0-20 scratch, 21 the unknowns' units, 22-23 a region's box, 24 HELD
+HELD = 24  # the row whose first entry is 1 while the per-leg workspace holds a preconditioner (:func:`held_setup`)
 MIN_WIDTH = 1.0 / 64.0  # narrowest sub-interval of the readings path tried
 INFLATIONS = 4  # boxes tried per test (epsilon-inflation)
 FLOOR = 0.05  # a first box's radius per unknown, at least this fraction of the largest one (in units)
@@ -84,6 +85,19 @@ def preconditioned_blocks(ws, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr):
         YFr[a] = up(YFr[a] + up(abs(tm[a]) + gr[a]) * half)
 
 
+@njit(cache=True, inline="always")
+def held_setup(Jm, rows, work):
+    """:func:`.krawczyk_blocks.setup` into ``work``'s per-leg workspace, noting whether it now holds a preconditioner.
+
+    Every preconditioner of the per-leg test is built here: a failed setup leaves the workspace
+    partly written (its blocks no longer one matrix ``Y`` and the bound of ``|Y|``), and the note
+    (``work``'s row :data:`HELD`) says so, so that :func:`prove_whole` never reuses it.
+    """
+    ok = setup(Jm, rows, work[5])
+    work[0][HELD][0] = 1.0 if ok else 0.0
+    return ok
+
+
 def workspace(nf: int, rows: int) -> tuple:
     """The work arrays of :func:`prove_path` for ``nf`` unknowns and legs of ``rows`` closure rows."""
     return (
@@ -113,7 +127,7 @@ def precondition(tables, T0, xc, hm, structured, work):
     zero6[:] = 0.0
     enclose_into(placements, motions, closure, held, rows, T0, xc, zero, hm, zero6, True, V[0], V[1], Jm, Jr, ew)
     if structured:
-        return setup(Jm, rows, blocks)
+        return held_setup(Jm, rows, work)
     nf = xc.shape[0]
     Y[:, :] = inverse(Jm[:, :nf])
     return np.all(np.isfinite(Y))
@@ -295,6 +309,39 @@ def _prove_end(tables, T0, x1, l1, c, rho, fresh, structured, work):
 
 
 @njit(cache=True)
+def _precondition_box(rows, structured, work):
+    """The preconditioner from the Jacobian's midpoint in ``work`` (per leg, or dense); False when singular."""
+    V, Jm, Jr, Y, H, blocks, ew = work
+    if structured:
+        return held_setup(Jm, rows, work)
+    nf = Jm.shape[0]
+    Y[:, :] = inverse(Jm[:, :nf])
+    return np.all(np.isfinite(Y))
+
+
+@njit(cache=True)
+def _whole_test(rows, dl, e, structured, work, rho, off, rad):
+    """:func:`prove_whole`'s test of the box ``x1 +- rho`` (its Jacobian enclosure and a preconditioner in ``work``).
+
+    ``work``'s first two rows hold ``F(x1, l1)``; True when ``K`` lies in the interior of the box.
+    """
+    V, Jm, Jr, Y, H, blocks, ew = work
+    Fm, Fr = V[0], V[1]
+    gm, gr, YFm, YFr, tm, tr = V[5], V[6], V[7], V[8], V[9], V[10]
+    Sm, Sr = V[14], V[15]
+    _path_term(Jm, Jr, dl, 1.0, e, gm, gr)  # |s - 1| <= 1 for the Jacobian's radius
+    for a in range(Fm.shape[0]):  # the midpoint moved to s = 1/2: F(x1, l1) - gm / 2, then gm (s - 1/2)
+        Sm[a] = Fm[a] - 0.5 * gm[a]
+        Sr[a] = up(Fr[a] + REL * (abs(Fm[a]) + abs(gm[a])))
+    if structured:
+        preconditioned_blocks(blocks, rows, Sm, Sr, gm, gr, 0.5, YFm, YFr, tm, tr)
+        transform(Jm, rows, blocks)
+        return krawczyk_blocks(YFm, YFr, Jr, rows, blocks, rho, off, rad)
+    YFm[:], YFr[:] = preconditioned_dense(Y, Sm, Sr, gm, gr, 0.5)
+    return krawczyk(YFm, YFr, Jm, Jr, rho, Y, off, rad)
+
+
+@njit(cache=True)
 def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
     """One Krawczyk test of the whole readings path on a box about the result ``x1``, then the end box.
 
@@ -304,10 +351,15 @@ def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
         F(x1, l(s)) in F(x1, l1) + J_held(x1, S) dl (s - 1),   s - 1 in -1/2 +- 1/2,
 
     so that one enclosure of the residual at the result, ``F(x1, l1)``, serves the path's test
-    and the end box's, and the preconditioner is built from the Jacobian's midpoint over the
-    first box (any real matrix proves: :mod:`.krawczyk_blocks`). The box ``x1 +- rho`` must hold
-    the start ``x0``. Costs one enclosure of the residual and one of the Jacobian per box
-    instead of :func:`prove_path`'s three; a step it does not prove is left to :func:`prove_path`.
+    and the end box's. The box ``x1 +- rho`` must hold the start ``x0``. Costs one enclosure of
+    the residual and one of the Jacobian per box instead of :func:`prove_path`'s three; a step it
+    does not prove is left to :func:`prove_path`.
+
+    **The preconditioner** (any real matrix proves: :mod:`.krawczyk_blocks`). The per-leg test
+    first tries the one ``work`` holds (:func:`held_setup`: the last test's, on a thread that
+    proves step after step, built from a Jacobian a step away); only when the first box fails
+    with it is it built afresh from the Jacobian's midpoint over that box, and the box tried
+    again. The dense test builds its own every time.
 
     Returns:
         :func:`prove_path`'s ``(proven, tests, radius, parts)``.
@@ -316,8 +368,7 @@ def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
     placements, motions, closure, held, rows = tables
     V, Jm, Jr, Y, H, blocks, ew = work
     Fm, Fr, zero = V[0], V[1], V[4]
-    gm, gr, YFm, YFr, tm, tr = V[5], V[6], V[7], V[8], V[9], V[10]
-    off, rad, rho, Sm, Sr = V[11], V[12], V[13], V[14], V[15]
+    off, rad, rho = V[11], V[12], V[13]
     e, zero6, hm, hr, dl = H[0], H[1], H[2], H[3], H[4]
     zero[:] = 0.0
     zero6[:] = 0.0
@@ -336,25 +387,14 @@ def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
         rho[a] = max(rho[a], WHOLE_FLOOR * big * unit[a])
     for k in range(INFLATIONS):
         enclose_into(placements, motions, closure, held, rows, T0, x1, rho, hm, hr, True, V[2], V[3], Jm, Jr, ew)
-        if k == 0:
-            if structured:
-                if not setup(Jm, rows, blocks):
-                    return False, 1, rho, 0
-            else:
-                Y[:, :] = inverse(Jm[:, :nf])
-                if not np.all(np.isfinite(Y)):
-                    return False, 1, rho, 0
-        _path_term(Jm, Jr, dl, 1.0, e, gm, gr)  # |s - 1| <= 1 for the Jacobian's radius
-        for a in range(nf):  # the midpoint moved to s = 1/2: F(x1, l1) - gm / 2, then gm (s - 1/2)
-            Sm[a] = Fm[a] - 0.5 * gm[a]
-            Sr[a] = up(Fr[a] + REL * (abs(Fm[a]) + abs(gm[a])))
-        if structured:
-            preconditioned_blocks(blocks, rows, Sm, Sr, gm, gr, 0.5, YFm, YFr, tm, tr)
-            transform(Jm, rows, blocks)
-            ok = krawczyk_blocks(YFm, YFr, Jr, rows, blocks, rho, off, rad)
-        else:
-            YFm[:], YFr[:] = preconditioned_dense(Y, Sm, Sr, gm, gr, 0.5)
-            ok = krawczyk(YFm, YFr, Jm, Jr, rho, Y, off, rad)
+        reused = k == 0 and structured and V[HELD][0] > 0.0
+        if k == 0 and not reused and not _precondition_box(rows, structured, work):
+            return False, 1, rho, 0
+        ok = _whole_test(rows, dl, e, structured, work, rho, off, rad)
+        if reused and not ok:  # the held preconditioner did not prove: build it from this box, try again
+            if not _precondition_box(rows, structured, work):
+                return False, 1, rho, 0
+            ok = _whole_test(rows, dl, e, structured, work, rho, off, rad)
         if ok and _inside(x0, zero, zero, x1, rho):
             proven, _, radius, parts = _prove_end(tables, T0, x1, l1, x1, rho, False, structured, work)
             return proven, 1, radius, parts
@@ -419,7 +459,7 @@ def prove_region(tables, T0, x0, x1, l0, l1, hm, hr, work, c, rho):
         return False
     c[:] = x1
     enclose_into(placements, motions, closure, held, rows, T0, c, zero, hm, zero6, True, Fm, Fr, Jm, Jr, ew)
-    if not setup(Jm, rows, blocks):
+    if not held_setup(Jm, rows, work):
         return False
     apply(blocks, rows, Fm, Fr, YFm, YFr)  # Y F(c, hm): the same at every box
     unit = V[21]

@@ -13,6 +13,10 @@ When it succeeds it is a **proof**, with every floating-point rounding bounded
 * it ends at the unique exact solution for the readings ``l1`` within :attr:`Proof.position_m`
   (platform origin) and :attr:`Proof.rotation_rad` (platform orientation) of ``q1``.
 
+Step after step, the per-leg test keeps its preconditioner (any matrix proves, a close inverse
+of the Jacobian proves most): the thread's next test of a whole step tries the one it holds
+before it builds its own (:func:`.krawczyk.prove_whole`).
+
 A fixture at rest or moving slowly sends readings that hardly change: the per-leg test first
 proves a **region** about a short step, a box of readings (about +-0.1 mm a reading on a model
 of 0.15 m anchor radius, narrowed where that fails) with one solution for every reading in it
@@ -67,6 +71,7 @@ class StepProver:
 
         self._kernel = proof_kernel
         self._workspace = krawczyk.workspace
+        self._held = krawczyk.HELD  # the work's row that notes a preconditioner held
         self._local = threading.local()  # the work arrays, one set per thread
         self.leg_q = tables.leg_q
         n = tables.leg_q.shape[1]
@@ -83,7 +88,8 @@ class StepProver:
         length = float(np.max(np.linalg.norm(tables.closure[:, :3, 3], axis=1))) or 1.0
         lengths = [np.linalg.norm(tables.motions[i, k, :3]) > 0.5 for i in range(6) for k in self.free[i]]
         self.units = np.array([length if t else 1.0 for t in lengths] + [length] * 3 + [1.0] * 3)
-        #: False: every step is proven by a test of its own, no region (see the module doc)
+        #: False: every step is proven by a test of its own, its bounds the step's alone: no region,
+        #: no preconditioner kept from the thread's earlier proofs (see the module doc)
         self.regions = True
 
     def platform(self, q: np.ndarray) -> np.ndarray:
@@ -102,11 +108,12 @@ class StepProver:
     def work(self) -> tuple:
         """The calling thread's work arrays: :func:`.krawczyk.workspace` and the path's ends.
 
-        A caller that runs the kernels on them itself overwrites the region they hold: it is
-        dropped here.
+        A caller that runs the kernels on them itself overwrites the region and the preconditioner
+        they hold: both are dropped here.
         """
         work = self._packed()[0]
         work[1][7][0] = 0.0
+        work[0][0][self._held][0] = 0.0
         return work
 
     def buffers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -146,10 +153,11 @@ class StepProver:
         """
         kernel = self._kernel.prove_packed
         announce(kernel)
-        (_, ends), (floats, ints, spec) = self._packed()
+        (work, ends), (floats, ints, spec) = self._packed()
         state = ends[7]
-        if not self.regions:  # no region held, none tried
+        if not self.regions:  # no region held, none tried; the preconditioner built afresh
             state[0], state[2] = 0.0, np.inf
+            work[0][self._held][0] = 0.0
         elif state[2] == np.inf:
             state[2] = 0.0
         # one compiled signature: contiguous float64 configurations (a strided one, a row of a
