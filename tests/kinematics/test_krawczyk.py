@@ -243,8 +243,8 @@ def _whole(prover: StepProver, work: tuple, q0: np.ndarray, q1: np.ndarray, trut
 
 def test_the_whole_path_test_reuses_its_preconditioner_and_never_a_stale_or_broken_one():
     """Step after step the per-leg preconditioner is built once and then reused (its blocks kept
-    bit for bit); one held from a distant pose is rebuilt when it does not prove; one a failed
-    setup left partly written is never used: the step's blocks are those a fresh work builds."""
+    bit for bit); at a distant pose it is built afresh; one a failed setup left partly written is
+    never used: the step's blocks are those a fresh work builds."""
     from hexapod_model.kinematics.newton.krawczyk import HELD, held_setup
 
     hexa, prover = hexapod("reference"), _prover("reference")
@@ -264,14 +264,14 @@ def test_the_whole_path_test_reuses_its_preconditioner_and_never_a_stale_or_brok
             assert np.array_equal(L, held)  # reused
         held, prev = L.copy(), sol
 
-    far = hexa.inverse(hexa.home_pose @ _moved(rng) @ _moved(rng))  # another pose: its Jacobian unlike the held one's
+    far = hexa.inverse(hexa.home_pose @ _moved(rng) @ _moved(rng))  # another pose: the held one not tried there
     truth = hexa.inverse(far.pose @ step)
     sol = hexa.forward(truth.lengths, guess=far, prove=False)
     _whole(prover, work, far.q, sol.q, truth.q)
     assert not np.array_equal(L, held)  # rebuilt
 
     Jm = work[1]
-    assert not held_setup(np.zeros_like(Jm), prover.tables[4], work)  # singular: the blocks partly written
+    assert not held_setup(np.zeros_like(Jm), prover.tables[4], work, np.zeros(prover.nf))  # singular: partly written
     assert work[0][HELD][0] == 0.0
     _whole(prover, work, far.q, sol.q, truth.q)
     fresh = StepProver.of(hexa.closed_loop)

@@ -40,8 +40,13 @@ from .krawczyk_blocks import workspace as workspace_blocks
 from .krawczyk_dense import inverse, krawczyk, preconditioned_dense
 
 MAX_TESTS = 32  # Krawczyk tests per path (each sub-interval that fails is halved)
-V_ROWS = 25  # rows of the work's vectors: 0-20 scratch, 21 the unknowns' units, 22-23 a region's box, 24 HELD
+V_ROWS = 26  # rows of the work's vectors: 0-20 scratch, 21 the unknowns' units, 22-23 a region's box, 24-25 HELD
 HELD = 24  # the row whose first entry is 1 while the per-leg workspace holds a preconditioner (:func:`held_setup`)
+HELD_AT = 25  # the row that holds the unknowns about which that preconditioner was built
+# a held preconditioner is tried when every leg joint lies within this (rad, or model lengths) of where it was
+# built: on trajectory A, all within 0.01 proved, 4 % of those 0.03-0.1 away (another fixture of the same
+# hexapod on the thread: its own pose), and a test that fails costs a third of the proof
+REUSE_WITHIN = 0.01
 MIN_WIDTH = 1.0 / 64.0  # narrowest sub-interval of the readings path tried
 INFLATIONS = 4  # boxes tried per test (epsilon-inflation)
 FLOOR = 0.05  # a first box's radius per unknown, at least this fraction of the largest one (in units)
@@ -86,16 +91,31 @@ def preconditioned_blocks(ws, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr):
 
 
 @njit(cache=True, inline="always")
-def held_setup(Jm, rows, work):
+def held_setup(Jm, rows, work, xc):
     """:func:`.krawczyk_blocks.setup` into ``work``'s per-leg workspace, noting whether it now holds a preconditioner.
 
     Every preconditioner of the per-leg test is built here: a failed setup leaves the workspace
     partly written (its blocks no longer one matrix ``Y`` and the bound of ``|Y|``), and the note
-    (``work``'s row :data:`HELD`) says so, so that :func:`prove_whole` never reuses it.
+    (``work``'s row :data:`HELD`) says so, so that :func:`prove_whole` never reuses it. ``xc``
+    (nf,), the unknowns at the Jacobian's centre, is kept (row :data:`HELD_AT`).
     """
     ok = setup(Jm, rows, work[5])
     work[0][HELD][0] = 1.0 if ok else 0.0
+    work[0][HELD_AT][:] = xc
     return ok
+
+
+@njit(cache=True, inline="always")
+def _held_near(work, x):
+    """Whether ``work`` holds a preconditioner built within :data:`REUSE_WITHIN` of ``x`` in every leg joint."""
+    V = work[0]
+    if not V[HELD][0] > 0.0:
+        return False
+    at, unit = V[HELD_AT], V[21]
+    for a in range(x.shape[0] - 6):  # the chart's coordinates are about each test's own origin
+        if not abs(x[a] - at[a]) <= REUSE_WITHIN * unit[a]:
+            return False
+    return True
 
 
 def workspace(nf: int, rows: int) -> tuple:
@@ -127,7 +147,7 @@ def precondition(tables, T0, xc, hm, structured, work):
     zero6[:] = 0.0
     enclose_into(placements, motions, closure, held, rows, T0, xc, zero, hm, zero6, True, V[0], V[1], Jm, Jr, ew)
     if structured:
-        return held_setup(Jm, rows, work)
+        return held_setup(Jm, rows, work, xc)
     nf = xc.shape[0]
     Y[:, :] = inverse(Jm[:, :nf])
     return np.all(np.isfinite(Y))
@@ -309,11 +329,11 @@ def _prove_end(tables, T0, x1, l1, c, rho, fresh, structured, work):
 
 
 @njit(cache=True)
-def _precondition_box(rows, structured, work):
-    """The preconditioner from the Jacobian's midpoint in ``work`` (per leg, or dense); False when singular."""
+def _precondition_box(rows, structured, work, xc):
+    """The preconditioner from the Jacobian's midpoint in ``work`` (per leg, or dense) about ``xc``; False when singular."""
     V, Jm, Jr, Y, H, blocks, ew = work
     if structured:
-        return held_setup(Jm, rows, work)
+        return held_setup(Jm, rows, work, xc)
     nf = Jm.shape[0]
     Y[:, :] = inverse(Jm[:, :nf])
     return np.all(np.isfinite(Y))
@@ -356,10 +376,11 @@ def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
     does not prove is left to :func:`prove_path`.
 
     **The preconditioner** (any real matrix proves: :mod:`.krawczyk_blocks`). The per-leg test
-    first tries the one ``work`` holds (:func:`held_setup`: the last test's, on a thread that
-    proves step after step, built from a Jacobian a step away); only when the first box fails
-    with it is it built afresh from the Jacobian's midpoint over that box, and the box tried
-    again. The dense test builds its own every time.
+    first tries the one ``work`` holds when it was built within :data:`REUSE_WITHIN` of ``x1``
+    (:func:`held_setup`: the last test's, on a thread that proves step after step, built from a
+    Jacobian a step away); only when the first box fails with it is it built afresh from the
+    Jacobian's midpoint over that box, and the box tried again. The dense test builds its own
+    every time.
 
     Returns:
         :func:`prove_path`'s ``(proven, tests, radius, parts)``.
@@ -387,12 +408,12 @@ def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
         rho[a] = max(rho[a], WHOLE_FLOOR * big * unit[a])
     for k in range(INFLATIONS):
         enclose_into(placements, motions, closure, held, rows, T0, x1, rho, hm, hr, True, V[2], V[3], Jm, Jr, ew)
-        reused = k == 0 and structured and V[HELD][0] > 0.0
-        if k == 0 and not reused and not _precondition_box(rows, structured, work):
+        reused = k == 0 and structured and _held_near(work, x1)
+        if k == 0 and not reused and not _precondition_box(rows, structured, work, x1):
             return False, 1, rho, 0
         ok = _whole_test(rows, dl, e, structured, work, rho, off, rad)
         if reused and not ok:  # the held preconditioner did not prove: build it from this box, try again
-            if not _precondition_box(rows, structured, work):
+            if not _precondition_box(rows, structured, work, x1):
                 return False, 1, rho, 0
             ok = _whole_test(rows, dl, e, structured, work, rho, off, rad)
         if ok and _inside(x0, zero, zero, x1, rho):
@@ -459,7 +480,7 @@ def prove_region(tables, T0, x0, x1, l0, l1, hm, hr, work, c, rho):
         return False
     c[:] = x1
     enclose_into(placements, motions, closure, held, rows, T0, c, zero, hm, zero6, True, Fm, Fr, Jm, Jr, ew)
-    if not held_setup(Jm, rows, work):
+    if not held_setup(Jm, rows, work, c):
         return False
     apply(blocks, rows, Fm, Fr, YFm, YFr)  # Y F(c, hm): the same at every box
     unit = V[21]

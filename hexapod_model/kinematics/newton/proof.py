@@ -14,8 +14,8 @@ When it succeeds it is a **proof**, with every floating-point rounding bounded
   (platform origin) and :attr:`Proof.rotation_rad` (platform orientation) of ``q1``.
 
 Step after step, the per-leg test keeps its preconditioner (any matrix proves, a close inverse
-of the Jacobian proves most): the thread's next test of a whole step tries the one it holds
-before it builds its own (:func:`.krawczyk.prove_whole`).
+of the Jacobian proves most): the thread's next test of a whole step close by tries the one it
+holds before it builds its own (:func:`.krawczyk.prove_whole`).
 
 A fixture at rest or moving slowly sends readings that hardly change: the per-leg test first
 proves a **region** about a short step, a box of readings (about +-0.1 mm a reading on a model
