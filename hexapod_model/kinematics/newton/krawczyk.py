@@ -330,7 +330,7 @@ def _prove_end(tables, T0, x1, l1, c, rho, fresh, structured, work):
 
 @njit(cache=True)
 def _precondition_box(rows, structured, work, xc):
-    """The preconditioner from the Jacobian's midpoint in ``work`` (per leg, or dense) about ``xc``; False when singular."""
+    """The preconditioner from the Jacobian midpoint in ``work`` (per leg, or dense) about ``xc``; False if singular."""
     V, Jm, Jr, Y, H, blocks, ew = work
     if structured:
         return held_setup(Jm, rows, work, xc)
