@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from hexapod_model.kinematics.newton.enclosure import enclose
-from hexapod_model.kinematics.newton.intervals import REL, motion, product, times_motion, times_point
+from hexapod_model.kinematics.newton.intervals import REL, motion, placement, product, times_motion, times_point
 from hexapod_model.kinematics.newton.proof import StepProver
 from hexapod_model.lie import rpy_to_matrix
 
@@ -73,11 +73,16 @@ def test_the_primitives_enclose_the_exact_values_of_an_mpmath_reference():
 
 @pytest.mark.parametrize("compiled", [True, False])
 def test_the_products_by_columns_enclose_the_exact_values_of_an_mpmath_reference(compiled):
-    # times_motion and times_point skip the exact zeros and ones of axis motions and identity rotations
+    # times_motion and times_point skip the exact zeros and ones of axis motions and identity rotations,
+    # on placements held as tuples; the general ones go through product
     iv.prec = 120
     rng = np.random.default_rng(4)
     tm, tp = (times_motion, times_point) if compiled else (times_motion.py_func, times_point.py_func)
-    scratch = np.empty((3, 4)), np.empty((3, 4))
+    scratch = np.empty((6, 3, 4))
+
+    def arrays(C: tuple) -> tuple[np.ndarray, np.ndarray]:  # the (midpoints, radii) 12-tuples as 3 x 4 arrays
+        return np.array(C[0]).reshape(3, 4), np.array(C[1]).reshape(3, 4)
+
     for trial in range(24):
         Am, Ar = rng.normal(size=(3, 4)), 10.0 ** rng.uniform(-12, -3, (3, 4))
         j, sign, rotation = trial % 3, rng.choice([-1.0, 1.0]), trial % 2 == 0
@@ -87,8 +92,8 @@ def test_the_products_by_columns_enclose_the_exact_values_of_an_mpmath_reference
             S[3 if rotation else 0 : 6 if rotation else 3] = rng.normal(size=3)
             S /= np.linalg.norm(S)
         xm, xr = rng.uniform(-3, 3), 10.0 ** rng.uniform(-9, -1)
-        Cm, Cr = np.empty((3, 4)), np.empty((3, 4))
-        tm(Am, Ar, S, xm, xr, Cm, Cr, *scratch)
+        A = placement(Am), placement(Ar)
+        Cm, Cr = arrays(tm(*A, S, xm, xr, scratch))
         x = _iv(xm, xr)
         if rotation:
             w = S[3:]
@@ -113,7 +118,7 @@ def test_the_products_by_columns_enclose_the_exact_values_of_an_mpmath_reference
         P[:3, 3] = rng.normal(size=3)
         if trial % 3 == 0:
             P[:3, :3] = rpy_to_matrix(*rng.uniform(-1, 1, 3))
-        tp(Am, Ar, P, Cm, Cr, *scratch)
+        Cm, Cr = arrays(tp(*A, P, scratch))
         for a in range(3):
             for b in range(4):
                 exact = sum(_iv(Am[a, k], Ar[a, k]) * iv.mpf(P[k, b]) for k in range(3))
@@ -156,6 +161,42 @@ def _moved(rng) -> np.ndarray:
     T[:3, 3] = rng.uniform(-0.03, 0.03, 3)
     T[:3, :3] = rpy_to_matrix(*np.radians(rng.uniform(-10, 10, 3)))
     return T
+
+
+@pytest.mark.parametrize("name", ["reference", "3-6", "guideway"])
+def test_the_residuals_enclosure_at_a_point_holds_pinocchios_closure_residual(name):
+    """An independent reference: Pinocchio's frames at a configuration off the closure.
+
+    The residual ``F`` (tip minus anchor, m; for 6-D closures ``vex`` of the skew part of
+    ``R_tip R_anchor^T``, rad) enclosed at the configuration's own unknowns holds Pinocchio's
+    value within Pinocchio's rounding (1e-14 m or rad).
+    """
+    import pinocchio as pin
+
+    prover, hexa = _prover(name), hexapod(name)
+    clm = hexa.closed_loop
+    rows = prover.tables[4]
+    rng = np.random.default_rng(8)
+    data = clm.model.createData()
+    for _ in range(5):
+        q = hexa.inverse(hexa.home_pose @ _moved(rng), check=False).q.copy()
+        legs = [k for k in range(clm.model.nq) if not clm.platform_q <= k < clm.platform_q + 7]
+        q[legs] += rng.normal(0.0, 3e-3, len(legs))  # off the closure: a residual of millimetres
+        T0 = prover.platform(q)
+        x = prover.unknowns(q, T0)
+        nf = x.size
+        Fm, Fr, Jm, Jr = np.empty(nf), np.empty(nf), np.empty((nf, nf)), np.empty((nf, nf))
+        enclose(*prover.tables, T0, x, np.zeros(nf), q[prover.held_q], np.zeros(6), False, Fm, Fr, Jm, Jr)
+        pin.framesForwardKinematics(clm.model, data, q)
+        for i, leg in enumerate(clm.legs):
+            tip, anchor = data.oMf[leg.tip_frame], data.oMf[leg.anchor_frame]
+            F = list(tip.translation - anchor.translation)
+            if rows == 6:
+                E = tip.rotation @ anchor.rotation.T
+                F += [0.5 * (E[(a + 2) % 3, (a + 1) % 3] - E[(a + 1) % 3, (a + 2) % 3]) for a in range(3)]
+            got = slice(i * rows, (i + 1) * rows)
+            assert np.all(np.abs(Fm[got] - F) <= Fr[got] + 1e-14), (i, Fm[got], F)
+        assert np.max(np.abs(Fm)) > 1e-4  # the configuration is off the closure
 
 
 @pytest.mark.parametrize("name", ["reference", "intersecting", "spherical", "3-6", "guideway"])

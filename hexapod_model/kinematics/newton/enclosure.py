@@ -19,46 +19,89 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .intervals import REL, point, times_motion, times_point, up
+from .intervals import REL, ZERO, placement, store, times_motion, times_point, up
 
 
 @njit(cache=True, inline="always")
-def _column(Wm, Wr, S, dm, dr, Hm, Hr, rows, sign, Jm, Jr, row, col, wm, wr, vm, vr):
+def _turned(Wm, Wr, S, a, o):
+    """Row ``a`` of ``R S[o:o + 3]`` for the interval rotation ``R`` of ``W``: midpoint and radius."""
+    m, s, r = 0.0, 0.0, 0.0
+    for k in range(3):
+        t = Wm[a, k] * S[o + k]
+        m += t
+        s += abs(t)
+        r += Wr[a, k] * abs(S[o + k])
+    return m, up(r + REL * s)
+
+
+@njit(cache=True, inline="always")
+def _crossed(vm, vr, db, dbr, dc, dcr, wb, wbr, wc, wcr):
+    """A row of ``v + d x w``: ``v_a + d_b w_c - d_c w_b`` (midpoint, radius) with ``(a, b, c)`` cyclic."""
+    t1, t2 = db * wc, dc * wb
+    m = vm + t1 - t2
+    r = vr + abs(db) * wcr + dbr * (abs(wc) + wcr)
+    r += abs(dc) * wbr + dcr * (abs(wb) + wbr)
+    return m, up(r + REL * (abs(vm) + abs(t1) + abs(t2)))
+
+
+@njit(cache=True, inline="always")
+def _weighted(Hm, Hr, a, w0, w1, w2, r0, r1, r2):
+    """Row ``a`` of ``H w`` (intervals): midpoint and radius."""
+    m, s, r = 0.0, 0.0, 0.0
+    t = Hm[a, 0] * w0
+    m += t
+    s += abs(t)
+    r += abs(Hm[a, 0]) * r0 + Hr[a, 0] * (abs(w0) + r0)
+    t = Hm[a, 1] * w1
+    m += t
+    s += abs(t)
+    r += abs(Hm[a, 1]) * r1 + Hr[a, 1] * (abs(w1) + r1)
+    t = Hm[a, 2] * w2
+    m += t
+    s += abs(t)
+    r += abs(Hm[a, 2]) * r2 + Hr[a, 2] * (abs(w2) + r2)
+    return m, up(r + REL * s)
+
+
+@njit(cache=True, inline="always")
+def _column(Wm, Wr, S, d, Hm, Hr, rows, sign, Jm, Jr, row, col):
     """Closure Jacobian column of the joint at world placement ``W`` with motion ``S``.
 
-    ``[R v + (p - point) x R w; H R w]`` times ``sign``; ``d = p - point`` is given; ``wm``,
-    ``wr``, ``vm``, ``vr`` (3,) are scratch.
+    ``[R v + (p - point) x R w; H R w]`` times ``sign``; ``d = p - point`` is given (a 6-tuple:
+    three midpoints, three radii). The column's vectors are held in registers, not arrays.
     """
-    for a in range(3):
-        m1, s1, r1, m2, s2, r2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        for k in range(3):
-            t1, t2 = Wm[a, k] * S[3 + k], Wm[a, k] * S[k]
-            m1 += t1
-            s1 += abs(t1)
-            r1 += Wr[a, k] * abs(S[3 + k])
-            m2 += t2
-            s2 += abs(t2)
-            r2 += Wr[a, k] * abs(S[k])
-        wm[a], wr[a] = m1, up(r1 + REL * s1)
-        vm[a], vr[a] = m2, up(r2 + REL * s2)
-    for a in range(3):
-        b, c = (a + 1) % 3, (a + 2) % 3  # (d x w)_a = d_b w_c - d_c w_b
-        t1, t2 = dm[b] * wm[c], dm[c] * wm[b]
-        m = vm[a] + t1 - t2
-        r = vr[a] + abs(dm[b]) * wr[c] + dr[b] * (abs(wm[c]) + wr[c])
-        r += abs(dm[c]) * wr[b] + dr[c] * (abs(wm[b]) + wr[b])
-        Jm[row + a, col] = sign * m
-        Jr[row + a, col] = up(r + REL * (abs(vm[a]) + abs(t1) + abs(t2)))
+    d0, d1, d2, e0, e1, e2 = d
+    w0, u0 = _turned(Wm, Wr, S, 0, 3)
+    w1, u1 = _turned(Wm, Wr, S, 1, 3)
+    w2, u2 = _turned(Wm, Wr, S, 2, 3)
+    v0, y0 = _turned(Wm, Wr, S, 0, 0)
+    v1, y1 = _turned(Wm, Wr, S, 1, 0)
+    v2, y2 = _turned(Wm, Wr, S, 2, 0)
+    m, r = _crossed(v0, y0, d1, e1, d2, e2, w1, u1, w2, u2)
+    Jm[row, col], Jr[row, col] = sign * m, r
+    m, r = _crossed(v1, y1, d2, e2, d0, e0, w2, u2, w0, u0)
+    Jm[row + 1, col], Jr[row + 1, col] = sign * m, r
+    m, r = _crossed(v2, y2, d0, e0, d1, e1, w0, u0, w1, u1)
+    Jm[row + 2, col], Jr[row + 2, col] = sign * m, r
     if rows == 6:
         for a in range(3):
-            m, s, r = 0.0, 0.0, 0.0
-            for k in range(3):
-                t = Hm[a, k] * wm[k]
-                m += t
-                s += abs(t)
-                r += abs(Hm[a, k]) * wr[k] + Hr[a, k] * (abs(wm[k]) + wr[k])
-            Jm[row + 3 + a, col] = sign * m
-            Jr[row + 3 + a, col] = up(r + REL * s)
+            m, r = _weighted(Hm, Hr, a, w0, w1, w2, u0, u1, u2)
+            Jm[row + 3 + a, col], Jr[row + 3 + a, col] = sign * m, r
+
+
+@njit(cache=True, inline="always")
+def _offset(Pm, Pr, Qm, Qr):
+    """``p - q`` of two interval placements' translations, as a 6-tuple: three midpoints, three radii."""
+    a, b, c = Pm[0, 3], Pm[1, 3], Pm[2, 3]
+    x, y, z = Qm[0, 3], Qm[1, 3], Qm[2, 3]
+    return (
+        a - x,
+        b - y,
+        c - z,
+        up(Pr[0, 3] + Qr[0, 3] + REL * (abs(a) + abs(x))),
+        up(Pr[1, 3] + Qr[1, 3] + REL * (abs(b) + abs(y))),
+        up(Pr[2, 3] + Qr[2, 3] + REL * (abs(c) + abs(z))),
+    )
 
 
 @njit(cache=True)
@@ -84,12 +127,11 @@ def enclosure_workspace(n):
     for j in range(6):
         chart[j, j] = 1.0
     return (
-        np.zeros((8, 3, 4)),  # placements A, B, M: midpoints, then radii
+        np.zeros((8, 3, 4)),  # the primitives' scratch placements (:func:`.intervals.times_point`)
         np.zeros((2, 6, n, 3, 4)),  # the joints' world placements
         np.zeros((6, 6, 3, 4)),  # the chart's joints', the tips' and the anchors' world placements
-        np.zeros((2, 6, 3, 3)),  # E (tip^T anchor) per leg
+        np.zeros((2, 6, 3, 3)),  # E = R_tip R_anchor^T per leg
         np.zeros((2, 3, 3)),  # H
-        np.zeros((6, 3)),  # d, w, v: midpoints, then radii
         chart,
     )
 
@@ -128,30 +170,35 @@ def enclose_into(placements, motions, closure, held, rows, T0, xm, xr, hm, hr, j
     n = placements.shape[1]
     nl = 6 * (n - 1)
     nf = xm.shape[0]
-    P3, W, P6, E, H, D, chart = work
-    Am, Ar, Bm, Br, Mm, Mr = P3[0], P3[1], P3[2], P3[3], P3[4], P3[5]
+    P3, W, P6, E, H, chart = work
     Wm, Wr = W[0], W[1]  # joints' world placements
     Pm, Pr = P6[0], P6[1]  # the chart's joints' world placements
     tipm, tipr, ancm, ancr = P6[2], P6[3], P6[4], P6[5]
-    point(T0, Am, Ar)
+    Am, Ar = placement(T0), ZERO  # the walk's placement: tuples (:mod:`.intervals`), stored where J needs it
     for j in range(6):
-        times_motion(Am, Ar, chart[j], xm[nl + j], xr[nl + j], Pm[j], Pr[j], Mm, Mr)
-        Am, Ar = Pm[j], Pr[j]
+        Am, Ar = times_motion(Am, Ar, chart[j], xm[nl + j], xr[nl + j], P3)
+        store(Am, Pm[j])
+        store(Ar, Pr[j])
+    Cm, Cr = Am, Ar
     for i in range(6):
-        times_point(Pm[5], Pr[5], closure[6 + i], ancm[i], ancr[i], Mm, Mr)
-        point(placements[i, 0], Bm, Br)
-        Am, Ar = Bm, Br
+        Am, Ar = times_point(Cm, Cr, closure[6 + i], P3)
+        store(Am, ancm[i])
+        store(Ar, ancr[i])
+        Am, Ar = placement(placements[i, 0]), ZERO
         v = i * (n - 1)
         for k in range(n):
             if k > 0:
-                times_point(Wm[i, k - 1], Wr[i, k - 1], placements[i, k], Bm, Br, Mm, Mr)
-                Am, Ar = Bm, Br
+                Am, Ar = times_point(Am, Ar, placements[i, k], P3)
             if k == held[i]:
-                times_motion(Am, Ar, motions[i, k], hm[i], hr[i], Wm[i, k], Wr[i, k], Mm, Mr)
+                Am, Ar = times_motion(Am, Ar, motions[i, k], hm[i], hr[i], P3)
             else:
-                times_motion(Am, Ar, motions[i, k], xm[v], xr[v], Wm[i, k], Wr[i, k], Mm, Mr)
+                Am, Ar = times_motion(Am, Ar, motions[i, k], xm[v], xr[v], P3)
                 v += 1
-        times_point(Wm[i, n - 1], Wr[i, n - 1], closure[i], tipm[i], tipr[i], Mm, Mr)
+            store(Am, Wm[i, k])
+            store(Ar, Wr[i, k])
+        Am, Ar = times_point(Am, Ar, closure[i], P3)
+        store(Am, tipm[i])
+        store(Ar, tipr[i])
     Em, Er = E[0], E[1]
     for i in range(6):
         o = i * rows
@@ -177,7 +224,7 @@ def enclose_into(placements, motions, closure, held, rows, T0, xm, xr, hm, hr, j
         return
     Jm[:, :] = 0.0
     Jr[:, :] = 0.0
-    Hm, Hr, dm, dr, wm, wr, vm, vr = H[0], H[1], D[0], D[1], D[2], D[3], D[4], D[5]
+    Hm, Hr = H[0], H[1]
     for i in range(6):
         o = i * rows
         if rows == 6:
@@ -186,17 +233,13 @@ def enclose_into(placements, motions, closure, held, rows, T0, xm, xr, hm, hr, j
         for k in range(n):
             if k == held[i] and Jm.shape[1] == nf:
                 continue
-            for a in range(3):
-                dm[a] = Wm[i, k, a, 3] - tipm[i, a, 3]
-                dr[a] = up(Wr[i, k, a, 3] + tipr[i, a, 3] + REL * (abs(Wm[i, k, a, 3]) + abs(tipm[i, a, 3])))
+            d = _offset(Wm[i, k], Wr[i, k], tipm[i], tipr[i])
             c = nf + i if k == held[i] else v
-            _column(Wm[i, k], Wr[i, k], motions[i, k], dm, dr, Hm, Hr, rows, 1.0, Jm, Jr, o, c, wm, wr, vm, vr)
+            _column(Wm[i, k], Wr[i, k], motions[i, k], d, Hm, Hr, rows, 1.0, Jm, Jr, o, c)
             if k != held[i]:
                 v += 1
         if rows == 6:
             _weights(Em[i], Er[i], True, Hm, Hr)
         for j in range(6):
-            for a in range(3):
-                dm[a] = Pm[j, a, 3] - ancm[i, a, 3]
-                dr[a] = up(Pr[j, a, 3] + ancr[i, a, 3] + REL * (abs(Pm[j, a, 3]) + abs(ancm[i, a, 3])))
-            _column(Pm[j], Pr[j], chart[j], dm, dr, Hm, Hr, rows, -1.0, Jm, Jr, o, nl + j, wm, wr, vm, vr)
+            d = _offset(Pm[j], Pr[j], ancm[i], ancr[i])
+            _column(Pm[j], Pr[j], chart[j], d, Hm, Hr, rows, -1.0, Jm, Jr, o, nl + j)

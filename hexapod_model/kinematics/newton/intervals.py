@@ -108,63 +108,159 @@ def _axis(S):
     return 0, 0, 0.0
 
 
-@njit(cache=True)
-def times_point(Am, Ar, P, Cm, Cr, Mm, Mr):
-    """``C = A * P`` for an interval placement ``A`` and a point placement ``P`` (4x4).
+# On a walk along a chain (:mod:`.enclosure`) the placements are tuples of 12 floats, the rows of
+# the 3 x 4 placement (index 4 a + b), one of the midpoints and one of the radii: they stay in
+# registers from joint to joint, where arrays went through memory at every product (2.6 times the
+# time of a leg's chain). Every sum is the one :func:`product` forms, term for term in the same
+# order: the same floating-point values.
+ZERO = (0.0,) * 12  # the radii of a point placement
+
+
+@njit(cache=True, inline="always")
+def placement(M):
+    """The 12-tuple of a placement's first three rows (a 4 x 4 or 3 x 4 array)."""
+    return (M[0, 0], M[0, 1], M[0, 2], M[0, 3], M[1, 0], M[1, 1], M[1, 2], M[1, 3], M[2, 0], M[2, 1], M[2, 2], M[2, 3])
+
+
+@njit(cache=True, inline="always")
+def store(T, M):
+    """Write the 12-tuple ``T`` into the (3, 4) array ``M``."""
+    M[0, 0], M[0, 1], M[0, 2], M[0, 3] = T[0], T[1], T[2], T[3]
+    M[1, 0], M[1, 1], M[1, 2], M[1, 3] = T[4], T[5], T[6], T[7]
+    M[2, 0], M[2, 1], M[2, 2], M[2, 3] = T[8], T[9], T[10], T[11]
+
+
+@njit(cache=True, inline="always")
+def _through(Am, Ar, scratch):
+    """``A * B`` by :func:`product`: ``B`` (midpoints, radii) in ``scratch[2:4]``, ``A`` copied to ``scratch[0:2]``."""
+    store(Am, scratch[0])
+    store(Ar, scratch[1])
+    product(scratch[0], scratch[1], scratch[2], scratch[3], scratch[4], scratch[5])
+    return placement(scratch[4]), placement(scratch[5])
+
+
+@njit(cache=True, inline="always")
+def _shift_row(a0, a1, a2, a3, r0, r1, r2, r3, p0, p1, p2):
+    """A row's translation of ``A * P`` for a translation ``P``: its midpoint and radius."""
+    m, s, r = a3, abs(a3), r3
+    t = a0 * p0
+    m += t
+    s += abs(t)
+    r += r0 * abs(p0)
+    t = a1 * p1
+    m += t
+    s += abs(t)
+    r += r1 * abs(p1)
+    t = a2 * p2
+    m += t
+    s += abs(t)
+    r += r2 * abs(p2)
+    return m, up(r + REL * s)
+
+
+@njit(cache=True, inline="always")
+def times_point(Am, Ar, P, scratch):
+    """``C = A * P`` for an interval placement ``A`` (two 12-tuples) and a point placement ``P`` (4x4).
 
     When ``P``'s rotation is exactly the identity (most joint placements), the rotation is
-    copied exactly and only the translation is summed. ``Mm``, ``Mr`` (3, 4) are scratch.
+    copied exactly and only the translation is summed. ``scratch`` (6, 3, 4) is overwritten.
+    Returns ``(Cm, Cr)``, 12-tuples.
     """
     for a in range(3):
         for b in range(3):
             if P[a, b] != (1.0 if a == b else 0.0):
-                point(P, Mm, Mr)
-                product(Am, Ar, Mm, Mr, Cm, Cr)
-                return
-    for a in range(3):
-        m, s, r = Am[a, 3], abs(Am[a, 3]), Ar[a, 3]
-        for k in range(3):
-            t = Am[a, k] * P[k, 3]
-            m += t
-            s += abs(t)
-            r += Ar[a, k] * abs(P[k, 3])
-            Cm[a, k], Cr[a, k] = Am[a, k], Ar[a, k]
-        Cm[a, 3], Cr[a, 3] = m, up(r + REL * s)
+                point(P, scratch[2], scratch[3])
+                return _through(Am, Ar, scratch)
+    p0, p1, p2 = P[0, 3], P[1, 3], P[2, 3]
+    m0, q0 = _shift_row(Am[0], Am[1], Am[2], Am[3], Ar[0], Ar[1], Ar[2], Ar[3], p0, p1, p2)
+    m1, q1 = _shift_row(Am[4], Am[5], Am[6], Am[7], Ar[4], Ar[5], Ar[6], Ar[7], p0, p1, p2)
+    m2, q2 = _shift_row(Am[8], Am[9], Am[10], Am[11], Ar[8], Ar[9], Ar[10], Ar[11], p0, p1, p2)
+    return (
+        (Am[0], Am[1], Am[2], m0, Am[4], Am[5], Am[6], m1, Am[8], Am[9], Am[10], m2),
+        (Ar[0], Ar[1], Ar[2], q0, Ar[4], Ar[5], Ar[6], q1, Ar[8], Ar[9], Ar[10], q2),
+    )
 
 
-@njit(cache=True)
-def times_motion(Am, Ar, S, xm, xr, Cm, Cr, Mm, Mr):
-    """``C = A * exp(S x)``, ``x = xm +- xr``: as :func:`motion` then :func:`product`, by columns for an axis.
+@njit(cache=True, inline="always")
+def _slide_row(a3, aj, r3, rj, t, tr):
+    """A row's translation after a translation ``t +- tr`` along the axis whose column is ``aj``."""
+    p = aj * t
+    return a3 + p, up(r3 + abs(aj) * tr + rj * (abs(t) + tr) + REL * (abs(a3) + abs(p)))
+
+
+@njit(cache=True, inline="always")
+def _slide(Am, Ar, j, t, tr):
+    """``A * Trans(t e_j)``, ``t`` in ``t +- tr``: the translation column moves along column ``j``."""
+    if j == 0:
+        c0, c1, c2, d0, d1, d2 = Am[0], Am[4], Am[8], Ar[0], Ar[4], Ar[8]
+    elif j == 1:
+        c0, c1, c2, d0, d1, d2 = Am[1], Am[5], Am[9], Ar[1], Ar[5], Ar[9]
+    else:
+        c0, c1, c2, d0, d1, d2 = Am[2], Am[6], Am[10], Ar[2], Ar[6], Ar[10]
+    m0, q0 = _slide_row(Am[3], c0, Ar[3], d0, t, tr)
+    m1, q1 = _slide_row(Am[7], c1, Ar[7], d1, t, tr)
+    m2, q2 = _slide_row(Am[11], c2, Ar[11], d2, t, tr)
+    return (
+        (Am[0], Am[1], Am[2], m0, Am[4], Am[5], Am[6], m1, Am[8], Am[9], Am[10], m2),
+        (Ar[0], Ar[1], Ar[2], q0, Ar[4], Ar[5], Ar[6], q1, Ar[8], Ar[9], Ar[10], q2),
+    )
+
+
+@njit(cache=True, inline="always")
+def _mix(ap, aq, rp, rq, c, s, cr, sr):
+    """A row's entries in columns ``p``, ``q`` after a rotation about the third axis: ``R e_p = c e_p + s e_q``."""
+    t1, t2, t3, t4 = ap * c, aq * s, ap * s, aq * c
+    mp = t1 + t2
+    rp2 = up(abs(ap) * cr + rp * (abs(c) + cr) + abs(aq) * sr + rq * (abs(s) + sr) + REL * (abs(t1) + abs(t2)))
+    mq = t4 - t3
+    rq2 = up(abs(aq) * cr + rq * (abs(c) + cr) + abs(ap) * sr + rp * (abs(s) + sr) + REL * (abs(t3) + abs(t4)))
+    return mp, rp2, mq, rq2
+
+
+@njit(cache=True, inline="always")
+def _turn(Am, Ar, j, c, s, cr, sr):
+    """``A * Rot(e_j)``, cosine ``c +- cr`` and sine ``s +- sr``: columns ``j + 1`` and ``j + 2`` (mod 3) mixed."""
+    if j == 0:  # columns 1 and 2
+        m01, r01, m02, r02 = _mix(Am[1], Am[2], Ar[1], Ar[2], c, s, cr, sr)
+        m11, r11, m12, r12 = _mix(Am[5], Am[6], Ar[5], Ar[6], c, s, cr, sr)
+        m21, r21, m22, r22 = _mix(Am[9], Am[10], Ar[9], Ar[10], c, s, cr, sr)
+        return (
+            (Am[0], m01, m02, Am[3], Am[4], m11, m12, Am[7], Am[8], m21, m22, Am[11]),
+            (Ar[0], r01, r02, Ar[3], Ar[4], r11, r12, Ar[7], Ar[8], r21, r22, Ar[11]),
+        )
+    if j == 1:  # columns 2 and 0
+        m02, r02, m00, r00 = _mix(Am[2], Am[0], Ar[2], Ar[0], c, s, cr, sr)
+        m12, r12, m10, r10 = _mix(Am[6], Am[4], Ar[6], Ar[4], c, s, cr, sr)
+        m22, r22, m20, r20 = _mix(Am[10], Am[8], Ar[10], Ar[8], c, s, cr, sr)
+        return (
+            (m00, Am[1], m02, Am[3], m10, Am[5], m12, Am[7], m20, Am[9], m22, Am[11]),
+            (r00, Ar[1], r02, Ar[3], r10, Ar[5], r12, Ar[7], r20, Ar[9], r22, Ar[11]),
+        )
+    m00, r00, m01, r01 = _mix(Am[0], Am[1], Ar[0], Ar[1], c, s, cr, sr)  # columns 0 and 1
+    m10, r10, m11, r11 = _mix(Am[4], Am[5], Ar[4], Ar[5], c, s, cr, sr)
+    m20, r20, m21, r21 = _mix(Am[8], Am[9], Ar[8], Ar[9], c, s, cr, sr)
+    return (
+        (m00, m01, Am[2], Am[3], m10, m11, Am[6], Am[7], m20, m21, Am[10], Am[11]),
+        (r00, r01, Ar[2], Ar[3], r10, r11, Ar[6], Ar[7], r20, r21, Ar[10], Ar[11]),
+    )
+
+
+@njit(cache=True, inline="always")
+def times_motion(Am, Ar, S, xm, xr, scratch):
+    """``C = A * exp(S x)``, ``x = xm +- xr``, for an interval placement ``A`` (two 12-tuples).
 
     A translation along a coordinate axis moves only the translation column; a rotation about
-    one mixes two columns by ``cos x`` and ``sin x`` (enclosed as in :func:`motion`). ``Mm``,
-    ``Mr`` (3, 4) are scratch.
+    one mixes two columns by ``cos x`` and ``sin x`` (enclosed as in :func:`motion`); any other
+    motion is :func:`motion` then :func:`product`. ``scratch`` (6, 3, 4) is overwritten.
+    Returns ``(Cm, Cr)``, 12-tuples.
     """
     kind, j, sign = _axis(S)
-    if kind == 0:
-        motion(S, xm, xr, Mm, Mr)
-        product(Am, Ar, Mm, Mr, Cm, Cr)
-        return
     if kind == 1:
-        t, tr = sign * xm, xr
-        for a in range(3):
-            p = Am[a, j] * t
-            m = Am[a, 3] + p
-            Cm[a, 3] = m
-            Cr[a, 3] = up(Ar[a, 3] + abs(Am[a, j]) * tr + Ar[a, j] * (abs(t) + tr) + REL * (abs(Am[a, 3]) + abs(p)))
-            for b in range(3):
-                Cm[a, b], Cr[a, b] = Am[a, b], Ar[a, b]
-        return
-    c, s = np.cos(xm), sign * np.sin(xm)
-    cr = up(min(xr, abs(s) * xr + 0.5 * xr * xr) + REL)
-    sr = up(min(xr, abs(c) * xr + 0.5 * xr * xr) + REL)
-    p, q = (j + 1) % 3, (j + 2) % 3  # R e_p = c e_p + s e_q, R e_q = -s e_p + c e_q
-    for a in range(3):
-        ap, aq, rp, rq = Am[a, p], Am[a, q], Ar[a, p], Ar[a, q]
-        t1, t2, t3, t4 = ap * c, aq * s, ap * s, aq * c
-        Cm[a, p] = t1 + t2
-        Cr[a, p] = up(abs(ap) * cr + rp * (abs(c) + cr) + abs(aq) * sr + rq * (abs(s) + sr) + REL * (abs(t1) + abs(t2)))
-        Cm[a, q] = t4 - t3
-        Cr[a, q] = up(abs(aq) * cr + rq * (abs(c) + cr) + abs(ap) * sr + rp * (abs(s) + sr) + REL * (abs(t3) + abs(t4)))
-        Cm[a, j], Cr[a, j] = Am[a, j], Ar[a, j]
-        Cm[a, 3], Cr[a, 3] = Am[a, 3], Ar[a, 3]
+        return _slide(Am, Ar, j, sign * xm, xr)
+    if kind == 2:
+        c, s = np.cos(xm), sign * np.sin(xm)
+        cr = up(min(xr, abs(s) * xr + 0.5 * xr * xr) + REL)
+        sr = up(min(xr, abs(c) * xr + 0.5 * xr * xr) + REL)
+        return _turn(Am, Ar, j, c, s, cr, sr)
+    motion(S, xm, xr, scratch[2], scratch[3])
+    return _through(Am, Ar, scratch)

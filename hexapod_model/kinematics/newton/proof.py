@@ -135,8 +135,8 @@ class StepProver:
             model = (placements, motions, closure, held, self.home, self.leg_q, self.free, self.held_q)
             floats, ints, spec, views = self._kernel.pack((V, Jm, Jr, Y, H, *blocks, *ew, *ends, *model))
             views[0][21] = self.units
-            work = (*views[:5], tuple(views[5:21]), tuple(views[21:28]))
-            packed = self._local.packed = ((work, tuple(views[28:36])), (floats, ints, spec))
+            work = (*views[:5], tuple(views[5:21]), tuple(views[21:27]))
+            packed = self._local.packed = ((work, tuple(views[27:35])), (floats, ints, spec))
         return packed
 
     def prove(self, q0: np.ndarray, q1: np.ndarray, structured: bool = True, subdivide: bool = True) -> Proof:

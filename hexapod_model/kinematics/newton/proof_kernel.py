@@ -18,11 +18,11 @@ from numba import njit
 from .krawczyk import prove_in_region, prove_path, prove_region, prove_whole
 
 #: the dimensions of :func:`.krawczyk.workspace`'s arrays (V, Jm, Jr, Y, H, the 16 of the per-leg
-#: test's workspace, the 7 of the enclosure's)
-WORK = (2, 2, 2, 2, 2) + (3, 3, 2, 3, 3, 2, 1, 2, 2, 2, 1, 1, 1, 3, 3, 3) + (3, 5, 4, 4, 3, 2, 2)
+#: test's workspace, the 6 of the enclosure's)
+WORK = (2, 2, 2, 2, 2) + (3, 3, 2, 3, 3, 2, 1, 2, 2, 2, 1, 1, 1, 3, 3, 3) + (3, 5, 4, 4, 3, 2)
 #: the dimensions of the arrays :func:`pack` takes: the work, the path's ends, the model's tables
 LAYOUT = WORK + (2, 2, 1, 1, 1, 1, 2, 1) + (4, 3, 3, 1, 2, 2, 2, 1)
-INTEGER = (39, 41, 42, 43)  # the int64 arrays among them (the rest are float64)
+INTEGER = (38, 40, 41, 42)  # the int64 arrays among them (the rest are float64)
 
 REGION = 7e-4  # a region's readings box: half-width per reading, in the model's length (its anchor radius)
 REGION_STEP = 0.35  # a region is built about a step (and after a motion) of at most this fraction of its half-width
@@ -301,15 +301,15 @@ def unpack(fb, ib, s):
         *(_v2(f, s, 12), _v2(f, s, 13), _v2(f, s, 14), _v1(f, s, 15), _v1(f, s, 16), _v1(f, s, 17)),
         *(_v3(f, s, 18), _v3(f, s, 19), _v3(f, s, 20)),
     )
-    ew = (_v3(f, s, 21), _v5(f, s, 22), _v4(f, s, 23), _v4(f, s, 24), _v3(f, s, 25), _v2(f, s, 26), _v2(f, s, 27))
+    ew = (_v3(f, s, 21), _v5(f, s, 22), _v4(f, s, 23), _v4(f, s, 24), _v3(f, s, 25), _v2(f, s, 26))
     work = (_v2(f, s, 0), _v2(f, s, 1), _v2(f, s, 2), _v2(f, s, 3), _v2(f, s, 4), blocks, ew)
     ends = (
-        *(_v2(f, s, 28), _v2(f, s, 29), _v1(f, s, 30), _v1(f, s, 31), _v1(f, s, 32), _v1(f, s, 33)),
-        *(_v2(f, s, 34), _v1(f, s, 35)),
+        *(_v2(f, s, 27), _v2(f, s, 28), _v1(f, s, 29), _v1(f, s, 30), _v1(f, s, 31), _v1(f, s, 32)),
+        *(_v2(f, s, 33), _v1(f, s, 34)),
     )
     model = (
-        *(_v4(f, s, 36), _v3(f, s, 37), _v3(f, s, 38), _v1(i, s, 39), _v2(f, s, 40)),
-        *(_v2(i, s, 41), _v2(i, s, 42), _v1(i, s, 43)),
+        *(_v4(f, s, 35), _v3(f, s, 36), _v3(f, s, 37), _v1(i, s, 38), _v2(f, s, 39)),
+        *(_v2(i, s, 40), _v2(i, s, 41), _v1(i, s, 42)),
     )
     return work, ends, model
 
