@@ -19,7 +19,17 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .intervals import REL, ZERO, placement, store, times_motion, times_point, up
+from .intervals import (
+    REL,
+    ZERO,
+    placement,
+    store,
+    times_motion,
+    times_motion_inline,
+    times_point,
+    times_point_inline,
+    up,
+)
 
 
 @njit(cache=True, inline="always")
@@ -186,14 +196,15 @@ def enclose_into(placements, motions, closure, held, rows, T0, xm, xr, hm, hr, j
         store(Ar, ancr[i])
         Am, Ar = placement(placements[i, 0]), ZERO
         v = i * (n - 1)
-        for k in range(n):
+        for k in range(n):  # the walk's most calls: inlined, once each
             if k > 0:
-                Am, Ar = times_point(Am, Ar, placements[i, k], P3)
+                Am, Ar = times_point_inline(Am, Ar, placements[i, k], P3)
             if k == held[i]:
-                Am, Ar = times_motion(Am, Ar, motions[i, k], hm[i], hr[i], P3)
+                x, r = hm[i], hr[i]
             else:
-                Am, Ar = times_motion(Am, Ar, motions[i, k], xm[v], xr[v], P3)
+                x, r = xm[v], xr[v]
                 v += 1
+            Am, Ar = times_motion_inline(Am, Ar, motions[i, k], x, r, P3)
             store(Am, Wm[i, k])
             store(Ar, Wr[i, k])
         Am, Ar = times_point(Am, Ar, closure[i], P3)

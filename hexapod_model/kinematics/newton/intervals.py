@@ -159,7 +159,7 @@ def _shift_row(a0, a1, a2, a3, r0, r1, r2, r3, p0, p1, p2):
 
 
 @njit(cache=True, inline="always")
-def times_point(Am, Ar, P, scratch):
+def times_point_inline(Am, Ar, P, scratch):
     """``C = A * P`` for an interval placement ``A`` (two 12-tuples) and a point placement ``P`` (4x4).
 
     When ``P``'s rotation is exactly the identity (most joint placements), the rotation is
@@ -246,7 +246,7 @@ def _turn(Am, Ar, j, c, s, cr, sr):
 
 
 @njit(cache=True, inline="always")
-def times_motion(Am, Ar, S, xm, xr, scratch):
+def times_motion_inline(Am, Ar, S, xm, xr, scratch):
     """``C = A * exp(S x)``, ``x = xm +- xr``, for an interval placement ``A`` (two 12-tuples).
 
     A translation along a coordinate axis moves only the translation column; a rotation about
@@ -264,3 +264,19 @@ def times_motion(Am, Ar, S, xm, xr, scratch):
         return _turn(Am, Ar, j, c, s, cr, sr)
     motion(S, xm, xr, scratch[2], scratch[3])
     return _through(Am, Ar, scratch)
+
+
+# Each inlined copy of the two above adds seconds to the compilation of every kernel that holds
+# the walk: a walk inlines them where it calls them most, and calls these for its other uses.
+
+
+@njit(cache=True)
+def times_point(Am, Ar, P, scratch):
+    """:func:`times_point_inline` as a call."""
+    return times_point_inline(Am, Ar, P, scratch)
+
+
+@njit(cache=True)
+def times_motion(Am, Ar, S, xm, xr, scratch):
+    """:func:`times_motion_inline` as a call."""
+    return times_motion_inline(Am, Ar, S, xm, xr, scratch)
