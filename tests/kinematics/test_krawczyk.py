@@ -15,7 +15,16 @@ import numpy as np
 import pytest
 
 from hexapod_model.kinematics.newton.enclosure import enclose
-from hexapod_model.kinematics.newton.intervals import REL, motion, placement, product, times_motion, times_point
+from hexapod_model.kinematics.newton.intervals import (
+    REL,
+    motion,
+    placement,
+    product,
+    times_motion,
+    times_motion_inline,
+    times_point,
+    times_point_inline,
+)
 from hexapod_model.kinematics.newton.proof import StepProver
 from hexapod_model.lie import rpy_to_matrix
 
@@ -77,7 +86,8 @@ def test_the_products_by_columns_enclose_the_exact_values_of_an_mpmath_reference
     # on placements held as tuples; the general ones go through product
     iv.prec = 120
     rng = np.random.default_rng(4)
-    tm, tp = (times_motion, times_point) if compiled else (times_motion.py_func, times_point.py_func)
+    # the calls compiled, or the inlined functions' own code run as Python (what they call compiled)
+    tm, tp = (times_motion, times_point) if compiled else (times_motion_inline.py_func, times_point_inline.py_func)
     scratch = np.empty((6, 3, 4))
 
     def arrays(C: tuple) -> tuple[np.ndarray, np.ndarray]:  # the (midpoints, radii) 12-tuples as 3 x 4 arrays

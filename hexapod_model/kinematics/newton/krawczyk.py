@@ -44,8 +44,8 @@ V_ROWS = 26  # rows of the work's vectors: 0-20 scratch, 21 the unknowns' units,
 HELD = 24  # the row whose first entry is 1 while the per-leg workspace holds a preconditioner (:func:`held_setup`)
 HELD_AT = 25  # the row that holds the unknowns about which that preconditioner was built
 # a held preconditioner is tried when every leg joint lies within this (rad, or model lengths) of where it was
-# built: on trajectory A, all within 0.01 proved, 4 % of those 0.03-0.1 away (another fixture of the same
-# hexapod on the thread: its own pose), and a test that fails costs a third of the proof
+# built: on trajectory A every one held within 0.01 proved, 4 % of those 0.03-0.1 away, and a test that fails
+# costs a third of the proof (a thread that proves the steps of several fixtures of one hexapod, at their poses)
 REUSE_WITHIN = 0.01
 MIN_WIDTH = 1.0 / 64.0  # narrowest sub-interval of the readings path tried
 INFLATIONS = 4  # boxes tried per test (epsilon-inflation)
@@ -133,6 +133,17 @@ def workspace(nf: int, rows: int) -> tuple:
 
 
 @njit(cache=True)
+def _precondition_box(rows, structured, work, xc):
+    """The preconditioner from the Jacobian midpoint in ``work`` (per leg, or dense) about ``xc``; False if singular."""
+    V, Jm, Jr, Y, H, blocks, ew = work
+    if structured:
+        return held_setup(Jm, rows, work, xc)
+    nf = Jm.shape[0]
+    Y[:, :] = inverse(Jm[:, :nf])
+    return np.all(np.isfinite(Y))
+
+
+@njit(cache=True)
 def precondition(tables, T0, xc, hm, structured, work):
     """``F(xc, hm)`` (``work``'s first two rows) and the preconditioner from the Jacobian at ``xc``, ``hm``.
 
@@ -146,11 +157,7 @@ def precondition(tables, T0, xc, hm, structured, work):
     zero[:] = 0.0
     zero6[:] = 0.0
     enclose_into(placements, motions, closure, held, rows, T0, xc, zero, hm, zero6, True, V[0], V[1], Jm, Jr, ew)
-    if structured:
-        return held_setup(Jm, rows, work, xc)
-    nf = xc.shape[0]
-    Y[:, :] = inverse(Jm[:, :nf])
-    return np.all(np.isfinite(Y))
+    return _precondition_box(rows, structured, work, xc)
 
 
 @njit(cache=True)
@@ -326,17 +333,6 @@ def _prove_end(tables, T0, x1, l1, c, rho, fresh, structured, work):
         for a in range(nf):
             box[a] = max(box[a], 1.5 * (abs(off[a]) + rad[a]))
     return False, 0, box, 0
-
-
-@njit(cache=True)
-def _precondition_box(rows, structured, work, xc):
-    """The preconditioner from the Jacobian midpoint in ``work`` (per leg, or dense) about ``xc``; False if singular."""
-    V, Jm, Jr, Y, H, blocks, ew = work
-    if structured:
-        return held_setup(Jm, rows, work, xc)
-    nf = Jm.shape[0]
-    Y[:, :] = inverse(Jm[:, :nf])
-    return np.all(np.isfinite(Y))
 
 
 @njit(cache=True)
