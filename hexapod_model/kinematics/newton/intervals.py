@@ -54,6 +54,15 @@ def product(Am, Ar, Bm, Br, Cm, Cr):
             Cr[a, b] = up(r + REL * s)
 
 
+@njit(cache=True, inline="always")
+def cos_sin(xm, xr):
+    """``(c, s, cr, sr)``: ``cos`` and ``sin`` of ``xm +- xr`` as midpoints ``c``, ``s`` and radii ``cr``, ``sr``."""
+    c, s = np.cos(xm), np.sin(xm)
+    cr = up(min(xr, abs(s) * xr + 0.5 * xr * xr) + REL)
+    sr = up(min(xr, abs(c) * xr + 0.5 * xr * xr) + REL)
+    return c, s, cr, sr
+
+
 @njit(cache=True)
 def motion(S, xm, xr, Mm, Mr):
     """``exp(S x)`` for a unit motion ``S = [v; w]`` (prismatic or revolute) and ``x = xm +- xr``."""
@@ -67,9 +76,7 @@ def motion(S, xm, xr, Mm, Mr):
             Mm[a, 3] = t
             Mr[a, 3] = up(xr * abs(S[a]) + REL * abs(t))
         return
-    c, s = np.cos(xm), np.sin(xm)
-    cr = up(min(xr, abs(s) * xr + 0.5 * xr * xr) + REL)
-    sr = up(min(xr, abs(c) * xr + 0.5 * xr * xr) + REL)
+    c, s, cr, sr = cos_sin(xm, xr)
     axis = (ax, ay, az)
     K = ((0.0, -az, ay), (az, 0.0, -ax), (-ay, ax, 0.0))
     for a in range(3):
@@ -258,10 +265,8 @@ def times_motion_inline(Am, Ar, S, xm, xr, scratch):
     if kind == 1:
         return _slide(Am, Ar, j, sign * xm, xr)
     if kind == 2:
-        c, s = np.cos(xm), sign * np.sin(xm)
-        cr = up(min(xr, abs(s) * xr + 0.5 * xr * xr) + REL)
-        sr = up(min(xr, abs(c) * xr + 0.5 * xr * xr) + REL)
-        return _turn(Am, Ar, j, c, s, cr, sr)
+        c, s, cr, sr = cos_sin(xm, xr)
+        return _turn(Am, Ar, j, c, sign * s, cr, sr)
     motion(S, xm, xr, scratch[2], scratch[3])
     return _through(Am, Ar, scratch)
 
