@@ -26,7 +26,7 @@ import numpy as np
 from numba import njit
 
 from ...lie.compiled import pose_to_xyzquat, xyzquat_to_pose
-from .follow import follow, rescale
+from .follow import closure_norm, follow_buffers, follow_in, rescale
 from .iteration import iterate_blocks, iterate_schur
 from .kernels import copy_into, first_outside, first_outside_at, rigid_error
 from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
@@ -71,18 +71,21 @@ def _invalid_row(k, out):
 
 
 @njit(cache=True, inline="always")
-def _follow_row(q0, q, start, target, attempt, tol, max_iter, sign, guessed, near_kappa, packed):
+def _follow_row(q0, q, start, closes, target, attempt, tol, max_iter, sign, guessed, near_kappa, packed, buffers):
     """The rest of :func:`.certificate.solve_forward` after a failed certified attempt from ``q0``.
 
     ``attempt = (iterations, theta)`` of that attempt, whose last iterate is in ``q``;
-    ``start`` holds the start's own readings. From a guess (``guessed``), first the plain uncertified solve
-    (a result near a singularity is left to the caller), then the path from ``start``.
-    Returns ``(done, iterations, residual)``: done when the path reached its end (in ``q``).
+    ``start`` holds the start's own readings, ``closes`` its closure residual norm (NaN: not
+    known). From a guess (``guessed``), first the plain uncertified solve (a result near a
+    singularity is left to the caller), then the path from ``start``. ``buffers``:
+    :func:`.follow.follow_buffers` and two more configurations. Returns ``(done, iterations,
+    residual)``: done when the path reached its end (in ``q``).
     """
     ints, floats, work, iwork = packed
     state = unpack_work(ints, work)[0][18]
     it, theta = attempt
-    first = q.copy()  # the first Newton iterate when the attempt took one step
+    path, first, x = buffers
+    copy_into(first, q)  # the first Newton iterate when the attempt took one step
     if guessed:  # near a singularity no path certifies: forward() returns the plain result, flagged
         no = np.zeros(1, dtype=np.bool_)[0]  # a runtime False: one compiled signature of iterate_schur
         code, n, _, _, theta, _, _ = iterate_schur(
@@ -92,7 +95,9 @@ def _follow_row(q0, q, start, target, attempt, tol, max_iter, sign, guessed, nea
         if code == CONVERGED and not state[1] <= near_kappa:
             return False, it, 0.0
     h = rescale(theta, False, 1)
-    t, it, norm = follow(start, target, first, attempt[0] == 1, tol, max_iter, sign, it, h, packed, first.copy(), q)
+    t, it, norm = follow_in(
+        start, closes, target, first, attempt[0] == 1, tol, max_iter, sign, it, h, packed, x, q, path
+    )
     return t == 1.0, it, norm
 
 
@@ -111,6 +116,9 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, stroke, pac
     state = unpack_work(ints, work)[0][18]  # the last Schur step's sign and condition bound
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
     yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
+    nq = start.shape[0]
+    buffers = (follow_buffers(nq, ints[1], 6 * ints[0]), np.empty(nq), np.empty(nq))
+    closes = np.nan  # the start's closure residual norm: evaluated when a row first follows the path
     for k in range(k0, readings.shape[0]):
         if first_outside(readings[k], stroke[0], stroke[1], slack) >= 0:  # NaN, inf or out of stroke
             _invalid_row(k, out)
@@ -123,8 +131,10 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, stroke, pac
         )
         if not certified or (code != CONVERGED and code != NO_CONVERGENCE):  # follow the readings path
             attempt, guessed = (it, theta), carry[1] == 1.0 or carry[2] == 1.0
+            if not closes == closes:  # NaN: the start's own residual, once while it stays the start
+                closes = closure_norm(start, ints, floats, work)
             done, it, norm = _follow_row(
-                q0, q, start, joints[k], attempt, tol, max_iter, carry[0], guessed, near_kappa, packed
+                q0, q, start, closes, joints[k], attempt, tol, max_iter, carry[0], guessed, near_kappa, packed, buffers
             )
             if not done:
                 return k  # blocked (the candidates) or uncertified near a singularity: forward() solves it
@@ -136,6 +146,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, stroke, pac
         if warm and code == CONVERGED:
             copy_into(start, q)
             carry[0], carry[1] = sign, 1.0
+            closes = norm  # the row's last evaluation was at q
     return readings.shape[0]
 
 

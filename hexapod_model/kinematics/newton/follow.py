@@ -60,7 +60,7 @@ def _predict(x, a, b, u, q0, dv, ints, work, scratch):
 
 
 @njit(cache=True)
-def _residual(q, ints, floats, work):
+def closure_norm(q, ints, floats, work):
     """The closure residual norm at ``q``, left in the work buffer ``r`` (``iterate(q, inf, 0)``'s)."""
     (leg_q, leg_v, platform_v, _, _, _, kinds), _ = unpack_ints(ints)
     (placements, motions, closure, home), _ = unpack_floats(ints, floats)
@@ -69,7 +69,14 @@ def _residual(q, ints, floats, work):
     return closure_residual(R, p, ints[0], E, r, floats[LENGTH_SCALE])[0]
 
 
-@njit(cache=True, inline="always")  # inlined into batch_kernels.forward_rows: one compiled unit, not two
+@njit(cache=True, inline="always")
+def follow_buffers(nq, nv, nr):
+    """The work arrays of :func:`follow_in`: ``nq`` configuration entries, ``nv`` velocities, ``nr`` residual rows."""
+    scratch = (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3))
+    return np.empty(nq), np.empty(nq), np.empty(nv), scratch, np.empty(nr)
+
+
+@njit(cache=True)
 def follow(start, target, first, predicted, tol, max_iter, sign, total, h, packed, x, q):
     """Follow the readings path from ``start`` to ``target`` in certified substeps, the first of ``h``.
 
@@ -91,17 +98,28 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, packe
         ``(t, total, residual)``: how far the path was followed (1: certified end), the Newton
         steps counted and the last corrector's residual norm.
     """
+    ints = packed[0]
+    buffers = follow_buffers(start.shape[0], ints[1], 6 * ints[0])
+    return follow_in(start, np.nan, target, first, predicted, tol, max_iter, sign, total, h, packed, x, q, buffers)
+
+
+@njit(cache=True, inline="always")  # inlined into follow and batch_kernels.forward_rows: one compiled unit each
+def follow_in(start, closes, target, first, predicted, tol, max_iter, sign, total, h, packed, x, q, buffers):
+    """:func:`follow` with its work arrays (:func:`follow_buffers`) and the start's residual if known.
+
+    ``closes``: the closure residual norm at ``start`` when the caller knows it (the start is
+    the batch's first start or a row's result, whose last evaluation it is), NaN when not. A
+    known residual within the intermediate tolerance is not evaluated again; any other is.
+    """
     ints, floats, work, iwork = packed
     r = unpack_work(ints, work)[0][6]
     prismatic_q = unpack_constants(ints, floats)[0][0]
-    nq, n = start.shape[0], prismatic_q.shape[0]
-    q0, before, dv = np.empty(nq), np.empty(nq), np.empty(ints[1])
-    scratch = (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3))
-    offset = np.zeros(r.shape[0])
+    n = prismatic_q.shape[0]
+    q0, before, dv, scratch, offset = buffers
     yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
     intermediate = INTERMEDIATE_TOL * floats[LENGTH_SCALE]  # m, rad: scaled as the tolerance
     # the start's own closure residual: a start off the manifold follows r - (1 - t) r_start
-    res = _residual(start, ints, floats, work)
+    res = closes if closes <= intermediate else closure_norm(start, ints, floats, work)
     shifted = res > intermediate
     if shifted:
         copy_into(offset, r)
