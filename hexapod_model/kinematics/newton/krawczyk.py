@@ -26,6 +26,14 @@ Each test tries ``INFLATIONS`` boxes (epsilon-inflation: ``rho <- 1.5 |K - xc|``
 Jacobian, then the 6 x 6 Schur complement onto the platform's unknowns), or, as the reference
 that the tests hold the structured test to, as a dense matrix (:mod:`.krawczyk_dense`): the
 same theorem with the same enclosures, proving the same statements.
+
+Every function here but the leaves is inlined into its caller (``inline="always"``): the proof
+compiles as one unit, :func:`.proof_kernel.prove_packed`, that calls the enclosure
+(:func:`.enclosure.enclose_into`) and the per-leg algebra. numba links a called compiled
+function into each caller's unit and optimises it there again, so each unit between the entry
+and the enclosure cost a few seconds of the first compilation (with the fourteen functions
+above it units of their own, it took 96 s of CPU; inlined, 76 s). The proofs are bit for bit
+the same, and as fast.
 """
 
 from __future__ import annotations
@@ -132,7 +140,7 @@ def workspace(nf: int, rows: int) -> tuple:
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _precondition_box(rows, structured, work, xc):
     """The preconditioner from the Jacobian midpoint in ``work`` (per leg, or dense) about ``xc``; False if singular."""
     V, Jm, Jr, Y, H, blocks, ew = work
@@ -143,7 +151,7 @@ def _precondition_box(rows, structured, work, xc):
     return np.all(np.isfinite(Y))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def precondition(tables, T0, xc, hm, structured, work):
     """``F(xc, hm)`` (``work``'s first two rows) and the preconditioner from the Jacobian at ``xc``, ``hm``.
 
@@ -160,7 +168,7 @@ def precondition(tables, T0, xc, hm, structured, work):
     return _precondition_box(rows, structured, work, xc)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _path_enclosure(tables, hm, dl, half, structured, work):
     """``Y F(xc, S)`` (``work``'s rows 7 and 8) with the Jacobian enclosure in ``work`` (see :func:`_path_term`)."""
     rows = tables[4]
@@ -176,7 +184,7 @@ def _path_enclosure(tables, hm, dl, half, structured, work):
         YFm[:], YFr[:] = preconditioned_dense(Y, Fm, Fr, gm, gr, half)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def try_box(tables, T0, xc, rho, hm, hr, dl, half, structured, work, off, rad):
     """One Krawczyk test of the box ``xc +- rho`` over the held joints ``hm +- hr`` (after :func:`precondition`).
 
@@ -194,7 +202,7 @@ def try_box(tables, T0, xc, rho, hm, hr, dl, half, structured, work, off, rad):
     return krawczyk(V[7], V[8], Jm, Jr, rho, Y, off, rad)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def prove_box(tables, T0, xc, spread, hm, hr, dl, half, off, rad, rho, structured, work):
     """Krawczyk with epsilon-inflation around ``xc``; ``spread`` (nf,) is a first radius to cover.
 
@@ -233,7 +241,7 @@ def _inside(c, off, rad, c2, rho2):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def prove_path(tables, T0, x0, x1, l0, l1, structured, work):
     """Prove that the readings path from ``x0`` (readings ``l0``) to ``x1`` (``l1``) stays on one assembly.
 
@@ -294,7 +302,7 @@ def prove_path(tables, T0, x0, x1, l0, l1, structured, work):
     return proven, tests, radius, parts if proven else 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _prove_end(tables, T0, x1, l1, c, rho, fresh, structured, work):
     """The box about the result ``x1`` at ``s = 1`` alone, inside the last proven box ``c +- rho``.
 
@@ -335,7 +343,7 @@ def _prove_end(tables, T0, x1, l1, c, rho, fresh, structured, work):
     return False, 0, box, 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _whole_test(rows, dl, e, structured, work, rho, off, rad):
     """:func:`prove_whole`'s test of the box ``x1 +- rho`` (its Jacobian enclosure and a preconditioner in ``work``).
 
@@ -357,7 +365,7 @@ def _whole_test(rows, dl, e, structured, work, rho, off, rad):
     return krawczyk(YFm, YFr, Jm, Jr, rho, Y, off, rad)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
     """One Krawczyk test of the whole readings path on a box about the result ``x1``, then the end box.
 
@@ -430,7 +438,7 @@ def in_readings(l, hm, hr):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def prove_region(tables, T0, x0, x1, l0, l1, hm, hr, work, c, rho):
     """One Krawczyk test over a box of readings ``P = hm +- hr`` (6,) on a box ``X = x1 +- rho`` (per-leg test).
 
@@ -514,7 +522,7 @@ def prove_region(tables, T0, x0, x1, l0, l1, hm, hr, work, c, rho):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def prove_in_region(tables, T0, x0, x1, l0, l1, hm, hr, work, c, rho):
     """The end box of a step whose readings lie in a proven region (:func:`prove_region`) and starts in its box.
 

@@ -7,7 +7,8 @@ free joints and the platform's chart coordinates about the result's placement,
 turns the proven radius into bounds of the platform's position and rotation, in one call.
 :class:`.proof.StepProver` calls it through :func:`prove_packed`, which takes the model's tables
 and the work arrays packed in two buffers (:func:`pack`): numba unboxes each array an entry is
-handed (about 70 ns each), and the unpacked call takes some fifty.
+handed (about 70 ns each), and the unpacked call takes some fifty. Everything between it and
+the enclosure is inlined into it: one compiled unit (see :mod:`.krawczyk`).
 """
 
 from __future__ import annotations
@@ -79,7 +80,7 @@ def unknowns_into(q, T0, T, home, platform_q, leg_q, free, x):
     chart_coordinates_into(T0, T, x[v:])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _in_region(tables, home, platform_q, leg_q, free, held_q, q0, q1, work, ends):
     """The proof of a step inside the thread's proven region (``ends``' state), or not proven (then no region)."""
     T0, T, x0, x1, l0, l1, Tc, state = ends
@@ -112,7 +113,7 @@ def _finite(x0, x1, l0, l1):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _build_region(tables, T0, x0, x1, l0, l1, work, state, motion):
     """A region about the step (:func:`.krawczyk.prove_region`) and the step's end box in it; state updated.
 
@@ -154,7 +155,7 @@ def _build_region(tables, T0, x0, x1, l0, l1, work, state, motion):
     return False, V[23]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, structured, subdivide, work, ends):
     """The Krawczyk proof of the readings path from ``q0`` to ``q1`` (:meth:`.proof.StepProver.prove`).
 
