@@ -130,6 +130,13 @@ def startup_rows(data: dict) -> list[tuple[str, str]]:
                 f"{c['first_inverse_cpu_s']:.1f} s, forward_batch {c['first_batch_cpu_s']:.1f} s",
             )
         )
+        if "first_proven_cpu_s" in c:
+            rows.append(
+                (
+                    "then the first warm forward, its Krawczyk proof compiling (empty numba cache), CPU",
+                    f"{c['first_proven_cpu_s']:.1f} s",
+                )
+            )
     return rows
 
 

@@ -352,6 +352,13 @@ def test_startup_benchmark_runs(tmp_path):
     rows = dict(_performance_table().startup_rows(data))
     urdf = "`hexapod_model urdf reference -o FILE` (imports only, compiles nothing)"
     assert rows[f"{urdf}, CPU against `import pinocchio, numpy`"].endswith(f"({data['urdf']['cpu_ratio']:.2f}x)")
+    # --cold's figures (a minute and more to measure): the first proof's compilation has a row of its own
+    cold = {"first_forward_cpu_s": 15.0, "first_inverse_cpu_s": 4.0, "first_batch_cpu_s": 12.0}
+    data["cold"] = {**cold, "floor_compile_cpu_s": 5.0, "first_proven_cpu_s": 76.31}
+    rows = dict(_performance_table().startup_rows(data))
+    assert rows["then the first warm forward, its Krawczyk proof compiling (empty numba cache), CPU"] == "76.3 s"
+    first = rows["first compiled forward after installation (empty numba cache), CPU"]
+    assert first.startswith("15.0 s, 3.00x the one-function floor's compile (5.0 s)")
 
 
 def test_performance_table_only_keeps_the_other_scripts_rows():
