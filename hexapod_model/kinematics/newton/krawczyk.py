@@ -32,8 +32,9 @@ compiles as one unit, :func:`.proof_kernel.prove_packed`, that calls the enclosu
 (:func:`.enclosure.enclose_into`) and the per-leg algebra. numba links a called compiled
 function into each caller's unit and optimises it there again, so each unit between the entry
 and the enclosure cost a few seconds of the first compilation (with the fourteen functions
-above it units of their own, it took 96 s of CPU; inlined, 76 s). The proofs are bit for bit
-the same, and as fast.
+above it units of their own, the first proven warm step took 107 s of CPU after installation;
+inlined, 82 s: ``benchmarks/startup.py --cold``). The proofs are bit for bit the same, and as
+fast.
 """
 
 from __future__ import annotations
