@@ -46,7 +46,7 @@ from .enclosure import enclose_into, enclosure_workspace
 from .intervals import REL, up
 from .krawczyk_blocks import apply, krawczyk_blocks, setup, transform
 from .krawczyk_blocks import workspace as workspace_blocks
-from .krawczyk_dense import inverse, krawczyk, preconditioned_dense
+from .krawczyk_dense import end_dense, krawczyk, precondition_dense, preconditioned_dense
 
 MAX_TESTS = 32  # Krawczyk tests per path (each sub-interval that fails is halved)
 V_ROWS = 26  # rows of the work's vectors: 0-20 scratch, 21 the unknowns' units, 22-23 a region's box, 24-25 HELD
@@ -147,9 +147,7 @@ def _precondition_box(rows, structured, work, xc):
     V, Jm, Jr, Y, H, blocks, ew = work
     if structured:
         return held_setup(Jm, rows, work, xc)
-    nf = Jm.shape[0]
-    Y[:, :] = inverse(Jm[:, :nf])
-    return np.all(np.isfinite(Y))
+    return precondition_dense(Y, Jm)
 
 
 @njit(cache=True, inline="always")
@@ -232,7 +230,7 @@ def prove_box(tables, T0, xc, spread, hm, hr, dl, half, off, rad, rho, structure
     return False
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _inside(c, off, rad, c2, rho2):
     """Whether the box ``c + off +- rad`` lies inside ``c2 +- rho2`` (rounding allowed for)."""
     for a in range(c.shape[0]):
@@ -323,8 +321,7 @@ def _prove_end(tables, T0, x1, l1, c, rho, fresh, structured, work):
     if structured:
         apply(blocks, rows, Fm, Fr, YFm, YFr)
     else:
-        YFm[:] = Y @ Fm
-        YFr[:] = np.abs(Y) @ (Fr + REL * np.abs(Fm))
+        end_dense(Y, Fm, Fr, YFm, YFr)
     for a in range(nf):
         YFr[a] = up(YFr[a] + REL * abs(YFm[a]))
         box[a] = 2.0 * (abs(YFm[a]) + YFr[a]) + 1e-15 * (1.0 + abs(x1[a]))
@@ -429,7 +426,7 @@ def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
     return False, 1, rho, 0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def in_readings(l, hm, hr):
     """Whether the readings ``l`` (6,) lie in the box ``hm +- hr`` (the rounding of ``l - hm`` allowed for)."""
     for i in range(6):

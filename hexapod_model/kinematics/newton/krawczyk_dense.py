@@ -73,3 +73,25 @@ def inverse(J):
         Y[a, a] = 1.0
         lu_solve_in_place(LU, piv, Y[a], nf)  # row a: column a of J^-1
     return Y.T.copy()
+
+
+@njit(cache=True)
+def precondition_dense(Y, Jm):
+    """``Y = Jm[:, :nf]^-1`` (:func:`inverse`) in place; False when singular.
+
+    A called function: the proof inlines its callers at several sites, and numba would type,
+    lower and optimise the inverse's NumPy expressions once per site.
+    """
+    nf = Y.shape[0]
+    Y[:, :] = inverse(Jm[:, :nf])
+    return np.all(np.isfinite(Y))
+
+
+@njit(cache=True)
+def end_dense(Y, Fm, Fr, YFm, YFr):
+    """``Y F(x1, l1)`` in place: midpoint ``YFm``, radius ``YFr`` (before the product's rounding).
+
+    A called function, as :func:`precondition_dense` is.
+    """
+    YFm[:] = Y @ Fm
+    YFr[:] = np.abs(Y) @ (Fr + REL * np.abs(Fm))
