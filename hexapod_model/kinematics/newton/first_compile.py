@@ -35,7 +35,7 @@ ENTRIES = {
     "forward_rows": ("the direct-kinematics batch loop", 13),
     "inverse_rows": ("the inverse-kinematics batch loop", 8),
     "follow": ("the readings path", 12),
-    "prove_packed": ("the Krawczyk proof of a warm step", 82),
+    "prove_packed": ("the Krawczyk proof of a warm step", 70),
 }
 
 #: first-generation threshold of the cyclic garbage collector while numba compiles (CPython's
