@@ -11,10 +11,10 @@ the CPU time of the first compiled solve (``Hexapod.from_preset("reference")``, 
 ``forward``, then one ``inverse``, then a 3-row ``forward_batch``, then a warm ``forward`` whose
 Krawczyk proof compiles; numba and the package already imported) beside the compilation of the
 reference floor (``floor_newton.py``: the same iteration as one njit function, its first solve),
-and their ratio. ``--phases`` also splits the first
-forward's and the floor's compile CPU by numba pass (type inference, inlining, lowering) and LLVM
-(optimisation and machine code, under numba's LLVM lock), and by compiled function (exclusive:
-what a function's own passes cost, its callees not counted).
+and their ratio. ``--phases`` also splits the first forward's and the floor's compile CPU by
+numba pass (type inference, inlining, lowering) and LLVM (optimisation and machine code, under
+numba's LLVM lock), and by compiled function (exclusive: what a function's own passes cost, its
+callees not counted).
 
     python benchmarks/startup.py [--runs 7] [--cold] [--phases] [-- hexapod fk reference docs/examples/lengths.csv]
 """

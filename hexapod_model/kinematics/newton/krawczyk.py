@@ -29,12 +29,14 @@ same theorem with the same enclosures, proving the same statements.
 
 Every function here but the leaves is inlined into its caller (``inline="always"``): the proof
 compiles as one unit, :func:`.proof_kernel.prove_packed`, that calls the enclosure
-(:func:`.enclosure.enclose_into`) and the per-leg algebra. numba links a called compiled
-function into each caller's unit and optimises it there again, so each unit between the entry
-and the enclosure cost a few seconds of the first compilation (with the fourteen functions
-above it units of their own, the first proven warm step took 107 s of CPU after installation;
-inlined, 82 s: ``benchmarks/startup.py --cold``). The proofs are bit for bit the same, and as
-fast.
+(:func:`.enclosure.enclose_into`), the per-leg algebra and the small leaves. numba links a
+called compiled function into each caller's unit and optimises it there again, so each unit
+between the entry and the enclosure cost a few seconds of the first compilation; an inlined
+function is typed, lowered and optimised once per call site, so the leaves used at several sites
+(:func:`_inside`, :func:`in_readings`, the dense reference's products) are called. The first
+proven warm step took 107 s of CPU after installation with the fourteen functions above the
+enclosure units of their own, 68 s so (``benchmarks/startup.py --cold``); the proofs are bit for
+bit the same, and as fast.
 """
 
 from __future__ import annotations
