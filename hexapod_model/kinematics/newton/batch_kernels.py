@@ -3,7 +3,7 @@
 Per row: the input checks, the Newton iteration (:func:`.newton.iterate`) and the joint-limit
 check of :meth:`.hexapod.Hexapod.forward` / :meth:`~.hexapod.Hexapod.inverse`. Direct kinematics
 runs :func:`.certificate.solve_forward`: the certified first attempt, then, for a row it does not
-settle, the readings path (:func:`.follow.follow`, :func:`_follow_row`). A row whose path is
+settle, the readings path (:func:`.follow.follow_in`, :func:`_follow_row`). A row whose path is
 blocked (the candidates of an ambiguous assembly are looked for in Python), whose warm plain
 result is uncertified near a singularity, or whose warm result converged near a singularity
 (``converged`` then only with the Krawczyk proof of its step, :meth:`.engine.SolveEngine.proven_near`)
