@@ -21,7 +21,9 @@ Then the **proof** (which ``Hexapod.forward`` runs on every warm step, the Krawc
 1 kHz, the first ``K`` samples): per preset and trajectory the fraction of warm steps proven,
 the median subdivisions, the median time of the warm ``forward`` with its proof (the default)
 and of the solve alone (``prove=False``), of the proof by itself (the per-leg test, and beside it
-the dense reference test on the same solves, with its proven fraction), and the
+the dense reference test on the same solves, with its proven fraction), each kind of call in
+passes of its own along the trajectory (what a proof keeps for the next step, a region or its
+preconditioner, is then the stream's own, as a caller's), and the
 floor (``floor_newton.fk_newton``, the reference Newton iteration in one njit function, on the
 offset-Cardan presets whose legs it reads) on the same readings.
 
@@ -141,12 +143,17 @@ def limited_readings(hexa: Hexapod, which: str, samples: int) -> tuple[np.ndarra
     return ik.lengths[:stop], stop
 
 
-def trajectory_proofs(name: str, which: str, samples: int) -> dict:
+def trajectory_proofs(name: str, which: str, samples: int, rounds: int = 2) -> dict:
     """Proven fractions and per-step medians (us) of warm solves along trajectory ``which`` at 1 kHz.
 
-    Each warm step is solved alone (``prove=False``), then as ``forward`` gives it by default (with
-    its proof), then proven on the same solve by ``StepProver.prove`` with the per-leg test and
-    with the dense reference test (``structured=False``), side by side without the facade.
+    Each kind of call runs in passes of its own over the whole trajectory, as a stream of warm
+    steps that a caller makes: what a proof keeps from one step for the next (a region it
+    proved, the preconditioner it built, the last step's readings) and the caches are the
+    stream's own, never those of another kind of call between two steps. ``rounds`` passes
+    each, alternating, of ``forward`` with its proof (the default), chained from its own
+    results, and of the solve alone (``prove=False``); then ``StepProver.prove`` on the steps
+    of the first proven pass, in order, as ``forward`` calls it (the per-leg test), and the
+    dense reference test on the same steps.
     """
     hexa = Hexapod.load(name)
     prover = hexa.engine.prover
@@ -156,30 +163,46 @@ def trajectory_proofs(name: str, which: str, samples: int) -> dict:
     hexa.forward(readings[1], sol, check=False, prove=False)
     if prover is not None:
         prover.prove(hexa.engine.start(sol), first.q, structured=False)
-    solve_t, proof_t, blocks_t, dense_t, proven, dense_proven, parts = [], [], [], [], 0, 0, []
-    for x in readings[1:]:
-        t0 = time.perf_counter()
-        nxt = hexa.forward(x, sol, check=False, prove=False)  # the solve alone
-        t1 = time.perf_counter()
-        checked = hexa.forward(x, sol, check=False)  # the default: the solve and its proof
-        t2 = time.perf_counter()
-        if prover is not None and nxt.closed:
-            start = hexa.engine.start(sol)
-            t3 = time.perf_counter()
-            prover.prove(start, nxt.q)
-            t4 = time.perf_counter()
-            dense = prover.prove(start, nxt.q, structured=False)
-            blocks_t.append(t4 - t3)
-            dense_t.append(time.perf_counter() - t4)
-            dense_proven += dense.proven
-        solve_t.append(t1 - t0)
-        proof_t.append(t2 - t1)  # with the solve: forward as a caller gets it
-        if checked.proof is not None and checked.proof.proven:
-            proven += 1
-            parts.append(checked.proof.subdivisions)
-        sol = nxt if nxt.closed else sol
+
+    def stream(prove: bool) -> tuple[list[float], list[tuple]]:
+        """One pass of warm steps along the readings, each from the last result that closed.
+
+        Returns the times and, per step, ``(proven, subdivisions, start, q)`` (``q`` None when
+        the step did not close); no result is kept (kept, the collector's passes over them
+        grew with the stream and were timed with it).
+        """
+        times, steps, last = [], [], sol
+        for x in readings[1:]:
+            t0 = time.perf_counter()
+            nxt = hexa.forward(x, last, check=False, prove=prove)
+            times.append(time.perf_counter() - t0)
+            proof = nxt.proof
+            proven = proof is not None and proof.proven
+            steps.append((proven, proof.subdivisions if proven else 0, last.q, nxt.q if nxt.closed else None))
+            last = nxt if nxt.closed else last
+        return times, steps
+
+    solve_t: list[float] = []
+    proof_t: list[float] = []
+    steps: list[tuple] = []
+    for _ in range(rounds):
+        times, results = stream(True)
+        proof_t += times  # with the solve: forward as a caller gets it
+        steps = steps or results
+        solve_t += stream(False)[0]
+    proven = sum(p for p, _, _, _ in steps)
+    parts = [k for p, k, _, _ in steps if p]
+    blocks_t, dense_t, dense_proven = [], [], 0
+    if prover is not None:
+        pairs = [(start, q) for _, _, start, q in steps if q is not None]
+        for structured in (True, False):
+            for start, q in pairs:
+                t0 = time.perf_counter()
+                proof = prover.prove(start, q, structured=structured)
+                (blocks_t if structured else dense_t).append(time.perf_counter() - t0)
+                dense_proven += not structured and proof.proven
     floor = floor_times(hexa, readings)
-    n = len(solve_t)
+    n = len(steps)
     return {
         "steps": n,
         "outside_from": outside_from,

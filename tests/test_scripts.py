@@ -285,6 +285,36 @@ def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
     assert any(args[0] == "certificate.py" and parse is table.certificate_rows for args, _, parse in table.BENCHMARKS)
 
 
+def test_certificate_benchmark_times_each_kind_of_call_in_a_stream_of_its_own(monkeypatch):
+    """The proven steps along a trajectory are timed as a caller's stream: no dense test between two of them.
+
+    The dense reference test drops the region a step proved (and a test of another kind between
+    two steps evicts the per-leg test's arrays from the caches): run between the steps, it made
+    the per-step figures those of another stream.
+    """
+    import importlib.util
+
+    from hexapod_model.kinematics.newton.proof import StepProver
+
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
+    spec = importlib.util.spec_from_file_location("certificate_bench", ROOT / "benchmarks" / "certificate.py")
+    assert spec is not None and spec.loader is not None
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    kinds: list[bool] = []
+    prove = StepProver.prove
+
+    def spy(self, q0, q1, structured=True, subdivide=True):
+        kinds.append(structured)
+        return prove(self, q0, q1, structured, subdivide)
+
+    monkeypatch.setattr(StepProver, "prove", spy)
+    report = bench.trajectory_proofs("guideway", "A", 30, rounds=2)
+    assert report["steps"] == 29 and report["proven_fraction"] == 1.0
+    # the warm-up (a proven forward, a dense test); two proven passes and the per-leg pass; the dense pass
+    assert kinds[:2] == [True, False] and kinds[2:] == [True] * 3 * 29 + [False] * 29
+
+
 def test_three_six_benchmark_runs():
     out = subprocess.run(
         [sys.executable, str(ROOT / "benchmarks" / "three_six_fk.py"), "--poses", "30"],
