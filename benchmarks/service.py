@@ -1,7 +1,7 @@
 """Throughput, CPU and latency of the fixture pose service (not a test: figures are printed).
 
 python benchmarks/service.py [--seconds S] [--one 250,500,1000,2000] [--many 50,100,200] [--fixtures 20]
-                             [--capacity]
+                             [--more FIXTURES:RATES ...] [--capacity]
 
 A feeder thread plays trajectory A (reference hexapod, 10 um reading noise, frames encoded with
 each fixture's layout and CAN ids) on python-can's virtual bus at a set rate per fixture; the
@@ -21,9 +21,13 @@ named ``hx-sim`` as the simulator of ``hexapod serve --simulate`` is; the rest).
 (no backlog). The machine's other load is part of the figures:
 run it on an idle machine for the capacity. Each run prints the service's CPU per solved set
 beside the tracker step's and the solve's own (measured first, alone, in this process).
+Every fixture's frames of one sampling period are queued together: the last fixture's set of a
+period waits for the sets of the others (its latency holds ``FIXTURES - 1`` sets' CPU).
+``--more 5:1000`` adds runs of 5 fixtures at 1 kHz: the 5,000 sets a second of 50 fixtures at
+100 Hz, in periods of 5 sets instead of 50.
 ``--capacity`` also queues the frames of 3 s of sets before the cycle thread reads them and
-prints its CPU per set with no idle gaps (1 x 1000 Hz and FIXTURES x 100 Hz): the cost of a set
-when the thread's caches stay warm.
+prints its CPU per set with no idle gaps (1 x 1000 Hz, FIXTURES x 100 Hz and each ``--more``
+run): the cost of a set when the thread's caches stay warm.
 """
 
 from __future__ import annotations
@@ -222,6 +226,7 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
     # virtual bus's send (a deepcopy per frame, in this process and under its GIL) is not the service
     sent, position = [0], [0]  # sets sent in the measured phase; where the trajectory is
     stop = threading.Event()
+    read = threading.Event()  # the measured feeder's CPU was read from outside: it may end
 
     def prepared(periods: int) -> list[list[list[can.Message]]]:
         # a message object per frame of each period, made before the phase: the feeder only
@@ -230,7 +235,7 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
             [[copy.copy(m) for m in msgs] for msgs in frames[(position[0] + k) % len(frames)]] for k in range(periods)
         ]
 
-    def feed(ahead: list[list[list[can.Message]]]) -> None:  # continues the trajectory where the warm-up left it
+    def feed(ahead: list[list[list[can.Message]]], hold: bool = False) -> None:  # continues where the warm-up left it
         period, k, start, wall = 1.0 / rate, 0, time.perf_counter(), time.time()
         while not stop.is_set() and k < len(ahead):
             wait = start + k * period - time.perf_counter()
@@ -245,6 +250,8 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
             sent[0] += 1
             k += 1
         position[0] += k
+        if hold:  # alive until its thread's CPU is read (a read while the cycle thread holds the GIL can take
+            read.wait(10.0)  # tens of milliseconds: an ended feeder's thread is gone from /proc)
 
     service.start()
     try:
@@ -265,12 +272,13 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         ahead = prepared(int((seconds + 1.0) * rate))
         c0, p0, t0 = thread_cpu(threads), time.process_time(), time.perf_counter()
         k0 = thread_cpu(threads[:1])
-        feeder = NamedThread(target=feed, args=(ahead,), name="hx-sim")  # the stand-in for the simulator
+        feeder = NamedThread(target=feed, args=(ahead, True), name="hx-sim")  # the stand-in for the simulator
         n0 = cpu_by_thread_name()
         feeder.start()
         time.sleep(seconds)
         stop.set()
         n1 = cpu_by_thread_name()  # before the feeder ends: its thread's time is read while it lives
+        read.set()
         feeder.join()
         fed = time.perf_counter() - t0
         n1 |= {k: v for k, v in cpu_by_thread_name().items() if k != "hx-sim"}
@@ -319,12 +327,39 @@ def line(r: dict) -> str:
     )
 
 
+def rates_of(text: str) -> list[float]:
+    """Set rates (Hz) from a comma-separated list (empty entries skipped)."""
+    return [float(v) for v in text.split(",") if v]
+
+
+def group(text: str) -> tuple[int, list[float]]:
+    """``FIXTURES:RATES`` (``5:1000``, ``5:500,1000``) as ``(fixtures, rates)``, for ``--more``."""
+    fixtures, _, rates = text.partition(":")
+    try:
+        out = int(fixtures), rates_of(rates)
+    except ValueError:
+        out = 0, []
+    if out[0] < 1 or not out[1] or min(out[1]) <= 0.0:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: expected FIXTURES:RATES, e.g. 5:1000 (fixtures >= 1, rates > 0 Hz)"
+        )
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=5.0, help="measured seconds per run")
     ap.add_argument("--one", default="250,500,1000,2000", help="set rates (Hz) for one fixture")
     ap.add_argument("--many", default="50,100,200", help="set rates (Hz) per fixture for --fixtures fixtures")
     ap.add_argument("--fixtures", type=int, default=20)
+    ap.add_argument(
+        "--more",
+        action="append",
+        default=[],
+        type=group,
+        metavar="FIXTURES:RATES",
+        help="also FIXTURES fixtures at each of RATES (Hz, comma-separated), e.g. 5:1000 (repeatable)",
+    )
     ap.add_argument("--json", help="also write the runs (and the capacity figures, kind 'capacity') as JSON")
     ap.add_argument(
         "--capacity", action="store_true", help="also the cycle thread's CPU per set from a full queue (no idle gaps)"
@@ -340,13 +375,14 @@ def main(argv=None) -> int:
         flush=True,
     )
     reports = []
+    groups = [(1, rates_of(args.one)), (args.fixtures, rates_of(args.many)), *args.more]
     with tempfile.TemporaryDirectory() as tmp:
-        for n, rates in ((1, args.one), (args.fixtures, args.many)):
-            for rate in (float(v) for v in rates.split(",") if v):
+        for n, rates in groups:
+            for rate in rates:
                 reports.append(run(hexa, readings, n, rate, args.seconds, Path(tmp)) | {"solve_us": solve_us})
                 print(line(reports[-1]), flush=True)
         if args.capacity:
-            for n, rate in ((1, 1000.0), (args.fixtures, 100.0)):
+            for n, rate in ((1, 1000.0), (args.fixtures, 100.0), *((n, r) for n, rates in args.more for r in rates)):
                 us = capacity(hexa, readings, n, rate, int(3 * rate), Path(tmp))
                 share = us * n * rate / 1e4  # percent of one core at that rate
                 reports.append(
@@ -359,7 +395,7 @@ def main(argv=None) -> int:
                     f"({share:.0f} % of a core)"
                     f"  against the solve's {solve_us:.0f} us and the tracker step's {step_us:.0f} us"
                 )
-    for n in (1, args.fixtures):
+    for n in dict.fromkeys(n for n, _ in groups):  # each fixture count once, in order
         ok = [r["rate_hz"] for r in reports if r["fixtures"] == n and r.get("sustained")]
         print(f"highest sustained set rate, {n} fixture(s): {max(ok):.0f} Hz" if ok else f"{n} fixture(s): none")
     if args.json:

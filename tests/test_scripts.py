@@ -407,22 +407,62 @@ def test_service_benchmark_runs(tmp_path):
     """A short run of both modes: a fed run per fixture count and the full-queue capacity, in the JSON and table too."""
     cmd = [sys.executable, str(ROOT / "benchmarks" / "service.py"), "--seconds", "0.5", "--one", "100"]
     out = subprocess.run(
-        [*cmd, "--many", "20", "--fixtures", "2", "--capacity", "--json", str(tmp_path / "s.json")],
+        [*cmd, "--many", "20", "--fixtures", "2", "--more", "3:50", "--capacity", "--json", str(tmp_path / "s.json")],
         capture_output=True,
         text=True,
         timeout=600,
     )
     assert out.returncode == 0, out.stderr
-    assert "1 x    100 Hz" in out.stdout and "2 x     20 Hz" in out.stdout
+    assert "1 x    100 Hz" in out.stdout and "2 x     20 Hz" in out.stdout and "3 x     50 Hz" in out.stdout
     assert "capacity   1 x   1000 Hz" in out.stdout and "capacity   2 x    100 Hz" in out.stdout
+    assert "capacity   3 x     50 Hz" in out.stdout and out.stdout.count("highest sustained set rate") <= 3
     data = json.loads((tmp_path / "s.json").read_text())
     full = [r for r in data if r.get("kind") == "capacity"]
-    assert [(r["fixtures"], r["rate_hz"]) for r in full] == [(1, 1000.0), (2, 100.0)]
+    assert [(r["fixtures"], r["rate_hz"]) for r in full] == [(1, 1000.0), (2, 100.0), (3, 50.0)]
     assert all(0.0 < r["solve_us"] < r["step_us"] < r["cycle_cpu_us_per_set"] for r in full)  # CPU µs a set
     rows = dict(_performance_table().service_rows(data))
-    assert len(rows) == 4 and "pose service, 2 fixture(s) × 20 Hz" in rows
+    assert (
+        len(rows) == 6 and "pose service, 2 fixture(s) × 20 Hz" in rows and "pose service, 3 fixture(s) × 50 Hz" in rows
+    )
     cell = rows["pose service, 2 fixture(s) × 100 Hz from a full queue (`--capacity`)"]
     assert cell.startswith(f"cycle thread {full[1]['cycle_cpu_us_per_set']:.0f} µs CPU a set")
+
+
+def test_service_benchmark_reads_the_feeders_cpu_while_it_lives(tmp_path, monkeypatch):
+    """The feeder (``hx-sim``) lives until its CPU was read from ``/proc``, however long the read takes.
+
+    A read while the cycle thread holds the interpreter lock can take tens of milliseconds: the
+    feeder that ended meanwhile was gone from ``/proc`` and its CPU read as 0 %.
+    """
+    import importlib.util
+    import threading
+    import time
+
+    spec = importlib.util.spec_from_file_location("service_bench", ROOT / "benchmarks" / "service.py")
+    assert spec is not None and spec.loader is not None
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    read = bench.cpu_by_thread_name
+
+    def slow_read(pid="self"):  # a read that takes long: the feeder's end, if it comes, comes first
+        end = time.monotonic() + 0.5
+        while time.monotonic() < end and any(t.name == "hx-sim" for t in threading.enumerate()):
+            time.sleep(0.01)
+        return read(pid)
+
+    monkeypatch.setattr(bench, "cpu_by_thread_name", slow_read)
+    hexa = hm.Hexapod.from_preset("reference")
+    readings = bench.readings_sequence(hexa)[:200]
+    report = bench.run(hexa, readings, 1, 50.0, 0.3, tmp_path)
+    assert report["records"] > 0 and report["os_sim_cpu_pct"] > 0.0
+
+
+@pytest.mark.parametrize("more", ["5", "5:", "0:100", "x:100", "5:-1"])
+def test_service_benchmark_refuses_a_bad_group_in_one_line(more):
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "service.py"), "--more", more]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2 and out.stdout == ""
+    assert "expected FIXTURES:RATES" in out.stderr and "Traceback" not in out.stderr
 
 
 def test_coverage_table_sums_every_module_per_package(tmp_path):
