@@ -339,7 +339,7 @@ def group(text: str) -> tuple[int, list[float]]:
         out = int(fixtures), rates_of(rates)
     except ValueError:
         out = 0, []
-    if out[0] < 1 or not out[1] or min(out[1]) <= 0.0:
+    if out[0] < 1 or not out[1] or not all(0.0 < r < float("inf") for r in out[1]):  # NaN fails too
         raise argparse.ArgumentTypeError(
             f"{text!r}: expected FIXTURES:RATES, e.g. 5:1000 (fixtures >= 1, rates > 0 Hz)"
         )

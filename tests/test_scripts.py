@@ -457,7 +457,7 @@ def test_service_benchmark_reads_the_feeders_cpu_while_it_lives(tmp_path, monkey
     assert report["records"] > 0 and report["os_sim_cpu_pct"] > 0.0
 
 
-@pytest.mark.parametrize("more", ["5", "5:", "0:100", "x:100", "5:-1"])
+@pytest.mark.parametrize("more", ["5", "5:", "0:100", "x:100", "5:-1", "5:nan", "5:100,inf"])
 def test_service_benchmark_refuses_a_bad_group_in_one_line(more):
     cmd = [sys.executable, str(ROOT / "benchmarks" / "service.py"), "--more", more]
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
