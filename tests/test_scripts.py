@@ -218,15 +218,20 @@ def test_certificate_and_tracker_false_alarm_benchmarks_run():
     assert out.stdout.count("expected <=") == 4  # two noise levels, at rest and moving
 
 
-def _performance_table():
-    """benchmarks/performance_table.py as a module (its row parsers and BENCHMARKS)."""
+def _benchmark(name: str):
+    """``benchmarks/NAME.py`` as a module (its functions, called in this process)."""
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("performance_table", ROOT / "benchmarks" / "performance_table.py")
+    spec = importlib.util.spec_from_file_location(f"{name}_bench", ROOT / "benchmarks" / f"{name}.py")
     assert spec is not None and spec.loader is not None
-    table = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(table)
-    return table
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _performance_table():
+    """benchmarks/performance_table.py as a module (its row parsers and BENCHMARKS)."""
+    return _benchmark("performance_table")
 
 
 def test_clearance_benchmark_json_makes_the_performance_rows(tmp_path):
@@ -292,15 +297,10 @@ def test_certificate_benchmark_times_each_kind_of_call_in_a_stream_of_its_own(mo
     two steps evicts the per-leg test's arrays from the caches): run between the steps, it made
     the per-step figures those of another stream.
     """
-    import importlib.util
-
     from hexapod_model.kinematics.newton.proof import StepProver
 
-    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
-    spec = importlib.util.spec_from_file_location("certificate_bench", ROOT / "benchmarks" / "certificate.py")
-    assert spec is not None and spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))  # its imports of the floor
+    bench = _benchmark("certificate")
     kinds: list[bool] = []
     prove = StepProver.prove
 
@@ -434,14 +434,10 @@ def test_service_benchmark_reads_the_feeders_cpu_while_it_lives(tmp_path, monkey
     A read while the cycle thread holds the interpreter lock can take tens of milliseconds: the
     feeder that ended meanwhile was gone from ``/proc`` and its CPU read as 0 %.
     """
-    import importlib.util
     import threading
     import time
 
-    spec = importlib.util.spec_from_file_location("service_bench", ROOT / "benchmarks" / "service.py")
-    assert spec is not None and spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = _benchmark("service")
     read = bench.cpu_by_thread_name
 
     def slow_read(pid="self"):  # a read that takes long: the feeder's end, if it comes, comes first
