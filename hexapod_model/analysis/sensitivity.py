@@ -27,6 +27,7 @@ import numpy as np
 from numba import njit
 
 from ..kinematics.hexapod import Hexapod
+from ..kinematics.newton.entries import direct
 from ..kinematics.newton.kernels import rotation_weights
 from ..kinematics.newton.linalg import (
     closure_block,
@@ -257,6 +258,9 @@ class SensitivityEvaluator:
         self._blocks: np.ndarray | None = None  # evaluate_solved's leg blocks, made on first use
         self._solved_by: NewtonSolver | None = None  # the solver whose buffers _solved_args holds
         self._solved_args: tuple | None = None
+        # measure_solved on _solved_args (the solver's buffers and this evaluator's: their types never change),
+        # the dispatcher until its first call with them, then the machine code that call ran (.entries.direct)
+        self._measure, self._measure_direct = measure_solved, False
 
     def evaluate_solved(self, q: np.ndarray) -> Sensitivity:
         """:meth:`evaluate` at ``q``, the configuration the calling thread's last direct-kinematics solve ended on.
@@ -273,7 +277,9 @@ class SensitivityEvaluator:
         args = self._solved_args
         if args is None or not _holds(s.q_aug, q):
             return self.evaluate(q)
-        tt, tr, cond, det = measure_solved(*args)
+        tt, tr, cond, det = self._measure(*args)
+        if not self._measure_direct:
+            self._measure, self._measure_direct = direct(measure_solved, args), True
         if cond == math.inf:
             self.Jinv[:] = np.nan
         return Sensitivity(math.sqrt(tt), math.sqrt(tr), cond, (det > 0.0) - (det < 0.0))

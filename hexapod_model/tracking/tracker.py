@@ -38,6 +38,7 @@ import pinocchio as pin
 from ..analysis.sensitivity import SensitivityEvaluator
 from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
+from ..kinematics.newton.entries import direct, plain
 from ..kinematics.newton.kernels import largest_step
 from ..kinematics.newton.solver import Solution
 from ..lie import pose_distance
@@ -152,6 +153,10 @@ class Tracker(PassageMixin):
         nv = hexa.model.nv
         mats, vecs = [np.zeros((3, 3)) for _ in range(4)], (np.zeros(3), np.zeros(3), np.zeros(4))
         self._predict_work = (np.zeros(nv), np.zeros(nv), *mats, *vecs)
+        # the compiled predictor and reading checks: the dispatchers until their first call, then the machine
+        # code it ran, called directly (every array they take is this tracker's, or a copy: .entries)
+        self._predict_into, self._predict_direct = predict_into, False
+        self._reading_checks, self._checks_direct = reading_checks, False
         self._Lr, self._Fr = _NewestFirst(s.window, 6), _NewestFirst(s.window, 7)
         self._L = self._Lr.rows  # readings of the trusted samples, newest first
         self._F = self._Fr.rows  # free-flyer coordinates of _hist, newest first
@@ -192,6 +197,7 @@ class Tracker(PassageMixin):
 
     def _restart(self, q: np.ndarray, trusted: bool) -> None:
         """History = ``q`` only (``trusted``: ``q`` is a sample of the stream)."""
+        q = plain(q)  # the predictor's one compiled type
         self._hist.clear()
         self._hist.appendleft(q)
         self._F[0] = q[self._ffq]
@@ -203,6 +209,7 @@ class Tracker(PassageMixin):
             self._push_trusted(q)
 
     def _push_trusted(self, q: np.ndarray) -> None:
+        q = plain(q)  # the predictor's one compiled type (a solver's q is one: no copy)
         if self._n > 0 or len(self._hist) > 1 or self._hist[0] is not q:
             self._hist.appendleft(q)
             self._F = self._Fr.push(q[self._ffq])
@@ -232,10 +239,11 @@ class Tracker(PassageMixin):
         t0 = time.perf_counter()
         s = self.settings
         self._k += 1  # every sample, readable or not, is one period: ages are counted from here
-        if type(lengths) is np.ndarray and lengths.dtype == np.float64:  # the common case, without a trial conversion
-            l = lengths.reshape(-1)
+        # the readings copied: the stuck test keeps them, and a caller may refill one array sample after sample
+        if type(lengths) is np.ndarray and lengths.dtype == np.float64 and lengths.ndim == 1:  # the common case
+            l = lengths.copy()
         else:
-            l = np.asarray(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
+            l = np.array(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
         n, m = self._n, self._gap + 1
         checked = l.shape == (6,) and n >= s.settle_samples and m <= s.max_gap + 1
         lhat, w, spread = _NONE, None, 0.0
@@ -251,9 +259,13 @@ class Tracker(PassageMixin):
         # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
         last = self._raw[-1] if self._raw else _NONE
         sigma_nu = s.innovation_sigma(spread)
-        finite, zmax, zz, frozen, any_stuck = (False, math.nan, 0.0, 0, False) if l.shape != (6,) else (
-            reading_checks(l, last, s.stuck_tolerance, self._frozen, self._stuck, lhat, sigma_nu, self._z)
-        )  # fmt: skip
+        if l.shape != (6,):
+            finite, zmax, zz, frozen, any_stuck = False, math.nan, 0.0, 0, False
+        else:
+            args = (l, last, s.stuck_tolerance, self._frozen, self._stuck, lhat, sigma_nu, self._z)
+            finite, zmax, zz, frozen, any_stuck = self._reading_checks(*args)
+            if not self._checks_direct:  # its first call: the machine code it ran, directly from now on
+                self._reading_checks, self._checks_direct = direct(reading_checks, args), True
         if not finite:
             msg = f"expected 6 finite readings, got {lengths!r}"
             return self._failure(l if l.shape == (6,) else np.full(6, np.nan), "invalid_input", msg, (), (), t0)
@@ -330,9 +342,12 @@ class Tracker(PassageMixin):
             return q0.copy()
         out = np.empty(q0.shape[0])
         if a1 != 0.0:
-            predict_into(q0, hist[1], a1, hist[2] if a2 != 0.0 else q0, a2, self._layout, out, self._predict_work)
+            args = (q0, hist[1], a1, hist[2] if a2 != 0.0 else q0, a2, self._layout, out, self._predict_work)
         else:
-            predict_into(q0, hist[2], a2, q0, 0.0, self._layout, out, self._predict_work)
+            args = (q0, hist[2], a2, q0, 0.0, self._layout, out, self._predict_work)
+        self._predict_into(*args)
+        if not self._predict_direct:  # its first call: the machine code it ran, directly from now on
+            self._predict_into, self._predict_direct = direct(predict_into, args), True
         return out
 
     def _solve(self, l: np.ndarray, guess: np.ndarray) -> Solution:

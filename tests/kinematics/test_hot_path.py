@@ -253,3 +253,34 @@ def test_strided_readings_take_the_hot_path_by_its_one_compiled_signature():
     assert _same(got, want)
     with pytest.raises(hm.LimitError):
         hexa.forward(np.stack([x + 1.0, x], axis=1)[:, 0], near)  # the stroke checked on the strided readings too
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    b = np.array(a)
+    b.setflags(write=False)  # as pandas' copy-on-write to_numpy() or np.load(..., mmap_mode="r") give them
+    return b
+
+
+def test_read_only_arrays_take_the_hot_paths_by_their_one_compiled_signature():
+    """Read-only readings, guess and configurations: the same answers, no second compiled solve or proof.
+
+    numba types a read-only array apart: each entry would compile again, unannounced (the solve
+    seconds, the proof half a minute).
+    """
+    from hexapod_model.kinematics.newton.proof_kernel import prove_packed
+
+    hexa = hm.Hexapod.from_preset("reference")
+    hexa.engine.prover.regions = False  # each step proven by its own test
+    near = hexa.forward(np.full(6, 0.01))
+    x = near.lengths + 1e-4
+    want = hexa.forward(x, near)  # the warm path and the proof compiled (or loaded)
+    before = len(solve_schur.signatures), len(prove_packed.signatures)
+    got = hexa.forward(_read_only(x), near)
+    assert _same(got, want)
+    guess = replace(near, q=_read_only(near.q))
+    assert _same(hexa.forward(x, guess), want)
+    cold = hexa.forward(_read_only(np.full(6, 0.01)))
+    assert _same(cold, near)
+    prover = hexa.engine.prover
+    assert prover.prove(_read_only(near.q), _read_only(want.q)) == prover.prove(near.q, want.q)
+    assert (len(solve_schur.signatures), len(prove_packed.signatures)) == before

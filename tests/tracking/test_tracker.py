@@ -247,3 +247,29 @@ def test_trackers_stepped_in_turn_on_one_thread_may_share_an_evaluator(reference
             assert (a.sigma_translation, a.condition_number) == (b.sigma_translation, b.condition_number)
     with pytest.raises(hm.InputError):
         Tracker(reference, length=1.0, sensitivity=shared_eval)
+
+
+def test_a_caller_may_refill_one_readings_array_sample_after_sample(reference):
+    """One array refilled for every sample (a 1 kHz loop's buffer), or read-only rows: the answers of fresh arrays.
+
+    The stuck test compares each sample with the ones before: a tracker that kept the caller's
+    array saw every leg frozen, and flagged most of trajectory A ``stuck``.
+    """
+    from hexapod_model.service.sim.config import trajectory_sequence
+
+    lengths, guess = [], None
+    for T in trajectory_sequence("A", reference.home_pose, 0.01, 250.0, 8.0)[:300]:
+        guess = reference.inverse(T, guess=guess)
+        lengths.append(guess.lengths)
+    readings = np.array(lengths) + np.random.default_rng(0).normal(0.0, 10e-6, (len(lengths), 6))
+    rows = readings.copy()
+    rows.setflags(write=False)  # pandas' copy-on-write to_numpy(), np.load(..., mmap_mode="r")
+    fresh, refilled, read_only = Tracker(reference), Tracker(reference), Tracker(reference)
+    buffer = np.empty(6)
+    for k in range(len(readings)):
+        buffer[:] = readings[k]
+        a, b, c = fresh.step(readings[k].copy()), refilled.step(buffer), read_only.step(rows[k])
+        assert a.flags == b.flags == c.flags and a.status == b.status == c.status
+        np.testing.assert_array_equal(a.solution.q, b.solution.q)
+        np.testing.assert_array_equal(a.solution.q, c.solution.q)
+    assert a.ok

@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 from ...description.model import ClosedLoopModel
+from .entries import direct, plain
 from .first_compile import announce
 from .iteration import solve_blocks, solve_schur
 from .kernels import jacobian
@@ -94,6 +95,9 @@ class CompiledSolver(NewtonSolver):
         self.packed = packed
         self._kernel = solve_schur if schur else solve_blocks
         announce(self._kernel)  # the first solve after installation compiles it
+        # every call passes the same types (start and offset through plain()): after the first, the
+        # machine code it ran is called directly (.entries.direct)
+        self._entry, self._direct = self._kernel, False
         # the entries' settings (.packing.SETTINGS), filled in place: per kind of call, the constant ones set here
         self._settings = np.zeros(SETTINGS)
         #: the settings of the next certified attempt of direct kinematics (:meth:`certified_forward`)
@@ -119,12 +123,19 @@ class CompiledSolver(NewtonSolver):
 
         Returns ``(status, iterations, residual, message, first joint outside its limits or -1)``.
         """
-        code, it, norm, ratio, self.theta, self.det_sign, self.certified, bad = self._kernel(
+        code, it, norm, ratio, self.theta, self.det_sign, self.certified, bad = self._run(
             start, offset, settings, arrays
         )
         self.sign, self.kappa = self.state.tolist()
         status, message = ("converged", "") if code == CONVERGED else outcome(code, tol, it, norm, ratio)
         return status, it, norm, message, bad
+
+    def _run(self, start: np.ndarray, offset: np.ndarray, settings: np.ndarray, arrays: tuple) -> tuple:
+        """The step's entry on these arguments (``start`` and ``offset`` through :func:`.entries.plain`): its tuple."""
+        done = self._entry(start, offset, settings, arrays)
+        if not self._direct:
+            self._entry, self._direct = direct(self._kernel, (start, offset, settings, arrays)), True
+        return done
 
     def iterate(self, q0, tol, max_iter, sign=0.0, offset=None, scale=0.0, certify=False):
         """:meth:`.solver.NewtonSolver.iterate`, compiled (same arguments, results and state)."""
@@ -133,7 +144,7 @@ class CompiledSolver(NewtonSolver):
         offset = self._no_offset if offset is None else offset
         settings = self._settings
         settings[:7] = (tol, max_iter, sign, scale, certify, 0.0, 0.0)
-        status, it, norm, message, _ = self._call(_contiguous(q0), _contiguous(offset), settings, self._scratch, tol)
+        status, it, norm, message, _ = self._call(plain(q0), plain(offset), settings, self._scratch, tol)
         return status, it, norm, message
 
     def _outputs(self) -> tuple:
@@ -195,21 +206,18 @@ class CompiledSolver(NewtonSolver):
         if (tol, max_iter, sign) != self._staged:  # a warm stream keeps them: no write into the array
             settings[0], settings[1], settings[2] = tol, max_iter, sign
             self._staged = (tol, max_iter, sign)
-        # one compiled signature: contiguous float64 arrays (a strided or float32 one would compile another)
-        if not readings.flags.c_contiguous:
-            readings = readings.copy()
-        return self._attempt(start, readings, settings, tol)
+        # one compiled signature (.entries.plain): a strided, read-only or float32 array would compile another
+        return self._attempt(start, plain(readings), settings, tol)
 
     def _attempt(self, start: np.ndarray, offset: np.ndarray, settings: np.ndarray, tol: float) -> Attempt | int:
         """The certified attempt with ``settings`` into new output arrays (an int: the reading outside the stroke)."""
         # the hot path of a warm solve: :meth:`_call` and :meth:`_outputs` written out
         q, pose, G = np.empty(self._nq), np.empty((4, 4)), np.empty(self._g_shape)
-        # one compiled signature: a contiguous float64 start (a strided or float32 array would compile another)
-        if start.dtype != np.float64 or not start.flags.c_contiguous:
-            start = np.ascontiguousarray(start, dtype=np.float64)
-        code, it, norm, ratio, theta, det_sign, certified, bad = self._kernel(
-            start, offset, settings, (*self._fixed, q, pose, G)
-        )
+        arrays = (*self._fixed, q, pose, G)
+        start = plain(start)  # one compiled signature: a strided, read-only or float32 start would compile another
+        code, it, norm, ratio, theta, det_sign, certified, bad = self._entry(start, offset, settings, arrays)
+        if not self._direct:
+            self._entry, self._direct = direct(self._kernel, (start, offset, settings, arrays)), True
         if code == INVALID_INPUT:  # refused before the solve (attempt_readings' stroke): the state is kept
             return bad
         self.theta, self.det_sign, self.certified = theta, det_sign, certified
@@ -230,7 +238,7 @@ class CompiledSolver(NewtonSolver):
         settings = self._checked_settings
         settings[0], settings[1] = tol, max_iter
         arrays = self._outputs()
-        status, it, norm, message, bad = self._call(_contiguous(q0), self._no_offset, settings, arrays, tol)
+        status, it, norm, message, bad = self._call(plain(q0), self._no_offset, settings, arrays, tol)
         return (arrays[5], status, it, norm, arrays[7], message), arrays[6], bad
 
     def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -238,14 +246,9 @@ class CompiledSolver(NewtonSolver):
         settings = self._settings
         settings[:7] = (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         # frames and residual at q; the solver's state untouched
-        self._kernel(_contiguous(q), self._no_offset, settings, self._scratch)
+        self._run(plain(q), self._no_offset, settings, self._scratch)
         jacobian(*self.jac_args)
         return self.r.copy(), self.G.copy()
-
-
-def _contiguous(a: np.ndarray) -> np.ndarray:
-    """``a`` as a C-contiguous float64 array (itself when it is one already)."""
-    return a if a.dtype == np.float64 and a.flags.c_contiguous else np.ascontiguousarray(a, dtype=np.float64)
 
 
 def solver_for(clm: ClosedLoopModel, held_joints: tuple[int, ...], limits: tuple | None = None) -> NewtonSolver:

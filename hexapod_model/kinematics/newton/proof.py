@@ -30,11 +30,13 @@ The numba kernels are imported by the first :class:`StepProver` (they compile on
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
 
 from ...description.model import ClosedLoopModel
+from .entries import direct, plain
 from .first_compile import announce
 from .legs import ChainTables
 from .proven import Proof, new_proof
@@ -70,6 +72,7 @@ class StepProver:
         from . import krawczyk, proof_kernel  # numba: compiled on first use
 
         self._kernel = proof_kernel
+        self._entry: Callable | None = None  # the machine code of the first proof, called directly after it
         self._workspace = krawczyk.workspace
         self._held = krawczyk.HELD  # the work's row that notes a preconditioner held
         self._local = threading.local()  # the work arrays, one set per thread
@@ -151,8 +154,6 @@ class StepProver:
                 (:func:`.krawczyk.prove_path`, at most 32 tests); False: one test only (a caller
                 that shortens the step itself).
         """
-        kernel = self._kernel.prove_packed
-        announce(kernel)
         (work, ends), (floats, ints, spec) = self._packed()
         state = ends[7]
         if not self.regions:  # no region held, none tried; the preconditioner built afresh
@@ -160,12 +161,26 @@ class StepProver:
             work[0][self._held][0] = 0.0
         elif state[2] == np.inf:
             state[2] = 0.0
-        # one compiled signature: contiguous float64 configurations (a strided one, a row of a
-        # Fortran array or a column, would compile the proof again, unannounced: a minute and more)
-        q0, q1 = np.ascontiguousarray(q0, dtype=np.float64), np.ascontiguousarray(q1, dtype=np.float64)
-        proven, tests, position, rotation, parts = kernel(
-            floats, ints, spec, self.tables[4], self.platform_q, q0, q1, structured, subdivide
+        # one compiled signature (.entries.plain): a strided, read-only or float32 configuration (a
+        # column, a row of a Fortran array) would compile the proof again, unannounced: a minute and more
+        args = (
+            floats,
+            ints,
+            spec,
+            self.tables[4],
+            self.platform_q,
+            plain(q0),
+            plain(q1),
+            bool(structured),
+            bool(subdivide),
         )
+        if self._entry is None:
+            kernel = self._kernel.prove_packed
+            announce(kernel)
+            proven, tests, position, rotation, parts = kernel(*args)
+            self._entry = direct(kernel, args)  # the same types on every later call
+        else:
+            proven, tests, position, rotation, parts = self._entry(*args)
         in_region = bool(proven) and bool(state[3] > 0.0)
         return new_proof(bool(proven), float(position), float(rotation), int(tests), int(parts), in_region)
 
