@@ -20,6 +20,7 @@ from .body_check import BodyCheck, message_of
 from .certificate import NEAR_SINGULAR_FACTOR
 from .engine import SolveEngine
 from .input_checks import failure_status
+from .newton.entries import plain
 from .newton.outcomes import INVALID_INPUT, OUT_OF_LIMITS, outcome
 from .newton.proven import Proof
 from .newton.solver import Solution
@@ -97,7 +98,7 @@ def as_rows(name: str, values, width: tuple[int, ...]) -> np.ndarray:
         raise InputError(name, values, f"expected an array of shape {shape}") from None
     if arr.ndim != 1 + len(width) or arr.shape[1:] != width:
         raise InputError(name, values, f"expected shape {shape}, got {arr.shape}")
-    return np.ascontiguousarray(arr)
+    return plain(arr)  # the compiled loops' one type (a read-only array: a copy)
 
 
 def poses_of_xyzquat(x: np.ndarray, tolerance: float) -> np.ndarray:

@@ -39,6 +39,7 @@ from ..exceptions import InputError, UrdfError
 from . import clearance_kernel as kernel
 from .body_tables import kernel_tables
 from .cones import ConeGeometry
+from .newton.entries import direct, plain
 from .newton.solver import Solution
 from .placement_kernel import FLAGS, POINTS
 
@@ -121,6 +122,8 @@ class ClearanceQuery:
         self.tables = kernel_tables(self.model, g, cones, limits)
         self.with_cones = cones is not None
         self._kernel = kernel.compiled_measure() if self.compiled else kernel.measure
+        # check()'s call: the kernel until its first call, then the machine code it ran (.newton.entries.direct)
+        self._check, self._check_direct = self._kernel, False
         self._nj = self.model.njoints
         self._local = threading.local()
 
@@ -145,7 +148,7 @@ class ClearanceQuery:
         return work
 
     def check(self, q: np.ndarray) -> tuple[Clearance | None, np.ndarray | None]:
-        """The body check of configuration ``q`` (float64, contiguous) in one kernel call: collision and cones.
+        """The body check of configuration ``q`` (``nq`` values) in one kernel call: collision and cones.
 
         Returns:
             ``(clearance, angles)``: the :class:`Clearance` when ``q`` is in collision (else
@@ -154,7 +157,11 @@ class ClearanceQuery:
         """
         work = getattr(self._local, "work", None) or self._work()
         ints, floats, frames = self.tables
-        found = self._kernel(q, ints, floats, frames, work[0], work[1], self.min_clearance, self.with_cones)
+        q = plain(q)
+        args = (q, ints, floats, frames, work[0], work[1], self.min_clearance, self.with_cones)
+        found = self._check(*args)
+        if not self._check_direct:  # the same types on every later call (q through plain)
+            self._check, self._check_direct = direct(self._kernel, args), True
         if found[1] < 0 and not found[2] and found[3]:  # nothing closer than min_clearance, every cone kept
             return None, None
         c = self._answer(q, found, *work)
@@ -168,7 +175,7 @@ class ClearanceQuery:
         overlaps of a body and a plate.
         """
         work, out = self._work()
-        q = np.ascontiguousarray(q, dtype=float)
+        q = plain(np.asarray(q, dtype=float))  # the kernel's one compiled type
         found = self._kernel(q, *self.tables, work, out, np.inf, False)
         c = self._answer(q, found, work, out)
         assert c is not None  # every pair is measured against an infinite bound

@@ -17,6 +17,7 @@ import pinocchio as pin
 
 from ..exceptions import GeometryError, InputError
 from .newton import numpy_kernels
+from .newton.entries import plain
 from .newton.solver import Solution
 
 POSE_TOLERANCE = 1e-6  # max deviation of a pose from a rigid transform, of a start quaternion from unit norm
@@ -29,7 +30,9 @@ RANK_TOL = 1e-9  # singular values below this fraction of the largest count as z
 def real_array(name: str, values: Any, expected: str) -> np.ndarray:
     """``values`` as a float array if they are real numbers (any shape), else :class:`InputError`.
 
-    Refuses complex values, text, booleans and ragged nesting rather than converting them.
+    Refuses complex values, text, booleans and ragged nesting rather than converting them. The
+    array is the compiled entries' one type (:func:`.newton.entries.plain`): float64,
+    C-contiguous, aligned and writeable (a copy when ``values`` is not).
     """
     try:
         arr = np.asarray(values)
@@ -37,12 +40,12 @@ def real_array(name: str, values: Any, expected: str) -> np.ndarray:
         raise InputError(name, values, expected) from None
     kind = arr.dtype.kind
     if kind in "iuf":
-        return arr.astype(float, copy=False)
+        return plain(arr)
     if kind == "c":
         raise InputError(name, values, f"{expected}; got complex values")
     if kind == "O":
         try:
-            return arr.astype(float)
+            return plain(arr.astype(float))
         except (TypeError, ValueError):
             raise InputError(name, values, expected) from None
     raise InputError(name, values, f"{expected}; got {arr.dtype} data")
@@ -68,7 +71,7 @@ def check_pose(pose: Any, rigid_error: Callable[[np.ndarray], float] = numpy_ker
     ``rigid_error`` measures the distance from a rigid transform (a solver passes its compiled kernel).
     """
     if type(pose) is np.ndarray and pose.dtype == np.float64 and pose.shape == (4, 4):
-        T = pose  # the common case: no conversion
+        T = plain(pose)  # the common case: no conversion (a read-only or strided pose: a copy)
     elif isinstance(pose, pin.SE3):
         T = np.array(pose.homogeneous)
     else:

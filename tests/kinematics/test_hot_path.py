@@ -284,3 +284,50 @@ def test_read_only_arrays_take_the_hot_paths_by_their_one_compiled_signature():
     prover = hexa.engine.prover
     assert prover.prove(_read_only(near.q), _read_only(want.q)) == prover.prove(near.q, want.q)
     assert (len(solve_schur.signatures), len(prove_packed.signatures)) == before
+
+
+def _signatures() -> dict[str, int]:
+    """The compiled signatures of every numba entry the package has imported, by module and name."""
+    import sys
+
+    from numba.core.registry import CPUDispatcher
+
+    out = {}
+    for module in list(sys.modules.values()):
+        if getattr(module, "__name__", "").startswith("hexapod_model."):
+            for name, value in list(vars(module).items()):
+                if isinstance(value, CPUDispatcher):
+                    out[f"{module.__name__}.{name}"] = len(value.signatures)
+    return out
+
+
+def test_read_only_inputs_of_the_public_calls_compile_nothing_more():
+    """Each public call, with read-only inputs after writeable ones: the same answer, no entry compiled again."""
+    from hexapod_model.tracking.tracker import Tracker
+
+    hexa = hm.Hexapod.from_preset("reference")
+    x = np.full(6, 0.01)
+    near = hexa.forward(x)
+    rows = np.array([x, x + 1e-4, x + 2e-4])
+
+    def track(c):
+        tracker = Tracker(hexa)
+        return [tracker.step(c(x + k * 1e-5)).solution.q for k in range(12)][-1]
+
+    calls = {
+        "forward": lambda c: hexa.forward(c(x + 1e-4), near).q,
+        "forward from a configuration": lambda c: hexa.forward(c(x + 1e-4), c(near.q)).q,
+        "inverse": lambda c: hexa.inverse(c(near.pose)).q,
+        "inverse from a configuration": lambda c: hexa.inverse(c(near.pose), c(near.q)).q,
+        "forward_batch": lambda c: hexa.forward_batch(c(rows)).q,
+        "forward_batch warm": lambda c: hexa.forward_batch(c(rows), warm=True).q,
+        "inverse_batch": lambda c: hexa.inverse_batch(c(np.array([near.pose, near.pose]))).q,
+        "clearance": lambda c: hexa.clearance(c(near.q)).distance,
+        "tracker": track,
+    }
+    for name, call in calls.items():
+        want = call(np.array)  # compiles (or loads) what the call runs
+        before = _signatures()
+        got = call(_read_only)
+        assert np.array_equal(got, want), name
+        assert _signatures() == before, name
