@@ -21,6 +21,7 @@ rad), from the eigenvalues of the 6x6 ``Js^T Js`` by cyclic Jacobi rotations.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -260,7 +261,8 @@ class SensitivityEvaluator:
         self._solved_args: tuple | None = None
         # measure_solved on _solved_args (the solver's buffers and this evaluator's: their types never change),
         # the dispatcher until its first call with them, then the machine code that call ran (.entries.direct)
-        self._measure, self._measure_direct = measure_solved, False
+        self._measure: Callable[..., tuple] = measure_solved
+        self._measure_direct = False
 
     def evaluate_solved(self, q: np.ndarray) -> Sensitivity:
         """:meth:`evaluate` at ``q``, the configuration the calling thread's last direct-kinematics solve ended on.

@@ -31,6 +31,7 @@ import dataclasses
 import math
 import time
 from collections import deque
+from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
@@ -155,8 +156,9 @@ class Tracker(PassageMixin):
         self._predict_work = (np.zeros(nv), np.zeros(nv), *mats, *vecs)
         # the compiled predictor and reading checks: the dispatchers until their first call, then the machine
         # code it ran, called directly (every array they take is this tracker's, or a copy: .entries)
-        self._predict_into, self._predict_direct = predict_into, False
-        self._reading_checks, self._checks_direct = reading_checks, False
+        self._predict_into: Callable[..., None] = predict_into
+        self._reading_checks: Callable[..., tuple] = reading_checks
+        self._predict_direct = self._checks_direct = False
         self._Lr, self._Fr = _NewestFirst(s.window, 6), _NewestFirst(s.window, 7)
         self._L = self._Lr.rows  # readings of the trusted samples, newest first
         self._F = self._Fr.rows  # free-flyer coordinates of _hist, newest first
