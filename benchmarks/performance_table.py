@@ -55,6 +55,14 @@ def robustness_rows(data: list[dict]) -> list[tuple[str, str]]:
     return rows
 
 
+def _after_idle(r: dict) -> str:
+    """A one-fixture run's ratio to its solve timed after the stream's idle gap (cold caches), or nothing."""
+    if "solve_idle_us" not in r:
+        return ""
+    us = r["solve_idle_us"]
+    return f"; {r['service_cpu_us_per_set'] / us:.1f}x the solve after the same idle gap, {us:.0f} µs"
+
+
 def service_rows(data: list[dict]) -> list[tuple[str, str]]:
     """``service.py``: CPU share and latency of the fixture pose service per stream, then its capacity."""
     runs = [r for r in data if r.get("kind") != "capacity"]
@@ -62,7 +70,8 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
         (
             f"pose service, {r['fixtures']} fixture(s) × {r['rate_hz']:.0f} Hz",
             f"{r['service_cpu_pct']:.0f} % of a core ({r['service_cpu_us_per_set']:.0f} µs a set, "
-            f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x its solve's {r['solve_us']:.0f} µs), latency median "
+            f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x its solve's {r['solve_us']:.0f} µs{_after_idle(r)}), "
+            "latency median "
             f"{r['latency_ms_median']:.2f} ms, p99 {r['latency_ms_p99']:.1f} ms, "
             f"{'sustained' if r['sustained'] else 'not sustained'}",
         )

@@ -20,7 +20,9 @@ named ``hx-sim`` as the simulator of ``hexapod serve --simulate`` is; the rest).
 *sustained* when at least 99 % of the sets sent are solved and the p99 latency stays under 10 ms
 (no backlog). The machine's other load is part of the figures:
 run it on an idle machine for the capacity. Each run prints the service's CPU per solved set
-beside the tracker step's and the solve's own (measured first, alone, in this process).
+beside the tracker step's and the solve's own (measured first, alone, in this process), and a
+run of one fixture also against the solve timed after the same idle gap (``1 / rate``): after a
+gap the caches are cold, and the same solve costs more CPU (docs/performance.md).
 Every fixture's frames of one sampling period are queued together: the last fixture's set of a
 period waits for the sets of the others (its latency holds ``FIXTURES - 1`` sets' CPU).
 ``--more 5:1000`` adds runs of 5 fixtures at 1 kHz: the 5,000 sets a second of 50 fixtures at
@@ -53,6 +55,7 @@ from hexapod_model.service.threads import NamedThread
 from hexapod_model.tracking.types import predict
 
 SETS = 2000  # one there-and-back of trajectory A, whatever the rate
+IDLE_SOLVES = 400  # solves timed after an idle gap, per rate of one fixture
 
 
 def readings_sequence(hexa: Hexapod, noise: float = 10e-6, seed: int = 0) -> np.ndarray:
@@ -192,15 +195,28 @@ def solve_cost(hexa: Hexapod, readings: np.ndarray, noise: float = 10e-6) -> tup
     for k in range(200, len(readings)):
         solver.step(readings[k], k)
     c1 = time.thread_time()
-    tol, history, spent = solver.tracker.tol, deque([hexa.q_home], maxlen=2), 0.0
-    for k in range(len(readings)):
+    n = len(readings) - 200
+    return 1e6 * (c1 - c0) / n, solves_cost(hexa, readings, solver.tracker.tol)
+
+
+def solves_cost(hexa: Hexapod, readings: np.ndarray, tol: float, gap: float = 0.0, timed: int = 0) -> float:
+    """CPU (us) of the tracker's solve alone (see :func:`solve_cost`), the mean of ``timed`` (0: all but 200).
+
+    ``gap`` (s): the thread sleeps that long before each timed solve, as the cycle thread waits
+    between the sets of a stream: after an idle gap the caches are cold, and the same solve
+    costs more CPU.
+    """
+    history, spent = deque([hexa.q_home], maxlen=2), 0.0
+    last = len(readings) if not timed else min(len(readings), 200 + timed)
+    for k in range(last):
         guess = predict(hexa.model, history, "eq22")
+        if k >= 200 and gap > 0.0:
+            time.sleep(gap)
         t = time.thread_time()
         sol = hexa.forward(readings[k], guess, tol=tol, max_iter=20, check=False)
         spent += time.thread_time() - t if k >= 200 else 0.0
         history.appendleft(sol.q)
-    n = len(readings) - 200
-    return 1e6 * (c1 - c0) / n, 1e6 * spent / n
+    return 1e6 * spent / (last - 200)
 
 
 def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> dict:
@@ -320,11 +336,18 @@ def line(r: dict) -> str:
         f"latency median {r['latency_ms_median']:6.2f} ms  p99 {r['latency_ms_p99']:7.2f} ms  "
         f"CPU service {r['service_cpu_pct']:5.1f} % ({r['service_cpu_us_per_set']:4.0f} us a set, "
         f"cycle thread {r['cycle_cpu_us_per_set']:4.0f}; "
-        f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x the solve)  "
+        f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x the solve{idle_ratio(r)})  "
         f"process {r['process_cpu_pct']:5.1f} % (by OS thread name: service {r['os_service_cpu_pct']:.1f}, "
         f"hx-sim {r['os_sim_cpu_pct']:.1f}, other {r['os_other_cpu_pct']:.1f})  "
         f"{'sustained' if r['sustained'] else 'NOT sustained'}  {r['statuses']}"
     )
+
+
+def idle_ratio(r: dict) -> str:
+    """``, Nx the solve after the same idle gap`` for a run of one fixture (empty for the others)."""
+    if "solve_idle_us" not in r:
+        return ""
+    return f", {r['service_cpu_us_per_set'] / r['solve_idle_us']:.1f}x the solve after the same idle gap"
 
 
 def rates_of(text: str) -> list[float]:
@@ -374,12 +397,21 @@ def main(argv=None) -> int:
         f"load average {Path('/proc/loadavg').read_text().split()[0]}",
         flush=True,
     )
+    one = rates_of(args.one)
+    tol = PoseSolver(hexa, 10e-6).tracker.tol
+    idle = {rate: solves_cost(hexa, readings, tol, 1.0 / rate, IDLE_SOLVES) for rate in one}
+    print(
+        "the solve after the idle gap of a 1-fixture stream: "
+        + ", ".join(f"{rate:.0f} Hz {us:.0f} us ({us / solve_us:.1f}x)" for rate, us in idle.items()),
+        flush=True,
+    )
     reports = []
-    groups = [(1, rates_of(args.one)), (args.fixtures, rates_of(args.many)), *args.more]
+    groups = [(1, one), (args.fixtures, rates_of(args.many)), *args.more]
     with tempfile.TemporaryDirectory() as tmp:
         for n, rates in groups:
             for rate in rates:
-                reports.append(run(hexa, readings, n, rate, args.seconds, Path(tmp)) | {"solve_us": solve_us})
+                extra = {"solve_us": solve_us} | ({"solve_idle_us": idle[rate]} if n == 1 else {})
+                reports.append(run(hexa, readings, n, rate, args.seconds, Path(tmp)) | extra)
                 print(line(reports[-1]), flush=True)
         if args.capacity:
             for n, rate in ((1, 1000.0), (args.fixtures, 100.0), *((n, r) for n, rates in args.more for r in rates)):

@@ -426,6 +426,12 @@ def test_service_benchmark_runs(tmp_path):
     )
     cell = rows["pose service, 2 fixture(s) × 100 Hz from a full queue (`--capacity`)"]
     assert cell.startswith(f"cycle thread {full[1]['cycle_cpu_us_per_set']:.0f} µs CPU a set")
+    # a run of one fixture also against its solve timed after the stream's idle gap (the others: not)
+    assert "the solve after the idle gap of a 1-fixture stream: 100 Hz" in out.stdout
+    fed = {r["fixtures"]: r for r in data if r.get("kind") != "capacity"}
+    assert fed[1]["solve_idle_us"] > 0.0 and "solve_idle_us" not in fed[2]
+    assert "the solve after the same idle gap, " in rows["pose service, 1 fixture(s) × 100 Hz"]
+    assert "idle gap" not in rows["pose service, 2 fixture(s) × 20 Hz"]
 
 
 def test_service_benchmark_reads_the_feeders_cpu_while_it_lives(tmp_path, monkeypatch):
