@@ -211,7 +211,7 @@ class CompiledSolver(NewtonSolver):
 
     def _attempt(self, start: np.ndarray, offset: np.ndarray, settings: np.ndarray, tol: float) -> Attempt | int:
         """The certified attempt with ``settings`` into new output arrays (an int: the reading outside the stroke)."""
-        # the hot path of a warm solve: :meth:`_call` and :meth:`_outputs` written out
+        # the hot path of a warm solve: :meth:`_call`, :meth:`_run` and :meth:`_outputs` written out
         q, pose, G = np.empty(self._nq), np.empty((4, 4)), np.empty(self._g_shape)
         arrays = (*self._fixed, q, pose, G)
         start = plain(start)  # one compiled signature: a strided, read-only or float32 start would compile another

@@ -1,11 +1,11 @@
 """The hot paths' calls of compiled kernels: one machine code per call site, called directly.
 
 numba's dispatcher resolves the numba type of every argument on every call to find the machine
-code compiled for those types: on a warm solve's entry (:func:`.iteration.solve_schur`, whose
-last argument is a tuple of eight arrays) that costs about 0.4 us of the solve's 16 us, on the
-proof's about 0.3 us, on the tracker's predictor 0.6 us. A call site whose arguments keep their
-types calls the machine code its first call ran (:func:`direct`: what the dispatcher would pick,
-without the search).
+code compiled for those types, the more so for a tuple of arrays (the last argument of a warm
+solve's entry, :func:`.iteration.solve_schur`): a measurable part of a warm solve, a proof and a
+tracker step (docs/performance.md). A call site whose arguments keep their types calls the
+machine code its first call ran (:func:`direct`: what the dispatcher would pick, without the
+search).
 
 For a type it has not compiled the dispatcher compiles a new specialisation, unannounced: for a
 read-only array (pandas' copy-on-write ``to_numpy()``, ``np.load(..., mmap_mode="r")``,
