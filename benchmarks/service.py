@@ -181,12 +181,15 @@ def capacity(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, se
     return 1e6 * (cpu[1] - cpu[0]) / (last - first)
 
 
-def solve_cost(hexa: Hexapod, readings: np.ndarray, noise: float = 10e-6) -> tuple[float, float]:
-    """CPU (us) a set of the tracker's step (solve, checks, uncertainty) and of its solve alone.
+def solve_cost(
+    hexa: Hexapod, readings: np.ndarray, rates: list[float], noise: float = 10e-6
+) -> tuple[float, float, dict[float, float]]:
+    """CPU (us) a set of the tracker's step (solve, checks, uncertainty), of its solve alone, and of it after idle gaps.
 
     The solve alone is the one the tracker makes: ``forward`` from the motion model's
     prediction (its ``eq22`` predictor over the last two poses) with the Krawczyk proof of that
-    short step, each timed by itself.
+    short step, each timed by itself; then, per rate of ``rates`` (Hz), the same solve timed
+    after the idle gap of a stream at that rate (:func:`solves_cost`).
     """
     solver = PoseSolver(hexa, noise)
     for k in range(200):
@@ -195,8 +198,9 @@ def solve_cost(hexa: Hexapod, readings: np.ndarray, noise: float = 10e-6) -> tup
     for k in range(200, len(readings)):
         solver.step(readings[k], k)
     c1 = time.thread_time()
-    n = len(readings) - 200
-    return 1e6 * (c1 - c0) / n, solves_cost(hexa, readings, solver.tracker.tol)
+    n, tol = len(readings) - 200, solver.tracker.tol
+    idle = {rate: solves_cost(hexa, readings, tol, 1.0 / rate, IDLE_SOLVES) for rate in rates}
+    return 1e6 * (c1 - c0) / n, solves_cost(hexa, readings, tol), idle
 
 
 def solves_cost(hexa: Hexapod, readings: np.ndarray, tol: float, gap: float = 0.0, timed: int = 0) -> float:
@@ -390,16 +394,14 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     hexa = Hexapod.from_preset("reference")
     readings = readings_sequence(hexa)
-    step_us, solve_us = solve_cost(hexa, readings)
+    one = rates_of(args.one)
+    step_us, solve_us, idle = solve_cost(hexa, readings, one)
     print(
         f"a set alone: tracker step {step_us:.0f} us CPU (solve, checks, uncertainty), of which the solve "
         f"(forward from the prediction, with its proof) {solve_us:.0f} us; "
         f"load average {Path('/proc/loadavg').read_text().split()[0]}",
         flush=True,
     )
-    one = rates_of(args.one)
-    tol = PoseSolver(hexa, 10e-6).tracker.tol
-    idle = {rate: solves_cost(hexa, readings, tol, 1.0 / rate, IDLE_SOLVES) for rate in one}
     print(
         "the solve after the idle gap of a 1-fixture stream: "
         + ", ".join(f"{rate:.0f} Hz {us:.0f} us ({us / solve_us:.1f}x)" for rate, us in idle.items()),
