@@ -12,6 +12,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import pytest
 
 from hexapod_model.kinematics.newton.krawczyk import prove_region
 from hexapod_model.kinematics.newton.proof import StepProver
@@ -146,3 +147,42 @@ def test_a_short_step_of_fast_moving_readings_builds_no_region():
         proof = prover.prove(guess.q, sol.q)
         assert proof.proven and proof.in_region and proof.tests == int(k == 1), (k, proof)
         previous = sol
+
+
+def test_streams_stepped_in_turn_keep_their_regions_in_states_of_their_own():
+    # two fixtures at rest at poses of their own, proven in turn on one thread (the service's cycle)
+    hexa = hexapod("reference")
+    prover = StepProver.of(hexa.closed_loop)
+    first = _pose(hexa)
+    T = first.pose.copy()
+    T[:3, 3] += [-0.02, 0.015, -0.01]
+    second = hexa.inverse(T)
+    rng = np.random.default_rng(7)
+
+    def steps(states: list | None):
+        q0, proofs = [first.q, second.q], []
+        for _ in range(12):
+            for i, start in enumerate((first, second)):
+                sol = hexa.forward(start.lengths + rng.normal(scale=1e-6, size=6), guess=q0[i], check=False, prove=False)
+                if states is None:  # the thread's own state
+                    proofs.append(prover.prove(q0[i], sol.q))
+                else:
+                    previous = prover.use(states[i])
+                    proofs.append(prover.prove(q0[i], sol.q))
+                    assert prover.use(previous) is states[i]
+                q0[i] = sol.q
+        return proofs
+
+    own = steps([prover.new_state(), prover.new_state()])
+    assert all(p.proven for p in own)
+    assert all(p.in_region and p.tests == 0 for p in own[2:])  # each stream's steps in its own region
+    shared = steps(None)  # the thread's one state: each step finds the other pose's region
+    assert all(p.proven for p in shared)
+    assert not any(p.in_region for p in shared[2:])
+
+
+def test_a_proof_state_serves_the_prover_that_made_it():
+    prover = StepProver.of(hexapod("reference").closed_loop)
+    other = StepProver.of(hexapod("spherical").closed_loop)
+    with pytest.raises(ValueError, match="another model"):
+        prover.use(other.new_state())

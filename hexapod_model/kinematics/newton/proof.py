@@ -24,6 +24,14 @@ of 0.15 m anchor radius, narrowed where that fails) with one solution for every 
 and whose start lies in its box of unknowns are proven by it: only the box about their result
 is tested (:attr:`Proof.in_region`), at about a third of the cost of a step's own test.
 
+The region and the preconditioner a thread holds are those of the last step it proved. A thread
+that solves the steps of several streams in turn (the service's cycle, several fixtures of one
+hexapod) gives each stream a :class:`ProofState` of its own (:meth:`StepProver.new_state`) and
+makes it the thread's while it solves that stream's step (:meth:`StepProver.use`), as
+:class:`~hexapod_model.tracking.tracker.Tracker` does: otherwise each step finds the region and
+the preconditioner of another stream's pose, and proves itself afresh (and builds a region
+again where the readings rest).
+
 The numba kernels are imported by the first :class:`StepProver` (they compile on first use).
 """
 
@@ -42,7 +50,7 @@ from .legs import ChainTables
 from .proven import Proof, new_proof
 from .solver import Solution
 
-__all__ = ["Proof", "StepProver", "attach_proof", "chart_coordinates", "with_proof"]
+__all__ = ["Proof", "ProofState", "StepProver", "attach_proof", "chart_coordinates", "with_proof"]
 
 
 def chart_coordinates(T0: np.ndarray, T: np.ndarray) -> np.ndarray:
@@ -52,6 +60,19 @@ def chart_coordinates(T0: np.ndarray, T: np.ndarray) -> np.ndarray:
     v = np.empty(6)
     chart_coordinates_into(np.asarray(T0, dtype=float), np.asarray(T, dtype=float), v)
     return v
+
+
+class ProofState:
+    """The work arrays of one stream of proven steps: its region, its preconditioner, the scratch.
+
+    Made by :meth:`StepProver.new_state` for the prover that uses it (:meth:`StepProver.use`);
+    used by one thread at a time.
+    """
+
+    __slots__ = ("packed", "prover")
+
+    def __init__(self, prover: StepProver, packed: tuple):
+        self.prover, self.packed = prover, packed
 
 
 class StepProver:
@@ -123,24 +144,48 @@ class StepProver:
         """The calling thread's ``(floats, ints, spec)``: the buffers that :meth:`work` views."""
         return self._packed()[1]
 
+    def new_state(self) -> ProofState:
+        """Work arrays of a stream of steps of its own: no region, no preconditioner yet (see :meth:`use`)."""
+        return ProofState(self, self._pack())
+
+    def use(self, state: ProofState | None) -> ProofState | None:
+        """Make ``state`` the calling thread's until the next call; returns the one it replaces.
+
+        The proofs the thread runs meanwhile (:meth:`prove`, and every solve that proves through
+        this prover) keep their region and preconditioner in ``state``. Hand the returned state
+        back when the stream's step is done. None: the thread's own (a new one when it had none).
+
+        Raises:
+            ValueError: ``state`` was made by another prover (another model).
+        """
+        if state is not None and state.prover is not self:
+            raise ValueError("this proof state was made by the prover of another model: make one with new_state()")
+        previous = getattr(self._local, "state", None)
+        self._local.state = state
+        return previous
+
     def _packed(self) -> tuple:
         """The calling thread's ``((work, ends), (floats, ints, spec))``: the arrays, and the buffers they view."""
-        packed = getattr(self._local, "packed", None)
-        if packed is None:
-            nf = self.nf
-            # the path's ends (the readings at the end: NaN until a step was proven, then its own, the
-            # readings' motion to the next); a proven region's chart origin and its state (held, width
-            # scale, steps before a try, whether the last step lay in it)
-            path = (np.zeros((4, 4)), np.zeros((4, 4)), np.zeros(nf), np.zeros(nf), np.zeros(6), np.full(6, np.nan))
-            ends = (*path, np.zeros((4, 4)), np.array([0.0, 1.0, 0.0, 0.0]))
-            V, Jm, Jr, Y, H, blocks, ew = self._workspace(self.nf, self.tables[4])
-            placements, motions, closure, held, _ = self.tables
-            model = (placements, motions, closure, held, self.home, self.leg_q, self.free, self.held_q)
-            floats, ints, spec, views = self._kernel.pack((V, Jm, Jr, Y, H, *blocks, *ew, *ends, *model))
-            views[0][21] = self.units
-            work = (*views[:5], tuple(views[5:21]), tuple(views[21:27]))
-            packed = self._local.packed = ((work, tuple(views[27:35])), (floats, ints, spec))
-        return packed
+        state = getattr(self._local, "state", None)
+        if state is None:
+            state = self._local.state = self.new_state()
+        return state.packed
+
+    def _pack(self) -> tuple:
+        """New ``((work, ends), (floats, ints, spec))``: the arrays, and the buffers they view."""
+        nf = self.nf
+        # the path's ends (the readings at the end: NaN until a step was proven, then its own, the
+        # readings' motion to the next); a proven region's chart origin and its state (held, width
+        # scale, steps before a try, whether the last step lay in it)
+        path = (np.zeros((4, 4)), np.zeros((4, 4)), np.zeros(nf), np.zeros(nf), np.zeros(6), np.full(6, np.nan))
+        ends = (*path, np.zeros((4, 4)), np.array([0.0, 1.0, 0.0, 0.0]))
+        V, Jm, Jr, Y, H, blocks, ew = self._workspace(self.nf, self.tables[4])
+        placements, motions, closure, held, _ = self.tables
+        model = (placements, motions, closure, held, self.home, self.leg_q, self.free, self.held_q)
+        floats, ints, spec, views = self._kernel.pack((V, Jm, Jr, Y, H, *blocks, *ew, *ends, *model))
+        views[0][21] = self.units
+        work = (*views[:5], tuple(views[5:21]), tuple(views[21:27]))
+        return (work, tuple(views[27:35])), (floats, ints, spec)
 
     def prove(self, q0: np.ndarray, q1: np.ndarray, structured: bool = True, subdivide: bool = True) -> Proof:
         """The proof of the readings path from ``q0`` (closed) to the result ``q1`` (see the module doc).
