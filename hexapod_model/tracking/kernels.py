@@ -142,6 +142,91 @@ def reading_checks(l, last, tol, frozen, stuck, lhat, sd, z):
 
 
 @njit(cache=True)
+def stuck_checks(ring, count, newest, frozen, z, stuck, first_run, run, bounds, moving, moved):
+    """The stuck and jump tests of a sample whose readings froze, jumped or hold a latched leg.
+
+    :func:`~hexapod_model.tracking.reading_tests.stuck_legs` with its inputs
+    (:func:`~hexapod_model.tracking.reading_tests.motion_sigmas`, the other legs' largest change
+    over each leg's frozen run) in one call, with no array made: a fixture at rest whose
+    encoders repeat counts runs it at nearly every sample.
+
+    Args:
+        ring: (m, 6) the readings kept (m), a ring: the newest in row ``newest``, ``count`` of them.
+        count: readings kept (the sample's own included), at most ``m``.
+        newest: the newest's row.
+        frozen: (6,) int64, consecutive unchanged samples per leg.
+        z: (6,) normalised innovations (NaN when the sample is not checked).
+        stuck: (6,) bool, the legs latched ``stuck``: updated in place (latched while unchanged).
+        first_run: unchanged samples before a leg's own innovation can make it stuck (``frozen_run``
+            with encoder counts, else 1).
+        run: unchanged samples before the other legs' motion can (``frozen_run``).
+        bounds: (6,) ``stuck_samples``, ``stuck_sigmas``, the other legs' change that is motion (m),
+            ``stuck_motion_sigmas``, ``jump_sigmas``, the readings' sigma (m).
+        moving: (6,) work: each leg's :func:`motion_sigmas`.
+        moved: (6,) work: the other legs' largest change over each leg's frozen run (m).
+
+    Returns:
+        ``(jumped, stuck_any, legs)``: a leg's innovation above ``jump_sigmas``, a leg stuck, and
+        the legs named (jump or stuck) as bits (leg ``i``: ``1 << i``).
+    """
+    stuck_samples, stuck_sigmas, moved_bound, motion_bound, jump_sigmas, sigma = (
+        bounds[0],
+        bounds[1],
+        bounds[2],
+        bounds[3],
+        bounds[4],
+        bounds[5],
+    )
+    m = ring.shape[0]
+    fmax = 0
+    for i in range(6):
+        fmax = max(fmax, frozen[i])
+    use_moving = fmax >= stuck_samples
+    if use_moving:  # motion_sigmas: each other leg's least-squares rate over the readings kept, in sigmas
+        for j in range(6):
+            moving[j] = 0.0
+        if count >= 3:
+            half = (count - 1) / 2.0
+            tt = 0.0
+            for k in range(count):
+                tt += (k - half) * (k - half)
+            for j in range(6):
+                s = 0.0
+                for k in range(count):  # oldest first
+                    s += (k - half) * ring[(newest - count + 1 + k) % m, j]
+                moved[j] = abs(s) / (sigma * math.sqrt(tt))
+            for i in range(6):
+                best = -math.inf
+                for j in range(6):
+                    if j != i:
+                        best = max(best, moved[j])
+                moving[i] = best
+    for i in range(6):  # the other legs' largest change over each leg's frozen run
+        moved[i] = 0.0
+        if frozen[i] >= stuck_samples:
+            back = min(frozen[i], count - 1)
+            older = (newest - back) % m
+            for j in range(6):
+                if j != i:
+                    moved[i] = max(moved[i], abs(ring[newest, j] - ring[older, j]))
+    jumped, stuck_any, legs = False, False, 0
+    for i in range(6):
+        evidence = moved[i] > moved_bound or (use_moving and moving[i] > motion_bound)
+        now = (
+            (frozen[i] >= first_run and z[i] > stuck_sigmas)  # False for a NaN innovation
+            or (frozen[i] >= run and evidence)
+            or (stuck[i] and frozen[i] > 0)
+        )
+        stuck[i] = now
+        jump = z[i] > jump_sigmas
+        jumped = jumped or jump
+        stuck_any = stuck_any or now
+        if jump or now:
+            legs |= 1 << i
+    return jumped, stuck_any, legs
+
+
+@njit(cache=True)
 def _difference_into(q0, q1, q_idx, v_idx, ffq, ffv, dv, R0, R1, Rd, pd):
     """``dv = q1 (-) q0``: the one-dof joints subtract, the free flyer by ``log6(M0^-1 M1)``."""
     for k in range(q_idx.shape[0]):

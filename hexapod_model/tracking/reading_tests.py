@@ -211,6 +211,9 @@ def stuck_legs(
 ) -> np.ndarray:
     """Boolean (6,): frozen legs that the motion implies move.
 
+    The tracker runs this test compiled, with its inputs, in one call
+    (:func:`~hexapod_model.tracking.kernels.stuck_checks`); a test holds the kernel to this one.
+
     A leg is stuck when its reading is unchanged while its own prediction moves by more than
     ``stuck_sigmas`` innovation sigmas, or when it has been unchanged for ``stuck_samples``
     while another leg moved by more than ``stuck_sigmas * sqrt(2) * noise``.

@@ -32,6 +32,7 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable
+from typing import Literal
 
 import numpy as np
 import pinocchio as pin
@@ -41,12 +42,13 @@ from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.entries import direct, plain
 from ..kinematics.newton.kernels import largest_step
+from ..kinematics.newton.proof import ProofState
 from ..kinematics.newton.solver import Solution
 from ..lie import pose_distance
 from .extra_readings import step_with_extra_readings
-from .kernels import branch_residual, motion_readings, predict_into, reading_checks
+from .kernels import branch_residual, motion_readings, predict_into, reading_checks, stuck_checks
 from .passage import PassageMixin
-from .reading_tests import MotionModel, TrackerSettings, motion_sigmas, stuck_legs
+from .reading_tests import MotionModel, TrackerSettings
 from .types import (
     FAILED_STATUSES,
     FLAGS,
@@ -60,9 +62,9 @@ from .types import (
     track_result,
 )
 
-_NO_Z = np.full(6, np.nan)  # innovations when the motion model is not available (read-only)
-_NO_Z.flags.writeable = False
 _NONE = np.zeros(0)  # no previous readings / no motion model (writeable: one compiled signature)
+# the innovations when the motion model is not available (writeable, never written: the stuck test's one signature)
+_NO_Z = np.full(6, np.nan)
 _SCALE_RATE = 0.02  # weight of a sample in the observed innovation scale (~50 samples)
 _SCALE_FLOOR = 1e-3  # the branch check never assumes readings better than 1e-3 noise
 _STUCK_LOOKBACK = 8  # readings kept beyond stuck_samples to see the other legs move
@@ -169,11 +171,30 @@ class Tracker(PassageMixin):
         self._born: list[int] = [0] * s.window  # sample number of each trusted one, newest first
         self._run = 0  # trusted samples at consecutive sample numbers ending at _born[0]
         self._ages = [tuple(range(1, n + 1)) for n in range(s.window + 1)]  # of n of them, the sample after
-        self._raw: deque[np.ndarray] = deque(maxlen=s.stuck_samples + _STUCK_LOOKBACK)
+        # the readings kept for the stuck test, a ring (the newest in row _raw_at, _raw_n of them)
+        self._raw = np.zeros((s.stuck_samples + _STUCK_LOOKBACK, 6))
+        self._raw_n = self._raw_at = 0
+        self._moving, self._moved = np.zeros(6), np.zeros(6)  # the stuck test's work
+        first_run = s.frozen_run if s.resolution > 0.0 else 1  # with counts, only an improbable run counts
+        moved_bound = s.stuck_sigmas * math.sqrt(2.0) * s.reading_sigma  # another leg's change that is motion (m)
+        self._stuck_args = (first_run, s.frozen_run)
+        self._stuck_bounds = np.array(
+            [s.stuck_samples, s.stuck_sigmas, moved_bound, s.stuck_motion_sigmas, s.jump_sigmas, s.reading_sigma]
+        )
+        self._leg_sets = [tuple(i for i in range(6) if bits >> i & 1) for bits in range(64)]  # legs named, by bits
         self._calm: deque[tuple[int, np.ndarray, np.ndarray]] = deque(maxlen=_BEFORE)  # certified, not near-singular
         self._sens_b: SensitivityEvaluator | None = None  # for the candidates of a passage
         self._k = 0  # samples since the start
+        # the proofs of this stream's steps keep their region and preconditioner in a state of their
+        # own (.newton.proof): trackers stepped in turn on one thread would otherwise find another
+        # stream's, and prove every step afresh. None until the first solve; False: no prover
+        self._proof_state: ProofState | Literal[False] | None = None
         self.reset(initial)
+        # the stuck test's kernel runs only when a reading repeats (a fixture at rest): loaded (or
+        # compiled, about a second after installation) now, on no reading, and called directly from then on
+        args = (self._raw, 0, 0, self._frozen, _NO_Z, self._stuck, 1, 1, self._stuck_bounds, self._moving, self._moved)
+        stuck_checks(*args)
+        self._stuck_checks: Callable[..., tuple] = direct(stuck_checks, args)
 
     def reset(self, initial=None) -> None:
         """Forget the history; restart from ``initial`` (``Solution``, ``q`` or home)."""
@@ -186,7 +207,7 @@ class Tracker(PassageMixin):
             if q.shape != (self.hexa.nq,) or not np.all(np.isfinite(q)):
                 raise InputError("initial", initial, f"expected a Solution or {self.hexa.nq} finite values")
         self._restart(q, trusted=False)
-        self._raw.clear()
+        self._raw_n = 0
         self._frozen = np.zeros(6, dtype=np.int64)
         self._stuck = np.zeros(6, dtype=bool)
         self._lost = False  # recover=False: a failed branch check latches branch_uncertain
@@ -259,7 +280,7 @@ class Tracker(PassageMixin):
             lhat = self._lhat
             motion_readings(w, self._L, lhat)  # w @ L[:n], compiled: BLAS would release the GIL
         # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
-        last = self._raw[-1] if self._raw else _NONE
+        last = self._raw[self._raw_at] if self._raw_n else _NONE
         sigma_nu = s.innovation_sigma(spread)
         if l.shape != (6,):
             finite, zmax, zz, frozen, any_stuck = False, math.nan, 0.0, 0, False
@@ -271,8 +292,10 @@ class Tracker(PassageMixin):
         if not finite:
             msg = f"expected 6 finite readings, got {lengths!r}"
             return self._failure(l if l.shape == (6,) else np.full(6, np.nan), "invalid_input", msg, (), (), t0)
-        self._raw.append(l)
-        z = self._z if checked else _NO_Z
+        if self._raw_n:
+            self._raw_at = (self._raw_at + 1) % self._raw.shape[0]
+        self._raw[self._raw_at] = l
+        self._raw_n = min(self._raw_n + 1, self._raw.shape[0])
         if zmax <= s.jump_sigmas:  # observed noise scale, for the branch check (False for NaN)
             self._z2 += _SCALE_RATE * (min(zz / 6.0, 1.0) - self._z2)
             self._scale = max(math.sqrt(self._z2), _SCALE_FLOOR)
@@ -280,12 +303,24 @@ class Tracker(PassageMixin):
         legs: tuple[int, ...] = ()
         suspect = False
         if zmax > s.jump_sigmas or frozen > 0 or any_stuck:
-            moving = motion_sigmas(np.array(self._raw), s.reading_sigma) if frozen >= s.stuck_samples else None
-            stuck = stuck_legs(self._frozen, z, self._moved(), s, moving) | (self._stuck & (self._frozen > 0))
-            self._stuck = stuck  # latched while the reading stays unchanged
-            jump = z > s.jump_sigmas
-            legs = tuple(int(i) for i in np.flatnonzero(jump | stuck))
-            flags += ["jump"] * bool(jump.any()) + ["stuck"] * bool(stuck.any())
+            # reading_tests.stuck_legs, compiled; the latched legs (self._stuck) updated in place
+            first_run, run = self._stuck_args
+            stuck_args = (
+                self._raw,
+                self._raw_n,
+                self._raw_at,
+                self._frozen,
+                self._z if checked else _NO_Z,
+                self._stuck,
+                first_run,
+                run,
+                self._stuck_bounds,
+                self._moving,
+                self._moved,
+            )
+            jumped, stuck_any, bits = self._stuck_checks(*stuck_args)
+            legs = self._leg_sets[bits]
+            flags += ["jump"] * jumped + ["stuck"] * stuck_any
             suspect = bool(flags)
         if self._gap > s.max_gap and "stuck" not in flags:
             return self._reanchor(l, flags, legs, t0)
@@ -318,20 +353,6 @@ class Tracker(PassageMixin):
             flags.append("settling")
         return self._finish(sol, sens, flags, legs, zmax, trusted=not suspect, t0=t0)
 
-    def _moved(self) -> np.ndarray:
-        """Largest change of the other legs over each leg's frozen run (m).
-
-        Only for legs frozen long enough to be tested (0 for the others); the run is limited
-        to the readings kept.
-        """
-        moved = np.zeros(6)
-        for i in np.flatnonzero(self._frozen >= self.settings.stuck_samples):
-            back = min(int(self._frozen[i]), len(self._raw) - 1)
-            d = np.abs(self._raw[-1] - self._raw[-1 - back])
-            d[i] = 0.0
-            moved[i] = d.max()
-        return moved
-
     def _guess(self) -> np.ndarray:
         if self._gap > self.settings.max_gap:
             return self._last_q
@@ -359,6 +380,11 @@ class Tracker(PassageMixin):
         joints = l if self.hexa.engine.encoder is None else self.hexa.joints_of(l[:6])  # m, as the guess's
         step = largest_step(joints, guess, self._prism_q)  # m, compiled: NumPy's would be four dispatches
         prove = bool(step <= self.settings.continuation_step)
+        state = self._proof_state
+        if state is None:  # the first solve: this stream's proof state, or False when the model has no prover
+            prover = self.hexa.engine.prover
+            state = self._proof_state = False if prover is None else prover.new_state()
+        previous = state.prover.use(state) if state else None
         try:
             if self.hexa.redundancy is not None:  # the six legs' solve of a hexapod with redundant sensors
                 return self.hexa.engine.forward(l, guess, self.tol, self.max_iter, False, False, prove)
@@ -366,6 +392,9 @@ class Tracker(PassageMixin):
         except HexapodError as exc:  # a reading outside the stroke
             q = self._last_q
             return Solution(self.hexa.pose_of(q), q.copy(), l.copy(), "invalid_input", 0, math.nan, None, str(exc))
+        finally:
+            if state:
+                state.prover.use(previous)  # the thread's own again
 
     def _branch_check(self, sol, sens, l, lhat, w, spread):
         """Compare the pose with the motion model's pose plus ``J^-1`` (reading innovation).

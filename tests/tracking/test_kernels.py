@@ -179,3 +179,72 @@ def test_a_model_with_other_joints_keeps_pinocchios_predictor():
     model.addJoint(1, pin.JointModelRUBZ(), pin.SE3.Identity(), "wheel")  # a continuous joint: nq 2, nv 1
     assert predictor_layout(model) is None
     assert predictor_layout(pin.Model()) is None  # no free flyer
+
+
+def _moved_reference(raw: np.ndarray, frozen: np.ndarray, stuck_samples: int) -> np.ndarray:
+    """The other legs' largest change over each leg's frozen run, as NumPy computes it (``raw`` oldest first)."""
+    moved = np.zeros(6)
+    for i in np.flatnonzero(frozen >= stuck_samples):
+        back = min(int(frozen[i]), len(raw) - 1)
+        d = np.abs(raw[-1] - raw[-1 - back])
+        d[i] = 0.0
+        moved[i] = d.max()
+    return moved
+
+
+@pytest.mark.parametrize("resolution", [0.0, 1e-6])
+def test_stuck_checks_match_the_numpy_stuck_test(resolution):
+    """The compiled stuck test against ``stuck_legs`` fed by ``motion_sigmas`` and NumPy's moved legs.
+
+    Random rings of readings (a few samples, full, wrapped), frozen runs, innovations (NaN when
+    the sample is not checked), latched legs; the same legs stuck and named, the same jumps.
+    """
+    from hexapod_model.tracking.kernels import stuck_checks
+    from hexapod_model.tracking.reading_tests import TrackerSettings, motion_sigmas, stuck_legs
+
+    s = TrackerSettings(noise=2e-6, resolution=resolution)
+    first_run = s.frozen_run if resolution > 0.0 else 1
+    bounds = np.array(
+        [
+            s.stuck_samples,
+            s.stuck_sigmas,
+            s.stuck_sigmas * np.sqrt(2.0) * s.reading_sigma,
+            s.stuck_motion_sigmas,
+            s.jump_sigmas,
+            s.reading_sigma,
+        ]
+    )
+    rng = np.random.default_rng(11)
+    m = s.stuck_samples + 8
+    seen = {"stuck": 0, "jump": 0, "free": 0, "moving": 0}
+    for trial in range(3000):
+        count = int(rng.integers(1, m + 1))
+        if trial % 4 == 3:  # a slow drift: significant as a rate before as a change (the rate's test)
+            sigma = s.reading_sigma
+            raw = np.cumsum(rng.normal(0.6 * sigma, 0.05 * sigma, (count, 6)), axis=0)
+        else:
+            raw = np.cumsum(rng.normal(0.0, [1e-6, 1e-5, 3e-5][trial % 4], (count, 6)), axis=0)  # oldest first
+        frozen = rng.integers(0, 3 * s.frozen_run + 4, 6).astype(np.int64) * (rng.random(6) < 0.25)
+        z = np.full(6, np.nan) if trial % 5 == 0 else np.abs(rng.normal(0.0, 3.0, 6))
+        latched = rng.random(6) < 0.05
+        newest = int(rng.integers(0, m))
+        ring = rng.normal(size=(m, 6))  # rows that are not kept hold anything
+        for k in range(count):
+            ring[(newest - count + 1 + k) % m] = raw[k]
+        moving = motion_sigmas(raw, s.reading_sigma) if frozen.max() >= s.stuck_samples else None
+        moved = _moved_reference(raw, frozen, s.stuck_samples)
+        want = stuck_legs(frozen, z, moved, s, moving) | (latched & (frozen > 0))
+        jump = z > s.jump_sigmas
+        stuck = latched.copy()
+        work = np.empty(6), np.empty(6)
+        got = stuck_checks(ring, count, newest, frozen, z, stuck, first_run, s.frozen_run, bounds, *work)
+        np.testing.assert_array_equal(stuck, want)
+        assert got == (bool(jump.any()), bool(want.any()), sum(1 << i for i in np.flatnonzero(jump | want)))
+        seen["stuck" if want.any() else "jump" if jump.any() else "free"] += 1
+        if moving is not None:
+            seen["moving"] += bool(
+                np.any((moving > s.stuck_motion_sigmas) & (frozen >= s.frozen_run) & ~(moved > bounds[2]))
+            )
+    if resolution > 0.0:  # runs of counts long enough to be stuck span changes the other legs' test sees first
+        del seen["moving"]
+    assert min(seen.values()) > 50, seen  # every outcome drawn often, and the rate alone making legs stuck

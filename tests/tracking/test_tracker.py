@@ -273,3 +273,31 @@ def test_a_caller_may_refill_one_readings_array_sample_after_sample(reference):
         np.testing.assert_array_equal(a.solution.q, b.solution.q)
         np.testing.assert_array_equal(a.solution.q, c.solution.q)
     assert a.ok
+
+
+def test_a_trackers_proofs_do_not_depend_on_the_trackers_stepped_before_it(reference):
+    """Fixtures at rest at poses of their own, stepped in turn on one thread (the service's cycle).
+
+    Each tracker's answers, its proofs included, are bit for bit those it gives stepped alone
+    (same code path), and at rest its steps are proven in its own region: a proof state shared by
+    the thread made each step find the other fixture's region and prove itself afresh.
+    """
+    poses = [reference.home_pose.copy() for _ in range(2)]
+    poses[0][:3, 3] += [0.01, 0.0, 0.02]
+    poses[1][:3, 3] += [-0.01, 0.015, 0.01]
+    rng = np.random.default_rng(6)
+    series = [reference.inverse(T).lengths + rng.normal(0.0, 1e-6, (40, 6)) for T in poses]
+    alone = []
+    for readings in series:
+        tracker = Tracker(reference, noise=1e-6)
+        alone.append([tracker.step(r) for r in readings])
+    trackers = [Tracker(reference, noise=1e-6) for _ in series]
+    for k in range(40):
+        for i, readings in enumerate(series):
+            got, want = trackers[i].step(readings[k]), alone[i][k]
+            assert got.status == want.status and got.flags == want.flags
+            np.testing.assert_array_equal(got.solution.q, want.solution.q)
+            assert got.solution.proof == want.solution.proof, (k, i, got.solution.proof, want.solution.proof)
+    for samples in alone:
+        proofs = [s.solution.proof for s in samples[10:]]
+        assert all(p is not None and p.proven and p.in_region for p in proofs), proofs
