@@ -31,6 +31,11 @@ Then a fixture **at rest** (``R`` samples of one pose with 1 um of noise on each
 proven fraction, the fraction proven in a region an earlier step proved, and the warm
 ``forward`` with its proof beside the same with every step proven by its own test.
 
+Then **fixtures at rest stepped in turn**: trackers of 5 fixtures at rest, each at a pose of its
+own, their readings encoder counts (1 um of noise, 1 um counts: a leg repeats its count often),
+stepped in turn on one thread as the service's cycle steps a cell's fixtures (each keeps its
+region and preconditioner apart), beside one fixture's tracker stepped alone.
+
 Then the **tracker** (:class:`hexapod_model.tracking.tracker.Tracker`, its default predictor) along
 trajectory A at 1 kHz: the proven fraction of its samples, the median step, and the solve it
 makes (from the prediction) with its proof and alone.
@@ -266,6 +271,60 @@ def rest_proofs(name: str, samples: int, noise: float = 1e-6, block: int = 50) -
     }
 
 
+def rest_streams(
+    name: str, fixtures: int = 5, samples: int = 400, noise: float = 1e-6, resolution: float = 1e-6
+) -> dict:
+    """Trackers of ``fixtures`` fixtures at rest, each at a pose of its own, stepped in turn on one thread.
+
+    As the service's cycle steps the fixtures of a cell: each tracker keeps its proof state
+    (region, preconditioner) apart from the others' (:class:`~hexapod_model.kinematics.newton.proof.ProofState`).
+    The readings are encoder counts (``noise`` m of noise, rounded to ``resolution`` m, the
+    trackers told it): at rest a leg repeats its count often, and the tracker's stuck test runs.
+    Beside it, ``fixtures`` steps at a time between the turns, one tracker of the first pose
+    stepped alone. Medians (us) of a step, fractions proven and proven in a region.
+    """
+    hexa = Hexapod.load(name)
+    rng = np.random.default_rng(9)
+    rests = []
+    for i in range(fixtures):
+        pose = hexa.home_pose.copy()
+        pose[:3, 3] += np.array([np.cos(i), np.sin(i), 0.5 * (-1) ** i]) * 0.3 * hexa.base_radius / 10.0
+        rests.append(hexa.inverse(pose, check=False).lengths)
+    series = [np.round((r + rng.normal(scale=noise, size=(samples, 6))) / resolution) * resolution for r in rests]
+    alone_series = np.round((rests[0] + rng.normal(scale=noise, size=(samples * fixtures, 6))) / resolution)
+    alone_series *= resolution  # as many steps as the turns take
+    trackers = [Tracker(hexa, noise=noise, resolution=resolution) for _ in series]
+    alone = Tracker(hexa, noise=noise, resolution=resolution)
+    skip = min(20, samples // 2)
+    t_turn, t_alone, proven, in_region, alone_in = [], [], 0, 0, 0
+    for k in range(samples):
+        for tracker, readings in zip(trackers, series):
+            t0 = time.perf_counter()
+            result = tracker.step(readings[k])
+            if k >= skip:
+                t_turn.append(time.perf_counter() - t0)
+                proof = result.solution.proof
+                proven += proof is not None and proof.proven
+                in_region += proof is not None and proof.in_region
+        for j in range(fixtures):  # as many steps of one fixture alone, between the turns
+            t0 = time.perf_counter()
+            result = alone.step(alone_series[k * fixtures + j])
+            if k >= skip:
+                t_alone.append(time.perf_counter() - t0)
+                alone_in += result.solution.proof is not None and result.solution.proof.in_region
+    return {
+        "fixtures": fixtures,
+        "noise_m": noise,
+        "resolution_m": resolution,
+        "steps": len(t_turn),
+        "proven_fraction": proven / len(t_turn),
+        "in_region_fraction": in_region / len(t_turn),
+        "step_median_us": float(np.median(t_turn) * 1e6),
+        "alone_step_median_us": float(np.median(t_alone) * 1e6),
+        "alone_in_region_fraction": alone_in / len(t_alone),
+    }
+
+
 def tracker_proofs(name: str, samples: int) -> dict:
     """The tracker (its default predictor, ``eq22``) along trajectory A at 1 kHz: proven fraction, medians (us).
 
@@ -376,6 +435,16 @@ def main(argv=None) -> int:
             f"{r['forward_proven_median_us']:.1f} us "
             f"(each step its own test: {r['forward_own_test_median_us']:.1f} us; "
             f"the solve alone {r['solve_median_us']:.1f} us); floor {r['floor_median_us']:.1f} us (medians)",
+            flush=True,
+        )
+    for name in args.presets:
+        r = rest_streams(name, samples=max(args.rest_samples // 5, 40))
+        report["rest_streams"] = [*report.get("rest_streams", []), {"preset": name, **r}]
+        print(
+            f"{name:12s} {r['fixtures']} fixtures at rest (1 um noise, 1 um counts), trackers stepped in turn: "
+            f"a step {r['step_median_us']:.1f} us (one fixture alone: {r['alone_step_median_us']:.1f} us; medians), "
+            f"proven {100 * r['proven_fraction']:.2f} %, in its region {100 * r['in_region_fraction']:.2f} % "
+            f"(alone: {100 * r['alone_in_region_fraction']:.2f} %)",
             flush=True,
         )
     for name in args.presets:

@@ -68,7 +68,7 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
     runs = [r for r in data if r.get("kind") != "capacity"]
     rows = [
         (
-            f"pose service, {r['fixtures']} fixture(s) × {r['rate_hz']:.0f} Hz",
+            f"pose service, {r['fixtures']} fixture(s) × {r['rate_hz']:.0f} Hz{_at_rest(r)}",
             f"{r['service_cpu_pct']:.0f} % of a core ({r['service_cpu_us_per_set']:.0f} µs a set, "
             f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x its solve's {r['solve_us']:.0f} µs{_after_idle(r)}), "
             "latency median "
@@ -79,7 +79,8 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
     ]
     rows += [
         (
-            f"pose service, {r['fixtures']} fixture(s) × {r['rate_hz']:.0f} Hz from a full queue (`--capacity`)",
+            f"pose service, {r['fixtures']} fixture(s) × {r['rate_hz']:.0f} Hz{_at_rest(r)} from a full queue "
+            "(`--capacity`)",
             f"cycle thread {r['cycle_cpu_us_per_set']:.0f} µs CPU a set, "
             f"{r['cycle_cpu_us_per_set'] / r['solve_us']:.1f}x its solve's {r['solve_us']:.0f} µs "
             f"(the tracker step alone: {r['step_us']:.0f} µs)",
@@ -88,6 +89,11 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
         if r.get("kind") == "capacity"
     ]
     return rows
+
+
+def _at_rest(r: dict) -> str:
+    """`` at rest (1 µm counts)`` for a run of fixtures at rest (``--rest``), else empty."""
+    return " at rest (1 µm counts)" if r.get("motion") == "rest" else ""
 
 
 def memory_rows(data: list[dict]) -> list[tuple[str, str]]:
@@ -218,6 +224,15 @@ def certificate_rows(data: dict) -> list[tuple[str, str]]:
             ratio = r["forward_proven_median_us"] / r["floor_median_us"]
             value += f"; floor {r['floor_median_us']:.1f} µs ({ratio:.1f}x)"
         rows.append((f"{where}, warm step with its proof (regions), time per step", value))
+    for r in data.get("rest_streams", []):
+        noise = f"{r['noise_m'] * 1e6:g} µm noise, {r['resolution_m'] * 1e6:g} µm counts"
+        where = f"{r['preset']}: {r['fixtures']} fixtures at rest, {noise}, trackers stepped in turn"
+        value = (
+            f"{r['step_median_us']:.0f} µs a step (one fixture alone: {r['alone_step_median_us']:.0f} µs; medians); "
+            f"{100 * r['proven_fraction']:.2f} % proven, {100 * r['in_region_fraction']:.2f} % in its region "
+            f"(alone: {100 * r['alone_in_region_fraction']:.2f} %)"
+        )
+        rows.append((f"{where}, time per step", value))
     for r in data.get("tracker", []):
         where = f"{r['preset']}: trajectory A at 1 kHz, the tracker (eq22)"
         value = (
@@ -280,6 +295,7 @@ BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str
             "--more",
             "5:1000",
             "--capacity",
+            "--rest",
         ],
         ["service.py"],
         service_rows,

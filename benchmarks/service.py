@@ -1,7 +1,7 @@
 """Throughput, CPU and latency of the fixture pose service (not a test: figures are printed).
 
 python benchmarks/service.py [--seconds S] [--one 250,500,1000,2000] [--many 50,100,200] [--fixtures 20]
-                             [--more FIXTURES:RATES ...] [--capacity]
+                             [--more FIXTURES:RATES ...] [--capacity] [--rest]
 
 A feeder thread plays trajectory A (reference hexapod, 10 um reading noise, frames encoded with
 each fixture's layout and CAN ids) on python-can's virtual bus at a set rate per fixture; the
@@ -23,10 +23,17 @@ run it on an idle machine for the capacity. Each run prints the service's CPU pe
 beside the tracker step's and the solve's own (measured first, alone, in this process), and a
 run of one fixture also against the solve timed after the same idle gap (``1 / rate``): after a
 gap the caches are cold, and the same solve costs more CPU (docs/performance.md).
+Each fixture plays the trajectory from a point of its own (fixture ``i`` of ``F`` from sample
+``i * SETS / F``): the fixtures of a cell stand at poses of their own (fixtures in step would
+share what one proof leaves for the next step, its region and preconditioner, as no cell does).
 Every fixture's frames of one sampling period are queued together: the last fixture's set of a
 period waits for the sets of the others (its latency holds ``FIXTURES - 1`` sets' CPU).
 ``--more 5:1000`` adds runs of 5 fixtures at 1 kHz: the 5,000 sets a second of 50 fixtures at
 100 Hz, in periods of 5 sets instead of 50.
+``--rest`` adds ``--fixtures`` fixtures at 100 Hz **at rest**, the usual state of a locked
+fixture: each at a pose of its own about home, 1 um of noise on readings carried as 1 um counts
+(a leg repeats its count often, and the tracker's stuck test runs), fed and, with
+``--capacity``, from a full queue; set against the solve of such a fixture.
 ``--capacity`` also queues the frames of 3 s of sets before the cycle thread reads them and
 prints its CPU per set with no idle gaps (1 x 1000 Hz, FIXTURES x 100 Hz and each ``--more``
 run): the cost of a set when the thread's caches stay warm.
@@ -49,6 +56,7 @@ import can
 import numpy as np
 
 from hexapod_model import Hexapod
+from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.service import FixtureService, PoseSolver, config_from_dict
 from hexapod_model.service.sim.config import trajectory_sequence
 from hexapod_model.service.threads import NamedThread
@@ -66,6 +74,35 @@ def readings_sequence(hexa: Hexapod, noise: float = 10e-6, seed: int = 0) -> np.
         guess = hexa.inverse(T, guess=guess)
         out.append(guess.lengths.copy())
     return np.array(out) + np.random.default_rng(seed).normal(0.0, noise, (len(out), 6))
+
+
+def phases(fixtures: int, samples: int) -> list[int]:
+    """Where each fixture starts on the readings sequence: evenly apart, each at a pose of its own."""
+    return [(i * samples) // fixtures for i in range(fixtures)]
+
+
+def fixture_readings(readings: np.ndarray, fixtures: int) -> np.ndarray:
+    """(samples, fixtures, 6): each fixture's readings (m) at each sample.
+
+    A (samples, fixtures, 6) array is returned as it is; a (samples, 6) sequence is played by
+    every fixture from a point of its own (:func:`phases`).
+    """
+    if readings.ndim == 3:
+        return readings
+    return np.stack([np.roll(readings, -s, axis=0) for s in phases(fixtures, len(readings))], axis=1)
+
+
+def rest_readings(hexa: Hexapod, fixtures: int, samples: int, noise: float = 1e-6, seed: int = 1) -> np.ndarray:
+    """(samples, fixtures, 6): fixtures at rest, each at a pose of its own, readings (m) with ``noise`` m of noise.
+
+    The poses are :func:`~hexapod_model.analysis.trajectories.box_poses` about home; the frames
+    carry the readings as the layout's counts (1 um), so that a leg at rest repeats its count.
+    """
+    solved = hexa.inverse_batch(box_poses(hexa.home_pose, fixtures, seed=seed))
+    if not np.all(solved.converged):
+        raise SystemExit("a rest pose has no inverse kinematics: choose another seed")
+    rng = np.random.default_rng(seed)
+    return solved.lengths[None, :, :] + rng.normal(0.0, noise, (samples, fixtures, 6))
 
 
 def drain(service: FixtureService, limit: float = 10.0) -> None:
@@ -156,10 +193,12 @@ def capacity(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, se
                 done.set()
 
     service.subscribe(on_record)
+    per = fixture_readings(readings, fixtures)
+    n = len(per)
     msgs = [
-        (k, j, leg.message(float(readings[k % len(readings), j])))
+        (k, j, leg.message(float(per[k % n, i, j])))
         for k in range(warm + sets)
-        for fl in (f.legs for f in config.fixtures)
+        for i, fl in enumerate(f.legs for f in config.fixtures)
         for j, leg in enumerate(fl)
     ]
     receiving = bus.queue
@@ -182,7 +221,7 @@ def capacity(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, se
 
 
 def solve_cost(
-    hexa: Hexapod, readings: np.ndarray, rates: list[float], noise: float = 10e-6
+    hexa: Hexapod, readings: np.ndarray, rates: list[float], noise: float = 10e-6, resolution: float = 0.0
 ) -> tuple[float, float, dict[float, float]]:
     """CPU (us) a set of the tracker's step (solve, checks, uncertainty), of its solve alone, and of it after idle gaps.
 
@@ -191,7 +230,7 @@ def solve_cost(
     short step, each timed by itself; then, per rate of ``rates`` (Hz), the same solve timed
     after the idle gap of a stream at that rate (:func:`solves_cost`).
     """
-    solver = PoseSolver(hexa, noise)
+    solver = PoseSolver(hexa, noise, resolution=resolution)  # resolution: m a count, as a fixture's layout
     for k in range(200):
         solver.step(readings[k], k)
     c0 = time.thread_time()
@@ -228,7 +267,11 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
     channel, config = make_config(fixtures, folder)
     legs = [f.legs for f in config.fixtures]
     names = [f.name for f in config.fixtures]
-    frames = [[[leg.message(float(r[k])) for k, leg in enumerate(fl)] for fl in legs] for r in readings]
+    per = fixture_readings(readings, fixtures)
+    frames = [
+        [[leg.message(float(per[k, i, j])) for j, leg in enumerate(fl)] for i, fl in enumerate(legs)]
+        for k in range(len(per))
+    ]
     latencies: list[float] = []
     statuses: dict[str, int] = {}
     arrived: dict[tuple[str, float], float] = {}  # (fixture, t of its last frame) -> when it was on the bus
@@ -391,6 +434,11 @@ def main(argv=None) -> int:
     ap.add_argument(
         "--capacity", action="store_true", help="also the cycle thread's CPU per set from a full queue (no idle gaps)"
     )
+    ap.add_argument(
+        "--rest",
+        action="store_true",
+        help="also --fixtures fixtures at 100 Hz at rest, each at a pose of its own (fed, and with --capacity)",
+    )
     args = ap.parse_args(argv)
     hexa = Hexapod.from_preset("reference")
     readings = readings_sequence(hexa)
@@ -407,6 +455,17 @@ def main(argv=None) -> int:
         + ", ".join(f"{rate:.0f} Hz {us:.0f} us ({us / solve_us:.1f}x)" for rate, us in idle.items()),
         flush=True,
     )
+    still = None
+    if args.rest:  # each fixture's samples of the fed run and of the capacity run, at rest
+        # the samples of a fed run (its warm-up and measured periods) and of a capacity run
+        still = rest_readings(hexa, args.fixtures, max(500, 150 + int((args.seconds + 1.0) * 100.0)) + 50)
+        counts = np.round(still[:, 0] / 1e-6) * 1e-6  # the first fixture's readings as the frames carry them
+        rest_step_us, rest_solve_us, _ = solve_cost(hexa, counts, [], noise=1e-6, resolution=1e-6)
+        print(
+            f"a set at rest (1 um noise, 1 um counts): tracker step {rest_step_us:.0f} us CPU, of which the solve "
+            f"{rest_solve_us:.0f} us",
+            flush=True,
+        )
     reports = []
     groups = [(1, one), (args.fixtures, rates_of(args.many)), *args.more]
     with tempfile.TemporaryDirectory() as tmp:
@@ -415,22 +474,31 @@ def main(argv=None) -> int:
                 extra = {"solve_us": solve_us} | ({"solve_idle_us": idle[rate]} if n == 1 else {})
                 reports.append(run(hexa, readings, n, rate, args.seconds, Path(tmp)) | extra)
                 print(line(reports[-1]), flush=True)
+        if still is not None:
+            extra = {"solve_us": rest_solve_us, "motion": "rest"}
+            reports.append(run(hexa, still, args.fixtures, 100.0, args.seconds, Path(tmp)) | extra)
+            print("at rest " + line(reports[-1]), flush=True)
         if args.capacity:
-            for n, rate in ((1, 1000.0), (args.fixtures, 100.0), *((n, r) for n, rates in args.more for r in rates)):
-                us = capacity(hexa, readings, n, rate, int(3 * rate), Path(tmp))
+            runs = [(1, 1000.0, None), (args.fixtures, 100.0, None)]
+            runs += [(n, r, None) for n, rates in args.more for r in rates]
+            runs += [] if still is None else [(args.fixtures, 100.0, still)]
+            for n, rate, at_rest in runs:
+                us = capacity(hexa, readings if at_rest is None else at_rest, n, rate, int(3 * rate), Path(tmp))
                 share = us * n * rate / 1e4  # percent of one core at that rate
+                solve, step = (solve_us, step_us) if at_rest is None else (rest_solve_us, rest_step_us)
                 reports.append(
                     {"kind": "capacity", "fixtures": n, "rate_hz": rate, "cycle_cpu_us_per_set": us}
-                    | {"solve_us": solve_us, "step_us": step_us}
+                    | {"solve_us": solve, "step_us": step}
+                    | ({} if at_rest is None else {"motion": "rest"})
                 )
                 print(
-                    f"capacity {n:3d} x {rate:6.0f} Hz  cycle thread CPU {us:5.0f} us a set, "
-                    f"{us / solve_us:.1f}x the solve "
+                    f"capacity {n:3d} x {rate:6.0f} Hz{' at rest' if at_rest is not None else ''}  "
+                    f"cycle thread CPU {us:5.0f} us a set, {us / solve:.1f}x the solve "
                     f"({share:.0f} % of a core)"
-                    f"  against the solve's {solve_us:.0f} us and the tracker step's {step_us:.0f} us"
+                    f"  against the solve's {solve:.0f} us and the tracker step's {step:.0f} us"
                 )
-    for n in dict.fromkeys(n for n, _ in groups):  # each fixture count once, in order
-        ok = [r["rate_hz"] for r in reports if r["fixtures"] == n and r.get("sustained")]
+    for n in dict.fromkeys(n for n, _ in groups):  # each fixture count once, in order (moving)
+        ok = [r["rate_hz"] for r in reports if r["fixtures"] == n and r.get("sustained") and "motion" not in r]
         print(f"highest sustained set rate, {n} fixture(s): {max(ok):.0f} Hz" if ok else f"{n} fixture(s): none")
     if args.json:
         Path(args.json).write_text(json.dumps(reports, indent=2) + "\n")

@@ -267,7 +267,7 @@ def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
     assert all(0 <= t["proven_fraction"] <= 1 and t["steps"] > 0 for t in data["trajectories"]) and not data["solves"]
     table = _performance_table()
     rows = dict(table.certificate_rows(data))
-    assert len(rows) == 14
+    assert len(rows) == 16
     for preset, which in (("reference", "A"), ("reference", "B"), ("3-6", "A"), ("3-6", "B")):
         where = f"{preset}: trajectory {which} at 1 kHz"
         assert rows[f"{where}, warm steps proven (Krawczyk)"].endswith(" of 19")
@@ -279,6 +279,11 @@ def test_certificate_benchmark_json_makes_the_performance_rows(tmp_path):
         row = rows[f"{rest['preset']}: at rest, 1 µm noise, warm step with its proof (regions), time per step"]
         assert "in a region" in row and "each step its own test" in row
         assert ("floor" in row) == (rest["preset"] == "reference")
+    for rest in data["rest_streams"]:  # fixtures at rest stepped in turn: each in its own region
+        assert rest["steps"] == 5 * 20 and rest["proven_fraction"] == 1.0, rest
+        assert rest["in_region_fraction"] > 0.9 and rest["alone_in_region_fraction"] > 0.9, rest
+        where = f"{rest['preset']}: 5 fixtures at rest, 1 µm noise, 1 µm counts, trackers stepped in turn"
+        assert "one fixture alone" in rows[f"{where}, time per step"]
     for tracked in data["tracker"]:  # the tracker's short steps from its prediction build no region while moving
         assert tracked["steps"] == 10 and tracked["proven_fraction"] == 1.0 and tracked["in_region_fraction"] == 0.0
         row = rows[f"{tracked['preset']}: trajectory A at 1 kHz, the tracker (eq22), time per step"]
@@ -404,10 +409,22 @@ def test_performance_table_only_keeps_the_other_scripts_rows():
 
 
 def test_service_benchmark_runs(tmp_path):
-    """A short run of both modes: a fed run per fixture count and the full-queue capacity, in the JSON and table too."""
+    """Both modes, short: a fed run per fixture count and the full-queue capacity, moving and at rest (JSON, table)."""
     cmd = [sys.executable, str(ROOT / "benchmarks" / "service.py"), "--seconds", "0.5", "--one", "100"]
     out = subprocess.run(
-        [*cmd, "--many", "20", "--fixtures", "2", "--more", "3:50", "--capacity", "--json", str(tmp_path / "s.json")],
+        [
+            *cmd,
+            "--many",
+            "20",
+            "--fixtures",
+            "2",
+            "--more",
+            "3:50",
+            "--capacity",
+            "--rest",
+            "--json",
+            str(tmp_path / "s.json"),
+        ],
         capture_output=True,
         text=True,
         timeout=600,
@@ -418,12 +435,22 @@ def test_service_benchmark_runs(tmp_path):
     assert "capacity   3 x     50 Hz" in out.stdout and out.stdout.count("highest sustained set rate") <= 3
     data = json.loads((tmp_path / "s.json").read_text())
     full = [r for r in data if r.get("kind") == "capacity"]
-    assert [(r["fixtures"], r["rate_hz"]) for r in full] == [(1, 1000.0), (2, 100.0), (3, 50.0)]
+    assert [(r["fixtures"], r["rate_hz"], r.get("motion")) for r in full] == [
+        (1, 1000.0, None),
+        (2, 100.0, None),
+        (3, 50.0, None),
+        (2, 100.0, "rest"),
+    ]
     assert all(0.0 < r["solve_us"] < r["step_us"] < r["cycle_cpu_us_per_set"] for r in full)  # CPU µs a set
+    rest = [r for r in data if r.get("motion") == "rest" and r.get("kind") != "capacity"]
+    assert len(rest) == 1 and rest[0]["fixtures"] == 2 and rest[0]["records"] > 0, rest
+    assert "a set at rest (1 um noise, 1 um counts)" in out.stdout and "at rest   2 x    100 Hz" in out.stdout
     rows = dict(_performance_table().service_rows(data))
     assert (
-        len(rows) == 6 and "pose service, 2 fixture(s) × 20 Hz" in rows and "pose service, 3 fixture(s) × 50 Hz" in rows
+        len(rows) == 8 and "pose service, 2 fixture(s) × 20 Hz" in rows and "pose service, 3 fixture(s) × 50 Hz" in rows
     )
+    assert "pose service, 2 fixture(s) × 100 Hz at rest (1 µm counts) from a full queue (`--capacity`)" in rows
+    assert "pose service, 2 fixture(s) × 100 Hz at rest (1 µm counts)" in rows
     cell = rows["pose service, 2 fixture(s) × 100 Hz from a full queue (`--capacity`)"]
     assert cell.startswith(f"cycle thread {full[1]['cycle_cpu_us_per_set']:.0f} µs CPU a set")
     # a run of one fixture also against its solve timed after the stream's idle gap (the others: not)
@@ -540,3 +567,16 @@ def test_false_alarm_hour_benchmark_rate_is_the_stated_one_at_its_sample_size(tm
         assert binomtest(r["alarms"], r["samples"], r["alpha"]).pvalue > 1e-3, r
         assert r["ci95"][0] <= r["alarms"] / r["samples"] <= r["ci95"][1]
     assert ("NOT consistent" in out.stdout) != all(r["consistent"] for r in results)
+
+
+def test_service_benchmark_plays_each_fixture_from_a_point_of_its_own():
+    """Fixtures of a cell stand at poses of their own: a sequence is played from evenly spread points."""
+    bench = _benchmark("service")
+    seq = np.arange(10.0)[:, None] * np.ones(6)
+    per = bench.fixture_readings(seq, 3)
+    assert per.shape == (10, 3, 6)
+    np.testing.assert_array_equal(per[:, 0, 0], np.arange(10.0))
+    np.testing.assert_array_equal(per[:, 1, 0], np.roll(np.arange(10.0), -3))  # fixture 1 from sample 3
+    np.testing.assert_array_equal(per[:, 2, 0], np.roll(np.arange(10.0), -6))
+    still = np.zeros((4, 2, 6))
+    assert bench.fixture_readings(still, 2) is still  # each fixture's own readings, as given
