@@ -187,7 +187,7 @@ class Tracker(PassageMixin):
         self._k = 0  # samples since the start
         # the proofs of this stream's steps keep their region and preconditioner in a state of their
         # own (.newton.proof): trackers stepped in turn on one thread would otherwise find another
-        # stream's, and prove every step afresh. None until the first solve; False: no prover
+        # stream's, and prove every step afresh. None until the first step; False: no prover
         self._proof_state: ProofState | Literal[False] | None = None
         self.reset(initial)
         # the stuck test's kernel runs only when a reading repeats (a fixture at rest): loaded (or
@@ -253,9 +253,18 @@ class Tracker(PassageMixin):
         ``reading_names`` (m for legs, rad for tilts): :mod:`~hexapod_model.tracking.extra_readings`.
         Never raises on bad readings or a failed solve: see ``status`` and ``flags``.
         """
-        if self.hexa.redundancy is not None:
-            return step_with_extra_readings(self.hexa, lengths, self._step, self.tol, self.max_iter)
-        return self._step(lengths)
+        state = self._proof_state
+        if state is None:  # the first step: this stream's proof state, or False when the model has no prover
+            prover = self.hexa.engine.prover
+            state = self._proof_state = False if prover is None else prover.new_state()
+        previous = state.prover.use(state) if state else None  # every solve of the step proves with it
+        try:
+            if self.hexa.redundancy is not None:
+                return step_with_extra_readings(self.hexa, lengths, self._step, self.tol, self.max_iter)
+            return self._step(lengths)
+        finally:
+            if state:
+                state.prover.use(previous)  # the thread's own again
 
     def _step(self, lengths) -> TrackResult:
         """:meth:`step` of six leg readings."""
@@ -380,11 +389,6 @@ class Tracker(PassageMixin):
         joints = l if self.hexa.engine.encoder is None else self.hexa.joints_of(l[:6])  # m, as the guess's
         step = largest_step(joints, guess, self._prism_q)  # m, compiled: NumPy's would be four dispatches
         prove = bool(step <= self.settings.continuation_step)
-        state = self._proof_state
-        if state is None:  # the first solve: this stream's proof state, or False when the model has no prover
-            prover = self.hexa.engine.prover
-            state = self._proof_state = False if prover is None else prover.new_state()
-        previous = state.prover.use(state) if state else None
         try:
             if self.hexa.redundancy is not None:  # the six legs' solve of a hexapod with redundant sensors
                 return self.hexa.engine.forward(l, guess, self.tol, self.max_iter, False, False, prove)
@@ -392,9 +396,6 @@ class Tracker(PassageMixin):
         except HexapodError as exc:  # a reading outside the stroke
             q = self._last_q
             return Solution(self.hexa.pose_of(q), q.copy(), l.copy(), "invalid_input", 0, math.nan, None, str(exc))
-        finally:
-            if state:
-                state.prover.use(previous)  # the thread's own again
 
     def _branch_check(self, sol, sens, l, lhat, w, spread):
         """Compare the pose with the motion model's pose plus ``J^-1`` (reading innovation).
