@@ -163,7 +163,9 @@ def test_streams_stepped_in_turn_keep_their_regions_in_states_of_their_own():
         q0, proofs = [first.q, second.q], []
         for _ in range(12):
             for i, start in enumerate((first, second)):
-                sol = hexa.forward(start.lengths + rng.normal(scale=1e-6, size=6), guess=q0[i], check=False, prove=False)
+                sol = hexa.forward(
+                    start.lengths + rng.normal(scale=1e-6, size=6), guess=q0[i], check=False, prove=False
+                )
                 if states is None:  # the thread's own state
                     proofs.append(prover.prove(q0[i], sol.q))
                 else:
