@@ -29,6 +29,7 @@ from numba import njit
 
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.entries import direct
+from ..kinematics.newton.first_compile import announce
 from ..kinematics.newton.kernels import rotation_weights
 from ..kinematics.newton.linalg import (
     closure_block,
@@ -263,6 +264,7 @@ class SensitivityEvaluator:
         # the dispatcher until its first call with them, then the machine code that call ran (.entries.direct)
         self._measure: Callable[..., tuple] = measure_solved
         self._measure_direct = False
+        self._announced = False  # evaluate's kernels: their first compilation is announced (first_compile)
 
     def evaluate_solved(self, q: np.ndarray) -> Sensitivity:
         """:meth:`evaluate` at ``q``, the configuration the calling thread's last direct-kinematics solve ended on.
@@ -279,9 +281,12 @@ class SensitivityEvaluator:
         args = self._solved_args
         if args is None or not _holds(s.q_aug, q):
             return self.evaluate(q)
-        tt, tr, cond, det = self._measure(*args)
-        if not self._measure_direct:
+        if not self._measure_direct:  # its first call: announced if it compiles, then its machine code directly
+            announce(measure_solved)
+            tt, tr, cond, det = measure_solved(*args)
             self._measure, self._measure_direct = direct(measure_solved, args), True
+        else:
+            tt, tr, cond, det = self._measure(*args)
         if cond == math.inf:
             self.Jinv[:] = np.nan
         return Sensitivity(math.sqrt(tt), math.sqrt(tr), cond, (det > 0.0) - (det < 0.0))
@@ -299,6 +304,9 @@ class SensitivityEvaluator:
 
     def evaluate(self, q: np.ndarray) -> Sensitivity:
         """Fill :attr:`J` and :attr:`Jinv` at ``q``; return the figures (``inf`` when singular)."""
+        if not self._announced:  # the first call after installation compiles the Jacobian's and measure's kernels
+            announce(measure)
+            self._announced = True
         _, G = self._solver.evaluate(q)
         if self.supported:
             tt, tr, cond, det = measure(

@@ -41,6 +41,7 @@ from ..analysis.sensitivity import SensitivityEvaluator
 from ..exceptions import HexapodError, InputError
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.entries import direct, plain
+from ..kinematics.newton.first_compile import announce
 from ..kinematics.newton.kernels import largest_step
 from ..kinematics.newton.proof import ProofState
 from ..kinematics.newton.solver import Solution
@@ -193,6 +194,7 @@ class Tracker(PassageMixin):
         # the stuck test's kernel runs only when a reading repeats (a fixture at rest): loaded (or
         # compiled, about a second after installation) now, on no reading, and called directly from then on
         args = (self._raw, 0, 0, self._frozen, _NO_Z, self._stuck, 1, 1, self._stuck_bounds, self._moving, self._moved)
+        announce(stuck_checks)
         stuck_checks(*args)
         self._stuck_checks: Callable[..., tuple] = direct(stuck_checks, args)
 

@@ -147,3 +147,22 @@ def test_a_plain_script_sees_one_compile_warning_on_stderr():
         len(lines) == 1 and f"compiling the solver kernels ({what}), once after installation: ~{seconds} s" in lines[0]
     )
     assert issubclass(hm.CompileWarning, hm.HexapodWarning) and issubclass(hm.HexapodWarning, UserWarning)
+
+
+def test_the_tracker_and_the_pose_uncertainty_announce_their_kernels_before_their_first_calls(monkeypatch):
+    """A tracker's construction compiles the pose uncertainty's kernels (about 5 s after installation) and its
+    stuck test's; its first solved sample the uncertainty of a solve (about 3 s): each is announced first."""
+    import hexapod_model as hm
+    from hexapod_model.analysis import sensitivity
+    from hexapod_model.tracking import kernels, tracker
+
+    seen: list[str] = []
+    monkeypatch.setattr(sensitivity, "announce", lambda d: seen.append(d.py_func.__name__))
+    monkeypatch.setattr(tracker, "announce", lambda d: seen.append(d.py_func.__name__))
+    hexa = hm.Hexapod.from_preset("reference")
+    stream = tracker.Tracker(hexa)
+    assert seen == ["measure", "stuck_checks"]
+    for _ in range(3):
+        stream.step(hexa.closed_loop.q_home[hexa.closed_loop.prismatic_q])
+    assert seen == ["measure", "stuck_checks", "measure_solved"]  # once, at its first call
+    assert set(seen) <= set(first_compile.ENTRIES) and kernels.stuck_checks.py_func.__name__ == "stuck_checks"

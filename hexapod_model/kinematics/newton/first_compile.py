@@ -36,6 +36,9 @@ ENTRIES = {
     "inverse_rows": ("the inverse-kinematics batch loop", 8),
     "follow": ("the readings path", 12),
     "prove_packed": ("the Krawczyk proof of a warm step", 70),
+    "measure": ("the pose uncertainty", 5),
+    "measure_solved": ("the pose uncertainty of a solve", 3),
+    "stuck_checks": ("the tracker's stuck test", 1),
 }
 
 #: first-generation threshold of the cyclic garbage collector while numba compiles (CPython's
