@@ -290,9 +290,12 @@ def rest_streams(
         pose = hexa.home_pose.copy()
         pose[:3, 3] += np.array([np.cos(i), np.sin(i), 0.5 * (-1) ** i]) * 0.3 * hexa.base_radius / 10.0
         rests.append(hexa.inverse(pose, check=False).lengths)
-    series = [np.round((r + rng.normal(scale=noise, size=(samples, 6))) / resolution) * resolution for r in rests]
-    alone_series = np.round((rests[0] + rng.normal(scale=noise, size=(samples * fixtures, 6))) / resolution)
-    alone_series *= resolution  # as many steps as the turns take
+
+    def counts(rest: np.ndarray, n: int) -> np.ndarray:  # n noisy readings of ``rest`` as the encoders count them
+        return np.round((rest + rng.normal(scale=noise, size=(n, 6))) / resolution) * resolution
+
+    series = [counts(r, samples) for r in rests]
+    alone_series = counts(rests[0], samples * fixtures)  # as many steps as the turns take
     trackers = [Tracker(hexa, noise=noise, resolution=resolution) for _ in series]
     alone = Tracker(hexa, noise=noise, resolution=resolution)
     skip = min(20, samples // 2)

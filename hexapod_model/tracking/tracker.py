@@ -69,6 +69,7 @@ _NO_Z = np.full(6, np.nan)
 _SCALE_RATE = 0.02  # weight of a sample in the observed innovation scale (~50 samples)
 _SCALE_FLOOR = 1e-3  # the branch check never assumes readings better than 1e-3 noise
 _STUCK_LOOKBACK = 8  # readings kept beyond stuck_samples to see the other legs move
+_LEG_SETS = [tuple(i for i in range(6) if bits >> i & 1) for bits in range(64)]  # the legs named by stuck_checks' bits
 _BEFORE = 24  # certified samples before a passage near a singularity that the candidates are judged by
 
 __all__ = [
@@ -182,7 +183,6 @@ class Tracker(PassageMixin):
         self._stuck_bounds = np.array(
             [s.stuck_samples, s.stuck_sigmas, moved_bound, s.stuck_motion_sigmas, s.jump_sigmas, s.reading_sigma]
         )
-        self._leg_sets = [tuple(i for i in range(6) if bits >> i & 1) for bits in range(64)]  # legs named, by bits
         self._calm: deque[tuple[int, np.ndarray, np.ndarray]] = deque(maxlen=_BEFORE)  # certified, not near-singular
         self._sens_b: SensitivityEvaluator | None = None  # for the candidates of a passage
         self._k = 0  # samples since the start
@@ -330,7 +330,7 @@ class Tracker(PassageMixin):
                 self._moved,
             )
             jumped, stuck_any, bits = self._stuck_checks(*stuck_args)
-            legs = self._leg_sets[bits]
+            legs = _LEG_SETS[bits]
             flags += ["jump"] * jumped + ["stuck"] * stuck_any
             suspect = bool(flags)
         if self._gap > s.max_gap and "stuck" not in flags:
