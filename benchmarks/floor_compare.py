@@ -15,8 +15,10 @@ Alternating rounds (the machine is shared: the load affects both alike), CPU tim
 Both solve to ``BENCH_TOL``. The package solves without the body check (cones, clearance) unless
 ``--check-body``: the floor checks neither. Then where the package's time goes beside the floor's: the warm
 solve's compiled call alone (the iteration, and the finish a ``Solution`` needs: Jacobian, pose,
-limit check) and the Python around it; the rows of the box whose certified first attempt fails
-(the certificate then follows the readings path, :mod:`hexapod_model.kinematics.certificate`). The
+limit check) and the Python around it; the warm step's Krawczyk proof and its compiled parts
+(:func:`proof_breakdown`: the two interval enclosures and the per-leg algebra of one test); the rows
+of the box whose certified first attempt fails (the certificate then follows the readings path,
+:mod:`hexapod_model.kinematics.certificate`). The
 figures of the first solves (compilation) are in ``startup.py --cold``.
 
     python benchmarks/floor_compare.py [--rounds 5] [--samples 1000]
@@ -35,6 +37,7 @@ from compiled_newton import per_solve, rate
 
 from hexapod_model import Hexapod
 from hexapod_model.analysis.trajectories import box_poses
+from hexapod_model.kinematics.newton.entries import plain
 from hexapod_model.kinematics.newton.solver import MAX_STEP
 from hexapod_model.studies.bench import BENCH_TOL, trajectory_readings
 
@@ -61,6 +64,103 @@ def call_breakdown(hexa: Hexapod, readings: np.ndarray, first) -> dict[str, floa
             t0 = time.thread_time_ns()
             solver._kernel(start.q, x, settings, outputs)
             times[key].append((time.thread_time_ns() - t0) / 1e3)
+    return {key: float(np.median(t)) for key, t in times.items()}
+
+
+def _proof_kernels():
+    """Loops of the warm step's proof's compiled parts, each ``n`` calls (compiled here, on first use)."""
+    from numba import njit
+
+    from hexapod_model.kinematics.newton.enclosure import enclose_into
+    from hexapod_model.kinematics.newton.krawczyk_blocks import apply, krawczyk_blocks, setup, transform
+
+    @njit
+    def residual(n, tables, T0, x, l, work):  # F at the result, its rounding bounded (a point enclosure)
+        placements, motions, closure, held, rows = tables
+        V, Jm, Jr, _, H, _, ew = work
+        for _ in range(n):
+            enclose_into(placements, motions, closure, held, rows, T0, x, V[4], l, H[1], False, V[0], V[1], Jm, Jr, ew)
+
+    @njit
+    def jacobian(n, tables, T0, x, rho, hm, hr, work):  # F and the Jacobian over a box and the readings path
+        placements, motions, closure, held, rows = tables
+        V, Jm, Jr, _, _, _, ew = work
+        for _ in range(n):
+            enclose_into(placements, motions, closure, held, rows, T0, x, rho, hm, hr, True, V[2], V[3], Jm, Jr, ew)
+
+    @njit
+    def algebra(n, which, rows, rho, work):  # the per-leg preconditioner, Y J's blocks, the test, one Y v
+        V, Jm, Jr, _, _, blocks, _ = work
+        for _ in range(n):
+            if which == 0:
+                setup(Jm, rows, blocks)
+            elif which == 1:
+                transform(Jm, rows, blocks)
+            elif which == 2:
+                krawczyk_blocks(V[7], V[8], Jr, rows, blocks, rho, V[11], V[12])
+            else:
+                apply(blocks, rows, V[0], V[1], V[7], V[8])
+
+    return residual, jacobian, algebra
+
+
+def proof_breakdown(hexa: Hexapod, readings: np.ndarray, first, reps: int = 50) -> dict[str, float]:
+    """Median CPU microseconds of the warm step's Krawczyk proof along ``readings`` and of its compiled parts.
+
+    ``prove``: :meth:`StepProver.prove` as :meth:`Hexapod.forward` calls it (from the previous
+    result), with the Python around its compiled call; ``compiled_call`` that call alone. The
+    parts, each timed over ``reps`` calls on the step's own box (its radius 1.5 times the step
+    in each unknown, the readings over the step): the residual's enclosure at the result (a
+    point), the residual's and the Jacobian's over the box, the per-leg preconditioner from the
+    Jacobian's midpoint, the per-leg blocks of ``Y J`` over the box, the Krawczyk test on them,
+    and one product ``Y v``. A whole-path test runs the two enclosures, the blocks, two tests
+    (the path's box, the end box) and three products, and the preconditioner only when the one
+    held from the last step does not prove.
+    """
+    prover = hexa.engine.prover
+    residual, jacobian, algebra = _proof_kernels()
+    rows = prover.tables[4]
+    steps = [first]
+    for x in readings:
+        steps.append(hexa.forward(x, steps[-1], tol=BENCH_TOL, prove=False))
+    keys = ("residual", "jacobian", "preconditioner", "blocks", "test", "apply")
+    times: dict[str, list[float]] = {k: [] for k in ("prove", *keys)}
+    for a, b in zip(steps[:-1], steps[1:]):
+        t0 = time.thread_time_ns()
+        prover.prove(a.q, b.q)
+        times["prove"].append((time.thread_time_ns() - t0) / 1e3)
+    floats, ints, spec = prover.buffers()
+    entry = prover._entry  # the compiled call that prove makes (set by its first call)
+    times["compiled_call"] = []
+    for a, b in zip(steps[:-1], steps[1:]):
+        args = (floats, ints, spec, rows, prover.platform_q, plain(a.q), plain(b.q), True, True)
+        t0 = time.thread_time_ns()
+        entry(*args)
+        times["compiled_call"].append((time.thread_time_ns() - t0) / 1e3)
+    work = prover.work()[0]  # the thread's arrays (what they hold for the next proof is dropped)
+    for a, b in zip(steps[:-1], steps[1:]):
+        T0 = prover.platform(b.q)
+        x0, x1 = prover.unknowns(a.q, T0), prover.unknowns(b.q, T0)
+        l0, l1 = a.q[prover.held_q], b.q[prover.held_q]
+        rho = 1.5 * np.abs(x1 - x0) + 1e-12 * (1.0 + np.abs(x1))
+        hm, hr = 0.5 * (l0 + l1), 0.5 * np.abs(l1 - l0)
+        calls = (
+            ("residual", lambda n, x1=x1, l1=l1, T0=T0: residual(n, prover.tables, T0, x1, l1, work)),
+            (
+                "jacobian",
+                lambda n, x1=x1, T0=T0, rho=rho, hm=hm, hr=hr: jacobian(n, prover.tables, T0, x1, rho, hm, hr, work),
+            ),
+            ("preconditioner", lambda n, rho=rho: algebra(n, 0, rows, rho, work)),
+            ("blocks", lambda n, rho=rho: algebra(n, 1, rows, rho, work)),
+            ("test", lambda n, rho=rho: algebra(n, 2, rows, rho, work)),
+            ("apply", lambda n, rho=rho: algebra(n, 3, rows, rho, work)),
+        )
+        for key, call in calls:
+            call(1)  # compiled on the first step
+            t0 = time.thread_time_ns()
+            call(reps)
+            times[key].append((time.thread_time_ns() - t0) / 1e3 / reps)
+    prover.work()  # the arrays' region and preconditioner were overwritten: dropped
     return {key: float(np.median(t)) for key, t in times.items()}
 
 
@@ -189,6 +289,22 @@ def main(argv=None) -> int:
     print(f"warm FK, where the package's time goes (median us): compiled call {parts['compiled_call']:.1f}", end="")
     print(f" (iteration {parts['iteration']:.1f}, finish {parts['compiled_call'] - parts['iteration']:.1f});", end="")
     print(f" Python around it {python:.1f}")
+    proof = proof_breakdown(hexa, warm[1 : 1 + min(args.samples, 200)], first)
+    # a whole-path test: the two enclosures, the blocks, two tests (the path's box, the end box) and three products
+    whole = proof["residual"] + proof["jacobian"] + proof["blocks"] + 2.0 * proof["test"] + 3.0 * proof["apply"]
+    call = proof["compiled_call"]
+    print(f"warm FK's Krawczyk proof (median us): {proof['prove']:.1f}, its compiled call {call:.1f}: the", end="")
+    print(f" residual at the result {proof['residual']:.1f}, the Jacobian over the step's box", end="")
+    print(
+        f" {proof['jacobian']:.1f}, Y J's per-leg blocks {proof['blocks']:.1f}, 2 tests {2.0 * proof['test']:.1f},",
+        end="",
+    )
+    print(f" 3 products Y v {3.0 * proof['apply']:.1f} (sum {whole:.1f}; the rest, the step's unknowns and", end="")
+    print(
+        f" the path's term, {call - whole:.1f}); a preconditioner built afresh {proof['preconditioner']:.1f};", end=""
+    )
+    print(f" the floor's whole solve {report['warm_fk_us']['floor']:.1f}")
+    report["warm_fk_proof_breakdown_us"] = proof
     failed = uncertified_attempts(hexa, cold)
     print(f"box poses from home: the certified first attempt fails on {failed.sum()} of {len(cold)} rows", end="")
     print(" (the certificate follows their readings path); forward_batch of each part against the floor:")

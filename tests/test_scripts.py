@@ -369,6 +369,13 @@ def test_floor_compare_benchmark_runs(tmp_path):
     assert proven < batch["forward_batch, trajectory A warm"]["package"]  # solves/s: the proofs cost on top
     rows = dict(_performance_table().floor_rows(data))
     assert "µs vs the floor's" in rows["reference: warm FK with its Krawczyk proof (the default), CPU per solve"]
+    parts = data["warm_fk_proof_breakdown_us"]  # the proof's compiled parts, each timed on its own
+    assert set(parts) == {"prove", "compiled_call", "residual", "jacobian", "preconditioner", "blocks", "test", "apply"}
+    assert 0 < parts["compiled_call"] < parts["prove"]  # the Python around the call costs on top
+    assert 0 < parts["residual"] < parts["jacobian"]  # a point's enclosure, then the box's with the Jacobian
+    assert parts["residual"] + parts["jacobian"] + parts["blocks"] + 2 * parts["test"] < parts["compiled_call"]
+    assert "two Krawczyk tests" in rows["reference: warm FK's Krawczyk proof, where its time goes, CPU (medians)"]
+    assert "Krawczyk proof (median us)" in out.stdout
 
 
 def test_startup_benchmark_runs(tmp_path):
