@@ -138,30 +138,31 @@ def proof_breakdown(hexa: Hexapod, readings: np.ndarray, first, reps: int = 50) 
         entry(*args)
         times["compiled_call"].append((time.thread_time_ns() - t0) / 1e3)
     work = prover.work()[0]  # the thread's arrays (what they hold for the next proof is dropped)
+
+    def per_call(kernel, *args) -> float:
+        kernel(1, *args)  # compiled on its first use
+        t0 = time.thread_time_ns()
+        kernel(reps, *args)
+        return (time.thread_time_ns() - t0) / 1e3 / reps
+
     for a, b in zip(steps[:-1], steps[1:]):
         T0 = prover.platform(b.q)
         x0, x1 = prover.unknowns(a.q, T0), prover.unknowns(b.q, T0)
         l0, l1 = a.q[prover.held_q], b.q[prover.held_q]
         rho = 1.5 * np.abs(x1 - x0) + 1e-12 * (1.0 + np.abs(x1))
-        hm, hr = 0.5 * (l0 + l1), 0.5 * np.abs(l1 - l0)
-        calls = (
-            ("residual", lambda n, x1=x1, l1=l1, T0=T0: residual(n, prover.tables, T0, x1, l1, work)),
-            (
-                "jacobian",
-                lambda n, x1=x1, T0=T0, rho=rho, hm=hm, hr=hr: jacobian(n, prover.tables, T0, x1, rho, hm, hr, work),
-            ),
-            ("preconditioner", lambda n, rho=rho: algebra(n, 0, rows, rho, work)),
-            ("blocks", lambda n, rho=rho: algebra(n, 1, rows, rho, work)),
-            ("test", lambda n, rho=rho: algebra(n, 2, rows, rho, work)),
-            ("apply", lambda n, rho=rho: algebra(n, 3, rows, rho, work)),
+        times["residual"].append(per_call(residual, prover.tables, T0, x1, l1, work))
+        times["jacobian"].append(
+            per_call(jacobian, prover.tables, T0, x1, rho, 0.5 * (l0 + l1), 0.5 * np.abs(l1 - l0), work)
         )
-        for key, call in calls:
-            call(1)  # compiled on the first step
-            t0 = time.thread_time_ns()
-            call(reps)
-            times[key].append((time.thread_time_ns() - t0) / 1e3 / reps)
+        for which, key in enumerate(("preconditioner", "blocks", "test", "apply")):
+            times[key].append(per_call(algebra, which, rows, rho, work))
     prover.work()  # the arrays' region and preconditioner were overwritten: dropped
-    return {key: float(np.median(t)) for key, t in times.items()}
+    out = {key: float(np.median(t)) for key, t in times.items()}
+    # a whole-path test runs the two enclosures, the blocks, two tests (the path's box, the end box), three products
+    out["whole_test_parts"] = (
+        sum(out[k] for k in ("residual", "jacobian", "blocks")) + 2 * out["test"] + 3 * out["apply"]
+    )
+    return out
 
 
 def uncertified_attempts(hexa: Hexapod, readings: np.ndarray) -> np.ndarray:
@@ -290,8 +291,7 @@ def main(argv=None) -> int:
     print(f" (iteration {parts['iteration']:.1f}, finish {parts['compiled_call'] - parts['iteration']:.1f});", end="")
     print(f" Python around it {python:.1f}")
     proof = proof_breakdown(hexa, warm[1 : 1 + min(args.samples, 200)], first)
-    # a whole-path test: the two enclosures, the blocks, two tests (the path's box, the end box) and three products
-    whole = proof["residual"] + proof["jacobian"] + proof["blocks"] + 2.0 * proof["test"] + 3.0 * proof["apply"]
+    whole = proof["whole_test_parts"]
     call = proof["compiled_call"]
     print(f"warm FK's Krawczyk proof (median us): {proof['prove']:.1f}, its compiled call {call:.1f}: the", end="")
     print(f" residual at the result {proof['residual']:.1f}, the Jacobian over the step's box", end="")

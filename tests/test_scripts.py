@@ -370,10 +370,12 @@ def test_floor_compare_benchmark_runs(tmp_path):
     rows = dict(_performance_table().floor_rows(data))
     assert "µs vs the floor's" in rows["reference: warm FK with its Krawczyk proof (the default), CPU per solve"]
     parts = data["warm_fk_proof_breakdown_us"]  # the proof's compiled parts, each timed on its own
-    assert set(parts) == {"prove", "compiled_call", "residual", "jacobian", "preconditioner", "blocks", "test", "apply"}
+    kinds = ("prove", "compiled_call", "residual", "jacobian", "preconditioner", "blocks", "test", "apply")
+    assert set(parts) == {*kinds, "whole_test_parts"}
     assert 0 < parts["compiled_call"] < parts["prove"]  # the Python around the call costs on top
     assert 0 < parts["residual"] < parts["jacobian"]  # a point's enclosure, then the box's with the Jacobian
-    assert parts["residual"] + parts["jacobian"] + parts["blocks"] + 2 * parts["test"] < parts["compiled_call"]
+    assert parts["residual"] + parts["jacobian"] + parts["blocks"] + 2 * parts["test"] < parts["whole_test_parts"]
+    assert parts["whole_test_parts"] < parts["compiled_call"]  # the parts of one test, timed alone, within the call
     assert "two Krawczyk tests" in rows["reference: warm FK's Krawczyk proof, where its time goes, CPU (medians)"]
     assert "Krawczyk proof (median us)" in out.stdout
 
