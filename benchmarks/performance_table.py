@@ -83,12 +83,19 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
             "(`--capacity`)",
             f"cycle thread {r['cycle_cpu_us_per_set']:.0f} µs CPU a set, "
             f"{r['cycle_cpu_us_per_set'] / r['solve_us']:.1f}x its solve's {r['solve_us']:.0f} µs "
-            f"(the tracker step alone: {r['step_us']:.0f} µs)",
+            f"(the tracker step alone: {r['step_us']:.0f} µs{_in_turn(r)})",
         )
         for r in data
         if r.get("kind") == "capacity"
     ]
     return rows
+
+
+def _in_turn(r: dict) -> str:
+    """``; the N fixtures' steps in turn: X µs`` for a capacity run of several fixtures, else empty."""
+    if r["fixtures"] == 1 or "steps_in_turn_us" not in r:
+        return ""
+    return f"; the {r['fixtures']} fixtures' steps in turn, without the bus: {r['steps_in_turn_us']:.0f} µs"
 
 
 def _at_rest(r: dict) -> str:

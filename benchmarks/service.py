@@ -36,7 +36,9 @@ fixture: each at a pose of its own about home, 1 um of noise on readings carried
 ``--capacity``, from a full queue; set against the solve of such a fixture.
 ``--capacity`` also queues the frames of 3 s of sets before the cycle thread reads them and
 prints its CPU per set with no idle gaps (1 x 1000 Hz, FIXTURES x 100 Hz and each ``--more``
-run): the cost of a set when the thread's caches stay warm.
+run): the cost of a set when the thread's caches stay warm, beside the same fixtures' tracker
+steps run in turn on one thread without the bus, the frames and the records (one fixture: its
+step alone), which shows what stepping many fixtures' trackers costs each one's.
 """
 
 from __future__ import annotations
@@ -56,11 +58,12 @@ import can
 import numpy as np
 
 from hexapod_model import Hexapod
+from hexapod_model.analysis.sensitivity import SensitivityEvaluator
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.service import FixtureService, PoseSolver, config_from_dict
 from hexapod_model.service.sim.config import trajectory_sequence
 from hexapod_model.service.threads import NamedThread
-from hexapod_model.tracking.types import predict
+from hexapod_model.tracking.types import characteristic_length, predict
 
 SETS = 2000  # one there-and-back of trajectory A, whatever the rate
 IDLE_SOLVES = 400  # solves timed after an idle gap, per rate of one fixture
@@ -240,6 +243,30 @@ def solve_cost(
     n, tol = len(readings) - 200, solver.tracker.tol
     idle = {rate: solves_cost(hexa, readings, tol, 1.0 / rate, IDLE_SOLVES) for rate in rates}
     return 1e6 * (c1 - c0) / n, solves_cost(hexa, readings, tol), idle
+
+
+def steps_in_turn(
+    hexa: Hexapod, readings: np.ndarray, fixtures: int, noise: float = 10e-6, resolution: float = 0.0
+) -> float:
+    """CPU (us) a set of the tracker's step when ``fixtures`` streams are stepped in turn on one thread.
+
+    As the service's cycle thread steps its fixtures' trackers (one sensitivity evaluator shared,
+    each fixture at a point of its own on ``readings``, :func:`fixture_readings`), without the
+    bus, the frames and the records: what the other fixtures' steps cost each one's (their state
+    no longer in the caches), beside :func:`solve_cost`'s one stream.
+    """
+    per = fixture_readings(readings, fixtures)
+    evaluator = SensitivityEvaluator(hexa, characteristic_length(hexa))
+    solvers = [PoseSolver(hexa, noise, sensitivity=evaluator, resolution=resolution) for _ in range(fixtures)]
+    warm, timed = 200, max(100, 2000 // fixtures)
+    for k in range(warm):
+        for i, solver in enumerate(solvers):
+            solver.step(per[k % len(per), i], k)
+    c0 = time.thread_time()
+    for k in range(warm, warm + timed):
+        for i, solver in enumerate(solvers):
+            solver.step(per[k % len(per), i], k)
+    return 1e6 * (time.thread_time() - c0) / (timed * fixtures)
 
 
 def solves_cost(hexa: Hexapod, readings: np.ndarray, tol: float, gap: float = 0.0, timed: int = 0) -> float:
@@ -486,16 +513,21 @@ def main(argv=None) -> int:
                 us = capacity(hexa, readings if at_rest is None else at_rest, n, rate, int(3 * rate), Path(tmp))
                 share = us * n * rate / 1e4  # percent of one core at that rate
                 solve, step = (solve_us, step_us) if at_rest is None else (rest_solve_us, rest_step_us)
+                if at_rest is None:
+                    turn = step_us if n == 1 else steps_in_turn(hexa, readings, n)
+                else:
+                    turn = steps_in_turn(hexa, np.round(at_rest / 1e-6) * 1e-6, n, 1e-6, 1e-6)
                 reports.append(
                     {"kind": "capacity", "fixtures": n, "rate_hz": rate, "cycle_cpu_us_per_set": us}
-                    | {"solve_us": solve, "step_us": step}
+                    | {"solve_us": solve, "step_us": step, "steps_in_turn_us": turn}
                     | ({} if at_rest is None else {"motion": "rest"})
                 )
                 print(
                     f"capacity {n:3d} x {rate:6.0f} Hz{' at rest' if at_rest is not None else ''}  "
                     f"cycle thread CPU {us:5.0f} us a set, {us / solve:.1f}x the solve "
                     f"({share:.0f} % of a core)"
-                    f"  against the solve's {solve:.0f} us and the tracker step's {step:.0f} us"
+                    f"  against the solve's {solve:.0f} us, the tracker step's {step:.0f} us"
+                    f" and the {n} fixtures' tracker steps in turn, without the bus: {turn:.0f} us"
                 )
     for n in dict.fromkeys(n for n, _ in groups):  # each fixture count once, in order (moving)
         ok = [r["rate_hz"] for r in reports if r["fixtures"] == n and r.get("sustained") and "motion" not in r]

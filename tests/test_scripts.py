@@ -462,6 +462,11 @@ def test_service_benchmark_runs(tmp_path):
     assert "pose service, 2 fixture(s) × 100 Hz at rest (1 µm counts)" in rows
     cell = rows["pose service, 2 fixture(s) × 100 Hz from a full queue (`--capacity`)"]
     assert cell.startswith(f"cycle thread {full[1]['cycle_cpu_us_per_set']:.0f} µs CPU a set")
+    # several fixtures' tracker steps in turn, without the bus, beside the one stream's (one fixture: its own)
+    assert full[0]["steps_in_turn_us"] == full[0]["step_us"] and all(r["steps_in_turn_us"] > 0.0 for r in full)
+    assert f"the 2 fixtures' steps in turn, without the bus: {full[1]['steps_in_turn_us']:.0f} µs" in cell
+    assert "in turn" not in rows["pose service, 1 fixture(s) × 1000 Hz from a full queue (`--capacity`)"]
+    assert "the 2 fixtures' tracker steps in turn, without the bus:" in out.stdout
     # a run of one fixture also against its solve timed after the stream's idle gap (the others: not)
     assert "the solve after the idle gap of a 1-fixture stream: 100 Hz" in out.stdout
     fed = {r["fixtures"]: r for r in data if r.get("kind") != "capacity"}
