@@ -5,9 +5,11 @@
 ...     svc.subscribe(print)          # every published record (a PoseRecord)
 ...     svc.record("left")            # the latest one; also GET /fixtures/left/pose
 
-Threads: one reads the bus and runs every fixture's cycle (so a record is published within the
-frame's own iteration), one writes the store (:class:`~hexapod_model.service.store.writer.StoreWriter`),
-and the HTTP server's. Subscribers run on the bus thread: keep them short.
+Threads: one reads the bus and runs every fixture's cycle (a record is published within the
+frame's own iteration; with several fixtures, once no frame waits on the bus, or within 2 ms:
+the sets completed meanwhile are solved back to back), one writes the store
+(:class:`~hexapod_model.service.store.writer.StoreWriter`), and the HTTP server's. Subscribers run
+on the bus thread: keep them short.
 """
 
 from __future__ import annotations
@@ -49,6 +51,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 TRANSIT_WINDOW = 1.0  # s: silence is judged allowing for the longest wait of a frame over this long
+HOLD_LIMIT = 0.002  # s: a complete set waits at most this long for the frames queued behind it (_loop)
 
 
 class FixtureService:
@@ -175,6 +178,8 @@ class FixtureService:
                     evaluators[id(hexa)] = SensitivityEvaluator(hexa, characteristic_length(hexa))
                 last = store.last_lock(f.name)
                 cycles[f.name] = FixtureCycle(f, hexa, hashes[id(hexa)], last, self._started, evaluators[id(hexa)])
+                # several fixtures: their complete sets wait for the frames queued behind them (_loop)
+                cycles[f.name].hold_sets = len(cfg.fixtures) > 1
                 log.info("fixture %s: %s", f.name, cycles[f.name].recovery)
             self.phase = "compiling the solver's kernels"
             self._warm_up()
@@ -365,13 +370,24 @@ class FixtureService:
         # earlier may still be on their way: a gateway's delivery, a sender or this thread running late)
         waits: deque[float] = deque(maxlen=max(1, round(TRANSIT_WINDOW / tick)))
         transit = 0.0
+        # the cycles holding a complete set (FixtureCycle.hold_sets, with several fixtures): the sets
+        # are solved back to back once no frame is queued, before a holding cycle takes another
+        # frame, HOLD_LIMIT after the first was held, and before the silence checks. Solving each
+        # set between the frames of the others runs the solver's code and data cold from the
+        # caches every time
+        held: list[FixtureCycle] = []
+        since = 0.0  # when the first of them was held
         while not self._stop.is_set():
             asked = time.time()
             try:
-                msg = recv(tick)
+                msg = recv(0.0 if held else tick)
             except (can.CanError, OSError) as exc:
                 log.error("bus: %s", exc)
+                self._solve_held(held)
                 self._stop.wait(tick)
+                continue
+            if msg is None and held:  # nothing queued: the held sets now, then wait for frames
+                self._solve_held(held)
                 continue
             if msg is None:  # nothing queued until the wait ended: quiet until then, not until this thread ran
                 # (a stall after the wait is the service's), less the longest wait lately: the frames handled
@@ -388,10 +404,17 @@ class FixtureService:
                 else:
                     self.frames += 1
                     cycle, on_frame, leg = route
+                    if held and (cycle.holding or now - since > HOLD_LIMIT):
+                        self._solve_held(held)
                     rec = on_frame(leg, msg.data, stamp)
                     if rec is not None:
                         self._publish(cycle, rec)
+                    if cycle.holding:
+                        if not held:
+                            since = now
+                        held.append(cycle)
             if clock - last_check >= tick:
+                self._solve_held(held)
                 last_check = clock
                 self.lag, behind = behind, 0.0  # the most a frame waited since the last check: the service's delay
                 waits.append(self.lag)
@@ -400,6 +423,15 @@ class FixtureService:
                     rec = cycle.check_silence(clock)
                     if rec is not None:
                         self._publish(cycle, rec)
+        self._solve_held(held)  # stopping: every set taken is published
+
+    def _solve_held(self, held: list[FixtureCycle]) -> None:
+        """Solve and publish the sets ``held`` (in the order they were completed); empties it."""
+        for cycle in held:
+            rec = cycle.finish_held()
+            if rec is not None:  # (None: the cycle published it itself, before a record of its own)
+                self._publish(cycle, rec)
+        held.clear()
 
     def _publish(self, cycle: FixtureCycle, rec: PoseRecord) -> None:
         writer = self.writer

@@ -183,6 +183,11 @@ class FixtureCycle:
         #: the lock to commit: the service takes it, stores it and calls :meth:`lock_stored`
         self.pending_lock: tuple[int, LockEvent] | None = None
         self._in_robot = None if cfg.cell is None else InRobot(cfg.cell, cfg.noise, self.solver.propagation)
+        #: complete sets wait for :meth:`finish_held` (the service's cycle thread: the sets of many
+        #: fixtures queued on the bus are then solved back to back, their code and data warm in the caches)
+        self.hold_sets = False
+        self._held: tuple[float, np.ndarray, bool, bool] | None = None  # the set waiting: t, readings, its lock states
+        self._may_hold = False  # a frame on the plain path is being taken (not a burst's, not a silence check's)
         #: the latest record
         self.last: PoseRecord = self._record(t0, "no_data", [], None)
         self._listening = t0  # s: since when the bus is read (see listen)
@@ -210,10 +215,14 @@ class FixtureCycle:
         instants under one stamp are buffered and split (:mod:`~hexapod_model.service.cycle.burst`):
         their records come one per call, after the burst.
         """
+        if self._held is not None:  # a set held (hold_sets) and not finished: its record first
+            self._queue_held()
         if t > self._heard[leg]:
             self._heard[leg] = t
         if self._bursts.engaged or self._bursts.shares_instant(leg, data, t):
+            self._may_hold = False
             return self._burst_frame(leg, data, t)
+        self._may_hold = self.hold_sets and not self._pending
         record = self._frame(leg, data, t)
         if self._pending:  # a burst's records are still queued: this one after them
             if record is not None:
@@ -305,6 +314,8 @@ class FixtureCycle:
 
     def _take(self, leg: int, data: bytes | bytearray, t: float, skew: float) -> PoseRecord | None:
         """Add a frame that is neither late, a repeat nor ahead to the set (see :meth:`on_frame`)."""
+        if self._held is not None:  # (a second frame of one call: the held set's record before any other)
+            self._queue_held()
         published = None
         if self._n_fresh:
             repeat = self._fresh[leg]
@@ -422,6 +433,9 @@ class FixtureCycle:
         run backwards; the unfinished set it ends is counted incomplete. A burst still buffered
         ``staleness`` after its stamp is judged now (the gateway sent no more).
         """
+        if self._held is not None:  # a set held (hold_sets): its record first
+            self._queue_held()
+        self._may_hold = False
         staleness = self.cfg.staleness
         if self._bursts.frames and now - self._bursts.stamp > staleness:
             self._close_burst(self._bursts.stamp)
@@ -465,8 +479,27 @@ class FixtureCycle:
         """
         return self.alarm.request(by, client, note, now)
 
+    @property
+    def holding(self) -> bool:
+        """Whether a complete set waits for :meth:`finish_held` (:attr:`hold_sets`)."""
+        return self._held is not None
+
+    def finish_held(self) -> PoseRecord | None:
+        """Solve the held set (:attr:`hold_sets`) and return its record; None when no set is held."""
+        held = self._held
+        if held is None:
+            return None
+        self._held = None
+        return self._solved(*held)
+
+    def _queue_held(self) -> None:
+        """Solve the held set now; its record goes first in the queue of records to publish."""
+        held, self._held = self._held, None
+        if held is not None:
+            self._pending.append(self._solved(*held))
+
     # ----- one set -----
-    def _complete(self, t: float) -> PoseRecord:
+    def _complete(self, t: float) -> PoseRecord | None:
         steps, dt = 1 + self._lost, t - self._t_set  # instants since the last set: lost sets count
         if dt > 0.0 and self._period > 0.0:  # (False for NaN)
             steps = max(steps, round(dt / self._period))
@@ -504,6 +537,14 @@ class FixtureCycle:
         if was_locked and self.lock.state != "locked":
             self._episode += 1
             log.info("fixture %s: moving (lock released)", self.cfg.name)
+        if self._may_hold:  # solved by finish_held, before this cycle takes another frame
+            self._held = (t, r, was_locked, ready)
+            return None
+        return self._solved(t, r, was_locked, ready)
+
+    def _solved(self, t: float, r: np.ndarray, was_locked: bool, ready: bool) -> PoseRecord:
+        """The rest of :meth:`_complete`: the set's readings ``r`` solved, checked and recorded."""
+        six = self._readings if self._n == 6 else self._readings[:6]  # no frame was taken since _complete
         outcome = self.solver.step(r, self._instant)
         jumped = outcome.legs if "jump" in outcome.flags else ()
         stepped = self.steps.update(self._instant, six, jumped)
