@@ -486,17 +486,14 @@ class FixtureCycle:
 
     def finish_held(self) -> PoseRecord | None:
         """Solve the held set (:attr:`hold_sets`) and return its record; None when no set is held."""
-        held = self._held
-        if held is None:
-            return None
-        self._held = None
-        return self._solved(*held)
+        held, self._held = self._held, None
+        return None if held is None else self._solved(*held)
 
     def _queue_held(self) -> None:
         """Solve the held set now; its record goes first in the queue of records to publish."""
-        held, self._held = self._held, None
-        if held is not None:
-            self._pending.append(self._solved(*held))
+        record = self.finish_held()
+        if record is not None:
+            self._pending.append(record)
 
     # ----- one set -----
     def _complete(self, t: float) -> PoseRecord | None:
