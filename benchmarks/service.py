@@ -234,15 +234,22 @@ def solve_cost(
     after the idle gap of a stream at that rate (:func:`solves_cost`).
     """
     solver = PoseSolver(hexa, noise, resolution=resolution)  # resolution: m a count, as a fixture's layout
-    for k in range(200):
-        solver.step(readings[k], k)
-    c0 = time.thread_time()
-    for k in range(200, len(readings)):
-        solver.step(readings[k], k)
-    c1 = time.thread_time()
-    n, tol = len(readings) - 200, solver.tracker.tol
+    step_us = steps_cpu([solver], readings[:, None, :], len(readings) - 200)
+    tol = solver.tracker.tol
     idle = {rate: solves_cost(hexa, readings, tol, 1.0 / rate, IDLE_SOLVES) for rate in rates}
-    return 1e6 * (c1 - c0) / n, solves_cost(hexa, readings, tol), idle
+    return step_us, solves_cost(hexa, readings, tol), idle
+
+
+def steps_cpu(solvers: list[PoseSolver], per: np.ndarray, timed: int, warm: int = 200) -> float:
+    """CPU (us) a set of ``solvers`` stepped in turn on ``per`` (samples, solvers, 6): ``warm`` sets, then ``timed``."""
+    for k in range(warm):
+        for i, solver in enumerate(solvers):
+            solver.step(per[k % len(per), i], k)
+    c0 = time.thread_time()
+    for k in range(warm, warm + timed):
+        for i, solver in enumerate(solvers):
+            solver.step(per[k % len(per), i], k)
+    return 1e6 * (time.thread_time() - c0) / (timed * len(solvers))
 
 
 def steps_in_turn(
@@ -255,18 +262,9 @@ def steps_in_turn(
     bus, the frames and the records: what the other fixtures' steps cost each one's (their state
     no longer in the caches), beside :func:`solve_cost`'s one stream.
     """
-    per = fixture_readings(readings, fixtures)
     evaluator = SensitivityEvaluator(hexa, characteristic_length(hexa))
     solvers = [PoseSolver(hexa, noise, sensitivity=evaluator, resolution=resolution) for _ in range(fixtures)]
-    warm, timed = 200, max(100, 2000 // fixtures)
-    for k in range(warm):
-        for i, solver in enumerate(solvers):
-            solver.step(per[k % len(per), i], k)
-    c0 = time.thread_time()
-    for k in range(warm, warm + timed):
-        for i, solver in enumerate(solvers):
-            solver.step(per[k % len(per), i], k)
-    return 1e6 * (time.thread_time() - c0) / (timed * fixtures)
+    return steps_cpu(solvers, fixture_readings(readings, fixtures), max(100, 2000 // fixtures))
 
 
 def solves_cost(hexa: Hexapod, readings: np.ndarray, tol: float, gap: float = 0.0, timed: int = 0) -> float:
