@@ -152,6 +152,16 @@ def startup_rows(data: dict) -> list[tuple[str, str]]:
                 f"{c['first_inverse_cpu_s']:.1f} s, forward_batch {c['first_batch_cpu_s']:.1f} s",
             )
         )
+        if "first_solver_cpu_s" in c:
+            solver, body = c["first_solver_cpu_s"], c["first_body_check_cpu_s"]
+            rows.append(
+                (
+                    "the first compiled forward split: its solver's kernels, then its body check's "
+                    "(empty numba cache), CPU",
+                    f"{solver:.1f} s without the body check ({solver / c['floor_compile_cpu_s']:.2f}x the floor's "
+                    f"compile), then the body check's kernels {body:.1f} s",
+                )
+            )
         if "first_proven_cpu_s" in c:
             rows.append(
                 (

@@ -9,7 +9,9 @@ the command once with an empty numba cache (a temporary ``NUMBA_CACHE_DIR``: the
 installation, compiling every kernel it calls) and, each in a fresh process with an empty cache,
 the CPU time of the first compiled solve (``Hexapod.from_preset("reference")``, then one
 ``forward``, then one ``inverse``, then a 3-row ``forward_batch``, then a warm ``forward`` whose
-Krawczyk proof compiles; numba and the package already imported) beside the compilation of the
+Krawczyk proof compiles; numba and the package already imported), that first forward split in
+another such process (the solver's kernels alone, ``check_body=False``; then the body check's
+kernels, a forward of a hexapod that checks it) beside the compilation of the
 reference floor (``floor_newton.py``: the same iteration as one njit function, its first solve),
 and their ratio. ``--phases`` also splits the first forward's and the floor's compile CPU by
 numba pass (type inference, inlining, lowering) and LLVM (optimisation and machine code, under
@@ -55,6 +57,24 @@ w = h.forward(np.full(6, 0.0101), s)  # a warm step: its Krawczyk proof (the def
 t4 = time.process_time()
 assert s.converged and b.converged and w.proof is not None and w.proof.proven
 print(t1 - t0, t2 - t1, t3 - t2, t4 - t3)
+"""
+#: the first forward split: the solver's kernels alone (no body check), then the body check's kernels
+#: (a hexapod that checks it, made before the clock starts: the solver's kernels are compiled by then)
+FIRST_PARTS = """
+import time
+import numpy as np, numba
+import hexapod_model as hm
+from hexapod_model.kinematics.newton import iteration
+t0 = time.process_time()
+h = hm.Hexapod.from_preset("reference", check_body=False)
+s = h.forward(np.full(6, 0.01))
+t1 = time.process_time()
+checked = hm.Hexapod.from_preset("reference")
+t2 = time.process_time()
+c = checked.forward(np.full(6, 0.01))
+t3 = time.process_time()
+assert s.converged and c.converged
+print(t1 - t0, t3 - t2)
 """
 FLOOR_SOLVE = """
 import sys, time
@@ -210,15 +230,19 @@ def main(argv=None) -> int:
             shutil.rmtree(cache, ignore_errors=True)
         print(f"{'first run, empty numba cache':34s}{wall:9.3f}{cpu:9.3f}{rss:9.0f}")
         forward, inverse, batch, proven = cold_cpu(FIRST_SOLVES, env)
+        solver, body = cold_cpu(FIRST_PARTS, env)
         (floor,) = cold_cpu(FLOOR_SOLVE, env, str(Path(__file__).resolve().parent))
         print("\nfirst compiled solves, empty numba cache (CPU s, numba and the package imported):")
         print(f"  Hexapod.from_preset + first forward {forward:8.2f}   x{forward / floor:.2f} the floor's compile")
+        print(f"    (another process) without the body check {solver:8.2f}   x{solver / floor:.2f}")
+        print(f"    then the body check's kernels     {body:8.2f}")
         print(f"  then first inverse                  {inverse:8.2f}")
         print(f"  then first forward_batch (3 rows)   {batch:8.2f}")
         print(f"  then first warm forward (its proof) {proven:8.2f}")
         print(f"  floor_newton.fk_newton first solve  {floor:8.2f}   (its compilation; target: first forward <= x1.5)")
         report["cold"] = {"first_forward_cpu_s": forward, "first_inverse_cpu_s": inverse, "first_batch_cpu_s": batch}
         report["cold"]["first_proven_cpu_s"] = proven
+        report["cold"]["first_solver_cpu_s"], report["cold"]["first_body_check_cpu_s"] = solver, body
         report["cold"]["floor_compile_cpu_s"] = floor
     if args.phases:
         phases(env)
