@@ -169,6 +169,14 @@ def startup_rows(data: dict) -> list[tuple[str, str]]:
                     f"{c['first_proven_cpu_s']:.1f} s",
                 )
             )
+        if "unannounced" in c:
+            rows.append(
+                (
+                    "then a Tracker's first samples (empty numba cache), CPU; the compilations over 1 s "
+                    "the package did not announce",
+                    f"{c['first_tracker_cpu_s']:.1f} s; unannounced: {c['unannounced']}",
+                )
+            )
     return rows
 
 

@@ -9,7 +9,9 @@ the command once with an empty numba cache (a temporary ``NUMBA_CACHE_DIR``: the
 installation, compiling every kernel it calls) and, each in a fresh process with an empty cache,
 the CPU time of the first compiled solve (``Hexapod.from_preset("reference")``, then one
 ``forward``, then one ``inverse``, then a 3-row ``forward_batch``, then a warm ``forward`` whose
-Krawczyk proof compiles; numba and the package already imported), that first forward split in
+Krawczyk proof compiles, then a ``Tracker``'s first samples past settling; numba and the package
+already imported) with the compilations over a second that the package did not announce (its
+``hexapod_model.compile`` log line names each before it starts), that first forward split in
 another such process (the solver's kernels alone, ``check_body=False``; then the body check's
 kernels, a forward of a hexapod that checks it) beside the compilation of the
 reference floor (``floor_newton.py``: the same iteration as one njit function, its first solve),
@@ -42,9 +44,33 @@ URDF = [sys.executable, "-m", "hexapod_model", "urdf", "reference", "-o"]
 URDF_TARGET = 3.0
 FIRST_SOLVES = """
 import sys, time
+import logging
 import numpy as np, numba
+import numba.core.event as ev
 import hexapod_model as hm
 from hexapod_model.kinematics.newton import iteration
+from hexapod_model.kinematics.newton.first_compile import ENTRIES, LOGGER
+from hexapod_model.tracking.tracker import Tracker
+said, unannounced = [], []  # the package's compile lines; compilations over 1 s no line named
+class Said(logging.Handler):
+    def emit(self, record):
+        said.append(record.getMessage())
+class Top(ev.Listener):  # each compilation started from Python (numba compiles its callees inside it)
+    depth = 0
+    def on_start(self, event):
+        if self.depth == 0:
+            self.name, self.t0 = event.data["dispatcher"].py_func.__name__, time.process_time()
+            what = ENTRIES.get(self.name, ("?",))[0]
+            self.told = any(f"({what})" in line for line in said)
+        self.depth += 1
+    def on_end(self, event):
+        self.depth -= 1
+        cpu = time.process_time() - self.t0
+        if self.depth == 0 and cpu > 1.0 and not self.told:
+            unannounced.append(f"{self.name} {cpu:.1f} s")
+logging.getLogger(LOGGER).addHandler(Said())
+logging.getLogger(LOGGER).setLevel(logging.INFO)
+ev.register("numba:compile", Top())
 t0 = time.process_time()
 h = hm.Hexapod.from_preset("reference")
 s = h.forward(np.full(6, 0.01))
@@ -55,8 +81,13 @@ h.forward_batch(np.full((3, 6), 0.01))
 t3 = time.process_time()
 w = h.forward(np.full(6, 0.0101), s)  # a warm step: its Krawczyk proof (the default) compiles
 t4 = time.process_time()
+tracker = Tracker(h)
+results = [tracker.step(np.full(6, 0.01 + 1e-6 * k)) for k in range(tracker.settings.settle_samples + 3)]
+t5 = time.process_time()
 assert s.converged and b.converged and w.proof is not None and w.proof.proven
-print(t1 - t0, t2 - t1, t3 - t2, t4 - t3)
+assert results[-1].status == "ok" and "settling" not in results[-1].flags
+print(t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4)
+print("; ".join(unannounced) or "none")
 """
 #: the first forward split: the solver's kernels alone (no body check), then the body check's kernels
 #: (a hexapod that checks it, made before the clock starts: the solver's kernels are compiled by then)
@@ -172,8 +203,8 @@ def run(cmd: list[str], env: dict | None = None) -> tuple[float, float, float]:
     return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024
 
 
-def cold_cpu(code: str, env: dict, *args: str) -> list[float]:
-    """The figures ``code`` prints, run in a fresh process with an empty numba cache."""
+def cold_run(code: str, env: dict, *args: str) -> list[str]:
+    """The lines ``code`` prints, run in a fresh process with an empty numba cache."""
     cache = tempfile.mkdtemp(prefix="numba-cold-")
     try:
         out = subprocess.run(
@@ -183,7 +214,12 @@ def cold_cpu(code: str, env: dict, *args: str) -> list[float]:
         shutil.rmtree(cache, ignore_errors=True)
     if out.returncode != 0:
         raise SystemExit(out.stderr[-800:])
-    return [float(v) for v in out.stdout.split()]
+    return out.stdout.splitlines()
+
+
+def cold_cpu(code: str, env: dict, *args: str) -> list[float]:
+    """The figures ``code`` prints on its first line, run in a fresh process with an empty numba cache."""
+    return [float(v) for v in cold_run(code, env, *args)[0].split()]
 
 
 def median(values: list[float]) -> float:
@@ -229,7 +265,8 @@ def main(argv=None) -> int:
         finally:
             shutil.rmtree(cache, ignore_errors=True)
         print(f"{'first run, empty numba cache':34s}{wall:9.3f}{cpu:9.3f}{rss:9.0f}")
-        forward, inverse, batch, proven = cold_cpu(FIRST_SOLVES, env)
+        lines = cold_run(FIRST_SOLVES, env)
+        forward, inverse, batch, proven, tracked = (float(v) for v in lines[0].split())
         solver, body = cold_cpu(FIRST_PARTS, env)
         (floor,) = cold_cpu(FLOOR_SOLVE, env, str(Path(__file__).resolve().parent))
         print("\nfirst compiled solves, empty numba cache (CPU s, numba and the package imported):")
@@ -239,9 +276,12 @@ def main(argv=None) -> int:
         print(f"  then first inverse                  {inverse:8.2f}")
         print(f"  then first forward_batch (3 rows)   {batch:8.2f}")
         print(f"  then first warm forward (its proof) {proven:8.2f}")
+        print(f"  then a Tracker's first samples      {tracked:8.2f}")
+        print(f"  compilations over 1 s that no line announced: {lines[1]}")
         print(f"  floor_newton.fk_newton first solve  {floor:8.2f}   (its compilation; target: first forward <= x1.5)")
         report["cold"] = {"first_forward_cpu_s": forward, "first_inverse_cpu_s": inverse, "first_batch_cpu_s": batch}
         report["cold"]["first_proven_cpu_s"] = proven
+        report["cold"]["first_tracker_cpu_s"], report["cold"]["unannounced"] = tracked, lines[1]
         report["cold"]["first_solver_cpu_s"], report["cold"]["first_body_check_cpu_s"] = solver, body
         report["cold"]["floor_compile_cpu_s"] = floor
     if args.phases:

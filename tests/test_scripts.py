@@ -410,6 +410,10 @@ def test_startup_benchmark_runs(tmp_path):
     assert rows[split] == (
         "10.9 s without the body check (2.18x the floor's compile), then the body check's kernels 4.3 s"
     )
+    data["cold"].update(first_tracker_cpu_s=12.04, unannounced="none")
+    rows = dict(_performance_table().startup_rows(data))
+    tracker = "then a Tracker's first samples (empty numba cache), CPU; the compilations over 1 s the package did not"
+    assert rows[f"{tracker} announce"] == "12.0 s; unannounced: none"
 
 
 def test_performance_table_only_keeps_the_other_scripts_rows():

@@ -21,7 +21,7 @@ from .cones import ConeGeometry
 def kernel_tables(
     model: pin.Model, geometry: pin.GeometryModel, cones: ConeGeometry | None = None, limits: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The model's joint tree, bodies and cones as the tables :func:`~.clearance_kernel.measure` reads.
+    """The model's joint tree, bodies and cones as the tables :func:`~.clearance_kernel.measure_body` reads.
 
     Returns:
         ``(ints, floats, frames)``: the integer and float rows named in

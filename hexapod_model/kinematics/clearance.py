@@ -40,6 +40,7 @@ from . import clearance_kernel as kernel
 from .body_tables import kernel_tables
 from .cones import ConeGeometry
 from .newton.entries import direct, plain
+from .newton.first_compile import announce
 from .newton.solver import Solution
 from .placement_kernel import FLAGS, POINTS
 
@@ -121,7 +122,7 @@ class ClearanceQuery:
             raise UrdfError(clm.source, "<collision>", "no pair of collision bodies to measure")
         self.tables = kernel_tables(self.model, g, cones, limits)
         self.with_cones = cones is not None
-        self._kernel = kernel.compiled_measure() if self.compiled else kernel.measure
+        self._kernel = kernel.compiled_measure() if self.compiled else kernel.measure_body
         # check()'s call: the kernel until its first call, then the machine code it ran (.newton.entries.direct)
         self._check, self._check_direct = self._kernel, False
         self._nj = self.model.njoints
@@ -159,9 +160,13 @@ class ClearanceQuery:
         ints, floats, frames = self.tables
         q = plain(q)
         args = (q, ints, floats, frames, work[0], work[1], self.min_clearance, self.with_cones)
-        found = self._check(*args)
-        if not self._check_direct:  # the same types on every later call (q through plain)
-            self._check, self._check_direct = direct(self._kernel, args), True
+        if self._check_direct:
+            found = self._check(*args)
+        else:  # its first call here: announced if it compiles (about 4 s after installation)
+            if self.compiled:
+                announce(self._kernel)
+            found = self._kernel(*args)
+            self._check, self._check_direct = direct(self._kernel, args), True  # the same types on every later call
         if found[1] < 0 and not found[2] and found[3]:  # nothing closer than min_clearance, every cone kept
             return None, None
         c = self._answer(q, found, *work)
@@ -176,6 +181,8 @@ class ClearanceQuery:
         """
         work, out = self._work()
         q = plain(np.asarray(q, dtype=float))  # the kernel's one compiled type
+        if self.compiled:
+            announce(self._kernel)  # (once per process: a set lookup after the first)
         found = self._kernel(q, *self.tables, work, out, np.inf, False)
         c = self._answer(q, found, work, out)
         assert c is not None  # every pair is measured against an infinite bound

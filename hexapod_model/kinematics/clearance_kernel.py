@@ -1,7 +1,7 @@
 """The distance half of the body kernel: exact body distances, one call with the placements (numba or NumPy).
 
 Coal's distance on every pair of a hexapod's ~26 bodies costs several warm forward solves (its
-per-pair set-up dominates). :func:`measure` places the bodies and takes the cone angles
+per-pair set-up dominates). :func:`measure_body` places the bodies and takes the cone angles
 (:mod:`.placement_kernel`), then :func:`nearest` measures the pairs:
 
 * capsules and spheres (a sphere is a capsule of zero length) exactly by the distance of their
@@ -217,7 +217,7 @@ def nearest(ints, floats, work, out, bound):
     return best, best_k, flagged
 
 
-def measure(q, ints, floats, frames, work, out, bound, with_cones):
+def measure_body(q, ints, floats, frames, work, out, bound, with_cones):
     """The body check of ``q``: :func:`.placement_kernel.place`, its ``cones`` when ``with_cones``, :func:`nearest`.
 
     Returns:
@@ -234,7 +234,7 @@ _COMPILED: dict[str, object] = {}
 
 
 def compiled_measure():
-    """:func:`measure` compiled by numba (imported, and compiled once per machine, at the first call)."""
+    """:func:`measure_body` compiled by numba (imported, and compiled once per machine, at the first call)."""
     fn = _COMPILED.get("measure")
     if fn is None:
         from numba import njit
@@ -244,5 +244,5 @@ def compiled_measure():
         g = globals()
         for name in ("_closest", "_in_plate", "_off_cylinder", "_disc", "_slabs", "nearest"):
             g[name] = njit(cache=True)(g[name])
-        fn = _COMPILED["measure"] = njit(cache=True)(measure)
+        fn = _COMPILED["measure"] = njit(cache=True)(measure_body)
     return fn

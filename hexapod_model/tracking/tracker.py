@@ -163,6 +163,7 @@ class Tracker(PassageMixin):
         self._predict_into: Callable[..., None] = predict_into
         self._reading_checks: Callable[..., tuple] = reading_checks
         self._predict_direct = self._checks_direct = False
+        self._branch_ready = False  # the branch check's kernel announced (its first call compiles it: about 1 s)
         self._Lr, self._Fr = _NewestFirst(s.window, 6), _NewestFirst(s.window, 7)
         self._L = self._Lr.rows  # readings of the trusted samples, newest first
         self._F = self._Fr.rows  # free-flyer coordinates of _hist, newest first
@@ -430,6 +431,9 @@ class Tracker(PassageMixin):
         if sens.det_sign != self._sign and not (self._near or cond > self.cond_limit):
             return False  # across a singularity without passing near one: another assembly
         e = self._e  # log6(Mm^-1 Ms) - J^-1 (l - l^), Mm the motion model's pose
+        if not self._branch_ready:
+            announce(branch_residual)
+            self._branch_ready = True
         et, er = branch_residual(self._F, w.size, w, sol.q[self._ffq], self._sens.Jinv, l, lhat, e)
         length = self.length
         size = math.hypot(et, length * er)

@@ -13,8 +13,8 @@ from hexapod_model.kinematics.newton import first_compile
 class _Entry:
     """A stand-in for a numba dispatcher: its Python function, its compiled signatures, no cache."""
 
-    def __init__(self, name: str, signatures: list):
-        self.py_func = types.SimpleNamespace(__name__=name)
+    def __init__(self, name: str, signatures: list, module: str = "hexapod_model.kinematics.newton.iteration"):
+        self.py_func = types.SimpleNamespace(__name__=name, __module__=module)
         self.signatures = signatures
 
 
@@ -26,6 +26,57 @@ def test_announces_a_compilation_once_per_entry(caplog, monkeypatch):
         first_compile.announce(_Entry("forward_rows", ["(float64[:],)"]))  # compiled in this process: silent
     what, seconds = first_compile.ENTRIES["solve_schur"]
     assert caplog.messages == [f"compiling the solver kernels ({what}), once after installation: ~{seconds} s"]
+
+
+def test_entries_of_one_name_in_two_modules_are_each_announced(caplog, monkeypatch):
+    """Two kernels named alike (the pose uncertainty's and another module's ``measure``) are two entries."""
+    monkeypatch.setattr(first_compile, "_announced", set())
+    monkeypatch.setattr(first_compile, "_cached", lambda d: False)
+    with caplog.at_level(logging.INFO, logger=first_compile.LOGGER):
+        first_compile.announce(_Entry("measure", [], "hexapod_model.analysis.sensitivity"))
+        first_compile.announce(_Entry("measure", [], "hexapod_model.kinematics.other"))
+        first_compile.announce(_Entry("measure", [], "hexapod_model.analysis.sensitivity"))  # the first again: once
+    assert len(caplog.messages) == 2
+
+
+def test_the_body_check_announces_its_kernel_before_its_first_call(monkeypatch):
+    """The body check's kernel compiles for about 4 s after installation, at the first forward: announced."""
+    import numpy as np
+
+    import hexapod_model as hm
+    from hexapod_model.kinematics import clearance
+
+    seen: list[str] = []
+    monkeypatch.setattr(clearance, "announce", lambda d: seen.append(d.py_func.__name__))
+    hexa = hm.Hexapod.from_preset("reference")
+    query = clearance.ClearanceQuery(hexa.closed_loop, 0.001)
+    q = hexa.closed_loop.q_home
+    assert query.check(q) == (None, None) and query.check(q) == (None, None)
+    assert seen == ["measure_body"]  # at the first call only: the later ones call its machine code
+    assert query(q).distance > 0.001 and seen == ["measure_body"] * 2
+    assert "measure_body" in first_compile.ENTRIES
+    plain = clearance.ClearanceQuery(hexa.closed_loop, 0.001, compiled=False)  # the NumPy kernel compiles nothing
+    plain.check(q)
+    assert seen == ["measure_body"] * 2 and np.isfinite(plain(q).distance)
+
+
+def test_the_proof_state_is_made_without_compiling(monkeypatch):
+    """A stream's proof work arrays come from Python: no kernel of a few ``np.zeros`` compiled for it (1.5 s)."""
+    import numpy as np
+
+    import hexapod_model as hm
+    from hexapod_model.kinematics.newton import krawczyk
+
+    class Refused:
+        py_func = staticmethod(krawczyk.enclosure_workspace.py_func)
+
+        def __call__(self, *args):
+            raise AssertionError("the compiled workspace called from Python")
+
+    monkeypatch.setattr(krawczyk, "enclosure_workspace", Refused())
+    prover = hm.Hexapod.from_preset("reference").engine.prover
+    (work, _), _ = prover.new_state().packed
+    assert work[6][1].shape == (2, 6, 6, 3, 4) and (work[6][5] == np.eye(6)).all()
 
 
 def test_a_cached_entry_is_not_announced(caplog, monkeypatch):
@@ -166,3 +217,19 @@ def test_the_tracker_and_the_pose_uncertainty_announce_their_kernels_before_thei
         stream.step(hexa.closed_loop.q_home[hexa.closed_loop.prismatic_q])
     assert seen == ["measure", "stuck_checks", "measure_solved"]  # once, at its first call
     assert set(seen) <= set(first_compile.ENTRIES) and kernels.stuck_checks.py_func.__name__ == "stuck_checks"
+
+
+def test_the_tracker_announces_its_branch_check_before_its_first_call(monkeypatch):
+    """The branch check's kernel (about 1 s after installation) runs once the tracker has settled: announced."""
+
+    import hexapod_model as hm
+    from hexapod_model.tracking import tracker
+
+    seen: list[str] = []
+    monkeypatch.setattr(tracker, "announce", lambda d: seen.append(d.py_func.__name__))
+    hexa = hm.Hexapod.from_preset("reference")
+    stream = tracker.Tracker(hexa)
+    home = hexa.closed_loop.q_home[hexa.closed_loop.prismatic_q]
+    results = [stream.step(home + 1e-6 * k) for k in range(stream.settings.settle_samples + 3)]
+    assert results[-1].status == "ok" and "settling" not in results[-1].flags
+    assert seen.count("branch_residual") == 1 and "branch_residual" in first_compile.ENTRIES

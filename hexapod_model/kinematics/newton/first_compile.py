@@ -39,6 +39,8 @@ ENTRIES = {
     "measure": ("the pose uncertainty", 5),
     "measure_solved": ("the pose uncertainty of a solve", 3),
     "stuck_checks": ("the tracker's stuck test", 1),
+    "branch_residual": ("the tracker's branch check", 1),
+    "measure_body": ("the body check: joint cones and collisions", 4),
 }
 
 #: first-generation threshold of the cyclic garbage collector while numba compiles (CPython's
@@ -46,21 +48,27 @@ ENTRIES = {
 COMPILING_GC_THRESHOLD = 10_000
 
 log = logging.getLogger(LOGGER)
-_announced: set[str] = set()
+_announced: set[tuple[str, str]] = set()  # (module, name) of each entry announced or found ready
 _warned: list[bool] = []  # the CompileWarning, once per process
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 _collecting_less: list[Any] = []  # the numba event listener, once registered
 
 
 def announce(dispatcher: Any) -> None:
-    """Log the compilation ``dispatcher``'s next call will start, once per entry and process, if it will."""
-    name = getattr(getattr(dispatcher, "py_func", None), "__name__", "")
-    if name in _announced:  # announced, compiled or loaded already: a set lookup on every later call
+    """Log the compilation ``dispatcher``'s next call will start, once per entry and process, if it will.
+
+    Entries are told apart by module and name (two modules may each have a ``measure``); the
+    message is :data:`ENTRIES`' for the name.
+    """
+    py_func = getattr(dispatcher, "py_func", None)
+    name = getattr(py_func, "__name__", "")
+    key = (getattr(py_func, "__module__", ""), name)
+    if key in _announced:  # announced, compiled or loaded already: a set lookup on every later call
         return
     if dispatcher.signatures or _cached(dispatcher):  # numba builds the signature list anew: ~15 us
-        _announced.add(name)
+        _announced.add(key)
         return
-    _announced.add(name)
+    _announced.add(key)
     collect_less()
     what, seconds = ENTRIES.get(name, ("the solver", 10))
     message = f"compiling the solver kernels ({what}), once after installation: ~{seconds} s"

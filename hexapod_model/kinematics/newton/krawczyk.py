@@ -139,7 +139,9 @@ def workspace(nf: int, rows: int) -> tuple:
         np.zeros((nf, nf)),  # Y: the dense test's preconditioner
         np.zeros((7, 6)),  # six-vectors (the last two: a region's readings box)
         workspace_blocks(rows),
-        enclosure_workspace(nf // 6),  # legs of nf / 6 joints (6 (n - 1) + 6 unknowns)
+        # legs of nf / 6 joints (6 (n - 1) + 6 unknowns); its Python function: the same arrays, without
+        # compiling a function of a few np.zeros (1.5 s after installation) for a call from Python
+        enclosure_workspace.py_func(nf // 6),
     )
 
 
