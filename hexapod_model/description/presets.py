@@ -14,9 +14,11 @@ of the 3-6 sensor and the guideway model take 45 deg, the tilt that high-angle b
 for parallel mechanisms reach (standard rod-end and ball-socket joints allow 15-30 deg); the
 ``spherical`` preset keeps the textbook's ideal ball joint (no cone: its test box needs 68 deg).
 Collision bodies take the defaults: 20 mm leg radius, 25 mm joint housings, 20 mm plates;
-but the guideway model's neighbouring struts of different pairs cross 0.3 mm apart at home (the
-paper's idealised line struts), so its struts take a 0.1 mm radius: its home pose is free of
-collision and a strut passing through another is still caught.
+but the guideway model's neighbouring struts of different pairs cross (the paper's idealised
+line struts): its platform joints lie 1 mm outside and inside its platform circle, so that the
+crossing axes pass 1.7 mm apart at home (on one circle they would meet there exactly), and its
+struts take a 0.1 mm radius: its home pose is free of collision and a strut passing through
+another is still caught.
 """
 
 from __future__ import annotations
@@ -68,8 +70,14 @@ def symmetric_legs(
     return tuple(legs)
 
 
-#: m: the guideway model's strut radius (its struts cross 0.3 mm apart at home; see the module doc)
+#: m: the guideway model's strut radius (the paper's struts are lines; see GUIDEWAY_JOINT_SHIFT)
 GUIDEWAY_STRUT_RADIUS = 1e-4
+#: m: the guideway model's platform joints lie this much outside (legs 2, 4, 6) and inside (legs
+#: 1, 3, 5) the platform radius. Each strut crosses one of the neighbouring pair's (legs 1-6,
+#: 2-3, 4-5); with the six joints on one circle the two are mirror images about a plane of
+#: symmetry, so at home they meet exactly where they cross it, and no strut, however thin,
+#: clears the other. With the joints 2 mm apart radially their axes pass 1.7 mm apart at home
+GUIDEWAY_JOINT_SHIFT = 1e-3
 
 
 def reference() -> HexapodGeometry:
@@ -176,7 +184,8 @@ def guideway() -> HexapodGeometry:
     Three pairs of parallel guideways, ``0.06 m`` apart, inclined like the line from radius
     0.45 m on the floor to radius 0.15 m at 0.25 m height; the slider (the measured joint) is
     on that line's midpoint at home and travels +-0.22 m along the rail; struts go to ball
-    joints on a 0.15 m platform.
+    joints on a 0.15 m platform, the two of a pair 1 mm outside and inside that radius
+    (:data:`GUIDEWAY_JOINT_SHIFT`: crossing struts that clear each other at home).
     """
     r_lo, r_hi, h, d, rp = 0.45, 0.15, 0.25, 0.06, 0.15
     legs = []
@@ -191,7 +200,7 @@ def guideway() -> HexapodGeometry:
             legs.append(
                 LegGeometry(
                     base_anchor=tuple(mid),
-                    platform_anchor=_circle(rp, c + sign * 75.0),
+                    platform_anchor=_circle(rp + sign * GUIDEWAY_JOINT_SHIFT, c + sign * 75.0),
                     stroke=(-0.22, 0.22),
                     guideway=tuple(rail / length),
                 )

@@ -260,3 +260,17 @@ def test_a_urdf_without_collision_bodies_is_named():
     with pytest.raises(hm.UrdfError, match="no collision bodies") as err:
         hexa.clearance(hexa.q_home)
     assert "bare.urdf" in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("name", sorted(hm.PRESETS))
+def test_every_preset_is_clear_at_home(name):
+    """A bundled preset's home pose is one its machine takes: inverse kinematics reaches it, no two bodies touch.
+
+    The guideway model's crossing struts, mirror images about a plane of symmetry with their
+    platform joints on one circle, met exactly at home: a collision of its own home pose.
+    """
+    hexa = hm.Hexapod.from_preset(name, compiled=False)
+    sol = hexa.inverse(hexa.home_pose, check=False)
+    assert sol.status == "converged", sol.message
+    clearance = hm.kinematics.clearance.query_of(hexa)(sol.q)
+    assert clearance.distance > max(hexa.geometry.min_clearance, 1e-3), clearance
