@@ -235,7 +235,7 @@ _COMPILED: dict[str, object] = {}
 
 def compiled_measure():
     """:func:`measure_body` compiled by numba (imported, and compiled once per machine, at the first call)."""
-    fn = _COMPILED.get("measure")
+    fn = _COMPILED.get("measure_body")
     if fn is None:
         from numba import njit
 
@@ -244,5 +244,5 @@ def compiled_measure():
         g = globals()
         for name in ("_closest", "_in_plate", "_off_cylinder", "_disc", "_slabs", "nearest"):
             g[name] = njit(cache=True)(g[name])
-        fn = _COMPILED["measure"] = njit(cache=True)(measure_body)
+        fn = _COMPILED["measure_body"] = njit(cache=True)(measure_body)
     return fn
