@@ -6,13 +6,16 @@ python benchmarks/service.py [--seconds S] [--one 250,500,1000,2000] [--many 50,
 A feeder thread plays trajectory A (reference hexapod, 10 um reading noise, frames encoded with
 each fixture's layout and CAN ids) on python-can's virtual bus at a set rate per fixture; the
 service (its cycle thread, the store writer, HTTP on 127.0.0.1:0) runs in the same process, as
-``hexapod serve --simulate`` does. Frames carry their sampling time as timestamps (as a SocketCAN
+``hexapod serve --simulate`` does. Each run is one stream: a warm-up of at least 1 s that goes on
+until the service has taken the frames sent (at most 5 s), then the measured seconds, without a
+pause between them. Frames carry their sampling time as timestamps (as a SocketCAN
 receiver stamps a burst) and are put straight into the receiving virtual bus's queue, as a kernel
 delivers them (the virtual bus's own ``send`` deep-copies each frame under this process's GIL: a
 cost of the stand-in hardware, not of the service); the frame objects of a run are made before
-it, so the feeder only stamps and queues them. Per run: sets sent and solved, the latency
-from the arrival of the frame that completed a set to the publication of its record (the
-subscriber's call; a backlog counts), and the CPU time
+the service starts, so the feeder only stamps and queues them, and the service's start puts them
+out of the cyclic collector's reach with its own objects (a kernel's buffers are not in the
+heap). Per run: sets sent and solved, the latency from the arrival of the frame that completed
+a set to the publication of its record (the subscriber's call; a backlog counts), and the CPU time
 of the service's threads (cycle + store + HTTP) and of the whole process (feeder included), in
 percent of one core; the process's CPU is also split as read from outside, by OS thread name
 (``/proc/self/task/*/comm``: the service's ``hx-cycle``, ``hx-store``, ``hx-http``; the feeder,
@@ -67,6 +70,8 @@ from hexapod_model.tracking.types import characteristic_length, predict
 
 SETS = 2000  # one there-and-back of trajectory A, whatever the rate
 IDLE_SOLVES = 400  # solves timed after an idle gap, per rate of one fixture
+WARM_UP = 1.0  # s: a fed run's warm-up, at least (caches, each tracker's first samples) ...
+WARM_UP_LIMIT = 5.0  # s: ... and then until the service has caught up with the stream, at most this
 
 
 def readings_sequence(hexa: Hexapod, noise: float = 10e-6, seed: int = 0) -> np.ndarray:
@@ -287,8 +292,28 @@ def solves_cost(hexa: Hexapod, readings: np.ndarray, tol: float, gap: float = 0.
     return 1e6 * spent / (last - 200)
 
 
+def caught_up(published: list[int], delivered: list[int], behind: int, least: float, limit: float) -> float:
+    """Seconds until the records ``published[0]`` counts are within ``behind`` of the sets ``delivered[0]`` counts.
+
+    Waits ``least`` first, at most ``limit`` in all; polls every 50 ms (a short hold of the
+    interpreter lock).
+    """
+    t0 = time.monotonic()
+    time.sleep(least)
+    while time.monotonic() - t0 < limit and delivered[0] - published[0] > behind:
+        time.sleep(0.05)
+    return time.monotonic() - t0
+
+
 def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> dict:
-    """One run: ``fixtures`` fixtures at ``rate`` sets per second each for ``seconds``."""
+    """One run: ``fixtures`` fixtures at ``rate`` sets per second each for ``seconds``, after the warm-up.
+
+    One stream from start to end: the warm-up (caches, each tracker's first samples) goes on
+    until the service has taken the frames sent (at least :data:`WARM_UP` s, at most
+    :data:`WARM_UP_LIMIT`), and the measured phase follows it without a pause (a pause would
+    leave every fixture's legs silent, and the measured phase would begin with the trackers
+    re-anchoring after it: a restart, not the stream's steady state).
+    """
     channel, config = make_config(fixtures, folder)
     legs = [f.legs for f in config.fixtures]
     names = [f.name for f in config.fixtures]
@@ -297,11 +322,20 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         [[leg.message(float(per[k, i, j])) for j, leg in enumerate(fl)] for i, fl in enumerate(legs)]
         for k in range(len(per))
     ]
+    # a message object per frame of each period of the run, made before the service starts: the
+    # feeder only stamps and queues them (as a kernel delivers frames), so its own cost stays small,
+    # and they are among the objects the service's start puts out of the cyclic collector's reach
+    # (gc.freeze), as a kernel's buffers are out of the process's heap (made during the run, the
+    # hundreds of thousands of them cost the cycle thread full collections of ~0.1 s each)
+    periods = int((WARM_UP_LIMIT + seconds + 1.0) * rate)
+    ahead = [[[copy.copy(m) for m in msgs] for msgs in frames[k % len(frames)]] for k in range(periods)]
     latencies: list[float] = []
     statuses: dict[str, int] = {}
     arrived: dict[tuple[str, float], float] = {}  # (fixture, t of its last frame) -> when it was on the bus
+    published = [0]  # records, of every status
 
     def on_record(rec: dict) -> None:  # runs in the cycle thread
+        published[0] += 1
         sent_at = arrived.get((rec.fixture, rec.t))
         if rec.pose is not None and sent_at is not None:  # a solved set of the measured phase
             latencies.append(time.time() - sent_at)
@@ -312,18 +346,11 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
     service.subscribe(on_record)
     deliver = bus.queue.put  # straight into the receiving queue, as a kernel delivers frames: the
     # virtual bus's send (a deepcopy per frame, in this process and under its GIL) is not the service
-    sent, position = [0], [0]  # sets sent in the measured phase; where the trajectory is
+    sent, delivered = [0], [0]  # periods sent in the measured phase; fixtures' sets sent in all
     stop = threading.Event()
-    read = threading.Event()  # the measured feeder's CPU was read from outside: it may end
+    read = threading.Event()  # the feeder's CPU was read from outside: it may end
 
-    def prepared(periods: int) -> list[list[list[can.Message]]]:
-        # a message object per frame of each period, made before the phase: the feeder only
-        # stamps and queues them (as a kernel delivers frames), so its own cost stays small
-        return [
-            [[copy.copy(m) for m in msgs] for msgs in frames[(position[0] + k) % len(frames)]] for k in range(periods)
-        ]
-
-    def feed(ahead: list[list[list[can.Message]]], hold: bool = False) -> None:  # continues where the warm-up left it
+    def feed() -> None:  # the warm-up, then the measured phase
         period, k, start, wall = 1.0 / rate, 0, time.perf_counter(), time.time()
         while not stop.is_set() and k < len(ahead):
             wait = start + k * period - time.perf_counter()
@@ -335,34 +362,28 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
                     m.timestamp = stamp + j * 130e-6
                     deliver(m)
                 arrived[(name, m.timestamp)] = time.time()  # the set's last frame is at the receiver
+                delivered[0] += 1
             sent[0] += 1
             k += 1
-        position[0] += k
-        if hold:  # alive until its thread's CPU is read (a read while the cycle thread holds the GIL can take
-            read.wait(10.0)  # tens of milliseconds: an ended feeder's thread is gone from /proc)
+        # alive until its thread's CPU is read (a read while the cycle thread holds the GIL can take
+        # tens of milliseconds: an ended feeder's thread is gone from /proc)
+        read.wait(10.0)
 
-    service.start()
+    service.start()  # compiles, then freezes what is alive: the frames above too
     try:
-        warm = threading.Thread(target=feed, args=(prepared(int(1.5 * rate)),), daemon=True)
-        warm.start()
-        time.sleep(1.0)  # warm-up: caches, first solves
-        stop.set()
-        warm.join()
-        drain(service)
-        stop.clear()
+        threads = [service._thread, getattr(service.writer, "_thread", None)]
+        if service.endpoint is not None:
+            threads.append(service.endpoint._thread)
+        feeder = NamedThread(target=feed, name="hx-sim")  # the stand-in for the simulator
+        feeder.start()
+        warm_up = caught_up(published, delivered, fixtures, WARM_UP, WARM_UP_LIMIT)
         arrived.clear()
         latencies.clear()
         statuses.clear()
         sent[0] = 0
-        threads = [service._thread, getattr(service.writer, "_thread", None)]
-        if service.endpoint is not None:
-            threads.append(service.endpoint._thread)
-        ahead = prepared(int((seconds + 1.0) * rate))
         c0, p0, t0 = thread_cpu(threads), time.process_time(), time.perf_counter()
         k0 = thread_cpu(threads[:1])
-        feeder = NamedThread(target=feed, args=(ahead, True), name="hx-sim")  # the stand-in for the simulator
         n0 = cpu_by_thread_name()
-        feeder.start()
         time.sleep(seconds)
         stop.set()
         n1 = cpu_by_thread_name()  # before the feeder ends: its thread's time is read while it lives
@@ -384,6 +405,7 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         "fixtures": fixtures,
         "rate_hz": rate,
         "sets_sent": sent[0] * fixtures,
+        "warm_up_s": warm_up,
         "records": records,
         "statuses": statuses,
         "latency_ms_median": float(np.median(lat)) if records else float("nan"),
@@ -411,7 +433,8 @@ def line(r: dict) -> str:
         f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x the solve{idle_ratio(r)})  "
         f"process {r['process_cpu_pct']:5.1f} % (by OS thread name: service {r['os_service_cpu_pct']:.1f}, "
         f"hx-sim {r['os_sim_cpu_pct']:.1f}, other {r['os_other_cpu_pct']:.1f})  "
-        f"{'sustained' if r['sustained'] else 'NOT sustained'}  {r['statuses']}"
+        f"{'sustained' if r['sustained'] else 'NOT sustained'}  {r['statuses']}  "
+        f"(after a warm-up of {r['warm_up_s']:.1f} s{'' if r['warm_up_s'] < WARM_UP_LIMIT else ': still behind'})"
     )
 
 
