@@ -73,7 +73,7 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
             f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x its solve's {r['solve_us']:.0f} µs{_after_idle(r)}), "
             "latency median "
             f"{r['latency_ms_median']:.2f} ms, p99 {r['latency_ms_p99']:.1f} ms, "
-            f"{'sustained' if r['sustained'] else 'not sustained'}",
+            f"{'sustained' if r['sustained'] else 'not sustained'}{_warm_up(r)}",
         )
         for r in runs
     ]
@@ -89,6 +89,15 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
         if r.get("kind") == "capacity"
     ]
     return rows
+
+
+def _warm_up(r: dict) -> str:
+    """How long the fed run's warm-up took to catch up with the stream, or that it had not (its limit)."""
+    if "warm_up_s" not in r:
+        return ""
+    if r["warm_up_s"] >= r["warm_up_limit_s"]:
+        return f" (measured still behind after the {r['warm_up_limit_s']:.0f} s warm-up)"
+    return f" (measured after a warm-up of {r['warm_up_s']:.1f} s)"
 
 
 def _in_turn(r: dict) -> str:

@@ -3,45 +3,43 @@
 python benchmarks/service.py [--seconds S] [--one 250,500,1000,2000] [--many 50,100,200] [--fixtures 20]
                              [--more FIXTURES:RATES ...] [--capacity] [--rest]
 
-A feeder thread plays trajectory A (reference hexapod, 10 um reading noise, frames encoded with
-each fixture's layout and CAN ids) on python-can's virtual bus at a set rate per fixture; the
-service (its cycle thread, the store writer, HTTP on 127.0.0.1:0) runs in the same process, as
-``hexapod serve --simulate`` does. Each run is one stream: a warm-up of at least 1 s that goes on
-until the service has taken the frames sent (at most 5 s), then the measured seconds, without a
-pause between them. Frames carry their sampling time as timestamps (as a SocketCAN
-receiver stamps a burst) and are put straight into the receiving virtual bus's queue, as a kernel
-delivers them (the virtual bus's own ``send`` deep-copies each frame under this process's GIL: a
-cost of the stand-in hardware, not of the service); the frame objects of a run are made before
-the service starts, so the feeder only stamps and queues them, and the service's start puts them
-out of the cyclic collector's reach with its own objects (a kernel's buffers are not in the
-heap). Per run: sets sent and solved, the latency from the arrival of the frame that completed
-a set to the publication of its record (the subscriber's call; a backlog counts), and the CPU time
-of the service's threads (cycle + store + HTTP) and of the whole process (feeder included), in
-percent of one core; the process's CPU is also split as read from outside, by OS thread name
-(``/proc/self/task/*/comm``: the service's ``hx-cycle``, ``hx-store``, ``hx-http``; the feeder,
-named ``hx-sim`` as the simulator of ``hexapod serve --simulate`` is; the rest). A rate is
-*sustained* when at least 99 % of the sets sent are solved and the p99 latency stays under 10 ms
-(no backlog). The machine's other load is part of the figures:
-run it on an idle machine for the capacity. Each run prints the service's CPU per solved set
-beside the tracker step's and the solve's own (measured first, alone, in this process), and a
-run of one fixture also against the solve timed after the same idle gap (``1 / rate``): after a
-gap the caches are cold, and the same solve costs more CPU (docs/performance.md).
-Each fixture plays the trajectory from a point of its own (fixture ``i`` of ``F`` from sample
-``i * SETS / F``): the fixtures of a cell stand at poses of their own (fixtures in step would
-share what one proof leaves for the next step, its region and preconditioner, as no cell does).
-Every fixture's frames of one sampling period are queued together: the last fixture's set of a
-period waits for the sets of the others (its latency holds ``FIXTURES - 1`` sets' CPU).
-``--more 5:1000`` adds runs of 5 fixtures at 1 kHz: the 5,000 sets a second of 50 fixtures at
-100 Hz, in periods of 5 sets instead of 50.
-``--rest`` adds ``--fixtures`` fixtures at 100 Hz **at rest**, the usual state of a locked
-fixture: each at a pose of its own about home, 1 um of noise on readings carried as 1 um counts
-(a leg repeats its count often, and the tracker's stuck test runs), fed and, with
-``--capacity``, from a full queue; set against the solve of such a fixture.
-``--capacity`` also queues the frames of 3 s of sets before the cycle thread reads them and
-prints its CPU per set with no idle gaps (1 x 1000 Hz, FIXTURES x 100 Hz and each ``--more``
-run): the cost of a set when the thread's caches stay warm, beside the same fixtures' tracker
-steps run in turn on one thread without the bus, the frames and the records (one fixture: its
-step alone), which shows what stepping many fixtures' trackers costs each one's.
+A feeder thread plays trajectory A (reference hexapod, 10 um reading noise, frames encoded with each
+fixture's layout and CAN ids) on python-can's virtual bus at a set rate per fixture; the service
+(its cycle thread, the store writer, HTTP on 127.0.0.1:0) runs in the same process, as ``hexapod
+serve --simulate`` does. Each run is one stream: a warm-up in which the fixtures join one after
+another over the first second, that goes on until the service has published a record for the sets
+sent (1.5 s at least, 5 s at most), then the measured seconds, without a pause. Frames carry their
+sampling time as timestamps (as a SocketCAN receiver stamps a burst) and are put straight into the
+receiving virtual bus's queue, as a kernel delivers them (the virtual bus's own ``send`` deep-copies
+each frame under this process's GIL: a cost of the stand-in hardware, not of the service); the frame
+objects of a run are made before the service starts, so the feeder only stamps and queues them, and
+the service's start puts them out of the cyclic collector's reach with its own objects (a kernel's
+buffers are not in the heap). Per run: sets sent and solved, the latency from the arrival of the
+frame that completed a set to the publication of its record (the subscriber's call; a backlog
+counts), and the CPU time of the service's threads (cycle + store + HTTP) and of the whole process
+(feeder included), in percent of one core; the process's CPU is also split as read from outside, by
+OS thread name (``/proc/self/task/*/comm``: the service's ``hx-cycle``, ``hx-store``, ``hx-http``;
+the feeder, named ``hx-sim`` as the simulator of ``hexapod serve --simulate`` is; the rest). A rate
+is *sustained* when at least 99 % of the sets sent are solved and the p99 latency stays under 10 ms
+(no backlog). The machine's other load is part of the figures: run it on an idle machine for the
+capacity. Each run prints the service's CPU per solved set beside the tracker step's and the solve's
+own (measured first, alone, in this process), and a run of one fixture also against the solve timed
+after the same idle gap (``1 / rate``): after a gap the caches are cold, and the same solve costs
+more CPU (docs/performance.md). Each fixture plays the trajectory from a point of its own (fixture
+``i`` of ``F`` from sample ``i * SETS / F``): the fixtures of a cell stand at poses of their own
+(fixtures in step would share what one proof leaves for the next step, its region and
+preconditioner, as no cell does). Every fixture's frames of one sampling period are queued together:
+the last fixture's set of a period waits for the sets of the others (its latency holds
+``FIXTURES - 1`` sets' CPU). ``--more 5:1000`` adds runs of 5 fixtures at 1 kHz: the 5,000 sets a second of 50
+fixtures at 100 Hz, in periods of 5 sets instead of 50. ``--rest`` adds ``--fixtures`` fixtures at
+100 Hz **at rest**, the usual state of a locked fixture: each at a pose of its own about home, 1 um
+of noise on readings carried as 1 um counts (a leg repeats its count often, and the tracker's stuck
+test runs), fed and, with ``--capacity``, from a full queue; set against the solve of such a
+fixture. ``--capacity`` also queues the frames of 3 s of sets before the cycle thread reads them and
+prints its CPU per set with no idle gaps (1 x 1000 Hz, FIXTURES x 100 Hz and each ``--more`` run):
+the cost of a set when the thread's caches stay warm, beside the same fixtures' tracker steps run in
+turn on one thread without the bus, the frames and the records (one fixture: its step alone), which
+shows what stepping many fixtures' trackers costs each one's.
 """
 
 from __future__ import annotations
@@ -70,7 +68,8 @@ from hexapod_model.tracking.types import characteristic_length, predict
 
 SETS = 2000  # one there-and-back of trajectory A, whatever the rate
 IDLE_SOLVES = 400  # solves timed after an idle gap, per rate of one fixture
-WARM_UP = 1.0  # s: a fed run's warm-up, at least (caches, each tracker's first samples) ...
+RAMP = 1.0  # s: a fed run's fixtures join the stream one after another over this time
+WARM_UP = 1.5  # s: a fed run's warm-up, at least (the ramp, caches, each tracker's first samples) ...
 WARM_UP_LIMIT = 5.0  # s: ... and then until the service has caught up with the stream, at most this
 
 
@@ -309,10 +308,11 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
     """One run: ``fixtures`` fixtures at ``rate`` sets per second each for ``seconds``, after the warm-up.
 
     One stream from start to end: the warm-up (caches, each tracker's first samples) goes on
-    until the service has taken the frames sent (at least :data:`WARM_UP` s, at most
-    :data:`WARM_UP_LIMIT`), and the measured phase follows it without a pause (a pause would
-    leave every fixture's legs silent, and the measured phase would begin with the trackers
-    re-anchoring after it: a restart, not the stream's steady state).
+    until the service has published a record for the sets sent (at least :data:`WARM_UP` s, at
+    most :data:`WARM_UP_LIMIT`; the fixtures join over the first :data:`RAMP` s), and the
+    measured phase follows it without a pause (a pause would leave every fixture's legs silent,
+    and the measured phase would begin with the trackers re-anchoring after it: a restart, not
+    the stream's steady state).
     """
     channel, config = make_config(fixtures, folder)
     legs = [f.legs for f in config.fixtures]
@@ -332,10 +332,11 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
     latencies: list[float] = []
     statuses: dict[str, int] = {}
     arrived: dict[tuple[str, float], float] = {}  # (fixture, t of its last frame) -> when it was on the bus
-    published = [0]  # records, of every status
+    published = [0]  # records of the sets sent (a fixture not yet in the stream publishes silent_leg)
 
     def on_record(rec: dict) -> None:  # runs in the cycle thread
-        published[0] += 1
+        if rec.status != "silent_leg":
+            published[0] += 1
         sent_at = arrived.get((rec.fixture, rec.t))
         if rec.pose is not None and sent_at is not None:  # a solved set of the measured phase
             latencies.append(time.time() - sent_at)
@@ -350,6 +351,11 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
     stop = threading.Event()
     read = threading.Event()  # the feeder's CPU was read from outside: it may end
 
+    # the fixtures join the stream one after another over the first second (fixture i at period
+    # joins[i]), as a cell's fixtures come up: each tracker's first samples (a solve from home, the
+    # settling) are spread out instead of queueing 50 fixtures' at once
+    joins = [(i * int(RAMP * rate)) // fixtures for i in range(fixtures)]
+
     def feed() -> None:  # the warm-up, then the measured phase
         period, k, start, wall = 1.0 / rate, 0, time.perf_counter(), time.time()
         while not stop.is_set() and k < len(ahead):
@@ -357,7 +363,9 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
             if wait > 0:
                 time.sleep(wait)
             stamp = wall + k * period  # the sampling time, as an encoder's frame would carry it
-            for name, msgs in zip(names, ahead[k]):
+            for name, msgs, join in zip(names, ahead[k], joins):
+                if k < join:
+                    continue
                 for j, m in enumerate(msgs):
                     m.timestamp = stamp + j * 130e-6
                     deliver(m)
@@ -406,6 +414,7 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         "rate_hz": rate,
         "sets_sent": sent[0] * fixtures,
         "warm_up_s": warm_up,
+        "warm_up_limit_s": WARM_UP_LIMIT,
         "records": records,
         "statuses": statuses,
         "latency_ms_median": float(np.median(lat)) if records else float("nan"),
