@@ -30,8 +30,8 @@ more CPU (docs/performance.md). Each fixture plays the trajectory from a point o
 (fixtures in step would share what one proof leaves for the next step, its region and
 preconditioner, as no cell does). Every fixture's frames of one sampling period are queued together:
 the last fixture's set of a period waits for the sets of the others (its latency holds
-``FIXTURES - 1`` sets' CPU). ``--more 5:1000`` adds runs of 5 fixtures at 1 kHz: the 5,000 sets a second of 50
-fixtures at 100 Hz, in periods of 5 sets instead of 50. ``--rest`` adds ``--fixtures`` fixtures at
+``FIXTURES - 1`` sets' CPU). ``--more 5:1000`` adds runs of 5 fixtures at 1 kHz: the 5,000 sets a
+second of 50 fixtures at 100 Hz, in periods of 5 sets instead of 50. ``--rest`` adds ``--fixtures`` fixtures at
 100 Hz **at rest**, the usual state of a locked fixture: each at a pose of its own about home, 1 um
 of noise on readings carried as 1 um counts (a leg repeats its count often, and the tracker's stuck
 test runs), fed and, with ``--capacity``, from a full queue; set against the solve of such a
