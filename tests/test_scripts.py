@@ -629,7 +629,7 @@ def test_service_benchmark_measures_the_stream_it_warmed_up(tmp_path, monkeypatc
 
     monkeypatch.setattr(bench, "cpu_by_thread_name", counting_read)
     hexa = hm.Hexapod.from_preset("reference")
-    readings = bench.readings_sequence(hexa)[:400]
+    readings = bench.readings_sequence(hexa)[:1000]  # 20 s at 50 Hz: no fixture comes to its sequence's end
     report = bench.run(hexa, readings, 2, 50.0, 0.5, tmp_path)
     assert tracked == [0]  # every frame of the run frozen with the service's objects
     assert report["records"] > 0 and set(report["statuses"]) <= {"ok", "silent_leg"}, report["statuses"]
