@@ -92,11 +92,11 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
 
 
 def _warm_up(r: dict) -> str:
-    """How long the fed run's warm-up took to catch up with the stream, or that it had not (its limit)."""
+    """How long the fed run's warm-up took to catch up with the stream, or that it had not (at its limit)."""
     if "warm_up_s" not in r:
         return ""
-    if r["warm_up_s"] >= r["warm_up_limit_s"]:
-        return f" (measured still behind after the {r['warm_up_limit_s']:.0f} s warm-up)"
+    if not r["caught_up"]:
+        return f" (measured still behind after a warm-up of {r['warm_up_s']:.0f} s)"
     return f" (measured after a warm-up of {r['warm_up_s']:.1f} s)"
 
 
