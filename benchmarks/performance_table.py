@@ -5,7 +5,8 @@
 Runs each benchmark script below in a fresh process with its quick settings (``--full``: the
 scripts' defaults, many minutes), reads the JSON it writes and puts one row per figure into a
 table: figure, value, the command that measured it, the machine and the date. ``--only`` reruns
-the named scripts and keeps the other scripts' rows (their load and date with them) from the page. Nothing is
+the named scripts and keeps the other scripts' rows (their load and date with them) from the page,
+on the machine that measured them only (the page names one machine for all its rows). Nothing is
 typed in by hand; rerun it after a change that moves a figure. The figures are those of the
 machine that ran it, under its load at the time (the ``load`` column: the 1-minute load average
 before each command).
@@ -374,6 +375,14 @@ def machine() -> str:
     return f"{cpu}, {os.cpu_count()} cores{mem}, Python {platform.python_version()}"
 
 
+def page_machine(text: str) -> str | None:
+    """The machine a page this script wrote names (None: it names none)."""
+    for line in text.splitlines():
+        if line.startswith("Machine: "):
+            return line.removeprefix("Machine: ").removesuffix(".")
+    return None
+
+
 def page_rows(text: str) -> list[tuple[str, str, str, str, str]]:
     """The rows (figure, value, command, load, date) of a page this script wrote."""
     rows = []
@@ -453,7 +462,12 @@ def main(argv=None) -> int:
         unknown = sorted(only - {quick[0] for quick, _, _ in BENCHMARKS})
         if unknown:
             ap.error(f"--only {' '.join(unknown)}: not a script of the table")
-    text = page(measure(args.full, only, args.output.read_text() if only else ""), machine())
+    here, kept = machine(), args.output.read_text() if only else ""
+    if only and page_machine(kept) != here:  # the kept rows would be labelled with this machine
+        raise SystemExit(
+            f"--only: {args.output} was measured on {page_machine(kept)}, this machine is {here}: run every script"
+        )
+    text = page(measure(args.full, only, kept), here)
     tmp = args.output.with_suffix(".tmp")
     tmp.write_text(text)
     tmp.replace(args.output)

@@ -428,6 +428,22 @@ def test_performance_table_only_keeps_the_other_scripts_rows():
         table.measure(False, set(), other)
 
 
+def test_performance_table_only_refuses_a_page_of_another_machine(tmp_path, monkeypatch):
+    """``--only`` keeps the page's other rows: never under the name of a machine that did not measure them."""
+    table = _performance_table()
+    text = (ROOT / "docs" / "performance.md").read_text()
+    page = tmp_path / "performance.md"
+    page.write_text(table.page(table.page_rows(text), "another machine, 64 cores"))
+    ran = []
+    monkeypatch.setattr(table, "measure", lambda *args: ran.append(args) or table.page_rows(text))
+    with pytest.raises(SystemExit, match=r"measured on another machine, 64 cores, this machine is .*: run every script"):
+        table.main(["--only", "startup.py", "-o", str(page)])
+    assert not ran and page.read_text() == table.page(table.page_rows(text), "another machine, 64 cores")
+    page.write_text(table.page(table.page_rows(text), table.machine()))  # measured here: the other rows are kept
+    assert table.main(["--only", "startup.py", "-o", str(page)]) == 0 and len(ran) == 1
+    assert table.page_machine(page.read_text()) == table.machine()
+
+
 def test_service_benchmark_runs(tmp_path):
     """Both modes, short: a fed run per fixture count and the full-queue capacity, moving and at rest (JSON, table)."""
     cmd = [sys.executable, str(ROOT / "benchmarks" / "service.py"), "--seconds", "0.5", "--one", "100"]
