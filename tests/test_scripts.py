@@ -477,7 +477,9 @@ def test_service_benchmark_runs(tmp_path):
         (3, 50.0, None),
         (2, 100.0, "rest"),
     ]
-    assert all(0.0 < r["solve_us"] < r["step_us"] < r["cycle_cpu_us_per_set"] for r in full)  # CPU µs a set
+    # CPU µs a set, each measured by itself (their order is a figure of the machine's load: benchmarks/, not a test)
+    figures = [r[k] for r in full for k in ("solve_us", "step_us", "cycle_cpu_us_per_set", "steps_in_turn_us")]
+    assert all(0.0 < v < 1e6 for v in figures), figures
     rest = [r for r in data if r.get("motion") == "rest" and r.get("kind") != "capacity"]
     assert len(rest) == 1 and rest[0]["fixtures"] == 2 and rest[0]["records"] > 0, rest
     assert "a set at rest (1 um noise, 1 um counts)" in out.stdout and "at rest   2 x    100 Hz" in out.stdout
