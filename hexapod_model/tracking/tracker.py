@@ -369,9 +369,12 @@ class Tracker(PassageMixin):
         if self._gap > self.settings.max_gap:
             return self._last_q
         hist = self._hist  # reads P0, P1, P2 only
+        # the trusted samples only: a start's configuration (home, a stored lock pose, reset()'s) that
+        # is still in the history is no sample of the stream, and no motion extrapolates from it
+        samples = max(1, min(len(hist), self._n))
         if self._layout is None:  # a model of other joints: Pinocchio's
-            return predict(self.hexa.model, hist, self.predictor)
-        a1, a2 = predictor_weights(self.predictor, len(hist))
+            return predict(self.hexa.model, list(hist)[:samples], self.predictor)
+        a1, a2 = predictor_weights(self.predictor, samples)
         q0 = hist[0]
         if a1 == 0.0 and a2 == 0.0:
             return q0.copy()

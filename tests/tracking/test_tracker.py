@@ -56,6 +56,25 @@ def test_short_history_falls_back(reference):
     np.testing.assert_array_equal(predict(model, [q], "eq24"), q)
 
 
+@pytest.mark.parametrize("predictor", PREDICTORS)
+def test_a_plate_at_rest_far_from_home_is_not_predicted_from_home(reference, predictor):
+    """The start (home) is no sample of the stream: the second sample is predicted from the first alone.
+
+    With the plate 5 cm off home and tilted by 21 and 23 degrees, a prediction that extrapolated
+    from home to the first sample led Newton beyond the Cardan joints' limits, and the tracker
+    kept that configuration: every later sample of the plate at rest was out_of_limits.
+    """
+    T = reference.home_pose.copy()
+    T[:3, :3] = T[:3, :3] @ rpy_to_matrix(*np.radians([-21.2, 23.1, 2.0]))
+    T[:3, 3] += [-0.0226, -0.0493, 0.0146]  # m, base frame
+    lengths = reference.inverse(T).lengths
+    tracker = Tracker(reference, predictor)
+    results = [tracker.step(lengths) for _ in range(8)]
+    assert [(r.status, r.flags) for r in results[-3:]] == [("ok", ())] * 3, [(r.status, r.flags) for r in results]
+    assert all(r.status == "ok" and set(r.flags) <= {"settling"} for r in results)
+    assert max(pose_distance(r.solution.pose, T, 1.0) for r in results) < 1e-9  # m (rad as m)
+
+
 def test_tracking_trajectory_a_stays_on_branch_and_unflagged(reference):
     run = simulate(reference, "A", speed=8, predictor="eq24")
     s = run.summary()
