@@ -152,6 +152,10 @@ def run_snapshot(args: argparse.Namespace) -> int:
     """``hexapod snapshot``."""
     require_extra("view")
     size = parse_size(args.size)
+    if args.png:  # a size below the minimum is named before a missing Chromium is
+        from ..viz.render import check_size
+
+        check_size(size)
     if args.plan:
         from .plan_view import run_snapshot_plan
 

@@ -25,6 +25,14 @@ HIDE_CONTROLS = "<style>.dg{display:none!important}</style>"  # meshcat's contro
 MIN_SIZE = (1024, 768)
 
 
+def check_size(size: tuple[int, int]) -> tuple[int, int]:
+    """``size`` (width, height in pixels) of a PNG snapshot, or :class:`RenderError` when below :data:`MIN_SIZE`."""
+    w, h = size
+    if w < MIN_SIZE[0] or h < MIN_SIZE[1]:
+        raise RenderError(f"snapshot size {w}x{h} is below the minimum {MIN_SIZE[0]}x{MIN_SIZE[1]}")
+    return w, h
+
+
 def find_chromium() -> str:
     """Path of a Chromium executable, or :class:`RenderError` saying what to install."""
     for name in CHROMIUM_NAMES:
@@ -62,9 +70,7 @@ def render_pngs(
 
     if len(html_files) != len(png_files) or not html_files:
         raise RenderError(f"need as many PNG paths as HTML files, got {len(png_files)} and {len(html_files)}")
-    w, h = size
-    if w < MIN_SIZE[0] or h < MIN_SIZE[1]:
-        raise RenderError(f"snapshot size {w}x{h} is below the minimum {MIN_SIZE[0]}x{MIN_SIZE[1]}")
+    w, h = check_size(size)
     chromium = find_chromium()
     with tempfile.TemporaryDirectory(prefix="hexapod_render_") as tmp_name:
         tmp = Path(tmp_name)
