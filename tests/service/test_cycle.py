@@ -66,6 +66,21 @@ def test_clean_stream_every_set_ok_within_the_noise_propagated_sigma(tmp_path):
     assert np.allclose(rec.readings, out[-1][0].readings, atol=6e-5)
 
 
+def test_a_plate_held_far_from_home_gives_ok_poses_after_settling(tmp_path):
+    """A fixture at rest 5 cm off home, tilted by about 20 degrees both ways: every set after the first ones is ok.
+
+    (A second set predicted by extrapolating from home, where the tracker starts, to the first set
+    leads Newton beyond the joint limits, and the tracker would keep that configuration: every
+    later record flagged or not_converged.)
+    """
+    svc = service_config(tmp_path, [fixture_table()])
+    spec = {"name": "left", "rate": RATE, "hold": [-0.0226, -0.0493, 0.4146, -21.2, 23.1, 2.0]}  # m, deg
+    _, out = drive(svc, sim_config(svc, [spec]), 1.0)
+    assert len(out) == 100 and all(rec.flags == ["settling"] for _, rec in out[:SETTLE])
+    assert [(rec.status, rec.flags) for _, rec in out[SETTLE:] if rec.status != "ok" or rec.flags] == []
+    check_ok_poses(out)
+
+
 @pytest.mark.parametrize(
     "fault,status,flag,first,last",
     [
