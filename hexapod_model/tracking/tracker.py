@@ -236,7 +236,12 @@ class Tracker(PassageMixin):
 
     def _push_trusted(self, q: np.ndarray) -> None:
         q = plain(q)  # the predictor's one compiled type (a solver's q is one: no copy)
-        if self._n > 0 or len(self._hist) > 1 or self._hist[0] is not q:
+        if self._n == 0:
+            # the history's one entry is the start (home, initial, reset()'s), no sample of the stream:
+            # the first trusted sample replaces it, so that no prediction extrapolates from the start
+            self._hist[0] = q
+            self._F[0] = q[self._ffq]
+        else:
             self._hist.appendleft(q)
             self._F = self._Fr.push(q[self._ffq])
         self._L = self._Lr.push(q[self._prism_q])
@@ -368,13 +373,10 @@ class Tracker(PassageMixin):
     def _guess(self) -> np.ndarray:
         if self._gap > self.settings.max_gap:
             return self._last_q
-        hist = self._hist  # reads P0, P1, P2 only
-        # the trusted samples only: a start's configuration (home, a stored lock pose, reset()'s) that
-        # is still in the history is no sample of the stream, and no motion extrapolates from it
-        samples = max(1, min(len(hist), self._n))
+        hist = self._hist  # reads P0, P1, P2 only: the trusted samples (before the first, the start)
         if self._layout is None:  # a model of other joints: Pinocchio's
-            return predict(self.hexa.model, list(hist)[:samples], self.predictor)
-        a1, a2 = predictor_weights(self.predictor, samples)
+            return predict(self.hexa.model, hist, self.predictor)
+        a1, a2 = predictor_weights(self.predictor, len(hist))
         q0 = hist[0]
         if a1 == 0.0 and a2 == 0.0:
             return q0.copy()
