@@ -463,10 +463,9 @@ def main(argv=None) -> int:
         if unknown:
             ap.error(f"--only {' '.join(unknown)}: not a script of the table")
     here, kept = machine(), args.output.read_text() if only else ""
-    if only and page_machine(kept) != here:  # the kept rows would be labelled with this machine
-        raise SystemExit(
-            f"--only: {args.output} was measured on {page_machine(kept)}, this machine is {here}: run every script"
-        )
+    measured = page_machine(kept)
+    if only and measured != here:  # the kept rows would be labelled with this machine
+        raise SystemExit(f"--only: {args.output} was measured on {measured}, this machine is {here}: run every script")
     text = page(measure(args.full, only, kept), here)
     tmp = args.output.with_suffix(".tmp")
     tmp.write_text(text)
