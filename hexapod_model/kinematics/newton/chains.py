@@ -16,6 +16,12 @@ then computes, for a configuration ``q``, what ``pin.computeJointJacobians`` fol
   columns ``oMp.act(e_k)``;
 * the closure placements ``oMtip = oMi_last * M_tip`` and ``oManchor = oMp * M_anchor``.
 
+The placement being built is held in scalars (the rotation's nine entries and the translation's
+three), updated in place joint after joint: no array view and no tuple, so that it stays in
+registers, and the code is plain arithmetic that numba types and LLVM compiles quickly (the same
+operations in the same order as the small SE(3) functions it replaced, inlined as 12-tuples: the
+same numbers, bit for bit, in a third less compile time).
+
 Outputs use the layouts of :mod:`.kernels` (``J``: 6 x nv as Pinocchio's ``data.J``; ``R``,
 ``p``: the 12 closure frames, leg tips then platform anchors), so the residual, Jacobian and
 Schur/block kernels run unchanged on them. Checked against Pinocchio in
@@ -27,171 +33,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .legs import GENERAL, SHIFT
-
-
-# A placement is a tuple of 12 floats: the rotation row by row, then the translation. The functions
-# below are inlined into evaluate_chains (numba's inlining; as separate calls they took half the time).
-# Arrays are indexed in full (``M[i, a, b]``) rather than through views: a view costs a
-# reference count update, which would dominate these few multiplications.
-@njit(cache=True, inline="always")
-def _load(M, i):
-    """The placement of the homogeneous matrix ``M[i]`` (4x4)."""
-    return (
-        M[i, 0, 0], M[i, 0, 1], M[i, 0, 2], M[i, 1, 0], M[i, 1, 1], M[i, 1, 2],
-        M[i, 2, 0], M[i, 2, 1], M[i, 2, 2], M[i, 0, 3], M[i, 1, 3], M[i, 2, 3],
-    )  # fmt: skip
-
-
-@njit(cache=True, inline="always")
-def _load_joint(M, i, k):
-    """The placement of the homogeneous matrix ``M[i, k]`` (4x4)."""
-    return (
-        M[i, k, 0, 0], M[i, k, 0, 1], M[i, k, 0, 2], M[i, k, 1, 0], M[i, k, 1, 1], M[i, k, 1, 2],
-        M[i, k, 2, 0], M[i, k, 2, 1], M[i, k, 2, 2], M[i, k, 0, 3], M[i, k, 1, 3], M[i, k, 2, 3],
-    )  # fmt: skip
-
-
-@njit(cache=True, inline="always")
-def _mul(a, b):
-    """SE(3) product ``a * b``: ``R = Ra Rb``, ``p = Ra pb + pa``."""
-    return (
-        a[0] * b[0] + a[1] * b[3] + a[2] * b[6],
-        a[0] * b[1] + a[1] * b[4] + a[2] * b[7],
-        a[0] * b[2] + a[1] * b[5] + a[2] * b[8],
-        a[3] * b[0] + a[4] * b[3] + a[5] * b[6],
-        a[3] * b[1] + a[4] * b[4] + a[5] * b[7],
-        a[3] * b[2] + a[4] * b[5] + a[5] * b[8],
-        a[6] * b[0] + a[7] * b[3] + a[8] * b[6],
-        a[6] * b[1] + a[7] * b[4] + a[8] * b[7],
-        a[6] * b[2] + a[7] * b[5] + a[8] * b[8],
-        a[0] * b[9] + a[1] * b[10] + a[2] * b[11] + a[9],
-        a[3] * b[9] + a[4] * b[10] + a[5] * b[11] + a[10],
-        a[6] * b[9] + a[7] * b[10] + a[8] * b[11] + a[11],
-    )
-
-
-@njit(cache=True, inline="always")
-def _rodrigues(ax, ay, az, c, s):
-    """Rotation about the unit axis ``a`` by the angle of cosine ``c`` and sine ``s``, as a placement.
-
-    Rodrigues: ``R = c I + s [a] + (1 - c) a a^T``.
-    """
-    o = 1.0 - c
-    return (
-        o * ax * ax + c, o * ax * ay - s * az, o * ax * az + s * ay,
-        o * ax * ay + s * az, o * ay * ay + c, o * ay * az - s * ax,
-        o * ax * az - s * ay, o * ay * az + s * ax, o * az * az + c,
-        0.0, 0.0, 0.0,
-    )  # fmt: skip
-
-
-@njit(cache=True, inline="always")
-def _turn(T, axis, c, s):
-    """``T * R_axis`` for a rotation about the joint frame's x, y or z axis (``axis`` 0, 1, 2).
-
-    Two columns ``u``, ``v`` of ``T``'s rotation mix into ``c u + s v`` and ``c v - s u``
-    (``R_x = [[1, 0, 0], [0, c, -s], [0, s, c]]``; ``R_y``: columns z, x; ``R_z``: columns x, y).
-    """
-    if axis == 0:
-        return (
-            T[0], c * T[1] + s * T[2], c * T[2] - s * T[1],
-            T[3], c * T[4] + s * T[5], c * T[5] - s * T[4],
-            T[6], c * T[7] + s * T[8], c * T[8] - s * T[7],
-            T[9], T[10], T[11],
-        )  # fmt: skip
-    if axis == 1:
-        return (
-            c * T[0] - s * T[2], T[1], c * T[2] + s * T[0],
-            c * T[3] - s * T[5], T[4], c * T[5] + s * T[3],
-            c * T[6] - s * T[8], T[7], c * T[8] + s * T[6],
-            T[9], T[10], T[11],
-        )  # fmt: skip
-    return (
-        c * T[0] + s * T[1], c * T[1] - s * T[0], T[2],
-        c * T[3] + s * T[4], c * T[4] - s * T[3], T[5],
-        c * T[6] + s * T[7], c * T[7] - s * T[6], T[8],
-        T[9], T[10], T[11],
-    )  # fmt: skip
-
-
-@njit(cache=True, inline="always")
-def _move(T, S, i, k, x):
-    """``T * exp(S[i, k] x)``: the placement after joint ``k`` of leg ``i`` moved by ``x``.
-
-    Prismatic (``S = [v; 0]``): ``p += x R v``. Revolute (``S = [0; a]``): ``R <- R Rot(a, x)``,
-    with two columns mixed when ``a`` is a coordinate axis (Pinocchio's RX, RY, RZ joints).
-    """
-    ax, ay, az = S[i, k, 3], S[i, k, 4], S[i, k, 5]
-    if ax == 0.0 and ay == 0.0 and az == 0.0:
-        vx, vy, vz = S[i, k, 0] * x, S[i, k, 1] * x, S[i, k, 2] * x
-        return (
-            T[0], T[1], T[2], T[3], T[4], T[5], T[6], T[7], T[8],
-            T[9] + T[0] * vx + T[1] * vy + T[2] * vz,
-            T[10] + T[3] * vx + T[4] * vy + T[5] * vz,
-            T[11] + T[6] * vx + T[7] * vy + T[8] * vz,
-        )  # fmt: skip
-    c, s = np.cos(x), np.sin(x)
-    if ay == 0.0 and az == 0.0 and ax == 1.0:
-        axis = 0
-    elif ax == 0.0 and az == 0.0 and ay == 1.0:
-        axis = 1
-    elif ax == 0.0 and ay == 0.0 and az == 1.0:
-        axis = 2
-    else:
-        return _mul(T, _rodrigues(ax, ay, az, c, s))
-    return _turn(T, axis, c, s)  # one call: each inlined call is a copy of _turn's three cases
-
-
-# Tuples are indexed with constants only: a computed index compiles to a switch over 12 cases.
-@njit(cache=True, inline="always")
-def _store(T, R, p, i):
-    """Write the placement ``T`` into ``R[i]`` (3x3) and ``p[i]`` (3,)."""
-    R[i, 0, 0], R[i, 0, 1], R[i, 0, 2] = T[0], T[1], T[2]
-    R[i, 1, 0], R[i, 1, 1], R[i, 1, 2] = T[3], T[4], T[5]
-    R[i, 2, 0], R[i, 2, 1], R[i, 2, 2] = T[6], T[7], T[8]
-    p[i, 0], p[i, 1], p[i, 2] = T[9], T[10], T[11]
-
-
-@njit(cache=True, inline="always")
-def _store_joint(T, R, p, i, k):
-    """Write the placement ``T`` into ``R[i, k]`` (3x3) and ``p[i, k]`` (3,)."""
-    R[i, k, 0, 0], R[i, k, 0, 1], R[i, k, 0, 2] = T[0], T[1], T[2]
-    R[i, k, 1, 0], R[i, k, 1, 1], R[i, k, 1, 2] = T[3], T[4], T[5]
-    R[i, k, 2, 0], R[i, k, 2, 1], R[i, k, 2, 2] = T[6], T[7], T[8]
-    p[i, k, 0], p[i, k, 1], p[i, k, 2] = T[9], T[10], T[11]
-
-
-@njit(cache=True, inline="always")
-def _column(J, c, vx, vy, vz, wx, wy, wz, px, py, pz):
-    """``J[:, c] = [v + p x w; w]``: the WORLD column of a motion ``(v, w)`` of the frame at ``p``."""
-    J[0, c] = vx + py * wz - pz * wy
-    J[1, c] = vy + pz * wx - px * wz
-    J[2, c] = vz + px * wy - py * wx
-    J[3, c], J[4, c], J[5, c] = wx, wy, wz
-
-
-@njit(cache=True, inline="always")
-def _act_column(T, S, i, k, J, c):
-    """``J[:, c] = M.act(S[i, k])`` for ``M = T``: ``w = R S_w``, ``v = R S_v + p x w`` (WORLD column)."""
-    a0, a1, a2, b0, b1, b2 = S[i, k, 0], S[i, k, 1], S[i, k, 2], S[i, k, 3], S[i, k, 4], S[i, k, 5]
-    _column(
-        J, c,
-        T[0] * a0 + T[1] * a1 + T[2] * a2, T[3] * a0 + T[4] * a1 + T[5] * a2, T[6] * a0 + T[7] * a1 + T[8] * a2,
-        T[0] * b0 + T[1] * b1 + T[2] * b2, T[3] * b0 + T[4] * b1 + T[5] * b2, T[6] * b0 + T[7] * b1 + T[8] * b2,
-        T[9], T[10], T[11],
-    )  # fmt: skip
-
-
-@njit(cache=True, inline="always")
-def _shift(a, b):
-    """``a * b`` for a placement ``b`` whose rotation is the identity: ``R = Ra``, ``p = Ra pb + pa``."""
-    return (
-        a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8],
-        a[0] * b[9] + a[1] * b[10] + a[2] * b[11] + a[9],
-        a[3] * b[9] + a[4] * b[10] + a[5] * b[11] + a[10],
-        a[6] * b[9] + a[7] * b[10] + a[8] * b[11] + a[11],
-    )  # fmt: skip
+from .legs import GENERAL, IDENTITY
 
 
 @njit(cache=True)
@@ -204,44 +46,146 @@ def evaluate_chains(
     platform columns of ``J`` (6 x nv, WORLD) and the 12 closure frames ``R`` (12, 3, 3) /
     ``p`` (12, 3).
     """
+    n = placements.shape[1]
     for i in range(leg_q.shape[0]):  # 6 as a variable: unrolled, every unit that holds it compiled longer
-        T = _load_joint(placements, i, 0)  # the first joint hangs from the root: oM_parent = identity
-        for k in range(placements.shape[1]):
+        # the placement oMi, rotation r.. row by row and translation p., in scalars (registers)
+        r00, r01, r02 = placements[i, 0, 0, 0], placements[i, 0, 0, 1], placements[i, 0, 0, 2]
+        r10, r11, r12 = placements[i, 0, 1, 0], placements[i, 0, 1, 1], placements[i, 0, 1, 2]
+        r20, r21, r22 = placements[i, 0, 2, 0], placements[i, 0, 2, 1], placements[i, 0, 2, 2]
+        px, py, pz = placements[i, 0, 0, 3], placements[i, 0, 1, 3], placements[i, 0, 2, 3]
+        for k in range(n):
             if k > 0:
                 kind = kinds[i, k]
+                if kind != IDENTITY:
+                    bx, by, bz = placements[i, k, 0, 3], placements[i, k, 1, 3], placements[i, k, 2, 3]
+                    px = r00 * bx + r01 * by + r02 * bz + px
+                    py = r10 * bx + r11 * by + r12 * bz + py
+                    pz = r20 * bx + r21 * by + r22 * bz + pz
                 if kind == GENERAL:
-                    T = _mul(T, _load_joint(placements, i, k))
-                elif kind == SHIFT:
-                    T = _shift(T, _load_joint(placements, i, k))
-            T = _move(T, motions, i, k, q[leg_q[i, k]])
-            _store_joint(T, oR, op, i, k)
-            _act_column(T, motions, i, k, J, leg_v[i, k])
-        _store(_mul(T, _load(closure, i)), R, p, i)
-    x = q[platform_q : platform_q + 7]
-    qx, qy, qz, qw = x[3], x[4], x[5], x[6]
-    tx, ty, tz = 2.0 * qx, 2.0 * qy, 2.0 * qz  # X's rotation as quat_to_matrix (Eigen) writes it
-    X = (
-        1.0 - (ty * qy + tz * qz),
-        ty * qx - tz * qw,
-        tz * qx + ty * qw,
-        ty * qx + tz * qw,
-        1.0 - (tx * qx + tz * qz),
-        tz * qy - tx * qw,
-        tz * qx - ty * qw,
-        tz * qy + tx * qw,
-        1.0 - (tx * qx + ty * qy),
-        x[0],
-        x[1],
-        x[2],
+                    b00, b01, b02 = placements[i, k, 0, 0], placements[i, k, 0, 1], placements[i, k, 0, 2]
+                    b10, b11, b12 = placements[i, k, 1, 0], placements[i, k, 1, 1], placements[i, k, 1, 2]
+                    b20, b21, b22 = placements[i, k, 2, 0], placements[i, k, 2, 1], placements[i, k, 2, 2]
+                    r00, r01, r02 = (
+                        r00 * b00 + r01 * b10 + r02 * b20,
+                        r00 * b01 + r01 * b11 + r02 * b21,
+                        r00 * b02 + r01 * b12 + r02 * b22,
+                    )
+                    r10, r11, r12 = (
+                        r10 * b00 + r11 * b10 + r12 * b20,
+                        r10 * b01 + r11 * b11 + r12 * b21,
+                        r10 * b02 + r11 * b12 + r12 * b22,
+                    )
+                    r20, r21, r22 = (
+                        r20 * b00 + r21 * b10 + r22 * b20,
+                        r20 * b01 + r21 * b11 + r22 * b21,
+                        r20 * b02 + r21 * b12 + r22 * b22,
+                    )
+            x = q[leg_q[i, k]]
+            s0, s1, s2 = motions[i, k, 0], motions[i, k, 1], motions[i, k, 2]
+            ax, ay, az = motions[i, k, 3], motions[i, k, 4], motions[i, k, 5]
+            if ax == 0.0 and ay == 0.0 and az == 0.0:  # prismatic: p += x R v
+                vx, vy, vz = s0 * x, s1 * x, s2 * x
+                px = px + r00 * vx + r01 * vy + r02 * vz
+                py = py + r10 * vx + r11 * vy + r12 * vz
+                pz = pz + r20 * vx + r21 * vy + r22 * vz
+            else:
+                c, s = np.cos(x), np.sin(x)
+                if ay == 0.0 and az == 0.0 and ax == 1.0:  # R_x: columns y, z mix
+                    r01, r02 = c * r01 + s * r02, c * r02 - s * r01
+                    r11, r12 = c * r11 + s * r12, c * r12 - s * r11
+                    r21, r22 = c * r21 + s * r22, c * r22 - s * r21
+                elif ax == 0.0 and az == 0.0 and ay == 1.0:  # R_y: columns z, x
+                    r00, r02 = c * r00 - s * r02, c * r02 + s * r00
+                    r10, r12 = c * r10 - s * r12, c * r12 + s * r10
+                    r20, r22 = c * r20 - s * r22, c * r22 + s * r20
+                elif ax == 0.0 and ay == 0.0 and az == 1.0:  # R_z: columns x, y
+                    r00, r01 = c * r00 + s * r01, c * r01 - s * r00
+                    r10, r11 = c * r10 + s * r11, c * r11 - s * r10
+                    r20, r21 = c * r20 + s * r21, c * r21 - s * r20
+                else:  # R <- R Rot(a, x), Rodrigues: R = c I + s [a] + (1 - c) a a^T
+                    o = 1.0 - c
+                    g00, g01, g02 = o * ax * ax + c, o * ax * ay - s * az, o * ax * az + s * ay
+                    g10, g11, g12 = o * ax * ay + s * az, o * ay * ay + c, o * ay * az - s * ax
+                    g20, g21, g22 = o * ax * az - s * ay, o * ay * az + s * ax, o * az * az + c
+                    r00, r01, r02 = (
+                        r00 * g00 + r01 * g10 + r02 * g20,
+                        r00 * g01 + r01 * g11 + r02 * g21,
+                        r00 * g02 + r01 * g12 + r02 * g22,
+                    )
+                    r10, r11, r12 = (
+                        r10 * g00 + r11 * g10 + r12 * g20,
+                        r10 * g01 + r11 * g11 + r12 * g21,
+                        r10 * g02 + r11 * g12 + r12 * g22,
+                    )
+                    r20, r21, r22 = (
+                        r20 * g00 + r21 * g10 + r22 * g20,
+                        r20 * g01 + r21 * g11 + r22 * g21,
+                        r20 * g02 + r21 * g12 + r22 * g22,
+                    )
+            oR[i, k, 0, 0], oR[i, k, 0, 1], oR[i, k, 0, 2] = r00, r01, r02
+            oR[i, k, 1, 0], oR[i, k, 1, 1], oR[i, k, 1, 2] = r10, r11, r12
+            oR[i, k, 2, 0], oR[i, k, 2, 1], oR[i, k, 2, 2] = r20, r21, r22
+            op[i, k, 0], op[i, k, 1], op[i, k, 2] = px, py, pz
+            # the WORLD column M.act(S): w = R S_w, v = R S_v + p x w
+            col = leg_v[i, k]
+            wx, wy, wz = r00 * ax + r01 * ay + r02 * az, r10 * ax + r11 * ay + r12 * az, r20 * ax + r21 * ay + r22 * az
+            J[0, col] = r00 * s0 + r01 * s1 + r02 * s2 + py * wz - pz * wy
+            J[1, col] = r10 * s0 + r11 * s1 + r12 * s2 + pz * wx - px * wz
+            J[2, col] = r20 * s0 + r21 * s1 + r22 * s2 + px * wy - py * wx
+            J[3, col], J[4, col], J[5, col] = wx, wy, wz
+        # the tip: oMtip = oMi_last * M_tip
+        for b in range(3):
+            R[i, 0, b] = r00 * closure[i, 0, b] + r01 * closure[i, 1, b] + r02 * closure[i, 2, b]
+            R[i, 1, b] = r10 * closure[i, 0, b] + r11 * closure[i, 1, b] + r12 * closure[i, 2, b]
+            R[i, 2, b] = r20 * closure[i, 0, b] + r21 * closure[i, 1, b] + r22 * closure[i, 2, b]
+        bx, by, bz = closure[i, 0, 3], closure[i, 1, 3], closure[i, 2, 3]
+        p[i, 0] = r00 * bx + r01 * by + r02 * bz + px
+        p[i, 1] = r10 * bx + r11 * by + r12 * bz + py
+        p[i, 2] = r20 * bx + r21 * by + r22 * bz + pz
+    # the platform: oMp = home * X(q_p), X's rotation as quat_to_matrix (Eigen) writes it
+    x0, x1, x2 = q[platform_q], q[platform_q + 1], q[platform_q + 2]
+    qx, qy, qz, qw = q[platform_q + 3], q[platform_q + 4], q[platform_q + 5], q[platform_q + 6]
+    tx, ty, tz = 2.0 * qx, 2.0 * qy, 2.0 * qz
+    X00, X01, X02 = 1.0 - (ty * qy + tz * qz), ty * qx - tz * qw, tz * qx + ty * qw
+    X10, X11, X12 = ty * qx + tz * qw, 1.0 - (tx * qx + tz * qz), tz * qy - tx * qw
+    X20, X21, X22 = tz * qx - ty * qw, tz * qy + tx * qw, 1.0 - (tx * qx + ty * qy)
+    h00, h01, h02, h10, h11, h12 = home[0, 0], home[0, 1], home[0, 2], home[1, 0], home[1, 1], home[1, 2]
+    h20, h21, h22 = home[2, 0], home[2, 1], home[2, 2]
+    r00, r01, r02 = (
+        h00 * X00 + h01 * X10 + h02 * X20,
+        h00 * X01 + h01 * X11 + h02 * X21,
+        h00 * X02 + h01 * X12 + h02 * X22,
     )
-    T = _mul((home[0, 0], home[0, 1], home[0, 2], home[1, 0], home[1, 1], home[1, 2],
-              home[2, 0], home[2, 1], home[2, 2], home[0, 3], home[1, 3], home[2, 3]), X)  # fmt: skip
+    r10, r11, r12 = (
+        h10 * X00 + h11 * X10 + h12 * X20,
+        h10 * X01 + h11 * X11 + h12 * X21,
+        h10 * X02 + h11 * X12 + h12 * X22,
+    )
+    r20, r21, r22 = (
+        h20 * X00 + h21 * X10 + h22 * X20,
+        h20 * X01 + h21 * X11 + h22 * X21,
+        h20 * X02 + h21 * X12 + h22 * X22,
+    )
+    px = h00 * x0 + h01 * x1 + h02 * x2 + home[0, 3]
+    py = h10 * x0 + h11 * x1 + h12 * x2 + home[1, 3]
+    pz = h20 * x0 + h21 * x1 + h22 * x2 + home[2, 3]
     v = platform_v  # oMp.act(e_k): linear columns [R e_k; 0], angular columns [p x R e_k; R e_k]
-    _column(J, v[0], T[0], T[3], T[6], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    _column(J, v[1], T[1], T[4], T[7], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    _column(J, v[2], T[2], T[5], T[8], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    _column(J, v[3], 0.0, 0.0, 0.0, T[0], T[3], T[6], T[9], T[10], T[11])
-    _column(J, v[4], 0.0, 0.0, 0.0, T[1], T[4], T[7], T[9], T[10], T[11])
-    _column(J, v[5], 0.0, 0.0, 0.0, T[2], T[5], T[8], T[9], T[10], T[11])
-    for i in range(6):
-        _store(_mul(T, _load(closure, 6 + i)), R, p, 6 + i)
+    J[0, v[0]], J[1, v[0]], J[2, v[0]], J[3, v[0]], J[4, v[0]], J[5, v[0]] = r00, r10, r20, 0.0, 0.0, 0.0
+    J[0, v[1]], J[1, v[1]], J[2, v[1]], J[3, v[1]], J[4, v[1]], J[5, v[1]] = r01, r11, r21, 0.0, 0.0, 0.0
+    J[0, v[2]], J[1, v[2]], J[2, v[2]], J[3, v[2]], J[4, v[2]], J[5, v[2]] = r02, r12, r22, 0.0, 0.0, 0.0
+    for k in range(3):
+        c = v[3 + k]
+        wx, wy, wz = J[0, v[k]], J[1, v[k]], J[2, v[k]]
+        J[0, c] = 0.0 + py * wz - pz * wy
+        J[1, c] = 0.0 + pz * wx - px * wz
+        J[2, c] = 0.0 + px * wy - py * wx
+        J[3, c], J[4, c], J[5, c] = wx, wy, wz
+    for f in range(6, 12):  # the anchors: oManchor = oMp * M_anchor
+        for b in range(3):
+            R[f, 0, b] = r00 * closure[f, 0, b] + r01 * closure[f, 1, b] + r02 * closure[f, 2, b]
+            R[f, 1, b] = r10 * closure[f, 0, b] + r11 * closure[f, 1, b] + r12 * closure[f, 2, b]
+            R[f, 2, b] = r20 * closure[f, 0, b] + r21 * closure[f, 1, b] + r22 * closure[f, 2, b]
+        bx, by, bz = closure[f, 0, 3], closure[f, 1, 3], closure[f, 2, 3]
+        p[f, 0] = r00 * bx + r01 * by + r02 * bz + px
+        p[f, 1] = r10 * bx + r11 * by + r12 * bz + py
+        p[f, 2] = r20 * bx + r21 * by + r22 * bz + pz
