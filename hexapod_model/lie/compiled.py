@@ -193,43 +193,51 @@ def pose_to_xyzquat(T, H, out):
     """Free-flyer configuration of a pose relative to home.
 
     Free-flyer configuration ``(x, y, z, qx, qy, qz, qw)`` of pose ``T`` relative to the
-    home placement ``H`` (both 4x4): ``H^-1 T``.
+    home placement ``H`` (both 4x4): ``H^-1 T``. No array is allocated (a batch's rows call it).
     """
-    M = np.empty((3, 3))
     for a in range(3):
         out[a] = H[0, a] * (T[0, 3] - H[0, 3]) + H[1, a] * (T[1, 3] - H[1, 3]) + H[2, a] * (T[2, 3] - H[2, 3])
-        for b in range(3):
-            M[a, b] = H[0, a] * T[0, b] + H[1, a] * T[1, b] + H[2, a] * T[2, b]
-    tr = M[0, 0] + M[1, 1] + M[2, 2]
+    # M = H^T T, entry by entry
+    m00 = H[0, 0] * T[0, 0] + H[1, 0] * T[1, 0] + H[2, 0] * T[2, 0]
+    m01 = H[0, 0] * T[0, 1] + H[1, 0] * T[1, 1] + H[2, 0] * T[2, 1]
+    m02 = H[0, 0] * T[0, 2] + H[1, 0] * T[1, 2] + H[2, 0] * T[2, 2]
+    m10 = H[0, 1] * T[0, 0] + H[1, 1] * T[1, 0] + H[2, 1] * T[2, 0]
+    m11 = H[0, 1] * T[0, 1] + H[1, 1] * T[1, 1] + H[2, 1] * T[2, 1]
+    m12 = H[0, 1] * T[0, 2] + H[1, 1] * T[1, 2] + H[2, 1] * T[2, 2]
+    m20 = H[0, 2] * T[0, 0] + H[1, 2] * T[1, 0] + H[2, 2] * T[2, 0]
+    m21 = H[0, 2] * T[0, 1] + H[1, 2] * T[1, 1] + H[2, 2] * T[2, 1]
+    m22 = H[0, 2] * T[0, 2] + H[1, 2] * T[1, 2] + H[2, 2] * T[2, 2]
+    tr = m00 + m11 + m22
     if tr > 0.0:
         s = 2.0 * np.sqrt(1.0 + tr)
-        qw, qx, qy, qz = 0.25 * s, (M[2, 1] - M[1, 2]) / s, (M[0, 2] - M[2, 0]) / s, (M[1, 0] - M[0, 1]) / s
-    elif M[0, 0] > M[1, 1] and M[0, 0] > M[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + M[0, 0] - M[1, 1] - M[2, 2])
-        qw, qx, qy, qz = (M[2, 1] - M[1, 2]) / s, 0.25 * s, (M[0, 1] + M[1, 0]) / s, (M[0, 2] + M[2, 0]) / s
-    elif M[1, 1] > M[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + M[1, 1] - M[0, 0] - M[2, 2])
-        qw, qx, qy, qz = (M[0, 2] - M[2, 0]) / s, (M[0, 1] + M[1, 0]) / s, 0.25 * s, (M[1, 2] + M[2, 1]) / s
+        qw, qx, qy, qz = 0.25 * s, (m21 - m12) / s, (m02 - m20) / s, (m10 - m01) / s
+    elif m00 > m11 and m00 > m22:
+        s = 2.0 * np.sqrt(1.0 + m00 - m11 - m22)
+        qw, qx, qy, qz = (m21 - m12) / s, 0.25 * s, (m01 + m10) / s, (m02 + m20) / s
+    elif m11 > m22:
+        s = 2.0 * np.sqrt(1.0 + m11 - m00 - m22)
+        qw, qx, qy, qz = (m02 - m20) / s, (m01 + m10) / s, 0.25 * s, (m12 + m21) / s
     else:
-        s = 2.0 * np.sqrt(1.0 + M[2, 2] - M[0, 0] - M[1, 1])
-        qw, qx, qy, qz = (M[1, 0] - M[0, 1]) / s, (M[0, 2] + M[2, 0]) / s, (M[1, 2] + M[2, 1]) / s, 0.25 * s
+        s = 2.0 * np.sqrt(1.0 + m22 - m00 - m11)
+        qw, qx, qy, qz = (m10 - m01) / s, (m02 + m20) / s, (m12 + m21) / s, 0.25 * s
     n = np.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
     out[3], out[4], out[5], out[6] = qx / n, qy / n, qz / n, qw / n
 
 
 @njit(cache=True)
 def xyzquat_to_pose(x, H, T):
-    """Pose ``T = H * X`` (4x4) of the free-flyer configuration ``x`` relative to ``H``."""
+    """Pose ``T = H * X`` (4x4) of the free-flyer configuration ``x`` relative to ``H`` (no array allocated)."""
     qx, qy, qz, qw = x[3], x[4], x[5], x[6]
     n = np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
     qx, qy, qz, qw = qx / n, qy / n, qz / n, qw / n
-    X = np.empty((3, 3))
-    X[0, 0], X[0, 1], X[0, 2] = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)
-    X[1, 0], X[1, 1], X[1, 2] = 2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)
-    X[2, 0], X[2, 1], X[2, 2] = 2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)
+    x00, x01, x02 = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)
+    x10, x11, x12 = 2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)
+    x20, x21, x22 = 2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)
     for a in range(3):
-        for b in range(3):
-            T[a, b] = H[a, 0] * X[0, b] + H[a, 1] * X[1, b] + H[a, 2] * X[2, b]
-        T[a, 3] = H[a, 0] * x[0] + H[a, 1] * x[1] + H[a, 2] * x[2] + H[a, 3]
+        h0, h1, h2 = H[a, 0], H[a, 1], H[a, 2]
+        T[a, 0] = h0 * x00 + h1 * x10 + h2 * x20
+        T[a, 1] = h0 * x01 + h1 * x11 + h2 * x21
+        T[a, 2] = h0 * x02 + h1 * x12 + h2 * x22
+        T[a, 3] = h0 * x[0] + h1 * x[1] + h2 * x[2] + H[a, 3]
         T[3, a] = 0.0
     T[3, 3] = 1.0
