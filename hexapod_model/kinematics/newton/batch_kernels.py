@@ -30,14 +30,13 @@ from .follow import closure_norm, follow_buffers, follow_in, rescale
 from .iteration import iterate_blocks, iterate_schur
 from .kernels import copy_into, first_outside, first_outside_at, rigid_error
 from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
-from .packing import unpack_constants, unpack_work
+from .packing import unpack, unpack_constants
 
 
 @njit(cache=True, inline="always")
-def _finish_row(k, q, code, it, norm, ratio, kappa, sign, ints, floats, out):
-    """The packed limit check (:func:`.packing.unpack_constants`) and the outputs of row ``k``."""
-    (_, limited, lo, hi, slack, home), _ = unpack_constants(ints, floats)
-    platform_q = ints[3]
+def _finish_row(k, q, code, it, norm, ratio, kappa, sign, platform_q, constants, out):
+    """The packed limit check and the outputs of row ``k`` (``constants``: :func:`.packing.unpack_constants`'s)."""
+    _, limited, lo, hi, slack, home = constants
     Q, poses, codes, iterations, residuals, ratios, kappas, signs, bad = out
     bad[k] = -1
     if code == CONVERGED:
@@ -71,32 +70,35 @@ def _invalid_row(k, out):
 
 
 @njit(cache=True, inline="always")
-def _follow_row(q0, q, start, closes, target, attempt, tol, max_iter, sign, guessed, near_kappa, packed, buffers):
+def _follow_row(
+    q0, q, start, closes, target, attempt, tol, max_iter, sign, guessed, near_kappa, packed, views, buffers
+):
     """The rest of :func:`.certificate.solve_forward` after a failed certified attempt from ``q0``.
 
     ``attempt = (iterations, theta)`` of that attempt, whose last iterate is in ``q``;
     ``start`` holds the start's own readings, ``closes`` its closure residual norm (NaN: not
     known). From a guess (``guessed``), first the plain uncertified solve (a result near a
-    singularity is left to the caller), then the path from ``start``. ``buffers``:
+    singularity is left to the caller), then the path from ``start``. ``views``: :func:`.packing.unpack`'s
+    of ``packed``; ``buffers``:
     :func:`.follow.follow_buffers` and two more configurations. Returns ``(done, iterations,
     residual)``: done when the path reached its end (in ``q``).
     """
-    ints, floats, work, iwork = packed
-    state = unpack_work(ints, work)[0][18]
+    ints, floats = packed[0], packed[1]
+    state = views[2][18]
     it, theta = attempt
     path, first, x = buffers
     copy_into(first, q)  # the first Newton iterate when the attempt took one step
     if guessed:  # near a singularity no path certifies: forward() returns the plain result, flagged
         no = np.zeros(1, dtype=np.bool_)[0]  # a runtime False: one compiled signature of iterate_schur
         code, n, _, _, theta, _, _ = iterate_schur(
-            q0, q, tol, max_iter, 0.0, np.zeros(6 * ints[0]), 0.0, no, ints, floats, work, iwork
+            q0, q, tol, max_iter, 0.0, np.zeros(6 * ints[0]), 0.0, no, ints, floats, views
         )
         it += n
         if code == CONVERGED and not state[1] <= near_kappa:
             return False, it, 0.0
     h = rescale(theta, False, 1)
     t, it, norm = follow_in(
-        start, closes, target, first, attempt[0] == 1, tol, max_iter, sign, it, h, packed, x, q, path
+        start, closes, target, first, attempt[0] == 1, tol, max_iter, sign, it, h, packed, views, x, q, path
     )
     return t == 1.0, it, norm
 
@@ -112,8 +114,10 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, stroke, pac
     """
     tol, max_iter, near_kappa = settings
     ints, floats, work, iwork = packed
-    (prismatic_q, _, _, _, slack, _), _ = unpack_constants(ints, floats)
-    state = unpack_work(ints, work)[0][18]  # the last Schur step's sign and condition bound
+    constants = unpack_constants(ints, floats)[0]  # once, as the views
+    prismatic_q, slack = constants[0], constants[4]
+    views = unpack(ints, floats, work, iwork)  # once: each iteration's call takes them
+    state = views[2][18]  # the last Schur step's sign and condition bound
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
     yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
     nq = start.shape[0]
@@ -127,20 +131,33 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, stroke, pac
         for i in range(prismatic_q.shape[0]):
             q0[prismatic_q[i]] = joints[k, i]
         code, it, norm, ratio, theta, sign, certified = iterate_schur(
-            q0, q, tol, max_iter, carry[0], no_offset, 0.0, yes, ints, floats, work, iwork
+            q0, q, tol, max_iter, carry[0], no_offset, 0.0, yes, ints, floats, views
         )
         if not certified or (code != CONVERGED and code != NO_CONVERGENCE):  # follow the readings path
             attempt, guessed = (it, theta), carry[1] == 1.0 or carry[2] == 1.0
             if not closes == closes:  # NaN: the start's own residual, once while it stays the start
                 closes = closure_norm(start, ints, floats, work)
             done, it, norm = _follow_row(
-                q0, q, start, closes, joints[k], attempt, tol, max_iter, carry[0], guessed, near_kappa, packed, buffers
+                q0,
+                q,
+                start,
+                closes,
+                joints[k],
+                attempt,
+                tol,
+                max_iter,
+                carry[0],
+                guessed,
+                near_kappa,
+                packed,
+                views,
+                buffers,
             )
             if not done:
                 return k  # blocked (the candidates) or uncertified near a singularity: forward() solves it
             code, ratio = CONVERGED, 1.0
         kappa, sign = (state[1], state[0]) if code == CONVERGED else (np.inf, 0.0)
-        code = _finish_row(k, q, code, it, norm, ratio, kappa, sign, ints, floats, out)
+        code = _finish_row(k, q, code, it, norm, ratio, kappa, sign, ints[3], constants, out)
         if code == CONVERGED and (carry[1] == 1.0 or carry[2] == 1.0) and not kappa <= near_kappa:
             return k  # warm and near a singularity: converged only with its proof, which forward() runs
         if warm and code == CONVERGED:
@@ -160,7 +177,9 @@ def inverse_rows(targets, start, warm, settings, packed, out):
     """
     tol, max_iter, pose_tolerance, max_position = settings
     ints, floats, work, iwork = packed
-    platform_q, home = ints[3], unpack_constants(ints, floats)[0][5]
+    platform_q, constants = ints[3], unpack_constants(ints, floats)[0]
+    home = constants[5]
+    views = unpack(ints, floats, work, iwork)  # once: each iteration's call takes them
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
     for k in range(targets.shape[0]):
         T = targets[k]
@@ -171,8 +190,8 @@ def inverse_rows(targets, start, warm, settings, packed, out):
         copy_into(q0, start)
         pose_to_xyzquat(T, home, q0[platform_q : platform_q + 7])
         code, it, norm, ratio, _, _, _ = iterate_blocks(
-            q0, q, tol, max_iter, 0.0, no_offset, 0.0, False, ints, floats, work, iwork
+            q0, q, tol, max_iter, 0.0, no_offset, 0.0, False, ints, floats, views
         )
-        code = _finish_row(k, q, code, it, norm, ratio, np.inf, 0.0, ints, floats, out)
+        code = _finish_row(k, q, code, it, norm, ratio, np.inf, 0.0, platform_q, constants, out)
         if warm and code == CONVERGED:
             copy_into(start, q)

@@ -29,17 +29,16 @@ from . import path_rules
 from .chains import evaluate_chains
 from .iteration import CONVERGED, integrate_configuration, iterate_schur
 from .kernels import closure_residual, copy_into
-from .packing import LENGTH_SCALE, unpack_constants, unpack_floats, unpack_ints, unpack_work
+from .packing import LENGTH_SCALE, unpack, unpack_constants, unpack_floats, unpack_ints, unpack_work
 from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP
 
 rescale = njit(cache=True)(path_rules.rescale)  # the Python follower's rule, compiled
 
 
 @njit(cache=True)
-def _difference(q0, q1, dv, ints, scratch):
+def _difference(q0, q1, dv, platform_q, tables, scratch):
     """``dv = q1 (-) q0`` (Pinocchio's ``difference``): leg joints subtract, the platform by ``log6``."""
-    (leg_q, leg_v, platform_v, _, _, _, kinds), _ = unpack_ints(ints)
-    platform_q = ints[3]
+    leg_q, leg_v, platform_v = tables[0], tables[1], tables[2]
     for i in range(leg_q.shape[0]):
         for k in range(leg_q.shape[1]):
             dv[leg_v[i, k]] = q1[leg_q[i, k]] - q0[leg_q[i, k]]
@@ -48,15 +47,18 @@ def _difference(q0, q1, dv, ints, scratch):
 
 
 @njit(cache=True)
-def _predict(x, a, b, u, q0, dv, ints, work, scratch):
-    """``q0 = x (+) u (b (-) a)``: ``pin.integrate(x, u * pin.difference(a, b))``."""
-    (leg_q, leg_v, platform_v, _, _, _, kinds), _ = unpack_ints(ints)
-    Rs, ps, quat = unpack_work(ints, work)[0][15:18]
-    _difference(a, b, dv, ints, scratch)
+def _predict(x, a, b, u, q0, dv, platform_q, views, scratch):
+    """``q0 = x (+) u (b (-) a)``: ``pin.integrate(x, u * pin.difference(a, b))``.
+
+    ``views``: :func:`.packing.unpack`'s of the solver's arrays.
+    """
+    tables, buffers = views[0], views[2]
+    leg_q, leg_v, platform_v = tables[0], tables[1], tables[2]
+    _difference(a, b, dv, platform_q, tables, scratch)
     for i in range(dv.shape[0]):
         dv[i] *= u
     copy_into(q0, x)
-    integrate_configuration(q0, dv, leg_q, leg_v, ints[3], platform_v, Rs, ps, quat)
+    integrate_configuration(q0, dv, leg_q, leg_v, platform_q, platform_v, buffers[15], buffers[16], buffers[17])
 
 
 @njit(cache=True)
@@ -100,19 +102,25 @@ def follow(start, target, first, predicted, tol, max_iter, sign, total, h, packe
     """
     ints = packed[0]
     buffers = follow_buffers(start.shape[0], ints[1], 6 * ints[0])
-    return follow_in(start, np.nan, target, first, predicted, tol, max_iter, sign, total, h, packed, x, q, buffers)
+    views = unpack(packed[0], packed[1], packed[2], packed[3])
+    return follow_in(
+        start, np.nan, target, first, predicted, tol, max_iter, sign, total, h, packed, views, x, q, buffers
+    )
 
 
 @njit(cache=True, inline="always")  # inlined into follow and batch_kernels.forward_rows: one compiled unit each
-def follow_in(start, closes, target, first, predicted, tol, max_iter, sign, total, h, packed, x, q, buffers):
+def follow_in(start, closes, target, first, predicted, tol, max_iter, sign, total, h, packed, views, x, q, buffers):
     """:func:`follow` with its work arrays (:func:`follow_buffers`) and the start's residual if known.
+
+    ``views``: :func:`.packing.unpack`'s of ``packed``, made once by the caller (each substep's
+    Newton call takes them).
 
     ``closes``: the closure residual norm at ``start`` when the caller knows it (the start is
     the batch's first start or a row's result, whose last evaluation it is), NaN when not. A
     known residual within the intermediate tolerance is not evaluated again; any other is.
     """
-    ints, floats, work, iwork = packed
-    r = unpack_work(ints, work)[0][6]
+    ints, floats, work = packed[0], packed[1], packed[2]
+    r = views[2][6]
     prismatic_q = unpack_constants(ints, floats)[0][0]
     n = prismatic_q.shape[0]
     q0, before, dv, scratch, offset = buffers
@@ -128,9 +136,9 @@ def follow_in(start, closes, target, first, predicted, tol, max_iter, sign, tota
     while t < 1.0 and substeps < MAX_SUBSTEPS and h >= MIN_STEP:
         tn = 1.0 if t + 1.2 * h >= 1.0 else t + h  # no sliver of a last substep
         if has_before:  # predictor: along the secant of the last two path points
-            _predict(x, before, x, (tn - t) / (t - t_before), q0, dv, ints, work, scratch)
+            _predict(x, before, x, (tn - t) / (t - t_before), q0, dv, ints[3], views, scratch)
         elif predicted:  # along the plain attempt's first Newton step (the tangent, to first order)
-            _predict(x, x, first, tn, q0, dv, ints, work, scratch)  # pin.interpolate(x, first, tn)
+            _predict(x, x, first, tn, q0, dv, ints[3], views, scratch)  # pin.interpolate(x, first, tn)
         else:
             copy_into(q0, x)
         for i in range(n):
@@ -139,7 +147,7 @@ def follow_in(start, closes, target, first, predicted, tol, max_iter, sign, tota
         scale = 1.0 - tn if shifted else 0.0
         tol_n = tol if tn == 1.0 else intermediate
         code, it, res, _, theta, kept, certified = iterate_schur(
-            q0, q, tol_n, max_iter, sign, offset, scale, yes, ints, floats, work, iwork
+            q0, q, tol_n, max_iter, sign, offset, scale, yes, ints, floats, views
         )
         total += it
         substeps += 1

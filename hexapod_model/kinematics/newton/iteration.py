@@ -50,7 +50,7 @@ from .kernels import (
     shift_residual,
 )
 from .outcomes import CONVERGED, FLIPPED, INVALID_INPUT, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED
-from .packing import FHEADER, LENGTH_SCALE, unpack_floats, unpack_ints, unpack_iwork, unpack_work
+from .packing import FHEADER, LENGTH_SCALE, unpack
 from .structured import blocks_solve, schur_solve
 
 
@@ -68,9 +68,8 @@ def integrate_configuration(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps,
 def _newton(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, tables, frames, buffers, pivots):
     """Newton from ``q0`` into ``q`` (see the module docstring), by the Schur or the block step.
 
-    ``tables``, ``frames``, ``buffers``, ``pivots``: the views of :func:`.packing.unpack_ints`,
-    :func:`.packing.unpack_floats`, :func:`.packing.unpack_work`, :func:`.packing.unpack_iwork`
-    (the entry unpacks them once). The Schur step leaves the determinant sign (``-1`` when
+    ``tables``, ``frames``, ``buffers``, ``pivots``: the views of :func:`.packing.unpack` (the
+    entry, or the loop that calls it, makes them once). The Schur step leaves the determinant sign (``-1`` when
     singular, as the general path) and the condition bound in ``state`` (scale-free with the
     geometry's length scale).
 
@@ -146,9 +145,8 @@ def _entries(schur: bool, step: str) -> tuple:
     and an inlined function that itself inlines the iteration doubled the copies on a first run.
     """
 
-    def iterate(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, work, iwork):
-        tables, frames = unpack_ints(ints)[0], unpack_floats(ints, floats)[0]
-        buffers, pivots = unpack_work(ints, work)[0], unpack_iwork(ints, iwork)[0]
+    def iterate(q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, views):
+        tables, frames, buffers, pivots = views
         return _newton(
             schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, floats, tables, frames, buffers, pivots
         )
@@ -175,8 +173,7 @@ def _entries(schur: bool, step: str) -> tuple:
         elif given != 0.0:
             for i in range(prismatic_q.shape[0]):
                 q[prismatic_q[i]] = settings[7 + i]
-        tables, frames = unpack_ints(ints)[0], unpack_floats(ints, floats)[0]
-        buffers, pivots = unpack_work(ints, work)[0], unpack_iwork(ints, iwork)[0]
+        tables, frames, buffers, pivots = unpack(ints, floats, work, iwork)
         code, it, norm, ratio, theta, sign, certified = _newton(
             schur,
             q,
@@ -205,7 +202,9 @@ def _entries(schur: bool, step: str) -> tuple:
 
     iterate.__doc__ = f""":func:`_newton` with the {step}.
 
-    For the compiled loops of :mod:`.follow` and :mod:`.batch_kernels`.
+    For the compiled loops of :mod:`.follow` and :mod:`.batch_kernels`: ``views`` are
+    :func:`.packing.unpack`'s views of the solver's arrays ``(ints, floats, work, iwork)``, made
+    once by the loop (in each call they would cost a tenth of a warm solve).
 
     The loops pass ``certify`` read from an array, never as a constant: a constant types as a
     literal, and numba would compile the whole iteration once more per literal value.
