@@ -69,13 +69,6 @@ def jacobian_column(J, c, rows, point, H, sign, out, row, col):
             out[row + 3 + a, col] += sign * (H[a, 0] * wx + H[a, 1] * wy + H[a, 2] * wz)
 
 
-@njit(cache=True)
-def _add_columns(J, G, o, rows, cols, colmap, point, H, sign):
-    for c in cols:
-        if c >= 0 and colmap[c] >= 0:
-            jacobian_column(J, c, rows, point, H, sign, G, o, colmap[c])
-
-
 @njit(cache=True, inline="always")
 def rotation_weights(E, i, Ht, Ha):
     """``H_tip = (tr(E) I - E)/2`` and ``H_anchor = (tr(E) I - E^T)/2`` of closure ``i``."""
@@ -93,16 +86,40 @@ def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
     """Fill ``G`` (6*rows x n_free): derivative of the residual w.r.t. the free velocities.
 
     ``colmap[v]`` is the column of velocity index ``v`` in ``G`` or -1 when that joint is held.
+    Each closure's columns are :func:`jacobian_column`'s, written out with ``H_tip`` (its leg's
+    joints, sign +1) and ``H_anchor = H_tip^T`` (the platform's, sign -1) held in scalars (as
+    :func:`rotation_weights` computes them): no array is allocated.
     """
-    G[:, :] = 0.0
-    Ht = np.empty((3, 3))
-    Ha = np.empty((3, 3))
+    for a in range(G.shape[0]):
+        for b in range(G.shape[1]):
+            G[a, b] = 0.0
+    h00 = h01 = h02 = h10 = h11 = h12 = h20 = h21 = h22 = 0.0
+    nl = leg_cols.shape[1]
     for i in range(6):
         o = i * rows
         if rows == 6:
-            rotation_weights(E, i, Ht, Ha)
-        _add_columns(J, G, o, rows, leg_cols[i], colmap, p[i], Ht, 1.0)
-        _add_columns(J, G, o, rows, ff_cols, colmap, p[6 + i], Ha, -1.0)
+            tr = E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2]
+            h00, h01, h02 = -0.5 * E[i, 0, 0] + 0.5 * tr, -0.5 * E[i, 0, 1], -0.5 * E[i, 0, 2]
+            h10, h11, h12 = -0.5 * E[i, 1, 0], -0.5 * E[i, 1, 1] + 0.5 * tr, -0.5 * E[i, 1, 2]
+            h20, h21, h22 = -0.5 * E[i, 2, 0], -0.5 * E[i, 2, 1], -0.5 * E[i, 2, 2] + 0.5 * tr
+        for k in range(nl + 6):  # the leg's joints at the tip, then the platform's velocity at the anchor
+            tip = k < nl
+            c = leg_cols[i, k] if tip else ff_cols[k - nl]
+            if c < 0 or colmap[c] < 0:
+                continue
+            col, f, sign = colmap[c], i if tip else 6 + i, 1.0 if tip else -1.0
+            wx, wy, wz = J[3, c], J[4, c], J[5, c]
+            G[o + 0, col] += sign * (J[0, c] - (p[f, 1] * wz - p[f, 2] * wy))
+            G[o + 1, col] += sign * (J[1, c] - (p[f, 2] * wx - p[f, 0] * wz))
+            G[o + 2, col] += sign * (J[2, c] - (p[f, 0] * wy - p[f, 1] * wx))
+            if rows == 6 and tip:
+                G[o + 3, col] += sign * (h00 * wx + h01 * wy + h02 * wz)
+                G[o + 4, col] += sign * (h10 * wx + h11 * wy + h12 * wz)
+                G[o + 5, col] += sign * (h20 * wx + h21 * wy + h22 * wz)
+            elif rows == 6:
+                G[o + 3, col] += sign * (h00 * wx + h10 * wy + h20 * wz)
+                G[o + 4, col] += sign * (h01 * wx + h11 * wy + h21 * wz)
+                G[o + 5, col] += sign * (h02 * wx + h12 * wy + h22 * wz)
 
 
 @njit(cache=True)
