@@ -131,24 +131,95 @@ def exp6(v, R, p):
 
 
 @njit(cache=True)
-def integrate_free_flyer(x, v, R0, R1, Re, pe, quat):
+def integrate_free_flyer(x, v):
     """``x <- x (+) v`` for a free flyer ``x = (p, quat)`` and body velocity ``v`` (6,), in place.
 
-    ``R0``, ``R1``, ``Re`` (3x3), ``pe`` (3,) and ``quat`` (4,) are scratch buffers.
+    :func:`quat_to_matrix` of ``x``'s quaternion ``R0``, :func:`exp6` of ``v`` ``(Re, pe)``, the
+    product ``M1 = M0 exp6(v)`` and :func:`matrix_to_quat` of ``R1``, written out in scalars with
+    the same operations in the same order (no array, and a third of the time; the same numbers:
+    ``tests/lie/test_lie.py``), then the quaternion kept on ``x``'s side and normalised to first order.
     """
-    quat_to_matrix(x[3], x[4], x[5], x[6], R0)
-    exp6(v, Re, pe)
-    for a in range(3):  # M1 = M0 exp6(v): p1 = p0 + R0 pe, R1 = R0 Re
-        x[a] += R0[a, 0] * pe[0] + R0[a, 1] * pe[1] + R0[a, 2] * pe[2]
-        for b in range(3):
-            R1[a, b] = R0[a, 0] * Re[0, b] + R0[a, 1] * Re[1, b] + R0[a, 2] * Re[2, b]
-    matrix_to_quat(R1, quat)
-    dot = quat[0] * x[3] + quat[1] * x[4] + quat[2] * x[5] + quat[3] * x[6]
+    qx, qy, qz, qw = x[3], x[4], x[5], x[6]
+    tx, ty, tz = 2.0 * qx, 2.0 * qy, 2.0 * qz  # R0, as quat_to_matrix
+    twx, twy, twz = tx * qw, ty * qw, tz * qw
+    txx, txy, txz = tx * qx, ty * qx, tz * qx
+    tyy, tyz, tzz = ty * qy, tz * qy, tz * qz
+    a00, a01, a02 = 1.0 - (tyy + tzz), txy - twz, txz + twy
+    a10, a11, a12 = txy + twz, 1.0 - (txx + tzz), tyz - twx
+    a20, a21, a22 = txz - twy, tyz + twx, 1.0 - (txx + tyy)
+    wx, wy, wz = v[3], v[4], v[5]  # (Re, pe), as exp6
+    t2 = wx * wx + wy * wy + wz * wz + _EPS * _EPS
+    t = np.sqrt(t2)
+    if t < _TAYLOR_T:
+        a_wxv = 0.5 - t2 / 24.0
+        a_v = 1.0 - t2 / 6.0
+        a_w = 1.0 / 6.0 - t2 / 120.0
+        diag = 1.0 - t2 / 2.0
+    else:
+        st, ct = np.sin(t), np.cos(t)
+        a_wxv = (1.0 - ct) / t2
+        a_v = st / t
+        a_w = (1.0 - a_v) / t2
+        diag = ct
+    vx, vy, vz = v[0], v[1], v[2]
+    wv = wx * vx + wy * vy + wz * vz
+    p0 = a_v * vx + a_w * wv * wx + a_wxv * (wy * vz - wz * vy)
+    p1 = a_v * vy + a_w * wv * wy + a_wxv * (wz * vx - wx * vz)
+    p2 = a_v * vz + a_w * wv * wz + a_wxv * (wx * vy - wy * vx)
+    cx, cy, cz = a_wxv * wx, a_wxv * wy, a_wxv * wz
+    e00, e01, e02 = cx * wx + diag, cx * wy - a_v * wz, cx * wz + a_v * wy
+    e10, e11, e12 = cy * wx + a_v * wz, cy * wy + diag, cy * wz - a_v * wx
+    e20, e21, e22 = cz * wx - a_v * wy, cz * wy + a_v * wx, cz * wz + diag
+    x[0] += a00 * p0 + a01 * p1 + a02 * p2  # M1 = M0 exp6(v): p1 = p0 + R0 pe, R1 = R0 Re
+    x[1] += a10 * p0 + a11 * p1 + a12 * p2
+    x[2] += a20 * p0 + a21 * p1 + a22 * p2
+    r00, r01, r02 = (
+        a00 * e00 + a01 * e10 + a02 * e20,
+        a00 * e01 + a01 * e11 + a02 * e21,
+        a00 * e02 + a01 * e12 + a02 * e22,
+    )
+    r10, r11, r12 = (
+        a10 * e00 + a11 * e10 + a12 * e20,
+        a10 * e01 + a11 * e11 + a12 * e21,
+        a10 * e02 + a11 * e12 + a12 * e22,
+    )
+    r20, r21, r22 = (
+        a20 * e00 + a21 * e10 + a22 * e20,
+        a20 * e01 + a21 * e11 + a22 * e21,
+        a20 * e02 + a21 * e12 + a22 * e22,
+    )
+    t = r00 + r11 + r22  # R1's quaternion, as matrix_to_quat (Eigen: Shepperd's branches)
+    if t > 0.0:
+        t = np.sqrt(t + 1.0)
+        ow = 0.5 * t
+        t = 0.5 / t
+        ox, oy, oz = (r21 - r12) * t, (r02 - r20) * t, (r10 - r01) * t
+    else:
+        i = 0
+        if r11 > r00:
+            i = 1
+        if r22 > (r11 if i == 1 else r00):
+            i = 2
+        if i == 0:
+            t = np.sqrt(r00 - r11 - r22 + 1.0)
+            ox = 0.5 * t
+            t = 0.5 / t
+            ow, oy, oz = (r21 - r12) * t, (r10 + r01) * t, (r20 + r02) * t
+        elif i == 1:
+            t = np.sqrt(r11 - r22 - r00 + 1.0)
+            oy = 0.5 * t
+            t = 0.5 / t
+            ow, oz, ox = (r02 - r20) * t, (r21 + r12) * t, (r01 + r10) * t
+        else:
+            t = np.sqrt(r22 - r00 - r11 + 1.0)
+            oz = 0.5 * t
+            t = 0.5 / t
+            ow, ox, oy = (r10 - r01) * t, (r02 + r20) * t, (r12 + r21) * t
+    dot = ox * qx + oy * qy + oz * qz + ow * qw
     sign = -1.0 if dot < 0.0 else 1.0
-    n2 = quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]
+    n2 = ox * ox + oy * oy + oz * oz + ow * ow
     alpha = sign * (3.0 - n2) / 2.0  # first-order normalisation
-    for a in range(4):
-        x[3 + a] = alpha * quat[a]
+    x[3], x[4], x[5], x[6] = alpha * ox, alpha * oy, alpha * oz, alpha * ow
 
 
 @njit(cache=True, inline="always")

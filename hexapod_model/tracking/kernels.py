@@ -247,11 +247,10 @@ def predict_into(q0, q1, a1, q2, a2, layout, out, work):
         layout: ``(q_idx, v_idx, ffq, ffv)``: the one-dof joints' configuration and velocity
             indices (int64 arrays), the free flyer's first configuration and velocity index.
         out: (nq,) written.
-        work: ``(dv, d2, R0, R1, Rd, Re, pd, pe, quat)``: (nv,), (nv,), 3 x (3, 3), (3, 3), (3,),
-            (3,), (4,) scratch.
+        work: ``(dv, d2, R0, R1, Rd, pd)``: (nv,), (nv,), 3 x (3, 3), (3,) scratch.
     """
     q_idx, v_idx, ffq, ffv = layout
-    dv, d2, R0, R1, Rd, Re, pd, pe, quat = work
+    dv, d2, R0, R1, Rd, pd = work
     _difference_into(q0, q1, q_idx, v_idx, ffq, ffv, dv, R0, R1, Rd, pd)
     for i in range(dv.shape[0]):
         dv[i] = dv[i] * a1 + 0.0  # -0.0 becomes +0.0, as the NumPy path's "+= 0.0"
@@ -263,4 +262,4 @@ def predict_into(q0, q1, a1, q2, a2, layout, out, work):
         out[i] = q0[i]
     for k in range(q_idx.shape[0]):
         out[q_idx[k]] += dv[v_idx[k]]
-    integrate_free_flyer(out[ffq : ffq + 7], dv[ffv : ffv + 6], R0, R1, Re, pe, quat)
+    integrate_free_flyer(out[ffq : ffq + 7], dv[ffv : ffv + 6])

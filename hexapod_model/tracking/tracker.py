@@ -156,8 +156,8 @@ class Tracker(PassageMixin):
         # the predictor compiled (:func:`.kernels.predict_into`; None: Pinocchio's, :func:`.types.predict`)
         self._layout = predictor_layout(hexa.model)
         nv = hexa.model.nv
-        mats, vecs = [np.zeros((3, 3)) for _ in range(4)], (np.zeros(3), np.zeros(3), np.zeros(4))
-        self._predict_work = (np.zeros(nv), np.zeros(nv), *mats, *vecs)
+        mats = [np.zeros((3, 3)) for _ in range(3)]
+        self._predict_work = (np.zeros(nv), np.zeros(nv), *mats, np.zeros(3))
         # the compiled predictor and reading checks: the dispatchers until their first call, then the machine
         # code it ran, called directly (every array they take is this tracker's, or a copy: .entries)
         self._predict_into: Callable[..., None] = predict_into

@@ -220,6 +220,49 @@ def test_compiled_exp6_and_log6_match_pinocchio_and_numpy():
             np.testing.assert_allclose(out, log6(M.homogeneous), rtol=0, atol=atol)
 
 
+def test_compiled_free_flyer_integration_is_the_maps_composed():
+    # integrate_free_flyer writes out quat_to_matrix, exp6, the product and matrix_to_quat in
+    # scalars: the same operations in the same order as the maps composed, so the same numbers
+    from numba import njit
+
+    @njit
+    def composed(x, v, R0, R1, Re, pe, quat):
+        lc.quat_to_matrix(x[3], x[4], x[5], x[6], R0)
+        lc.exp6(v, Re, pe)
+        for a in range(3):
+            x[a] += R0[a, 0] * pe[0] + R0[a, 1] * pe[1] + R0[a, 2] * pe[2]
+            for b in range(3):
+                R1[a, b] = R0[a, 0] * Re[0, b] + R0[a, 1] * Re[1, b] + R0[a, 2] * Re[2, b]
+        lc.matrix_to_quat(R1, quat)
+        dot = quat[0] * x[3] + quat[1] * x[4] + quat[2] * x[5] + quat[3] * x[6]
+        n2 = quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]
+        alpha = (-1.0 if dot < 0.0 else 1.0) * (3.0 - n2) / 2.0
+        for a in range(4):
+            x[3 + a] = alpha * quat[a]
+
+    rng = np.random.default_rng(25)
+    scratch = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(3), np.empty(4)
+    cases = []
+    for scale in (1e-9, 1e-5, 1e-2, 0.5, 3.0):  # both sides of the Taylor threshold, every quaternion branch
+        for _ in range(400):
+            x = rng.normal(size=7)
+            x[3:] /= np.linalg.norm(x[3:])
+            cases.append((x, rng.normal(0.0, scale, 6)))
+    for axis in range(3):  # half turns about each axis: R1's trace -1, its largest diagonal entry on that axis
+        v = np.zeros(6)
+        v[3 + axis] = np.pi
+        cases.append((np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]), v))
+    branches = set()
+    for x, v in cases:
+        want, got = x.copy(), x.copy()
+        composed(want, v, *scratch)
+        lc.integrate_free_flyer(got, v)
+        assert want.tobytes() == got.tobytes()
+        R = scratch[1]
+        branches.add(-1 if np.trace(R) > 0.0 else int(np.argmax(np.diag(R))))
+    assert branches == {-1, 0, 1, 2}
+
+
 def test_compiled_quaternions_match_pinocchio():
     pin.seed(22)
     R, quat = np.empty((3, 3)), np.empty(4)

@@ -149,7 +149,7 @@ def test_the_compiled_predictor_is_pinocchios_to_rounding(name, predictor, step)
     layout = predictor_layout(model)
     assert layout is not None
     nv = model.nv
-    work = (np.zeros(nv), np.zeros(nv), *[np.zeros((3, 3)) for _ in range(4)], np.zeros(3), np.zeros(3), np.zeros(4))
+    work = (np.zeros(nv), np.zeros(nv), *[np.zeros((3, 3)) for _ in range(3)], np.zeros(3))
     rng = np.random.default_rng(int(1e6 * step) + len(predictor))
     for _ in range(20):
         q0 = pin.integrate(model, hexa.q_home, rng.normal(0.0, 0.05, nv))

@@ -52,13 +52,13 @@ def _predict(x, a, b, u, q0, dv, platform_q, views, scratch):
 
     ``views``: :func:`.packing.unpack`'s of the solver's arrays.
     """
-    tables, buffers = views[0], views[2]
+    tables = views[0]
     leg_q, leg_v, platform_v = tables[0], tables[1], tables[2]
     _difference(a, b, dv, platform_q, tables, scratch)
     for i in range(dv.shape[0]):
         dv[i] *= u
     copy_into(q0, x)
-    integrate_configuration(q0, dv, leg_q, leg_v, platform_q, platform_v, buffers[15], buffers[16], buffers[17])
+    integrate_configuration(q0, dv, leg_q, leg_v, platform_q, platform_v)
 
 
 @njit(cache=True)

@@ -55,13 +55,13 @@ from .structured import blocks_solve, schur_solve
 
 
 @njit(cache=True, inline="always")
-def integrate_configuration(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat):
+def integrate_configuration(q, dv, leg_q, leg_v, platform_q, platform_v):
     """``q <- q (+) dv``: leg joints add their velocity, the platform's free flyer integrates on SE(3)."""
     for i in range(leg_q.shape[0]):
         for k in range(leg_q.shape[1]):
             q[leg_q[i, k]] += dv[leg_v[i, k]]
     v = dv[platform_v[0] : platform_v[0] + 6]
-    integrate_free_flyer(q[platform_q : platform_q + 7], v, Rs[0], Rs[1], Rs[2], ps[0], quat)
+    integrate_free_flyer(q[platform_q : platform_q + 7], v)
 
 
 @njit(cache=True, inline="always")
@@ -83,7 +83,7 @@ def _newton(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
     length = floats[LENGTH_SCALE]  # the geometry's length scale
     leg_q, leg_v, platform_v, held_pos, colmap, free_v, kinds = tables
     placements, motions, closure, home = frames
-    oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, Rs, ps, quat, state = buffers
+    oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, state = buffers
     PB, pm = pivots
     for k in range(q.shape[0]):
         q[k] = q0[k]
@@ -131,7 +131,7 @@ def _newton(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
             if not (certified and biggest <= max_step and theta <= theta_max):
                 code, certified = UNCERTIFIED, False
                 break
-        integrate_configuration(q, dv, leg_q, leg_v, platform_q, platform_v, Rs, ps, quat)
+        integrate_configuration(q, dv, leg_q, leg_v, platform_q, platform_v)
         it += 1
     return code, it, norm, ratio, theta, sign, certified
 

@@ -26,9 +26,8 @@ all C order):
   then ``lower`` (nl,), ``upper`` (nl,) of the limited joints and the limit check's ``slack`` (1,);
 * ``work``: ``oR`` (6, n, 3, 3), ``op`` (6, n, 3), ``J`` (6, nv), ``R`` (12, 3, 3), ``p`` (12, 3),
   ``E`` (6, 3, 3), ``r`` (6n,), ``x`` (nf,), ``dv`` (nv,), ``G`` (6n, nf), ``LB`` (6, n, n),
-  ``A`` (6, n, 6), ``M`` (6, 6), ``nb``, ``wb`` (6,), ``Rs`` (3, 3, 3), ``ps`` (2, 3), ``quat`` (4,),
-  ``state`` (2,): the determinant sign and condition bound of the last Schur step
-  (``NewtonSolver.sign``, ``kappa``);
+  ``A`` (6, n, 6), ``M`` (6, 6), ``nb``, ``wb`` (6,), ``state`` (2,): the determinant sign and
+  condition bound of the last Schur step (``NewtonSolver.sign``, ``kappa``);
 * ``iwork``: ``PB`` (6, n), ``pm`` (6,);
 * ``settings`` (float): ``(tol, max_iter, sign, scale, certify, finish, given)`` then the six
   prismatic joint values to hold when ``given`` is 1 (:data:`SETTINGS` in all; flags as 0 or 1).
@@ -51,7 +50,7 @@ LENGTH_SCALE = 5  # index of the geometry's length scale in ``floats`` (after th
 SETTINGS = 13
 #: entries after :data:`SETTINGS` of a solve that checks its readings against the stroke (``given`` 2)
 STROKE = 13
-WORK_NAMES = tuple("oR op J R p E r x dv G LB A M nb wb Rs ps quat state".split())
+WORK_NAMES = tuple("oR op J R p E r x dv G LB A M nb wb state".split())
 
 
 # Each view is ``buf[o : o + size]`` reshaped, ``o`` advancing: written out rather than through a
@@ -132,11 +131,8 @@ def unpack_work(ints, work):
     o += 36 * n
     M = work[o : o + 36].reshape((6, 6))
     nb, wb = work[o + 36 : o + 42], work[o + 42 : o + 48]
-    Rs = work[o + 48 : o + 75].reshape((3, 3, 3))
-    ps = work[o + 75 : o + 81].reshape((2, 3))
-    quat = work[o + 81 : o + 85]
-    state = work[o + 85 : o + 87]
-    return (oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, Rs, ps, quat, state), o + 87
+    state = work[o + 48 : o + 50]
+    return (oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, state), o + 50
 
 
 @njit(cache=True, inline="always")
@@ -198,7 +194,7 @@ class Packed:
         self.floats = np.zeros(FHEADER + nf + 6 * n * 22 + 12 * 16 + 16 + 2 * nl + 1)
         self.floats[:FHEADER] = constants
         self.floats[FHEADER : FHEADER + nf] = step_weights
-        self.work = np.zeros(6 * n * (9 + 3 + 1 + nf + n + 6) + 6 * nv + 108 + 36 + 54 + nf + nv + 36 + 12 + 39)
+        self.work = np.zeros(6 * n * (9 + 3 + 1 + nf + n + 6) + 6 * nv + 108 + 36 + 54 + nf + nv + 36 + 12 + 2)
         self.iwork = np.zeros(6 * n + 6, dtype=np.int64)
         # the compiled functions' Python source: the same layout, nothing compiled here
         (leg_q, leg_v, platform_v, held, cmap, free, kinds), self.ints[6] = unpack_ints.py_func(self.ints)
