@@ -30,7 +30,7 @@ from .follow import closure_norm, follow_buffers, follow_in, rescale
 from .iteration import iterate_blocks, iterate_schur
 from .kernels import copy_into, first_outside, first_outside_at, rigid_error
 from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
-from .packing import unpack, unpack_constants
+from .packing import WORK_STATE, unpack, unpack_constants
 
 
 @njit(cache=True, inline="always")
@@ -84,7 +84,7 @@ def _follow_row(
     residual)``: done when the path reached its end (in ``q``).
     """
     ints, floats = packed[0], packed[1]
-    state = views[2][15]
+    state = views[2][WORK_STATE]
     it, theta = attempt
     path, first, x = buffers
     copy_into(first, q)  # the first Newton iterate when the attempt took one step
@@ -117,7 +117,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, stroke, pac
     constants = unpack_constants(ints, floats)[0]  # once, as the views
     prismatic_q, slack = constants[0], constants[4]
     views = unpack(ints, floats, work, iwork)  # once: each iteration's call takes them
-    state = views[2][15]  # the last Schur step's sign and condition bound
+    state = views[2][WORK_STATE]  # the last Schur step's sign and condition bound
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
     yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
     nq = start.shape[0]

@@ -37,14 +37,11 @@ from .legs import GENERAL, IDENTITY
 
 
 @njit(cache=True)
-def evaluate_chains(
-    q, placements, kinds, motions, leg_q, leg_v, closure, home, platform_q, platform_v, oR, op, J, R, p
-):
+def evaluate_chains(q, placements, kinds, motions, leg_q, leg_v, closure, home, platform_q, platform_v, J, R, p):
     """Everything the Newton step needs at configuration ``q`` (see the module docstring).
 
-    Writes the leg joints' world placements ``oR`` (6, n, 3, 3) / ``op`` (6, n, 3), the leg and
-    platform columns of ``J`` (6 x nv, WORLD) and the 12 closure frames ``R`` (12, 3, 3) /
-    ``p`` (12, 3).
+    Writes the leg and platform columns of ``J`` (6 x nv, WORLD) and the 12 closure frames
+    ``R`` (12, 3, 3) / ``p`` (12, 3); the joints' own placements stay in registers.
     """
     n = placements.shape[1]
     for i in range(leg_q.shape[0]):  # 6 as a variable: unrolled, every unit that holds it compiled longer
@@ -122,10 +119,6 @@ def evaluate_chains(
                         r20 * g01 + r21 * g11 + r22 * g21,
                         r20 * g02 + r21 * g12 + r22 * g22,
                     )
-            oR[i, k, 0, 0], oR[i, k, 0, 1], oR[i, k, 0, 2] = r00, r01, r02
-            oR[i, k, 1, 0], oR[i, k, 1, 1], oR[i, k, 1, 2] = r10, r11, r12
-            oR[i, k, 2, 0], oR[i, k, 2, 1], oR[i, k, 2, 2] = r20, r21, r22
-            op[i, k, 0], op[i, k, 1], op[i, k, 2] = px, py, pz
             # the WORLD column M.act(S): w = R S_w, v = R S_v + p x w
             col = leg_v[i, k]
             wx, wy, wz = r00 * ax + r01 * ay + r02 * az, r10 * ax + r11 * ay + r12 * az, r20 * ax + r21 * ay + r22 * az

@@ -29,7 +29,7 @@ from . import path_rules
 from .chains import evaluate_chains
 from .iteration import CONVERGED, integrate_configuration, iterate_schur
 from .kernels import closure_residual, copy_into
-from .packing import LENGTH_SCALE, unpack, unpack_constants, unpack_floats, unpack_ints, unpack_work
+from .packing import LENGTH_SCALE, WORK_R, unpack, unpack_constants, unpack_floats, unpack_ints, unpack_work
 from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP
 
 rescale = njit(cache=True)(path_rules.rescale)  # the Python follower's rule, compiled
@@ -66,8 +66,8 @@ def closure_norm(q, ints, floats, work):
     """The closure residual norm at ``q``, left in the work buffer ``r`` (``iterate(q, inf, 0)``'s)."""
     (leg_q, leg_v, platform_v, _, _, _, kinds), _ = unpack_ints(ints)
     (placements, motions, closure, home), _ = unpack_floats(ints, floats)
-    oR, op, J, R, p, E, r = unpack_work(ints, work)[0][:7]
-    evaluate_chains(q, placements, kinds, motions, leg_q, leg_v, closure, home, ints[3], platform_v, oR, op, J, R, p)
+    J, R, p, E, r = unpack_work(ints, work)[0][:5]
+    evaluate_chains(q, placements, kinds, motions, leg_q, leg_v, closure, home, ints[3], platform_v, J, R, p)
     return closure_residual(R, p, ints[0], E, r, floats[LENGTH_SCALE])[0]
 
 
@@ -120,7 +120,7 @@ def follow_in(start, closes, target, first, predicted, tol, max_iter, sign, tota
     known residual within the intermediate tolerance is not evaluated again; any other is.
     """
     ints, floats, work = packed[0], packed[1], packed[2]
-    r = views[2][6]
+    r = views[2][WORK_R]
     prismatic_q = unpack_constants(ints, floats)[0][0]
     n = prismatic_q.shape[0]
     q0, before, dv, scratch, offset = buffers

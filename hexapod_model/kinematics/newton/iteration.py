@@ -83,15 +83,13 @@ def _newton(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
     length = floats[LENGTH_SCALE]  # the geometry's length scale
     leg_q, leg_v, platform_v, held_pos, colmap, free_v, kinds = tables
     placements, motions, closure, home = frames
-    oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, state = buffers
+    J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, state = buffers
     PB, pm = pivots
     for k in range(q.shape[0]):
         q[k] = q0[k]
     it, ratio, theta, previous, certified = 0, 1.0, 0.0, 0.0, True
     while True:
-        evaluate_chains(
-            q, placements, kinds, motions, leg_q, leg_v, closure, home, platform_q, platform_v, oR, op, J, R, p
-        )
+        evaluate_chains(q, placements, kinds, motions, leg_q, leg_v, closure, home, platform_q, platform_v, J, R, p)
         norm, min_trace = closure_residual(R, p, rows, E, r, length)
         if scale != 0.0:
             norm = shift_residual(r, offset, scale, rows, length)
@@ -194,7 +192,8 @@ def _entries(schur: bool, step: str) -> tuple:
         bad = -1
         if finish and (not certify or (code == CONVERGED and certified)):
             copy_into(q, q_solver)
-            jacobian(buffers[2], tables[1], tables[2], tables[4], ints[0], buffers[4], buffers[5], G)
+            J, p, E = buffers[0], buffers[2], buffers[3]
+            jacobian(J, tables[1], tables[2], tables[4], ints[0], p, E, G)
             xyzquat_to_pose(q[ints[3] : ints[3] + 7], home, pose)
             if code == CONVERGED:
                 bad = first_outside_at(q, limited, lower, upper, slack)

@@ -24,7 +24,7 @@ all C order):
   entries in metres count divided by the length scale), then ``placements`` (6, n, 4, 4),
   ``motions`` (6, n, 6), ``closure`` (12, 4, 4), ``home`` (4, 4) (:class:`.chains.ChainTables`),
   then ``lower`` (nl,), ``upper`` (nl,) of the limited joints and the limit check's ``slack`` (1,);
-* ``work``: ``oR`` (6, n, 3, 3), ``op`` (6, n, 3), ``J`` (6, nv), ``R`` (12, 3, 3), ``p`` (12, 3),
+* ``work``: ``J`` (6, nv), ``R`` (12, 3, 3), ``p`` (12, 3),
   ``E`` (6, 3, 3), ``r`` (6n,), ``x`` (nf,), ``dv`` (nv,), ``G`` (6n, nf), ``LB`` (6, n, n),
   ``A`` (6, n, 6), ``M`` (6, 6), ``nb``, ``wb`` (6,), ``state`` (2,): the determinant sign and
   condition bound of the last Schur step (``NewtonSolver.sign``, ``kappa``);
@@ -50,7 +50,9 @@ LENGTH_SCALE = 5  # index of the geometry's length scale in ``floats`` (after th
 SETTINGS = 13
 #: entries after :data:`SETTINGS` of a solve that checks its readings against the stroke (``given`` 2)
 STROKE = 13
-WORK_NAMES = tuple("oR op J R p E r x dv G LB A M nb wb state".split())
+WORK_NAMES = tuple("J R p E r x dv G LB A M nb wb state".split())
+#: positions in :func:`unpack_work`'s views (module constants: numba reads them as compile-time indices)
+WORK_R, WORK_STATE = WORK_NAMES.index("r"), WORK_NAMES.index("state")
 
 
 # Each view is ``buf[o : o + size]`` reshaped, ``o`` advancing: written out rather than through a
@@ -107,12 +109,8 @@ def unpack_constants(ints, floats):
 def unpack_work(ints, work):
     """Views of the float work buffers (see the module docstring), and their end."""
     n, nv, nf = ints[0], ints[1], ints[2]
-    oR = work[: 54 * n].reshape((6, n, 3, 3))
-    o = 54 * n
-    op = work[o : o + 18 * n].reshape((6, n, 3))
-    o += 18 * n
-    J = work[o : o + 6 * nv].reshape((6, nv))
-    o += 6 * nv
+    J = work[: 6 * nv].reshape((6, nv))
+    o = 6 * nv
     R = work[o : o + 108].reshape((12, 3, 3))
     p = work[o + 108 : o + 144].reshape((12, 3))
     E = work[o + 144 : o + 198].reshape((6, 3, 3))
@@ -132,7 +130,7 @@ def unpack_work(ints, work):
     M = work[o : o + 36].reshape((6, 6))
     nb, wb = work[o + 36 : o + 42], work[o + 42 : o + 48]
     state = work[o + 48 : o + 50]
-    return (oR, op, J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, state), o + 50
+    return (J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, state), o + 50
 
 
 @njit(cache=True, inline="always")
@@ -194,7 +192,7 @@ class Packed:
         self.floats = np.zeros(FHEADER + nf + 6 * n * 22 + 12 * 16 + 16 + 2 * nl + 1)
         self.floats[:FHEADER] = constants
         self.floats[FHEADER : FHEADER + nf] = step_weights
-        self.work = np.zeros(6 * n * (9 + 3 + 1 + nf + n + 6) + 6 * nv + 108 + 36 + 54 + nf + nv + 36 + 12 + 2)
+        self.work = np.zeros(6 * n * (1 + nf + n + 6) + 6 * nv + 108 + 36 + 54 + nf + nv + 36 + 12 + 2)
         self.iwork = np.zeros(6 * n + 6, dtype=np.int64)
         # the compiled functions' Python source: the same layout, nothing compiled here
         (leg_q, leg_v, platform_v, held, cmap, free, kinds), self.ints[6] = unpack_ints.py_func(self.ints)
