@@ -69,9 +69,9 @@ def _newton(schur, q0, q, tol, max_iter, sign, offset, scale, certify, ints, flo
     """Newton from ``q0`` into ``q`` (see the module docstring), by the Schur or the block step.
 
     ``tables``, ``frames``, ``buffers``, ``pivots``: the views of :func:`.packing.unpack` (the
-    entry, or the loop that calls it, makes them once). The Schur step leaves the determinant sign (``-1`` when
-    singular, as the general path) and the condition bound in ``state`` (scale-free with the
-    geometry's length scale).
+    entry, or the loop that calls it, makes them once). The Schur step leaves the determinant
+    sign (``-1`` when singular, as the general path) and the condition bound in ``state``
+    (scale-free with the geometry's length scale).
 
     Returns ``(code, iterations, norm, ratio, theta, sign, certified)``: the outcome code, the
     last residual norm and pivot ratio, the largest contraction, the determinant sign the
