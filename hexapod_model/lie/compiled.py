@@ -96,8 +96,12 @@ def matrix_to_quat(R, out):
 
 
 @njit(cache=True, inline="always")
-def exp6(v, R, p):
-    """Write ``R`` (3x3) and ``p`` (3,) of ``exp6(v)``, ``v = (linear, angular)`` (Pinocchio's ``exp6``)."""
+def _exp6_terms(v):
+    """``(a_wxv, a_v, diag, p0, p1, p2)`` of ``exp6(v)``.
+
+    The rotation's ``(1 - cos t) / t^2``, ``sin t / t`` and ``cos t``, and the translation
+    ``V v``; Taylor-expanded below Pinocchio's threshold, as Pinocchio's ``exp6``.
+    """
     wx, wy, wz = v[3], v[4], v[5]
     t2 = wx * wx + wy * wy + wz * wz + _EPS * _EPS
     t = np.sqrt(t2)
@@ -114,9 +118,17 @@ def exp6(v, R, p):
         diag = ct
     vx, vy, vz = v[0], v[1], v[2]
     wv = wx * vx + wy * vy + wz * vz
-    p[0] = a_v * vx + a_w * wv * wx + a_wxv * (wy * vz - wz * vy)
-    p[1] = a_v * vy + a_w * wv * wy + a_wxv * (wz * vx - wx * vz)
-    p[2] = a_v * vz + a_w * wv * wz + a_wxv * (wx * vy - wy * vx)
+    p0 = a_v * vx + a_w * wv * wx + a_wxv * (wy * vz - wz * vy)
+    p1 = a_v * vy + a_w * wv * wy + a_wxv * (wz * vx - wx * vz)
+    p2 = a_v * vz + a_w * wv * wz + a_wxv * (wx * vy - wy * vx)
+    return a_wxv, a_v, diag, p0, p1, p2
+
+
+@njit(cache=True, inline="always")
+def exp6(v, R, p):
+    """Write ``R`` (3x3) and ``p`` (3,) of ``exp6(v)``, ``v = (linear, angular)`` (Pinocchio's ``exp6``)."""
+    wx, wy, wz = v[3], v[4], v[5]
+    a_wxv, a_v, diag, p[0], p[1], p[2] = _exp6_terms(v)
     w = (wx, wy, wz)
     for a in range(3):
         for b in range(3):
@@ -148,24 +160,7 @@ def integrate_free_flyer(x, v):
     a10, a11, a12 = txy + twz, 1.0 - (txx + tzz), tyz - twx
     a20, a21, a22 = txz - twy, tyz + twx, 1.0 - (txx + tyy)
     wx, wy, wz = v[3], v[4], v[5]  # (Re, pe), as exp6
-    t2 = wx * wx + wy * wy + wz * wz + _EPS * _EPS
-    t = np.sqrt(t2)
-    if t < _TAYLOR_T:
-        a_wxv = 0.5 - t2 / 24.0
-        a_v = 1.0 - t2 / 6.0
-        a_w = 1.0 / 6.0 - t2 / 120.0
-        diag = 1.0 - t2 / 2.0
-    else:
-        st, ct = np.sin(t), np.cos(t)
-        a_wxv = (1.0 - ct) / t2
-        a_v = st / t
-        a_w = (1.0 - a_v) / t2
-        diag = ct
-    vx, vy, vz = v[0], v[1], v[2]
-    wv = wx * vx + wy * vy + wz * vz
-    p0 = a_v * vx + a_w * wv * wx + a_wxv * (wy * vz - wz * vy)
-    p1 = a_v * vy + a_w * wv * wy + a_wxv * (wz * vx - wx * vz)
-    p2 = a_v * vz + a_w * wv * wz + a_wxv * (wx * vy - wy * vx)
+    a_wxv, a_v, diag, p0, p1, p2 = _exp6_terms(v)
     cx, cy, cz = a_wxv * wx, a_wxv * wy, a_wxv * wz
     e00, e01, e02 = cx * wx + diag, cx * wy - a_v * wz, cx * wz + a_v * wy
     e10, e11, e12 = cy * wx + a_v * wz, cy * wy + diag, cy * wz - a_v * wx
