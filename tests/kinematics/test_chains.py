@@ -76,6 +76,38 @@ def test_placement_kinds_skip_only_exact_ones_and_zeros(name):
         assert out[0] == out[1]
 
 
+@pytest.mark.parametrize("name", ["reference", "spherical"])
+def test_the_compiled_kernels_agree_with_their_python_source(name):
+    # numba's machine code against the same source run by Python (NumPy's sin and cos may differ
+    # from libm's in the last bit): the chains, the reduced Jacobian and the free-flyer step
+    from hexapod_model.kinematics.newton.kernels import closure_residual, jacobian
+
+    hexa = hexapod(name)
+    clm = hexa.closed_loop
+    tables = ChainTables.of(clm)
+    assert tables is not None
+    solver = hexa.engine.solver(hexa.engine.held_forward)
+    args = (tables.placements, tables.kinds, tables.motions, tables.leg_q, tables.leg_v, tables.closure, tables.home)
+    rng = np.random.default_rng(26)
+    for _ in range(5):
+        q = random_q(hexa, rng)
+        out = []
+        for chains, jac in ((evaluate_chains, jacobian), (evaluate_chains.py_func, jacobian.py_func)):
+            J, R, p = chain_buffers(hexa.model.nv)
+            chains(q, *args, tables.platform_q, tables.platform_v, J, R, p)
+            E, r, G = np.empty((6, 3, 3)), np.empty(6 * solver.rows), np.full(solver.G.shape, np.nan)
+            closure_residual(R, p, solver.rows, E, r, 1.0)
+            jac(J, solver.leg_cols, solver.ff_cols, solver.colmap, solver.rows, p, E, G)
+            out.append((J, R, p, G))
+        for compiled, python in zip(*out):
+            np.testing.assert_allclose(compiled, python, rtol=0, atol=1e-14)  # m, rad and their derivatives
+        x, v = q[clm.platform_q : clm.platform_q + 7], rng.normal(0.0, 0.3, 6)
+        a, b = x.copy(), x.copy()
+        integrate_free_flyer(a, v)
+        integrate_free_flyer.py_func(b, v)
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-15)  # m, and the unit quaternion
+
+
 def test_tables_refuse_legs_of_different_joint_counts():
     assert ChainTables.of(idle_roll_hexapod().closed_loop) is None
 
