@@ -148,7 +148,7 @@ def integrate_free_flyer(x, v):
 
     :func:`quat_to_matrix` of ``x``'s quaternion ``R0``, :func:`exp6` of ``v`` ``(Re, pe)``, the
     product ``M1 = M0 exp6(v)`` and :func:`matrix_to_quat` of ``R1``, written out in scalars with
-    the same operations in the same order (no array, and a third of the time; the same numbers:
+    the same operations in the same order (no array, and a quarter of the time; the same numbers:
     ``tests/lie/test_lie.py``), then the quaternion kept on ``x``'s side and normalised to first order.
     """
     qx, qy, qz, qw = x[3], x[4], x[5], x[6]
