@@ -81,14 +81,28 @@ def rotation_weights(E, i, Ht, Ha):
         Ha[a, a] += 0.5 * tr
 
 
+@njit(cache=True, inline="always")
+def tip_weights(E, i):
+    """``H_tip = (tr(E) I - E)/2`` of closure ``i`` as a 9-tuple, row by row (``H_anchor`` is its transpose).
+
+    The same operations as :func:`rotation_weights` (``-E/2``, then ``tr/2`` on the diagonal), in scalars.
+    """
+    t = 0.5 * (E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2])
+    return (
+        -0.5 * E[i, 0, 0] + t, -0.5 * E[i, 0, 1], -0.5 * E[i, 0, 2],
+        -0.5 * E[i, 1, 0], -0.5 * E[i, 1, 1] + t, -0.5 * E[i, 1, 2],
+        -0.5 * E[i, 2, 0], -0.5 * E[i, 2, 1], -0.5 * E[i, 2, 2] + t,
+    )  # fmt: skip
+
+
 @njit(cache=True)
 def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
     """Fill ``G`` (6*rows x n_free): derivative of the residual w.r.t. the free velocities.
 
     ``colmap[v]`` is the column of velocity index ``v`` in ``G`` or -1 when that joint is held.
     Each closure's columns are :func:`jacobian_column`'s, written out with ``H_tip`` (its leg's
-    joints, sign +1) and ``H_anchor = H_tip^T`` (the platform's, sign -1) held in scalars (as
-    :func:`rotation_weights` computes them): no array is allocated.
+    joints, sign +1) and ``H_anchor = H_tip^T`` (the platform's, sign -1) from :func:`tip_weights`,
+    in scalars: no array is allocated.
     """
     for a in range(G.shape[0]):
         for b in range(G.shape[1]):
@@ -98,10 +112,7 @@ def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
     for i in range(6):
         o = i * rows
         if rows == 6:
-            tr = E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2]
-            h00, h01, h02 = -0.5 * E[i, 0, 0] + 0.5 * tr, -0.5 * E[i, 0, 1], -0.5 * E[i, 0, 2]
-            h10, h11, h12 = -0.5 * E[i, 1, 0], -0.5 * E[i, 1, 1] + 0.5 * tr, -0.5 * E[i, 1, 2]
-            h20, h21, h22 = -0.5 * E[i, 2, 0], -0.5 * E[i, 2, 1], -0.5 * E[i, 2, 2] + 0.5 * tr
+            h00, h01, h02, h10, h11, h12, h20, h21, h22 = tip_weights(E, i)
         for k in range(nl + 6):  # the leg's joints at the tip, then the platform's velocity at the anchor
             tip = k < nl
             c = leg_cols[i, k] if tip else ff_cols[k - nl]

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .kernels import tip_weights
 from .linalg import lu_det_sign, lu_factor_in_place, lu_solve_in_place, lu_solve_transposed_in_place
 
 
@@ -63,20 +64,6 @@ def _platform_block(J, cols, rows, point, h, B):
             B[5, k] = -(h[6] * wx + h[7] * wy + h[8] * wz)
 
 
-@njit(cache=True, inline="always")
-def _tip_weights(E, i):
-    """``H_tip = (tr(E) I - E)/2`` of closure ``i`` as a 9-tuple, row by row (``H_anchor`` is its transpose).
-
-    The same operations as :func:`.kernels.rotation_weights` (``-E/2``, then ``tr/2`` on the diagonal).
-    """
-    t = 0.5 * (E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2])
-    return (
-        -0.5 * E[i, 0, 0] + t, -0.5 * E[i, 0, 1], -0.5 * E[i, 0, 2],
-        -0.5 * E[i, 1, 0], -0.5 * E[i, 1, 1] + t, -0.5 * E[i, 1, 2],
-        -0.5 * E[i, 2, 0], -0.5 * E[i, 2, 1], -0.5 * E[i, 2, 2] + t,
-    )  # fmt: skip
-
-
 @njit(cache=True)
 def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB, A, M, pm, n, w, length):
     """Newton step when the platform is free and each leg has ``rows`` joints, one held.
@@ -100,7 +87,7 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
     sign = 1.0
     for i in range(leg_cols.shape[0]):
         o = i * rows
-        ht = _tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        ht = tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         ha = (ht[0], ht[3], ht[6], ht[1], ht[4], ht[7], ht[2], ht[5], ht[8])
         _leg_block(J, leg_cols[i], rows, p[i], ht, LB[i])  # L_i: the leg's joints
         _platform_block(J, ff_cols, rows, p[6 + i], ha, A[i])  # A_i: the platform's velocity
@@ -165,7 +152,7 @@ def blocks_solve(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w):
     worst = 1.0
     for i in range(leg_cols.shape[0]):
         o = i * rows
-        ht = _tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        ht = tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         _leg_block(J, leg_cols[i], rows, p[i], ht, LB[i])
         ratio = lu_factor_in_place(LB[i], PB[i], rows)
         if ratio == 0.0:
