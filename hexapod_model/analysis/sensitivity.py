@@ -30,9 +30,8 @@ from numba import njit
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.entries import direct
 from ..kinematics.newton.first_compile import announce
-from ..kinematics.newton.kernels import rotation_weights
+from ..kinematics.newton.kernels import tip_weights
 from ..kinematics.newton.linalg import (
-    closure_block,
     lu_apply,
     lu_apply_transposed,
     lu_factor,
@@ -40,6 +39,7 @@ from ..kinematics.newton.linalg import (
     lu_solve_transposed_in_place,
 )
 from ..kinematics.newton.solver import NewtonSolver
+from ..kinematics.newton.structured import leg_block, platform_block
 
 _JACOBI_SWEEPS = 30
 
@@ -168,18 +168,17 @@ def measure_solved(J, leg_cols, held_pos, ff_cols, rows, p, E, length, blocks, m
 
     ``J, leg_cols, held_pos, ff_cols, rows, p, E`` are the direct-kinematics solver's (its
     held joint per leg is the measured one): the leg blocks ``L_i`` and platform columns
-    ``A_i`` are built as :func:`~hexapod_model.kinematics.newton.structured.schur_solve` builds them,
-    so no ``computeJointJacobians`` and no full closure Jacobian. ``blocks`` (7, rows, 6)
-    is a work buffer. Returns ``(trace_t, trace_r, cond, det)``.
+    ``A_i`` are built by the functions that
+    :func:`~hexapod_model.kinematics.newton.structured.schur_solve` builds them with, so no
+    ``computeJointJacobians``, no full closure Jacobian and no allocation. ``blocks``
+    (7, rows, 6) is a work buffer. Returns ``(trace_t, trace_r, cond, det)``.
     """
-    Ht = np.empty((3, 3))
-    Ha = np.empty((3, 3))
     LB, A, PB, n = blocks[6, :rows, :rows], blocks[:6, :rows, :], piv[0, :rows], vecs[0, :rows]
     for i in range(6):
-        if rows == 6:
-            rotation_weights(E, i, Ht, Ha)
-        closure_block(J, leg_cols[i], rows, p[i], Ht, 1.0, LB, rows)  # L_i: the leg's joints
-        closure_block(J, ff_cols, rows, p[6 + i], Ha, -1.0, A[i], 6)  # A_i: the platform's velocity
+        ht = tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        ha = (ht[0], ht[3], ht[6], ht[1], ht[4], ht[7], ht[2], ht[5], ht[8])
+        leg_block(J, leg_cols[i], rows, p[i], ht, LB)  # L_i: the leg's joints
+        platform_block(J, ff_cols, rows, p[6 + i], ha, A[i])  # A_i: the platform's velocity
         if lu_factor_in_place(LB, PB, rows) == 0.0:
             return np.inf, np.inf, np.inf, 0.0
         for a in range(rows):

@@ -95,6 +95,26 @@ def test_evaluate_solved_follows_the_calling_threads_solver(reference):
     assert len({a.condition_number for a, _, _, _ in out.values()}) == 4
 
 
+@pytest.mark.parametrize("name", ["reference", "spherical", "3-6"])
+def test_evaluate_solved_gives_what_the_full_closure_jacobian_gives(name):
+    """The tracker's evaluation from the solve's own blocks (6- and 3-row closures) against the
+    elimination of the full closure Jacobian (:meth:`SensitivityEvaluator.evaluate`), another
+    route: the 6x6 Jacobian to 1e-12 of its largest entry, the figures to 1e-9 relative."""
+    hexa = hm.Hexapod.from_preset(name, check_body=False)
+    solved, full = SensitivityEvaluator(hexa, 0.25), SensitivityEvaluator(hexa, 0.25)
+    home = hexa.inverse(hexa.home_pose).lengths
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        sol = hexa.forward(home + rng.uniform(-8e-3, 8e-3, 6), check=False)
+        assert sol.converged
+        a, b = solved.evaluate_solved(sol.q), full.evaluate(sol.q)
+        np.testing.assert_allclose(solved.J, full.J, rtol=0, atol=1e-12 * np.abs(full.J).max())
+        np.testing.assert_allclose(solved.Jinv, full.Jinv, rtol=0, atol=1e-9 * np.abs(full.Jinv).max())
+        assert a.det_sign == b.det_sign != 0
+        for field in ("translation", "rotation", "condition_number"):
+            assert getattr(a, field) == pytest.approx(getattr(b, field), rel=1e-9)
+
+
 def test_ages_without_a_hole_give_what_the_ages_computed_give(reference):
     """The motion model's ages taken from the table (no untrusted sample among the last ones) or
     computed from the sample numbers: the same samples, bit for bit, through gaps and jumps."""

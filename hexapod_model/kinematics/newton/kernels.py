@@ -53,39 +53,12 @@ def closure_residual(R, p, rows, E, r, length):
     return np.sqrt(s), min_trace
 
 
-@njit(cache=True, inline="always")  # inlined into its callers: a call per column cost more than the column
-def jacobian_column(J, c, rows, point, H, sign, out, row, col):
-    """Add one column of the closure Jacobian.
-
-    Write ``sign`` times the residual derivative along velocity ``c`` into ``out[row:row+rows, col]``:
-    linear velocity of ``point`` and, for 6-row closures, ``H`` times the angular velocity.
-    """
-    wx, wy, wz = J[3, c], J[4, c], J[5, c]
-    out[row + 0, col] += sign * (J[0, c] - (point[1] * wz - point[2] * wy))
-    out[row + 1, col] += sign * (J[1, c] - (point[2] * wx - point[0] * wz))
-    out[row + 2, col] += sign * (J[2, c] - (point[0] * wy - point[1] * wx))
-    if rows == 6:
-        for a in range(3):
-            out[row + 3 + a, col] += sign * (H[a, 0] * wx + H[a, 1] * wy + H[a, 2] * wz)
-
-
-@njit(cache=True, inline="always")
-def rotation_weights(E, i, Ht, Ha):
-    """``H_tip = (tr(E) I - E)/2`` and ``H_anchor = (tr(E) I - E^T)/2`` of closure ``i``."""
-    tr = E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2]
-    for a in range(3):
-        for b in range(3):
-            Ht[a, b] = -0.5 * E[i, a, b]
-            Ha[a, b] = -0.5 * E[i, b, a]
-        Ht[a, a] += 0.5 * tr
-        Ha[a, a] += 0.5 * tr
-
-
 @njit(cache=True, inline="always")
 def tip_weights(E, i):
     """``H_tip = (tr(E) I - E)/2`` of closure ``i`` as a 9-tuple, row by row (``H_anchor`` is its transpose).
 
-    The same operations as :func:`rotation_weights` (``-E/2``, then ``tr/2`` on the diagonal), in scalars.
+    The rotation rows of a closure's Jacobian: ``H_tip`` times a leg joint's angular velocity,
+    ``H_anchor`` times the platform's (``E``: the closure's rotation error, :func:`closure_residual`).
     """
     t = 0.5 * (E[i, 0, 0] + E[i, 1, 1] + E[i, 2, 2])
     return (
@@ -100,9 +73,11 @@ def jacobian(J, leg_cols, ff_cols, colmap, rows, p, E, G):
     """Fill ``G`` (6*rows x n_free): derivative of the residual w.r.t. the free velocities.
 
     ``colmap[v]`` is the column of velocity index ``v`` in ``G`` or -1 when that joint is held.
-    Each closure's columns are :func:`jacobian_column`'s, written out with ``H_tip`` (its leg's
-    joints, sign +1) and ``H_anchor = H_tip^T`` (the platform's, sign -1) from :func:`tip_weights`,
-    in scalars: no array is allocated.
+    Each closure's column of a velocity is the velocity of the closure's point (the tip for its
+    leg's joints, sign +1; the anchor for the platform's, sign -1) and, for 6-row closures,
+    ``H_tip`` (the leg's joints) or ``H_anchor = H_tip^T`` (the platform's) times the angular
+    velocity (:func:`tip_weights`), in scalars: no array is allocated. The per-leg blocks of
+    :mod:`.structured` hold the same numbers.
     """
     for a in range(G.shape[0]):
         for b in range(G.shape[1]):

@@ -14,8 +14,6 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .kernels import jacobian_column
-
 
 # The factorisation and the solves work in place on the leading n x n block; they are inlined
 # into the structured solves below (a call per 6x6 block cost as much as the arithmetic).
@@ -156,17 +154,3 @@ def block_solve(G, r, rows, block_cols, LUb, piv, rb, xb, x):
         for b in range(rows):
             x[block_cols[i, b]] = xb[b]
     return worst
-
-
-@njit(cache=True, inline="always")
-def closure_block(J, cols, rows, point, H, sign, B, ncols):
-    """Fill ``B[:rows, :ncols]`` with the closure Jacobian's columns ``cols``.
-
-    The columns of :func:`.kernels.jacobian` for the closure at ``point`` with rotation
-    weights ``H``, times ``sign``.
-    """
-    for a in range(rows):  # jacobian_column adds into a zeroed block
-        for k in range(ncols):
-            B[a, k] = 0.0
-    for k in range(ncols):
-        jacobian_column(J, cols[k], rows, point, H, sign, B, 0, k)

@@ -45,7 +45,7 @@ def _columns(J, cols, rows, points, H):
     """The residual's derivative along velocities ``cols`` (6, n) of each closure: (6, rows, n).
 
     Closure ``i``'s column for velocity ``c``: the linear velocity of ``points[i]``,
-    ``v_o - points[i] x w``, over ``H[i] w`` (:func:`.kernels.jacobian_column`); ``cols`` must be valid indices.
+    ``v_o - points[i] x w``, over ``H[i] w`` (:func:`.kernels.jacobian`); ``cols`` must be valid indices.
     """
     v, w = J[0:3, cols], J[3:6, cols]  # (3, 6, n)
     px, py, pz = (points[:, a, None] for a in range(3))

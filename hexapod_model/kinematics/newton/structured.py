@@ -21,10 +21,12 @@ from .linalg import lu_det_sign, lu_factor_in_place, lu_solve_in_place, lu_solve
 
 
 @njit(cache=True, inline="always")
-def _leg_block(J, cols, rows, point, h, B):
+def leg_block(J, cols, rows, point, h, B):
     """``B[:rows, :rows]``: the closure Jacobian's columns of the leg joints ``cols`` (written, not added).
 
-    :func:`closure_block` with sign +1 and the rotation weights ``h = H_tip`` as a 9-tuple, row by row.
+    The columns' linear rows are the velocity of ``point`` (the closure's tip, world frame);
+    for 6-row closures the rotation rows are ``h`` times the angular velocity, ``h = H_tip``
+    (:func:`.kernels.tip_weights`) as a 9-tuple, row by row.
     """
     px, py, pz = point[0], point[1], point[2]
     for k in range(rows):
@@ -40,11 +42,12 @@ def _leg_block(J, cols, rows, point, h, B):
 
 
 @njit(cache=True, inline="always")
-def _platform_block(J, cols, rows, point, h, B):
+def platform_block(J, cols, rows, point, h, B):
     """``B[:rows, :6] = -``(the closure Jacobian's columns of the platform velocity ``cols``).
 
-    :func:`closure_block` with sign -1 and ``h = H_anchor``: the three linear columns have no angular
-    part (``oMp.act(e_k) = [R e_k; 0]``), so their rotation rows are zero.
+    As :func:`leg_block` at the closure's anchor ``point``, with ``h = H_anchor`` (``H_tip``
+    transposed) and the sign reversed: the three linear columns have no angular part
+    (``oMp.act(e_k) = [R e_k; 0]``), so their rotation rows are zero.
     """
     px, py, pz = point[0], point[1], point[2]
     for k in range(3):
@@ -89,8 +92,8 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
         o = i * rows
         ht = tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         ha = (ht[0], ht[3], ht[6], ht[1], ht[4], ht[7], ht[2], ht[5], ht[8])
-        _leg_block(J, leg_cols[i], rows, p[i], ht, LB[i])  # L_i: the leg's joints
-        _platform_block(J, ff_cols, rows, p[6 + i], ha, A[i])  # A_i: the platform's velocity
+        leg_block(J, leg_cols[i], rows, p[i], ht, LB[i])  # L_i: the leg's joints
+        platform_block(J, ff_cols, rows, p[6 + i], ha, A[i])  # A_i: the platform's velocity
         ratio = lu_factor_in_place(LB[i], PB[i], rows)
         if ratio == 0.0:
             return 0.0, np.inf
@@ -153,7 +156,7 @@ def blocks_solve(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w):
     for i in range(leg_cols.shape[0]):
         o = i * rows
         ht = tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        _leg_block(J, leg_cols[i], rows, p[i], ht, LB[i])
+        leg_block(J, leg_cols[i], rows, p[i], ht, LB[i])
         ratio = lu_factor_in_place(LB[i], PB[i], rows)
         if ratio == 0.0:
             return 0.0
