@@ -85,7 +85,9 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
     Schur step took 15 % less time, but every compiled unit that holds the Newton iteration
     took 10 s longer to compile (``benchmarks/compiled_newton.py``; first run after installation).
     """
-    rhs = np.empty(6)  # the eliminated right-hand side
+    # the eliminated right-hand side, in a vector of its own: held in ``w`` (``n`` taking each
+    # leg's step) the step ran slower, the compiler no longer telling the two vectors apart
+    rhs = np.empty(6)
     worst = 1.0
     sign = 1.0
     for i in range(leg_cols.shape[0]):
