@@ -30,7 +30,6 @@ from numba import njit
 from ..kinematics.hexapod import Hexapod
 from ..kinematics.newton.entries import direct
 from ..kinematics.newton.first_compile import announce
-from ..kinematics.newton.kernels import tip_weights
 from ..kinematics.newton.linalg import (
     lu_apply,
     lu_apply_transposed,
@@ -39,7 +38,7 @@ from ..kinematics.newton.linalg import (
     lu_solve_transposed_in_place,
 )
 from ..kinematics.newton.solver import NewtonSolver
-from ..kinematics.newton.structured import leg_block, platform_block
+from ..kinematics.newton.structured import closure_weights, leg_block, platform_block
 
 _JACOBI_SWEEPS = 30
 
@@ -175,8 +174,7 @@ def measure_solved(J, leg_cols, held_pos, ff_cols, rows, p, E, length, blocks, m
     """
     LB, A, PB, n = blocks[6, :rows, :rows], blocks[:6, :rows, :], piv[0, :rows], vecs[0, :rows]
     for i in range(6):
-        ht = tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        ha = (ht[0], ht[3], ht[6], ht[1], ht[4], ht[7], ht[2], ht[5], ht[8])
+        ht, ha = closure_weights(E, i, rows)
         leg_block(J, leg_cols[i], rows, p[i], ht, LB)  # L_i: the leg's joints
         platform_block(J, ff_cols, rows, p[6 + i], ha, A[i])  # A_i: the platform's velocity
         if lu_factor_in_place(LB, PB, rows) == 0.0:

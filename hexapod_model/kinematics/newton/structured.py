@@ -21,6 +21,17 @@ from .linalg import lu_det_sign, lu_factor_in_place, lu_solve_in_place, lu_solve
 
 
 @njit(cache=True, inline="always")
+def closure_weights(E, i, rows):
+    """``(H_tip, H_anchor)`` of closure ``i`` as 9-tuples row by row (:func:`.kernels.tip_weights`).
+
+    The weights of a 6-row closure's rotation rows (``H_anchor`` is ``H_tip`` transposed); zeros
+    for a 3-row closure, which has no rotation rows.
+    """
+    ht = tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return ht, (ht[0], ht[3], ht[6], ht[1], ht[4], ht[7], ht[2], ht[5], ht[8])
+
+
+@njit(cache=True, inline="always")
 def leg_block(J, cols, rows, point, h, B):
     """``B[:rows, :rows]``: the closure Jacobian's columns of the leg joints ``cols`` (written, not added).
 
@@ -92,8 +103,7 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
     sign = 1.0
     for i in range(leg_cols.shape[0]):
         o = i * rows
-        ht = tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        ha = (ht[0], ht[3], ht[6], ht[1], ht[4], ht[7], ht[2], ht[5], ht[8])
+        ht, ha = closure_weights(E, i, rows)
         leg_block(J, leg_cols[i], rows, p[i], ht, LB[i])  # L_i: the leg's joints
         platform_block(J, ff_cols, rows, p[6 + i], ha, A[i])  # A_i: the platform's velocity
         ratio = lu_factor_in_place(LB[i], PB[i], rows)
@@ -157,7 +167,7 @@ def blocks_solve(J, leg_cols, colmap, rows, p, E, r, x, LB, PB, w):
     worst = 1.0
     for i in range(leg_cols.shape[0]):
         o = i * rows
-        ht = tip_weights(E, i) if rows == 6 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        ht = closure_weights(E, i, rows)[0]
         leg_block(J, leg_cols[i], rows, p[i], ht, LB[i])
         ratio = lu_factor_in_place(LB[i], PB[i], rows)
         if ratio == 0.0:
