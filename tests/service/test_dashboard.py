@@ -6,79 +6,21 @@ rendered DOM and checked against ``/fixtures/NAME/guidance`` of the same service
 
 from __future__ import annotations
 
-import http.client
-import json
-import shutil
-import subprocess
 import time
-from html.parser import HTMLParser
 
 import can
 import pytest
 
 from hexapod_model.service import FixtureService, Simulator
-from hexapod_model.viz.render import CHROMIUM_NAMES
 
 from ..conftest import hexapod
+from .browser import fields, guidance, render_until
 from .helpers import fixture_table, service_config, sim_config
 from .test_http import TOKEN, token_file
 
 HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]
 POSE = dict(zip(("x", "y", "z", "roll", "pitch", "yaw"), HOLD))
 TOL = {"translation_mm": 0.1, "rotation_deg": 0.05}
-
-
-class Fields(HTMLParser):
-    """``(fixture, field) -> (text, data-value)`` of every element with a ``data-field``."""
-
-    def __init__(self):
-        super().__init__()
-        self.found: dict[tuple[str | None, str], list] = {}
-        self._open: list | None = None
-
-    def handle_starttag(self, tag, attrs):
-        a = dict(attrs)
-        if "data-field" in a:
-            self._open = ["", a.get("data-value")]
-            self.found[(a.get("data-fixture"), a["data-field"])] = self._open
-        elif self._open is not None and tag not in ("span",):
-            self._open = None
-
-    def handle_data(self, data):
-        if self._open is not None:
-            self._open[0] += data
-
-    def handle_endtag(self, tag):
-        self._open = None
-
-
-def render(url: str, profile) -> str:
-    chromium = next(shutil.which(n) for n in CHROMIUM_NAMES if shutil.which(n))
-    args = [
-        chromium,
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--no-first-run",
-        f"--user-data-dir={profile}",
-        "--dump-dom",
-        "--virtual-time-budget=4000",
-        url,
-    ]
-    done = subprocess.run(args, capture_output=True, text=True, timeout=120, check=True)
-    return done.stdout
-
-
-def guidance(address, name):
-    c = http.client.HTTPConnection(*address, timeout=5)
-    c.request("GET", f"/fixtures/{name}/guidance", headers={"Authorization": f"Bearer {TOKEN}"})
-    r = c.getresponse()
-    body = json.loads(r.read())
-    c.close()
-    assert r.status == 200, body
-    return body
 
 
 @pytest.mark.chromium
@@ -112,20 +54,14 @@ def test_the_dashboard_shows_what_guidance_says(tmp_path):
             assert time.monotonic() < deadline, [service.record(n) for n in ("left", "right")]
             time.sleep(0.05)
         host, port = service.address
-        # Chromium dumps the page when its virtual-time budget ends; on a loaded machine the
-        # service's first event can come after that (no data-updated: no recipe, no fixture shown)
-        for _ in range(3):
-            dom = render(f"http://{host}:{port}/#token={TOKEN}", tmp_path / "profile")
-            if "data-updated=" in dom:
-                break
+        # (a dump taken before the service's first event shows no recipe and no fixture: browser.py)
+        dom = render_until(f"http://{host}:{port}/#token={TOKEN}", tmp_path / "profile", lambda d: "data-updated=" in d)
         want = {name: guidance(service.address, name) for name in ("left", "right")}
     finally:
         simulator.stop()
         service.stop()
         bus.shutdown()
-    page = Fields()
-    page.feed(dom)
-    shown = page.found
+    shown = fields(dom)
     assert shown[(None, "active_recipe")][0] == "bracket"
     for name, g in want.items():
         assert g["status"] == "ok" and shown[(name, "status")][0] == "ok"

@@ -18,8 +18,8 @@ import hexapod_model as hm
 from hexapod_model.service import FixtureService, Simulator
 
 from ..conftest import hexapod
+from .browser import fields, guidance, render_until
 from .helpers import fixture_table, service_config, sim_config
-from .test_dashboard import Fields, guidance, render
 from .test_http import TOKEN, token_file
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -51,14 +51,15 @@ def test_the_dashboard_shows_the_clearance_and_highlights_a_collision(tmp_path):
             assert time.monotonic() < deadline, service.record("right")
             time.sleep(0.05)
         host, port = service.address
-        for _ in range(3):  # a page dumped while a starved simulator left the legs silent shows no pose: again
-            dom = render(f"http://{host}:{port}/#token={TOKEN}", tmp_path / "profile")
-            want = guidance(service.address, "right")
-            page = Fields()
-            page.feed(dom)
-            shown = page.found
-            if shown.get(("right", "clearance.collision"), ["", ""])[1] and want["clearance"] is not None:
-                break
+        want: dict = {}
+
+        def ready(dom: str) -> bool:  # a page dumped while a starved simulator left the legs silent shows no pose
+            want.update(guidance(service.address, "right"))
+            shown = fields(dom).get(("right", "clearance.collision"), ["", ""])[1]
+            return bool(shown) and want["clearance"] is not None
+
+        dom = render_until(f"http://{host}:{port}/#token={TOKEN}", tmp_path / "profile", ready)
+        shown = fields(dom)
     finally:
         simulator.stop()
         service.stop()

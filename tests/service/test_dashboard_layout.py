@@ -9,12 +9,8 @@ portrait tablet and at a phone's width.
 
 from __future__ import annotations
 
-import http.client
-import json
 import math
 import re
-import shutil
-import subprocess
 import time
 from html.parser import HTMLParser
 
@@ -22,9 +18,9 @@ import can
 import pytest
 
 from hexapod_model.service import FixtureService, Simulator, simulation_from_dict
-from hexapod_model.viz.render import CHROMIUM_NAMES
 
 from ..conftest import hexapod
+from .browser import guidance, render_until
 from .helpers import fixture_table, service_config
 from .test_http import TOKEN, token_file
 
@@ -68,6 +64,19 @@ class Measured(HTMLParser):
             self.cards[a["data-fixture"]] = a
 
 
+def measured(dom: str) -> Measured:
+    page = Measured()
+    page.feed(dom)
+    return page
+
+
+def settled(dom: str) -> bool:
+    """The page shows an event of the service, and both fixtures' records ``ok``."""
+    page = measured(dom)
+    shown = {page.fields.get((name, "status"), {}).get("text") for name in ("left", "right")}
+    return "data-updated" in page.body and shown == {"ok"}
+
+
 def moving_csv(path):
     """Poses of left: ``z`` of HOLD plus a sine of AMPLITUDE and PERIOD, one row per reading set."""
     rows = ["x,y,z,roll,pitch,yaw"]
@@ -85,34 +94,6 @@ def box(attrs: dict) -> tuple[float, ...]:
 def is_green(css: str) -> bool:
     r, g, b = (int(v) for v in GREEN.match(css).groups())  # type: ignore[union-attr]
     return g > 1.5 * r and g > 1.5 * b
-
-
-def render(url: str, profile, size: tuple[int, int]) -> str:
-    chromium = next(shutil.which(n) for n in CHROMIUM_NAMES if shutil.which(n))
-    args = [
-        chromium,
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--no-first-run",
-        "--hide-scrollbars",
-        f"--user-data-dir={profile}",
-        f"--window-size={size[0]},{size[1]}",
-        "--dump-dom",
-        "--virtual-time-budget=4000",
-        url,
-    ]
-    return subprocess.run(args, capture_output=True, text=True, timeout=120, check=True).stdout
-
-
-def guidance(address, name):
-    c = http.client.HTTPConnection(*address, timeout=5)
-    c.request("GET", f"/fixtures/{name}/guidance", headers={"Authorization": f"Bearer {TOKEN}"})
-    body = json.loads(c.getresponse().read())
-    c.close()
-    return body
 
 
 @pytest.mark.chromium
@@ -151,17 +132,10 @@ def test_the_dashboard_is_large_responsive_and_green_only_when_locked(tmp_path):
             time.sleep(0.1)
         host, port = service.address
         for label, size in SIZES.items():
-            # Chromium dumps the page when its virtual-time budget ends; on a loaded machine the
-            # service's first event can come after that, and the page then shows no fixture yet
-            # (no data-updated), or a record of a set the starved simulator left incomplete: such
-            # a dump says nothing of the layout, and is taken again
-            for _ in range(3):
-                page = Measured()
-                page.feed(render(f"http://{host}:{port}/#token={TOKEN}&measure", tmp_path / "profile", size))
-                shown = {page.fields.get((name, "status"), {}).get("text") for name in ("left", "right")}
-                if "data-updated" in page.body and shown == {"ok"}:
-                    break
-            pages[label] = page
+            # (a dump before the service's first event, or of a set the starved simulator left
+            # incomplete, says nothing of the layout: browser.py)
+            dom = render_until(f"http://{host}:{port}/#token={TOKEN}&measure", tmp_path / "profile", settled, size)
+            pages[label] = measured(dom)
     finally:
         if simulator is not None:
             simulator.stop()
