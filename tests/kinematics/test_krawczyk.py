@@ -347,3 +347,40 @@ def test_a_step_whose_leg_is_ill_conditioned_is_proven_only_subdivided():
     assert not one.proven and one.tests == 1
     assert halved.proven and halved.tests > 2 and halved.subdivisions > 1
     assert sol.converged and sol.proof is not None and sol.proof.proven
+
+
+def test_the_proof_calls_its_enclosure_with_a_plain_boolean():
+    """One compiled enclosure for both kinds of call (with and without the Jacobian), not one per constant.
+
+    numba compiles a function once per literal argument: a constant ``True`` or ``False`` passed
+    as ``jacobian`` compiled the enclosure twice, about 10 s of the proof's first compilation.
+    """
+    import ast
+    import inspect
+
+    from numba import njit, types
+
+    from hexapod_model.kinematics.newton import krawczyk
+    from hexapod_model.kinematics.newton.enclosure import JACOBIAN
+
+    calls = [
+        node
+        for node in ast.walk(ast.parse(inspect.getsource(krawczyk)))
+        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "enclose_into"
+    ]
+    assert len(calls) >= 5
+    for call in calls:
+        jacobian = call.args[10]
+        assert not isinstance(jacobian, ast.Constant), ast.unparse(call)
+        assert ast.unparse(jacobian) in ("JACOBIAN[0]", "JACOBIAN[1]"), ast.unparse(call)
+
+    @njit
+    def typed(flag):
+        return flag
+
+    @njit
+    def both():
+        return typed(JACOBIAN[0]), typed(JACOBIAN[1])
+
+    assert both() == (False, True)
+    assert typed.signatures == [(types.boolean,)]  # one specialisation, not Literal[bool](False) and (True)

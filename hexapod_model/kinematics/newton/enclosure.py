@@ -31,6 +31,12 @@ from .intervals import (
     up,
 )
 
+#: :func:`enclose_into`'s ``jacobian`` for its callers: ``JACOBIAN[1]`` with the Jacobian,
+#: ``JACOBIAN[0]`` the residual alone. An element of an array is a plain boolean, where a constant
+#: ``True`` or ``False`` is a literal, and numba compiles a function once per literal it is called
+#: with: the enclosure compiled twice, about 10 s of the proof's first compilation.
+JACOBIAN = np.array([False, True])
+
 
 @njit(cache=True, inline="always")
 def _turned(Wm, Wr, S, a, o):

@@ -35,7 +35,7 @@ ENTRIES = {
     "forward_rows": ("the direct-kinematics batch loop", 13),
     "inverse_rows": ("the inverse-kinematics batch loop", 8),
     "follow": ("the readings path", 12),
-    "prove_packed": ("the Krawczyk proof of a warm step", 70),
+    "prove_packed": ("the Krawczyk proof of a warm step", 60),
     "measure": ("the pose uncertainty", 5),
     "measure_solved": ("the pose uncertainty of a solve", 3),
     "stuck_checks": ("the tracker's stuck test", 1),

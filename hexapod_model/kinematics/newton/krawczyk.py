@@ -44,7 +44,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .enclosure import enclose_into, enclosure_workspace
+from .enclosure import JACOBIAN, enclose_into, enclosure_workspace
 from .intervals import REL, up
 from .krawczyk_blocks import apply, krawczyk_blocks, setup, transform
 from .krawczyk_blocks import workspace as workspace_blocks
@@ -167,7 +167,7 @@ def precondition(tables, T0, xc, hm, structured, work):
     zero, zero6 = V[4], H[1]
     zero[:] = 0.0
     zero6[:] = 0.0
-    enclose_into(placements, motions, closure, held, rows, T0, xc, zero, hm, zero6, True, V[0], V[1], Jm, Jr, ew)
+    enclose_into(placements, motions, closure, held, rows, T0, xc, zero, hm, zero6, JACOBIAN[1], V[0], V[1], Jm, Jr, ew)
     return _precondition_box(rows, structured, work, xc)
 
 
@@ -197,7 +197,7 @@ def try_box(tables, T0, xc, rho, hm, hr, dl, half, structured, work, off, rad):
     """
     placements, motions, closure, held, rows = tables
     V, Jm, Jr, Y, H, blocks, ew = work
-    enclose_into(placements, motions, closure, held, rows, T0, xc, rho, hm, hr, True, V[2], V[3], Jm, Jr, ew)
+    enclose_into(placements, motions, closure, held, rows, T0, xc, rho, hm, hr, JACOBIAN[1], V[2], V[3], Jm, Jr, ew)
     _path_enclosure(tables, hm, dl, half, structured, work)
     if structured:
         transform(Jm, rows, blocks)
@@ -321,7 +321,7 @@ def _prove_end(tables, T0, x1, l1, c, rho, fresh, structured, work):
     zero[:] = 0.0
     if fresh:
         H[1][:] = 0.0
-        enclose_into(placements, motions, closure, held, rows, T0, x1, zero, l1, H[1], False, Fm, Fr, Jm, Jr, ew)
+        enclose_into(placements, motions, closure, held, rows, T0, x1, zero, l1, H[1], JACOBIAN[0], Fm, Fr, Jm, Jr, ew)
     if structured:
         apply(blocks, rows, Fm, Fr, YFm, YFr)
     else:
@@ -404,7 +404,7 @@ def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
         hm[i] = l1[i] - 0.5 * dl[i]
         hr[i] = up(0.5 * abs(dl[i]) + REL * (abs(l1[i]) + abs(dl[i])))
         e[i] = REL * (abs(l1[i]) + abs(dl[i]))  # l0 + dl against l1
-    enclose_into(placements, motions, closure, held, rows, T0, x1, zero, l1, zero6, False, Fm, Fr, Jm, Jr, ew)
+    enclose_into(placements, motions, closure, held, rows, T0, x1, zero, l1, zero6, JACOBIAN[0], Fm, Fr, Jm, Jr, ew)
     unit = V[21]  # the unknowns' units: 1 for angles, the length scale for lengths
     big = 0.0
     for a in range(nf):
@@ -413,7 +413,7 @@ def prove_whole(tables, T0, x0, x1, l0, l1, structured, work):
     for a in range(nf):  # room for the coupling |I - Y J(X)| rho of an unknown that hardly moves
         rho[a] = max(rho[a], WHOLE_FLOOR * big * unit[a])
     for k in range(INFLATIONS):
-        enclose_into(placements, motions, closure, held, rows, T0, x1, rho, hm, hr, True, V[2], V[3], Jm, Jr, ew)
+        enclose_into(placements, motions, closure, held, rows, T0, x1, rho, hm, hr, JACOBIAN[1], V[2], V[3], Jm, Jr, ew)
         reused = k == 0 and structured and _held_near(work, x1)
         if k == 0 and not reused and not _precondition_box(rows, structured, work, x1):
             return False, 1, rho, 0
@@ -485,7 +485,7 @@ def prove_region(tables, T0, x0, x1, l0, l1, hm, hr, work, c, rho):
     if not (in_readings(l0, hm, hr) and in_readings(l1, hm, hr)):
         return False
     c[:] = x1
-    enclose_into(placements, motions, closure, held, rows, T0, c, zero, hm, zero6, True, Fm, Fr, Jm, Jr, ew)
+    enclose_into(placements, motions, closure, held, rows, T0, c, zero, hm, zero6, JACOBIAN[1], Fm, Fr, Jm, Jr, ew)
     if not held_setup(Jm, rows, work, c):
         return False
     apply(blocks, rows, Fm, Fr, YFm, YFr)  # Y F(c, hm): the same at every box
@@ -520,7 +520,7 @@ def prove_region(tables, T0, x0, x1, l0, l1, hm, hr, work, c, rho):
                 return True
             for a in range(nf):
                 rho[a] = max(rho[a], 1.5 * (abs(off[a]) + rad[a]))
-        enclose_into(placements, motions, closure, held, rows, T0, c, rho, hm, hr, True, V[2], V[3], Jm, Jr, ew)
+        enclose_into(placements, motions, closure, held, rows, T0, c, rho, hm, hr, JACOBIAN[1], V[2], V[3], Jm, Jr, ew)
     return False
 
 
