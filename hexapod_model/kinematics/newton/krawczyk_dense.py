@@ -61,29 +61,37 @@ def preconditioned_dense(Y, Fm, Fr, gm, gr, half):
 
 
 @njit(cache=True)
-def inverse(J):
-    """``J^-1`` by the pivoted LU of :mod:`.linalg` (NaN when singular; any matrix serves as ``Y``)."""
+def inverse_into(J, Y):
+    """``Y = J^-1`` by the pivoted LU of :mod:`.linalg` (NaN when singular; any matrix serves as ``Y``).
+
+    Written element by element: a slice assignment ``Y[:, :] = ...`` brings numba's
+    broadcasting check and its error message's string formatting, about 4 s of the proof's
+    first compilation.
+    """
     nf = J.shape[0]
     LU = J.copy()
     piv = np.empty(nf, dtype=np.int64)
     if lu_factor_in_place(LU, piv, nf) == 0.0:
-        return np.full((nf, nf), np.nan)
-    Y = np.zeros((nf, nf))
-    for a in range(nf):
-        Y[a, a] = 1.0
-        lu_solve_in_place(LU, piv, Y[a], nf)  # row a: column a of J^-1
-    return Y.T.copy()
+        Y.fill(np.nan)
+        return
+    e = np.empty(nf)
+    for b in range(nf):
+        for a in range(nf):
+            e[a] = 1.0 if a == b else 0.0
+        lu_solve_in_place(LU, piv, e, nf)  # column b of J^-1
+        for a in range(nf):
+            Y[a, b] = e[a]
 
 
 @njit(cache=True)
 def precondition_dense(Y, Jm):
-    """``Y = Jm[:, :nf]^-1`` (:func:`inverse`) in place; False when singular.
+    """``Y = Jm[:, :nf]^-1`` (:func:`inverse_into`) in place; False when singular.
 
     A called function: the proof inlines its callers at several sites, and numba would type,
     lower and optimise the inverse's NumPy expressions once per site.
     """
     nf = Y.shape[0]
-    Y[:, :] = inverse(Jm[:, :nf])
+    inverse_into(Jm[:, :nf], Y)
     return np.all(np.isfinite(Y))
 
 
