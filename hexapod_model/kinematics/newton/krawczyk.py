@@ -46,6 +46,7 @@ from numba import njit
 
 from .enclosure import JACOBIAN, enclose_into, enclosure_workspace
 from .intervals import REL, up
+from .kernels import copy_into
 from .krawczyk_blocks import apply, krawczyk_blocks, setup, transform
 from .krawczyk_blocks import workspace as workspace_blocks
 from .krawczyk_dense import end_dense, krawczyk, precondition_dense, preconditioned_dense
@@ -112,7 +113,7 @@ def held_setup(Jm, rows, work, xc):
     """
     ok = setup(Jm, rows, work[5])
     work[0][HELD][0] = 1.0 if ok else 0.0
-    work[0][HELD_AT][:] = xc
+    copy_into(work[0][HELD_AT], xc)
     return ok
 
 
@@ -184,7 +185,9 @@ def _path_enclosure(tables, hm, dl, half, structured, work):
     if structured:
         preconditioned_blocks(blocks, rows, Fm, Fr, gm, gr, half, YFm, YFr, tm, tr)
     else:
-        YFm[:], YFr[:] = preconditioned_dense(Y, Fm, Fr, gm, gr, half)
+        ym, yr = preconditioned_dense(Y, Fm, Fr, gm, gr, half)
+        copy_into(YFm, ym)
+        copy_into(YFr, yr)
 
 
 @njit(cache=True, inline="always")
@@ -291,7 +294,10 @@ def prove_path(tables, T0, x0, x1, l0, l1, structured, work):
         if ok and s0 > 0.0:  # chained to the box before
             ok = _inside(prev_c, prev_off, prev_rad, xc, rho) or _inside(xc, off, rad, prev_c, prev_rho)
         if ok:
-            prev_c[:], prev_off[:], prev_rad[:], prev_rho[:] = xc, off, rad, rho
+            copy_into(prev_c, xc)
+            copy_into(prev_off, off)
+            copy_into(prev_rad, rad)
+            copy_into(prev_rho, rho)
             s0 = s1
             parts += 1
             width = min(1.0 - s0, 2.0 * width) if s0 < 1.0 else width
@@ -363,7 +369,9 @@ def _whole_test(rows, dl, e, structured, work, rho, off, rad):
         preconditioned_blocks(blocks, rows, Sm, Sr, gm, gr, 0.5, YFm, YFr, tm, tr)
         transform(Jm, rows, blocks)
         return krawczyk_blocks(YFm, YFr, Jr, rows, blocks, rho, off, rad)
-    YFm[:], YFr[:] = preconditioned_dense(Y, Sm, Sr, gm, gr, 0.5)
+    ym, yr = preconditioned_dense(Y, Sm, Sr, gm, gr, 0.5)
+    copy_into(YFm, ym)
+    copy_into(YFr, yr)
     return krawczyk(YFm, YFr, Jm, Jr, rho, Y, off, rad)
 
 
@@ -484,7 +492,7 @@ def prove_region(tables, T0, x0, x1, l0, l1, hm, hr, work, c, rho):
     zero6[:] = 0.0
     if not (in_readings(l0, hm, hr) and in_readings(l1, hm, hr)):
         return False
-    c[:] = x1
+    copy_into(c, x1)
     enclose_into(placements, motions, closure, held, rows, T0, c, zero, hm, zero6, JACOBIAN[1], Fm, Fr, Jm, Jr, ew)
     if not held_setup(Jm, rows, work, c):
         return False

@@ -12,6 +12,7 @@ import numpy as np
 from numba import njit
 
 from .intervals import REL, up
+from .kernels import copy_into
 from .linalg import lu_factor_in_place, lu_solve_in_place
 
 
@@ -101,5 +102,5 @@ def end_dense(Y, Fm, Fr, YFm, YFr):
 
     A called function, as :func:`precondition_dense` is.
     """
-    YFm[:] = Y @ Fm
-    YFr[:] = np.abs(Y) @ (Fr + REL * np.abs(Fm))
+    copy_into(YFm, Y @ Fm)
+    copy_into(YFr, np.abs(Y) @ (Fr + REL * np.abs(Fm)))

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .kernels import copy_into
 from .krawczyk import prove_in_region, prove_path, prove_region, prove_whole
 
 #: the dimensions of :func:`.krawczyk.workspace`'s arrays (V, Jm, Jr, Y, H, the 16 of the per-leg
@@ -211,7 +212,8 @@ def prove_configurations(tables, home, platform_q, leg_q, free, held_q, q0, q1, 
         if structured:
             proven, radius = _build_region(tables, T0, x0, x1, l0, l1, work, state, motion)
             if proven:
-                Tc[:, :] = T0
+                for row in range(4):
+                    copy_into(Tc[row], T0[row])
                 tests = 1
         if not proven:
             proven, more, radius, parts = prove_whole(tables, T0, x0, x1, l0, l1, structured, work)
