@@ -65,9 +65,9 @@ def preconditioned_dense(Y, Fm, Fr, gm, gr, half):
 def inverse_into(J, Y):
     """``Y = J^-1`` by the pivoted LU of :mod:`.linalg` (NaN when singular; any matrix serves as ``Y``).
 
-    Written element by element: a slice assignment ``Y[:, :] = ...`` brings numba's
-    broadcasting check and its error message's string formatting, about 4 s of the proof's
-    first compilation.
+    Written element by element, not by a slice assignment ``Y[:, :] = ...``: that brings numba's
+    broadcast check and its error message's string formatting into the proof's compiled unit
+    (:func:`.kernels.copy_into`).
     """
     nf = J.shape[0]
     LU = J.copy()
