@@ -28,7 +28,7 @@ from numba import njit
 from ...lie.compiled import pose_to_xyzquat, xyzquat_to_pose
 from .follow import closure_norm, follow_buffers, follow_in, rescale
 from .iteration import iterate_blocks, iterate_schur
-from .kernels import copy_into, first_outside, first_outside_at, rigid_error
+from .kernels import BOOLEANS, copy_into, first_outside, first_outside_at, rigid_error
 from .outcomes import CONVERGED, INVALID_INPUT, NO_CONVERGENCE, OUT_OF_LIMITS
 from .packing import WORK_STATE, unpack, unpack_constants
 
@@ -89,7 +89,7 @@ def _follow_row(
     path, first, x = buffers
     copy_into(first, q)  # the first Newton iterate when the attempt took one step
     if guessed:  # near a singularity no path certifies: forward() returns the plain result, flagged
-        no = np.zeros(1, dtype=np.bool_)[0]  # a runtime False: one compiled signature of iterate_schur
+        no = BOOLEANS[0]  # a plain False: one compiled signature of iterate_schur
         code, n, _, _, theta, _, _ = iterate_schur(
             q0, q, tol, max_iter, 0.0, np.zeros(6 * ints[0]), 0.0, no, ints, floats, views
         )
@@ -119,7 +119,7 @@ def forward_rows(k0, readings, joints, start, carry, warm, settings, stroke, pac
     views = unpack(ints, floats, work, iwork)  # once: each iteration's call takes them
     state = views[2][WORK_STATE]  # the last Schur step's sign and condition bound
     q0, q, no_offset = start.copy(), start.copy(), np.zeros(6 * ints[0])
-    yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
+    yes = BOOLEANS[1]  # a plain True: one compiled signature of iterate_schur
     nq = start.shape[0]
     buffers = (follow_buffers(nq, ints[1], 6 * ints[0]), np.empty(nq), np.empty(nq))
     closes = np.nan  # the start's closure residual norm: evaluated when a row first follows the path

@@ -30,12 +30,12 @@ from .intervals import (
     times_point_inline,
     up,
 )
+from .kernels import BOOLEANS
 
 #: :func:`enclose_into`'s ``jacobian`` for its callers: ``JACOBIAN[1]`` with the Jacobian,
-#: ``JACOBIAN[0]`` the residual alone. An element of an array is a plain boolean, where a constant
-#: ``True`` or ``False`` is a literal, and numba compiles a function once per literal it is called
-#: with: the enclosure compiled twice, about 10 s of the proof's first compilation.
-JACOBIAN = np.array([False, True])
+#: ``JACOBIAN[0]`` the residual alone, plain booleans (:data:`.kernels.BOOLEANS`): with the
+#: constants the enclosure compiled twice, about 10 s of the proof's first compilation.
+JACOBIAN = BOOLEANS
 
 
 @njit(cache=True, inline="always")

@@ -28,7 +28,7 @@ from ...lie.compiled import difference_free_flyer
 from . import path_rules
 from .chains import evaluate_chains
 from .iteration import CONVERGED, integrate_configuration, iterate_schur
-from .kernels import closure_residual, copy_into
+from .kernels import BOOLEANS, closure_residual, copy_into
 from .packing import LENGTH_SCALE, WORK_R, unpack, unpack_constants, unpack_floats, unpack_ints, unpack_work
 from .path_rules import INTERMEDIATE_TOL, MAX_SUBSTEPS, MIN_STEP
 
@@ -124,7 +124,7 @@ def follow_in(start, closes, target, first, predicted, tol, max_iter, sign, tota
     prismatic_q = unpack_constants(ints, floats)[0][0]
     n = prismatic_q.shape[0]
     q0, before, dv, scratch, offset = buffers
-    yes = np.ones(1, dtype=np.bool_)[0]  # a runtime True: one compiled signature of iterate_schur
+    yes = BOOLEANS[1]  # a plain True: one compiled signature of iterate_schur
     intermediate = INTERMEDIATE_TOL * floats[LENGTH_SCALE]  # m, rad: scaled as the tolerance
     # the start's own closure residual: a start off the manifold follows r - (1 - t) r_start
     res = closes if closes <= intermediate else closure_norm(start, ints, floats, work)

@@ -23,6 +23,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+#: ``BOOLEANS[0]`` (False) and ``BOOLEANS[1]`` (True) as plain booleans for compiled callers: an
+#: element of an array is typed ``bool``, where a constant ``True`` or ``False`` is a literal, and
+#: numba compiles a function once per literal it is called with (a second specialisation of a
+#: kernel, seconds of compilation). Returning the constant from a function does not help: its
+#: return type stays literal.
+BOOLEANS = np.array([False, True])
+
 
 @njit(cache=True)
 def closure_residual(R, p, rows, E, r, length):
