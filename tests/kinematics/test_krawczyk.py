@@ -384,3 +384,27 @@ def test_the_proof_calls_its_enclosure_with_a_plain_boolean():
 
     assert both() == (False, True)
     assert typed.signatures == [(types.boolean,)]  # one specialisation, not Literal[bool](False) and (True)
+
+
+@pytest.mark.parametrize(
+    ("module", "callee", "index"), [("enclosure", "_weights", 2), ("krawczyk_blocks", "_invert", 1)]
+)
+def test_the_proof_passes_its_compiled_helpers_no_constant_they_would_compile_once_more_for(module, callee, index):
+    """The enclosure's transpose flag of its rotation weights and the preconditioner's inverse's size, at run time.
+
+    A constant argument types as a literal (``Literal[bool](True)``, ``Literal[int](6)``): numba
+    compiles the callee once more for each, beside its ``boolean`` or ``int64`` specialisation.
+    """
+    import ast
+    import importlib
+    import inspect
+
+    source = inspect.getsource(importlib.import_module(f"hexapod_model.kinematics.newton.{module}"))
+    calls = [
+        node
+        for node in ast.walk(ast.parse(source))
+        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == callee
+    ]
+    assert len(calls) >= 2
+    for call in calls:
+        assert not isinstance(call.args[index], ast.Constant), ast.unparse(call)

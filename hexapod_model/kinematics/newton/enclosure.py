@@ -245,7 +245,7 @@ def enclose_into(placements, motions, closure, held, rows, T0, xm, xr, hm, hr, j
     for i in range(6):
         o = i * rows
         if rows == 6:
-            _weights(Em[i], Er[i], False, Hm, Hr)
+            _weights(Em[i], Er[i], BOOLEANS[0], Hm, Hr)  # plain booleans: one compile, not one per literal
         v = i * (n - 1)
         for k in range(n):
             if k == held[i] and Jm.shape[1] == nf:
@@ -256,7 +256,7 @@ def enclose_into(placements, motions, closure, held, rows, T0, xm, xr, hm, hr, j
             if k != held[i]:
                 v += 1
         if rows == 6:
-            _weights(Em[i], Er[i], True, Hm, Hr)
+            _weights(Em[i], Er[i], BOOLEANS[1], Hm, Hr)
         for j in range(6):
             d = _offset(Pm[j], Pr[j], ancm[i], ancr[i])
             _column(Pm[j], Pr[j], chart[j], d, Hm, Hr, rows, -1.0, Jm, Jr, o, nl + j)

@@ -148,7 +148,7 @@ def setup(Jm, rows, ws):
                     G[i, a, b] = s
                 else:
                     S[i, b] = s
-    if not _invert(S, 6, LU, Z):
+    if not _invert(S, Z.shape[0], LU, Z):  # 6, not a constant: a literal would compile _invert once more
         return False
     for i in range(6):
         for a in range(m):
