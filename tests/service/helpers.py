@@ -25,6 +25,19 @@ from ..conftest import hexapod
 IDS = [[0x181 + k for k in range(6)], [0x191 + k for k in range(6)]]
 
 
+def kernels_ready(preset: str = "reference", noise: float = 1e-5) -> None:
+    """Load (or compile) the kernels a served set runs, before a ``hexapod serve --duration S`` run of a test.
+
+    ``--duration`` counts from the command's start, the service's warm-up of its kernels
+    included: where numba has them in no cache yet (a new checkout, an edited compiled module),
+    compiling them takes the whole run, and a test that expects records from a few seconds of
+    serving would find none. Loaded here first, the run serves for its whole duration.
+    """
+    from hexapod_model.service.cycle.solver import warm_up
+
+    warm_up(hexapod(preset), noise)
+
+
 def fixture_table(name: str = "left", index: int = 0, **extra) -> dict:
     return {"name": name, "hexapod": "reference", "can_ids": IDS[index], **extra}
 

@@ -13,6 +13,8 @@ import json
 
 import pytest
 
+from .helpers import kernels_ready
+
 MOTION = 'trajectory = "A"\nscale = 0.01\nperiod = 8.0\nmove = 3.0\nlock = 2.0\nramp = 0.3\n'
 FAULTS = {
     "lost_sets": 'kind = "lost_sets"\nprobability = 0.3\nstart = 0.5\nduration = 60\n',
@@ -32,6 +34,7 @@ def test_hexapod_serve_simulated_faults_of_the_bus_latch_nothing_and_name_no_hea
     cfg = write_config(tmp_path, fixtures=[("left", "reference", [0x181 + k for k in range(6)], "staleness = 0.05\n")])
     body = f'[[fixtures]]\nname = "left"\nrate = 100.0\n{MOTION}[[fixtures.faults]]\n{FAULTS[fault]}'
     sim = write_sim(tmp_path, body)
+    kernels_ready()  # the run's seconds serve: none go to compiling
     assert main(["serve", str(cfg), "--simulate", str(sim), "--jsonl", "--duration", "6"]) == 0
     records = [json.loads(line) for line in capsys.readouterr().out.splitlines() if line.startswith("{")]
     assert len(records) > 150

@@ -15,7 +15,7 @@ import pytest
 from hexapod_model.service import ConfigError, FixtureCycle, FixtureService, Simulator, decode, geometry_hash
 
 from ..conftest import hexapod
-from .helpers import CollectingBus, fixture_table, service_config, sim_config
+from .helpers import CollectingBus, fixture_table, kernels_ready, service_config, sim_config
 
 canopen = pytest.importorskip("canopen")
 cantools = pytest.importorskip("cantools")
@@ -194,6 +194,7 @@ def test_hexapod_serve_simulated_canopen_and_dbc_fixtures_publish_ok_records(tmp
 
     more = f"[fixtures.encoder]\n{encoder}"
     cfg = write_config(tmp_path, fixtures=[("left", "reference", [0x181 + k for k in range(6)], more)])
+    kernels_ready()  # the run's seconds serve: none go to compiling
     assert (
         main(["serve", str(cfg), "--simulate", str(write_sim(tmp_path, HOLD_SIM)), "--jsonl", "--duration", "3"]) == 0
     )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from .helpers import drive, fixture_table, service_config, sim_config
+from .helpers import drive, fixture_table, kernels_ready, service_config, sim_config
 
 
 def test_a_fixture_at_rest_with_5um_counts_and_2um_noise_publishes_no_false_stuck(tmp_path):
@@ -32,6 +32,7 @@ def test_hexapod_serve_simulated_at_rest_with_5um_counts_publishes_no_stuck(tmp_
         tmp_path,
         '[[fixtures]]\nname = "left"\nrate = 100.0\nnoise = 2e-6\nhold = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]\n',
     )
+    kernels_ready()  # the run's seconds serve: none go to compiling
     assert main(["serve", str(cfg), "--simulate", str(sim), "--jsonl", "--duration", "6"]) == 0
     records = [json.loads(line) for line in capsys.readouterr().out.splitlines() if line.startswith("{")]
     moving = [r for r in records if r["status"] in ("ok", "flagged", "stuck_leg")]
