@@ -42,7 +42,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--jsonl", action="store_true", help="also write every record as a JSON line on stdout")
     p.add_argument("--view", action="store_true", help="show the served poses in a local meshcat view")
     p.add_argument("--fixture", help="the fixture --view shows (default: the first)")
-    p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: until Ctrl-C)")
+    p.add_argument(
+        "--duration",
+        type=float,
+        metavar="S",
+        help="stop S seconds after the start, the kernels' warm-up included (default: until Ctrl-C)",
+    )
     p.add_argument("--log-level", default="INFO", choices=("DEBUG", "INFO", "WARNING", "ERROR"))
     p.set_defaults(func=run_serve)
 
