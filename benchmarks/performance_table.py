@@ -89,7 +89,7 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
             "(`--capacity`)",
             f"cycle thread {r['cycle_cpu_us_per_set']:.0f} µs CPU a set, "
             f"{r['cycle_cpu_us_per_set'] / r['solve_us']:.1f}x its solve's {r['solve_us']:.0f} µs "
-            f"(the tracker step alone: {r['step_us']:.0f} µs{_in_turn(r)})",
+            f"(the tracker step alone: {r['step_us']:.0f} µs{_in_turn(r)}{_by_hand(r)})",
         )
         for r in data
         if r.get("kind") == "capacity"
@@ -104,6 +104,15 @@ def _warm_up(r: dict) -> str:
     if not r["caught_up"]:
         return f" (measured still behind after a warm-up of {r['warm_up_s']:.0f} s)"
     return f" (measured after a warm-up of {r['warm_up_s']:.1f} s)"
+
+
+def _by_hand(r: dict) -> str:
+    """``; the cycles handed their frames, without the bus, the threads and the store: X µs`` (or empty)."""
+    if "cycles_by_hand_us" not in r:
+        return ""
+    return (
+        f"; the cycles handed their frames, without the bus, the threads and the store: {r['cycles_by_hand_us']:.0f} µs"
+    )
 
 
 def _in_turn(r: dict) -> str:

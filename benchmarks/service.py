@@ -39,7 +39,10 @@ fixture. ``--capacity`` also queues the frames of 3 s of sets before the cycle t
 prints its CPU per set with no idle gaps (1 x 1000 Hz, FIXTURES x 100 Hz and each ``--more`` run):
 the cost of a set when the thread's caches stay warm, beside the same fixtures' tracker steps run in
 turn on one thread without the bus, the frames and the records (one fixture: its step alone), which
-shows what stepping many fixtures' trackers costs each one's.
+shows what stepping many fixtures' trackers costs each one's, and beside the same fixtures' cycles
+handed the same frames directly on one thread (no bus, no other thread, no store): the set's
+Python from its frames to its record, so that the cycle thread's CPU splits into the tracker step,
+the cycle's own work and what python-can's bus, the threads and the store add.
 """
 
 from __future__ import annotations
@@ -61,7 +64,7 @@ import numpy as np
 from hexapod_model import Hexapod
 from hexapod_model.analysis.sensitivity import SensitivityEvaluator
 from hexapod_model.analysis.trajectories import box_poses
-from hexapod_model.service import FixtureService, PoseSolver, config_from_dict
+from hexapod_model.service import FixtureCycle, FixtureService, PoseSolver, config_from_dict, geometry_hash
 from hexapod_model.service.sim.config import trajectory_sequence
 from hexapod_model.service.threads import NamedThread
 from hexapod_model.tracking.types import characteristic_length, predict
@@ -200,14 +203,7 @@ def capacity(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, se
                 done.set()
 
     service.subscribe(on_record)
-    per = fixture_readings(readings, fixtures)
-    n = len(per)
-    msgs = [
-        (k, j, leg.message(float(per[k % n, i, j])))
-        for k in range(warm + sets)
-        for i, fl in enumerate(f.legs for f in config.fixtures)
-        for j, leg in enumerate(fl)
-    ]
+    msgs = [(k, j, m) for k, _, j, m in frames_of(config, readings, warm + sets)]
     receiving = bus.queue
     service.start()  # warms the kernels up, then listens
     try:
@@ -225,6 +221,58 @@ def capacity(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, se
     if count[0] < last:
         raise RuntimeError(f"capacity: {count[0] - first} of {last - first} sets solved within 120 s")
     return 1e6 * (cpu[1] - cpu[0]) / (last - first)
+
+
+def frames_of(config, readings: np.ndarray, periods: int) -> list[tuple[int, int, int, can.Message]]:
+    """``(period, fixture, leg, frame)`` of ``periods`` sampling periods of every fixture of ``config``, in order.
+
+    Each fixture plays ``readings`` from a point of its own (:func:`fixture_readings`); a
+    period's frames are every fixture's six, fixture by fixture.
+    """
+    per = fixture_readings(readings, len(config.fixtures))
+    n = len(per)
+    return [
+        (k, i, j, leg.message(float(per[k % n, i, j])))
+        for k in range(periods)
+        for i, fl in enumerate(f.legs for f in config.fixtures)
+        for j, leg in enumerate(fl)
+    ]
+
+
+def cycles_by_hand(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, sets: int, folder: Path) -> float:
+    """CPU (us) a set of the fixtures' cycles handed their frames directly: no bus, no threads, no store.
+
+    The frames of :func:`capacity`'s run (same configuration, readings and stamps) go to each
+    fixture's :meth:`~hexapod_model.service.FixtureCycle.on_frame` in turn on this thread, as
+    the cycle thread passes them on, each set solved when its last frame comes (a lock
+    committed at once, as the store would): the set's work in the service's Python, from its
+    frames to its record (tracker step included), without what python-can's bus, the other
+    threads and the store add. ``sets`` periods are timed after a warm-up of 200.
+    """
+    warm = 200
+    _, config = make_config(fixtures, folder)
+    evaluator = SensitivityEvaluator(hexa, characteristic_length(hexa))  # one per hexapod, as the service's
+    t0 = time.time()
+    digest = geometry_hash(hexa)
+    cycles = [FixtureCycle(f, hexa, digest, None, t0, evaluator) for f in config.fixtures]
+    frames = [
+        (k, cycles[i], j, m.data, t0 + 1.0 + k / rate + j * 130e-6)
+        for k, i, j, m in frames_of(config, readings, warm + sets)
+    ]
+    records, c0 = 0, 0.0
+    for k, cycle, j, data, stamp in frames:
+        if k == warm and c0 == 0.0:
+            records, c0 = 0, time.thread_time()
+        if cycle.on_frame(j, data, stamp) is not None:
+            records += 1
+        if cycle.pending_lock is not None:  # the store's part, done at once
+            episode, event = cycle.pending_lock
+            cycle.pending_lock = None
+            cycle.lock_stored(episode, event)
+    cpu = time.thread_time() - c0
+    if records != sets * fixtures:
+        raise RuntimeError(f"cycles by hand: {records} records of {sets * fixtures} sets")
+    return 1e6 * cpu / (sets * fixtures)
 
 
 def solve_cost(
@@ -557,9 +605,10 @@ def main(argv=None) -> int:
                     turn = step_us if n == 1 else steps_in_turn(hexa, readings, n)
                 else:
                     turn = steps_in_turn(hexa, np.round(at_rest / 1e-6) * 1e-6, n, 1e-6, 1e-6)
+                hand = cycles_by_hand(hexa, readings if at_rest is None else at_rest, n, rate, int(rate), Path(tmp))
                 reports.append(
                     {"kind": "capacity", "fixtures": n, "rate_hz": rate, "cycle_cpu_us_per_set": us}
-                    | {"solve_us": solve, "step_us": step, "steps_in_turn_us": turn}
+                    | {"solve_us": solve, "step_us": step, "steps_in_turn_us": turn, "cycles_by_hand_us": hand}
                     | ({} if at_rest is None else {"motion": "rest"})
                 )
                 print(
@@ -567,7 +616,8 @@ def main(argv=None) -> int:
                     f"cycle thread CPU {us:5.0f} us a set, {us / solve:.1f}x the solve "
                     f"({share:.0f} % of a core)"
                     f"  against the solve's {solve:.0f} us, the tracker step's {step:.0f} us"
-                    f" and the {n} fixtures' tracker steps in turn, without the bus: {turn:.0f} us"
+                    f", the {n} fixtures' tracker steps in turn, without the bus: {turn:.0f} us"
+                    f" and their cycles handed the frames, without the bus, the threads and the store: {hand:.0f} us"
                 )
     for n in dict.fromkeys(n for n, _ in groups):  # each fixture count once, in order (moving)
         ok = [r["rate_hz"] for r in reports if r["fixtures"] == n and r.get("sustained") and "motion" not in r]

@@ -478,7 +478,8 @@ def test_service_benchmark_runs(tmp_path):
         (2, 100.0, "rest"),
     ]
     # CPU µs a set, each measured by itself (their order is a figure of the machine's load: benchmarks/, not a test)
-    figures = [r[k] for r in full for k in ("solve_us", "step_us", "cycle_cpu_us_per_set", "steps_in_turn_us")]
+    keys = ("solve_us", "step_us", "cycle_cpu_us_per_set", "steps_in_turn_us", "cycles_by_hand_us")
+    figures = [r[k] for r in full for k in keys]
     assert all(0.0 < v < 1e6 for v in figures), figures
     rest = [r for r in data if r.get("motion") == "rest" and r.get("kind") != "capacity"]
     assert len(rest) == 1 and rest[0]["fixtures"] == 2 and rest[0]["records"] > 0, rest
@@ -496,6 +497,10 @@ def test_service_benchmark_runs(tmp_path):
     assert f"the 2 fixtures' steps in turn, without the bus: {full[1]['steps_in_turn_us']:.0f} µs" in cell
     assert "in turn" not in rows["pose service, 1 fixture(s) × 1000 Hz from a full queue (`--capacity`)"]
     assert "the 2 fixtures' tracker steps in turn, without the bus:" in out.stdout
+    # the same fixtures' cycles handed their frames on one thread: the set's Python without the bus and threads
+    hand = full[1]["cycles_by_hand_us"]
+    by_hand = f"the cycles handed their frames, without the bus, the threads and the store: {hand:.0f} µs"
+    assert by_hand in cell and "their cycles handed the frames, without the bus" in out.stdout
     # a run of one fixture also against its solve timed after the stream's idle gap (the others: not)
     assert "the solve after the idle gap of a 1-fixture stream: 100 Hz" in out.stdout
     fed = {r["fixtures"]: r for r in data if r.get("kind") != "capacity"}
