@@ -30,7 +30,7 @@ from hexapod_model.cli.main import main
 from hexapod_model.lie import rpy_to_matrix
 from hexapod_model.service import RECORD_KEYS, FixtureService, Simulator, decode, load_config, load_simulation
 
-from ..service.helpers import stored_locks
+from ..service.helpers import kernels_ready, stored_locks
 
 ROOT = Path(__file__).resolve().parents[2]
 HOLD = [0.01, -0.02, 0.41, 5.0, -3.0, 10.0]
@@ -172,6 +172,7 @@ class Served:
     """``hexapod serve`` in a subprocess: its port, its JSON lines (read in a thread), bounded waits."""
 
     def __init__(self, *args: str):
+        kernels_ready()  # in numba's cache before the subprocess starts: its wait for ready is bounded
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "hexapod_model", "serve", *args],
             stdout=subprocess.PIPE,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import time
 import uuid
 from pathlib import Path
@@ -25,13 +26,17 @@ from ..conftest import hexapod
 IDS = [[0x181 + k for k in range(6)], [0x191 + k for k in range(6)]]
 
 
+@functools.cache
 def kernels_ready(preset: str = "reference", noise: float = 1e-5) -> None:
-    """Load (or compile) the kernels a served set runs, before a ``hexapod serve --duration S`` run of a test.
+    """Load (or compile) the kernels a served set runs, before a test runs ``hexapod serve``; once per process.
 
     ``--duration`` counts from the command's start, the service's warm-up of its kernels
     included: where numba has them in no cache yet (a new checkout, an edited compiled module),
     compiling them takes the whole run, and a test that expects records from a few seconds of
-    serving would find none. Loaded here first, the run serves for its whole duration.
+    serving would find none. Loaded here first, the run serves for its whole duration. Compiled
+    here, they are in numba's cache next to the package before a ``hexapod serve`` subprocess
+    starts: it loads them, instead of compiling them against its bounded wait for ``ready``
+    while another test process may be compiling the same ones.
     """
     from hexapod_model.service.cycle.solver import warm_up
 
