@@ -349,6 +349,20 @@ def test_a_step_whose_leg_is_ill_conditioned_is_proven_only_subdivided():
     assert sol.converged and sol.proof is not None and sol.proof.proven
 
 
+def _calls(module: str, callee: str) -> list:
+    """The calls of ``callee`` (by name) in the source of ``hexapod_model.kinematics.newton.<module>`` (AST nodes)."""
+    import ast
+    import importlib
+    import inspect
+
+    source = inspect.getsource(importlib.import_module(f"hexapod_model.kinematics.newton.{module}"))
+    return [
+        node
+        for node in ast.walk(ast.parse(source))
+        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == callee
+    ]
+
+
 def test_the_proof_calls_its_enclosure_with_a_plain_boolean():
     """One compiled enclosure for both kinds of call (with and without the Jacobian), not one per constant.
 
@@ -356,18 +370,12 @@ def test_the_proof_calls_its_enclosure_with_a_plain_boolean():
     as ``jacobian`` compiled the enclosure twice, about 10 s of the proof's first compilation.
     """
     import ast
-    import inspect
 
     from numba import njit, types
 
-    from hexapod_model.kinematics.newton import krawczyk
     from hexapod_model.kinematics.newton.enclosure import JACOBIAN
 
-    calls = [
-        node
-        for node in ast.walk(ast.parse(inspect.getsource(krawczyk)))
-        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "enclose_into"
-    ]
+    calls = _calls("krawczyk", "enclose_into")
     assert len(calls) >= 5
     for call in calls:
         jacobian = call.args[10]
@@ -396,15 +404,8 @@ def test_the_proof_passes_its_compiled_helpers_no_constant_they_would_compile_on
     compiles the callee once more for each, beside its ``boolean`` or ``int64`` specialisation.
     """
     import ast
-    import importlib
-    import inspect
 
-    source = inspect.getsource(importlib.import_module(f"hexapod_model.kinematics.newton.{module}"))
-    calls = [
-        node
-        for node in ast.walk(ast.parse(source))
-        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == callee
-    ]
+    calls = _calls(module, callee)
     assert len(calls) >= 2
     for call in calls:
         assert not isinstance(call.args[index], ast.Constant), ast.unparse(call)
