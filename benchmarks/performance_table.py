@@ -65,8 +65,8 @@ def _after_idle(r: dict) -> str:
 
 
 def _backlog(r: dict) -> str:
-    """For a run that fell behind: its CPU per second of stream counts the backlog's work (over 100 % is possible)."""
-    return "" if r["sustained"] else " over the stream's time, with the backlog worked off after it"
+    """For a run that fell behind: its CPU per set handled times the sets sent a second (over 100 % is possible)."""
+    return "" if r["sustained"] else " needed by the sets sent"
 
 
 def service_rows(data: list[dict]) -> list[tuple[str, str]]:

@@ -16,8 +16,11 @@ objects of a run are made before the service starts, so the feeder only stamps a
 the service's start puts them out of the cyclic collector's reach with its own objects (a kernel's
 buffers are not in the heap). Per run: sets sent and solved, the latency from the arrival of the
 frame that completed a set to the publication of its record (the subscriber's call; a backlog
-counts), and the CPU time of the service's threads (cycle + store + HTTP) and of the whole process
-(feeder included), in percent of one core; the process's CPU is also split as read from outside, by
+counts), and the CPU time of the service's threads (cycle + store + HTTP) a set, over every set whose
+record they published while measured (a run still behind after its warm-up works the warm-up's
+backlog off then: those sets count too), and in percent of one core, that CPU a set times the sets
+sent a second (for a run that fell behind: what its stream needs, which can exceed 100 %), and the
+whole process's (feeder included); the process's CPU is also split as read from outside, by
 OS thread name (``/proc/self/task/*/comm``: the service's ``hx-cycle``, ``hx-store``, ``hx-http``;
 the feeder, named ``hx-sim`` as the simulator of ``hexapod serve --simulate`` is; the rest). A rate
 is *sustained* when at least 99 % of the sets sent are solved and the p99 latency stays under 10 ms
@@ -447,7 +450,7 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         statuses.clear()
         sent[0] = 0
         c0, p0, t0 = thread_cpu(threads), time.process_time(), time.perf_counter()
-        k0 = thread_cpu(threads[:1])
+        k0, h0 = thread_cpu(threads[:1]), published[0]
         n0 = cpu_by_thread_name()
         time.sleep(seconds)
         stop.set()
@@ -458,6 +461,12 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         n1 |= {k: v for k, v in cpu_by_thread_name().items() if k != "hx-sim"}
         drain(service)  # a backlog is worked off (and its latency counted), up to 10 s
         c1, p1, k1 = thread_cpu(threads), time.process_time(), thread_cpu(threads[:1])
+        # the sets handled meanwhile: those of the measured phase and, in a run still behind
+        # after its warm-up, the warm-up's backlog, whose work is in the same CPU time
+        handled = max(published[0] - h0, 1)
+        # the service threads' CPU per set handled times the sets sent: their share of a core per second
+        # of stream (a sustained run: about its CPU per second of stream; one that fell behind: what it needs)
+        need = sent[0] * fixtures / handled
         n2 = cpu_by_thread_name()
         named = {k: n2.get(k, n1.get(k, 0.0)) - n0.get(k, 0.0) for k in set(n0) | set(n1) | set(n2)}
         named["hx-sim"] = n1.get("hx-sim", 0.0) - n0.get("hx-sim", 0.0)
@@ -476,12 +485,14 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         "statuses": statuses,
         "latency_ms_median": float(np.median(lat)) if records else float("nan"),
         "latency_ms_p99": float(np.percentile(lat, 99)) if records else float("nan"),
-        "service_cpu_pct": 100.0 * (c1 - c0) / fed,  # CPU per second of stream, backlog included
-        "service_cpu_us_per_set": 1e6 * (c1 - c0) / max(records, 1),
-        "cycle_cpu_us_per_set": 1e6 * (k1 - k0) / max(records, 1),  # the cycle thread alone
-        "process_cpu_pct": 100.0 * (p1 - p0) / fed,
+        "sets_handled": handled,  # sets whose records the CPU time below paid for
+        "service_cpu_pct": 100.0 * (c1 - c0) * need / fed,  # the share of a core the sets sent need
+        "service_cpu_us_per_set": 1e6 * (c1 - c0) / handled,
+        "cycle_cpu_us_per_set": 1e6 * (k1 - k0) / handled,  # the cycle thread alone
+        # the service's threads as above; the feeder's and the other threads' per second of stream
+        "process_cpu_pct": 100.0 * ((c1 - c0) * need + (p1 - p0) - (c1 - c0)) / fed,
         # the same split as read from outside, by OS thread name (/proc/PID/task/*/comm)
-        "os_service_cpu_pct": 100.0 * sum(named.get(k, 0.0) for k in SERVICE_THREADS) / fed,
+        "os_service_cpu_pct": 100.0 * sum(named.get(k, 0.0) for k in SERVICE_THREADS) * need / fed,
         "os_sim_cpu_pct": 100.0 * named.get("hx-sim", 0.0) / fed,
         "os_other_cpu_pct": 100.0
         * sum(v for k, v in named.items() if k not in SERVICE_THREADS and k != "hx-sim")
@@ -505,11 +516,12 @@ def line(r: dict) -> str:
 
 
 def backlog(r: dict) -> str:
-    """`` of the stream's time, with the backlog worked off after it`` for a run that fell behind (empty else).
+    """`` needed by the sets sent`` for a run that fell behind (empty else).
 
-    Such a run's CPU per second of stream counts the backlog's work too: it can exceed 100 %.
+    Such a run's share of a core is its CPU per set handled times the sets sent a second: what
+    the stream would need, which can exceed 100 %.
     """
-    return "" if r["sustained"] else " of the stream's time, with the backlog worked off after it"
+    return "" if r["sustained"] else " needed by the sets sent"
 
 
 def idle_ratio(r: dict) -> str:

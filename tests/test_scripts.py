@@ -6,6 +6,8 @@ import json
 import re
 import subprocess
 import sys
+import threading
+import time
 import tomllib
 from pathlib import Path
 
@@ -659,8 +661,8 @@ def test_service_benchmark_measures_the_stream_it_warmed_up(tmp_path, monkeypatc
     assert report["caught_up"] and report["warm_up_s"] < bench.WARM_UP_LIMIT
 
 
-def test_an_overloaded_service_run_says_its_cpu_counts_the_backlog():
-    """A run that fell behind works its backlog off after the stream: its CPU per second of stream can exceed 100 %."""
+def test_an_overloaded_service_run_says_its_share_of_a_core_is_what_the_sets_sent_need():
+    """A run that fell behind: its share of a core is its CPU per set times the sets sent a second (over 100 %)."""
     run = {
         "fixtures": 50,
         "rate_hz": 100.0,
@@ -682,7 +684,51 @@ def test_an_overloaded_service_run_says_its_cpu_counts_the_backlog():
         "solve_us": 80.0,
     }
     kept = run | {"caught_up": True, "latency_ms_p99": 4.0, "service_cpu_pct": 80.0, "sustained": True}
-    said = "with the backlog worked off after it"
+    said = "needed by the sets sent"
     bench, rows = _benchmark("service"), _performance_table().service_rows
     assert said in bench.line(run) and said not in bench.line(kept)
     assert said in rows([run])[0][1] and said not in rows([kept])[0][1]
+
+
+def test_a_fed_run_counts_the_cpu_of_a_set_over_every_set_it_handled_the_warm_up_s_backlog_too(tmp_path, monkeypatch):
+    """A run still behind after its warm-up works that backlog off in its measured time: those sets count.
+
+    The cycle thread is held for half a second as the warm-up ends, so that the measured phase
+    begins with a backlog of warm-up sets; each record published is made to cost 100 µs of the
+    threads' CPU. Counted over the measured phase's sets alone, a set read as more (the backlog's
+    CPU over fewer sets: 50 fixtures at 100 Hz read 280-400 µs a set where the thread spent
+    220-240 µs on each).
+    """
+    bench = _benchmark("service")
+    published, held, holding = [0], threading.Event(), threading.Event()
+
+    class Held(bench.FixtureService):
+        def subscribe(self, callback):
+            def counted(rec):  # on the cycle thread, after the benchmark's own subscriber
+                callback(rec)
+                if rec.status != "silent_leg":
+                    published[0] += 1
+                if held.is_set() and not holding.is_set():
+                    holding.set()
+                    time.sleep(0.5)  # frames queue meanwhile: a backlog as the measured phase begins
+
+            return super().subscribe(counted)
+
+    warmed = bench.caught_up
+
+    def caught_up(*args):
+        out = warmed(*args)
+        held.set()
+        assert holding.wait(10.0)
+        time.sleep(0.25)  # the warm-up's last sets queue behind the held thread
+        return out
+
+    monkeypatch.setattr(bench, "FixtureService", Held)
+    monkeypatch.setattr(bench, "caught_up", caught_up)
+    monkeypatch.setattr(bench, "thread_cpu", lambda threads: published[0] * 100e-6)  # 100 µs a record
+    hexa = hm.Hexapod.from_preset("reference")
+    readings = bench.readings_sequence(hexa)[:1000]
+    report = bench.run(hexa, readings, 2, 50.0, 0.5, tmp_path)
+    assert report["cycle_cpu_us_per_set"] == pytest.approx(100.0, rel=1e-9)
+    assert report["service_cpu_us_per_set"] == pytest.approx(100.0, rel=1e-9)
+    assert report["sets_handled"] >= report["records"] + 10  # the backlog: 2 fixtures x 50 Hz x 0.25 s
