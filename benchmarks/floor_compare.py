@@ -19,7 +19,8 @@ solve's compiled call alone (the iteration, and the finish a ``Solution`` needs:
 limit check) and the Python around it; the warm step's Krawczyk proof and its compiled parts
 (:func:`proof_breakdown`: the two interval enclosures and the per-leg algebra of one test); the rows
 of the box whose certified first attempt fails (the certificate then follows the readings path,
-:mod:`hexapod_model.kinematics.certificate`). The
+:mod:`hexapod_model.kinematics.certificate`), how many of them fail at the attempt's first step,
+and each part's throughput and Newton steps per row beside the floor's. The
 figures of the first solves (compilation) are in ``startup.py --cold``.
 
     python benchmarks/floor_compare.py [--rounds 5] [--samples 1000]
@@ -166,12 +167,18 @@ def proof_breakdown(hexa: Hexapod, readings: np.ndarray, first, reps: int = 50) 
     return out
 
 
-def uncertified_attempts(hexa: Hexapod, readings: np.ndarray) -> np.ndarray:
-    """Which rows' certified first attempt from home fails (the certificate follows their readings path)."""
+def uncertified_attempts(hexa: Hexapod, readings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which rows' certified first attempt from home fails (the certificate follows their readings path).
+
+    Returns:
+        ``(failed, at_first)``: the rows whose attempt failed, and those whose attempt failed at
+        its first Newton step (the step's own checks: no step taken, the whole attempt spent).
+    """
     solver = hexa.engine.solver(hexa.engine.held_forward)
     home = hexa.closed_loop.q_home
     attempts = [solver.certified_forward(home, x, BENCH_TOL, MAX_ITER, solver.home_sign) for x in readings]
-    return np.array([len(a) != 6 for a in attempts], dtype=bool)
+    failed = np.array([len(a) != 6 for a in attempts], dtype=bool)
+    return failed, np.array([len(a) != 6 and a[1] == 0 for a in attempts], dtype=bool)
 
 
 def steady_rate(call, n: int) -> float:
@@ -317,9 +324,10 @@ def main(argv=None) -> int:
     )
     print(f" the floor's whole solve {report['warm_fk_us']['floor']:.1f}")
     report["warm_fk_proof_breakdown_us"] = proof
-    failed = uncertified_attempts(hexa, cold)
+    failed, at_first = uncertified_attempts(hexa, cold)
     print(f"box poses from home: the certified first attempt fails on {failed.sum()} of {len(cold)} rows", end="")
-    print(" (the certificate follows their readings path); forward_batch of each part against the floor:")
+    print(f" ({at_first.sum()} at its first step; the certificate follows their readings path);", end="")
+    print(" forward_batch of each part against the floor, and its Newton steps per row:")
     report["warm_fk_breakdown_us"] = {**parts, "python": python}
     report["box_rows_following_the_path"] = int(failed.sum())
     for label, part in (("certified at once", cold[~failed]), ("following the path", cold[failed])):
@@ -330,8 +338,18 @@ def main(argv=None) -> int:
             pkg_rates.append(steady_rate(lambda part=part: hexa.forward_batch(part, tol=BENCH_TOL), len(part)))
             ref_rates.append(steady_rate(lambda part=part: floor_batch(part, False), len(part)))
         pkg, ref = max(pkg_rates), max(ref_rates)
-        print(f"  {label:36s} package {pkg:8.0f}  floor {ref:8.0f}  ratio {pkg / ref:.2f}x")
-        report["batch"]["forward_batch, box poses from home"][label] = {"package": pkg, "floor": ref}
+        a, b = (
+            float(np.mean(hexa.forward_batch(part, tol=BENCH_TOL).iterations)),
+            float(np.mean(floor_batch(part, False))),
+        )
+        print(f"  {label:36s} package {pkg:8.0f}  floor {ref:8.0f}  ratio {pkg / ref:.2f}x;", end="")
+        print(f" steps per row: package {a:.2f}, floor {b:.2f}")
+        report["batch"]["forward_batch, box poses from home"][label] = {
+            "package": pkg,
+            "floor": ref,
+            "steps": {"package": a, "floor": b},
+        }
+    report["box_rows_failing_at_the_first_step"] = int(at_first.sum())
     if args.json:
         args.json.write_text(json.dumps(report, indent=1))
     return 0

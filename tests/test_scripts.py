@@ -378,6 +378,10 @@ def test_floor_compare_benchmark_runs(tmp_path):
     assert 0 < parts["residual"] < parts["jacobian"]  # a point's enclosure, then the box's with the Jacobian
     assert parts["residual"] + parts["jacobian"] + parts["blocks"] + 2 * parts["test"] < parts["whole_test_parts"]
     assert parts["whole_test_parts"] < parts["compiled_call"]  # the parts of one test, timed alone, within the call
+    box = batch["forward_batch, box poses from home"]
+    assert 0 <= data["box_rows_failing_at_the_first_step"] <= data["box_rows_following_the_path"]
+    for label in {"certified at once", "following the path"} & set(box):  # each part's Newton steps per row
+        assert box[label]["steps"]["package"] >= 1.0 and box[label]["steps"]["floor"] >= 1.0
     assert "two Krawczyk tests" in rows["reference: warm FK's Krawczyk proof, where its time goes, CPU (medians)"]
     assert "Krawczyk proof (median us)" in out.stdout
 
