@@ -505,7 +505,8 @@ def line(r: dict) -> str:
     return (
         f"{r['fixtures']:3d} x {r['rate_hz']:6.0f} Hz  sets {r['sets_sent']:7d}  solved {r['records']:7d}  "
         f"latency median {r['latency_ms_median']:6.2f} ms  p99 {r['latency_ms_p99']:7.2f} ms  "
-        f"CPU service {r['service_cpu_pct']:5.1f} %{backlog(r)} ({r['service_cpu_us_per_set']:4.0f} us a set, "
+        f"CPU service {r['service_cpu_pct']:5.1f} %{backlog(r)} ({r['service_cpu_us_per_set']:4.0f} us a set "
+        f"of {r['sets_handled']} handled, "
         f"cycle thread {r['cycle_cpu_us_per_set']:4.0f}; "
         f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x the solve{idle_ratio(r)})  "
         f"process {r['process_cpu_pct']:5.1f} % (by OS thread name: service {r['os_service_cpu_pct']:.1f}, "

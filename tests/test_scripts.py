@@ -674,6 +674,7 @@ def test_an_overloaded_service_run_says_its_share_of_a_core_is_what_the_sets_sen
         "warm_up_s": 5.0,
         "caught_up": False,
         "records": 10_000,
+        "sets_handled": 13_000,
         "statuses": {"ok": 10_000},
         "latency_ms_median": 1766.0,
         "latency_ms_p99": 2011.0,
