@@ -178,7 +178,7 @@ def uncertified_attempts(hexa: Hexapod, readings: np.ndarray) -> tuple[np.ndarra
     home = hexa.closed_loop.q_home
     attempts = [solver.certified_forward(home, x, BENCH_TOL, MAX_ITER, solver.home_sign) for x in readings]
     failed = np.array([len(a) != 6 for a in attempts], dtype=bool)
-    return failed, np.array([len(a) != 6 and a[1] == 0 for a in attempts], dtype=bool)
+    return failed, np.array([f and a[1] == 0 for f, a in zip(failed, attempts)], dtype=bool)
 
 
 def steady_rate(call, n: int) -> float:

@@ -700,9 +700,8 @@ def test_a_fed_run_counts_the_cpu_of_a_set_over_every_set_it_handled_the_warm_up
 
     The cycle thread is held for half a second as the warm-up ends, so that the measured phase
     begins with a backlog of warm-up sets; each record published is made to cost 100 µs of the
-    threads' CPU. Counted over the measured phase's sets alone, a set read as more (the backlog's
-    CPU over fewer sets: 50 fixtures at 100 Hz read 280-400 µs a set where the thread spent
-    220-240 µs on each).
+    threads' CPU. Counted over the measured phase's sets alone, a set read as more: the backlog's
+    CPU over fewer sets.
     """
     bench = _benchmark("service")
     published, held, holding = [0], threading.Event(), threading.Event()
