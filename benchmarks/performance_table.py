@@ -333,6 +333,29 @@ def false_alarm_rows(data: list[dict]) -> list[tuple[str, str]]:
     return rows
 
 
+def tracker_kernel_rows(r: dict) -> list[tuple[str, str]]:
+    """``tracker_kernels.py``: a moving tracker step's compiled kernels, the Python around them, and their floor."""
+    parts = sorted(r["kernels_in_step_us"].items(), key=lambda kv: -kv[1])
+    named = ", ".join(f"{name} {us:.1f}" for name, us in parts[:5])
+    fused = (
+        f", as one compiled call {r['fused_us']:.1f} µs (compiled in {r['fused_compile_s']:.1f} s CPU)"
+        if "fused_us" in r
+        else ""
+    )
+    return [
+        (
+            "reference: tracker step, moving at 1 kHz, where its CPU goes",
+            f"{r['step_us']:.1f} µs: its {len(r['sequence'])} compiled kernels {r['kernels_in_step_total_us']:.1f} µs "
+            f"inside the step ({named}, the rest less), the Python around them {r['python_in_step_us']:.1f} µs",
+        ),
+        (
+            "reference: tracker step's compiled kernels without the Python between them, CPU a step",
+            f"{r['replayed_us']:.1f} µs replayed from Python one after another{fused}; "
+            f"{r['kernels_in_step_total_us']:.1f} µs inside the step",
+        ),
+    ]
+
+
 #: (script and its quick arguments, its full arguments, the rows of its JSON)
 BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str]]]]] = [
     (["run_benchmarks.py", "reference", "--samples", "300"], ["run_benchmarks.py"], bench_rows),
@@ -364,6 +387,7 @@ BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str
         service_rows,
     ),
     (["service_memory.py", "--fixtures", "1,20", "--sets", "100"], ["service_memory.py"], memory_rows),
+    (["tracker_kernels.py", "--fused"], ["tracker_kernels.py", "--fused", "--steps", "5000"], tracker_kernel_rows),
     (["clearance.py", "--poses", "1000"], ["clearance.py"], clearance_rows),
     (["certificate.py", "--poses", "0"], ["certificate.py"], certificate_rows),  # every six-reading preset
     (["false_alarm_hour.py", "--seconds", "900"], ["false_alarm_hour.py"], false_alarm_rows),

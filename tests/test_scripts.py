@@ -352,6 +352,32 @@ def test_compiled_newton_benchmark_runs():
     assert "Pinocchio Newton" in out.stdout and "forward_batch" in out.stdout
 
 
+def test_tracker_kernels_benchmark_splits_a_step_into_its_kernels_and_the_python_around_them(tmp_path):
+    report = tmp_path / "kernels.json"
+    script = ROOT / "benchmarks" / "tracker_kernels.py"
+    out = subprocess.run(
+        [sys.executable, str(script), "--steps", "200", "--fused", "--json", str(report)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert out.returncode == 0, out.stderr
+    data = json.loads(report.read_text())  # what docs/performance.md's rows are made of
+    assert {"solve_schur", "prove_packed", "measure_solved"} <= set(data["sequence"])  # the solve, its proof, sigma
+    assert data["steps"] >= data["of"] // 2  # most steps of a moving stream call one sequence
+    assert 0 < data["kernels_in_step_total_us"] < data["step_us"]
+    assert data["python_in_step_us"] == pytest.approx(data["step_us"] - data["kernels_in_step_total_us"])
+    assert data["replayed_us"] > 0 and data["fused_us"] > 0 and data["fused_compile_s"] > 0
+    assert 0 <= data["wrapper_us"]["inside"] < 5  # the timing's own cost, taken off each kernel
+    rows = dict(_performance_table().tracker_kernel_rows(data))
+    assert "the Python around them" in rows["reference: tracker step, moving at 1 kHz, where its CPU goes"]
+    assert (
+        "as one compiled call"
+        in rows["reference: tracker step's compiled kernels without the Python between them, CPU a step"]
+    )
+    assert "the Python around them" in out.stdout and "as one compiled call" in out.stdout
+
+
 def test_floor_compare_benchmark_runs(tmp_path):
     report = tmp_path / "floor.json"
     out = subprocess.run(
