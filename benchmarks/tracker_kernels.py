@@ -45,6 +45,7 @@ from hexapod_model.kinematics.newton import entries
 from hexapod_model.service import PoseSolver
 
 WARM = 300  # steps before the measured ones (the kernels compiled or loaded, the stream moving)
+_DIRECT = entries.direct  # the library's, untimed: the replays call the machine code it gives
 
 
 class _Timed:
@@ -70,7 +71,7 @@ class _Timed:
 
 def intercept() -> None:
     """Time every kernel the library calls through ``direct``, and the tracker's module-level kernels."""
-    plain_direct = entries.direct
+    plain_direct = _DIRECT
 
     def timed_direct(dispatcher, args):
         if isinstance(dispatcher, _Timed):  # one of the tracker's: its machine code from now on, timed
@@ -78,6 +79,8 @@ def intercept() -> None:
         name = getattr(getattr(dispatcher, "py_func", dispatcher), "__name__", repr(dispatcher))
         return _Timed(name, dispatcher, plain_direct(dispatcher, args))
 
+    # the modules imported so far, and entries itself: a module imported later (the solver's, when the
+    # hexapod is made) takes the timed one from there
     for module in list(sys.modules.values()):
         if getattr(module, "__name__", "").startswith("hexapod_model") and vars(module).get("direct") is plain_direct:
             module.direct = timed_direct
@@ -152,7 +155,7 @@ def measure(steps: int, fused: bool) -> dict:
     in_step = {name: float(np.mean([c[i][3] for c in moving]) / 1e3) - inside for i, name in enumerate(sequence)}
     kernels_us = sum(in_step.values())
     step_us -= off * len(sequence)  # the wrappers' cost outside their windows
-    codes = [entries.direct(dispatcher, args) for _, dispatcher, args, _ in moving[0]]
+    codes = [_DIRECT(dispatcher, args) for _, dispatcher, args, _ in moving[0]]
     argsets = [[c[2] for c in calls] for calls in moving]
     at = [0]
 
@@ -182,7 +185,7 @@ def measure(steps: int, fused: bool) -> dict:
         t = time.process_time()
         function(*argsets[0])
         report["fused_compile_s"] = time.process_time() - t
-        code = entries.direct(function, argsets[0])
+        code = _DIRECT(function, argsets[0])
         at[0] = 0
 
         def replay_fused() -> None:
