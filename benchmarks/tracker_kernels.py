@@ -152,7 +152,12 @@ def measure(steps: int, fused: bool) -> dict:
     sequence, _ = Counter(tuple(c[0] for c in calls) for calls in recorded).most_common(1)[0]
     moving = [calls for calls in recorded if tuple(c[0] for c in calls) == sequence]
     # less the timing's own cost inside the window (a Python function that does nothing, timed the same way)
-    in_step = {name: float(np.mean([c[i][3] for c in moving]) / 1e3) - inside for i, name in enumerate(sequence)}
+    # (a kernel called twice in a step is named twice: its second call "name 2")
+    keys = [
+        name if name not in sequence[:i] else f"{name} {sequence[: i + 1].count(name)}"
+        for i, name in enumerate(sequence)
+    ]
+    in_step = {key: float(np.mean([c[i][3] for c in moving]) / 1e3) - inside for i, key in enumerate(keys)}
     kernels_us = sum(in_step.values())
     step_us -= off * len(sequence)  # the wrappers' cost outside their windows
     codes = [_DIRECT(dispatcher, args) for _, dispatcher, args, _ in moving[0]]

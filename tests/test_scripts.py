@@ -366,8 +366,9 @@ def test_tracker_kernels_benchmark_splits_a_step_into_its_kernels_and_the_python
     assert {"solve_schur", "prove_packed", "measure_solved"} <= set(data["sequence"])  # the solve, its proof, sigma
     assert data["steps"] >= data["of"] // 2  # most steps of a moving stream call one sequence
     assert 0 < data["kernels_in_step_total_us"] < data["step_us"]
-    assert data["python_in_step_us"] == pytest.approx(data["step_us"] - data["kernels_in_step_total_us"])
-    assert data["replayed_us"] > 0 and data["fused_us"] > 0 and data["fused_compile_s"] > 0
+    assert len(data["kernels_in_step_us"]) == len(data["sequence"])  # each call of the sequence timed
+    assert 0 < data["replayed_us"] < data["step_us"]  # the kernels without the step's Python cost less than the step
+    assert data["fused_us"] > 0 and data["fused_compile_s"] > 0
     assert 0 <= data["wrapper_us"]["inside"] < 5  # the timing's own cost, taken off each kernel
     rows = dict(_performance_table().tracker_kernel_rows(data))
     assert "the Python around them" in rows["reference: tracker step, moving at 1 kHz, where its CPU goes"]
