@@ -117,6 +117,14 @@ def wrapper_cost(calls: int = 20000) -> tuple[float, float]:
     return max(off, 0.0), inside
 
 
+def call_names(sequence: tuple[str, ...]) -> list[str]:
+    """A name for each call of ``sequence``: the kernel's; its second and later calls in a step ``name 2``, ..."""
+    return [
+        name if name not in sequence[:i] else f"{name} {sequence[: i + 1].count(name)}"
+        for i, name in enumerate(sequence)
+    ]
+
+
 def measure(steps: int, fused: bool) -> dict:
     """The figures of the module docstring, for ``steps`` steps after a warm-up of :data:`WARM`."""
     sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -152,11 +160,7 @@ def measure(steps: int, fused: bool) -> dict:
     sequence, _ = Counter(tuple(c[0] for c in calls) for calls in recorded).most_common(1)[0]
     moving = [calls for calls in recorded if tuple(c[0] for c in calls) == sequence]
     # less the timing's own cost inside the window (a Python function that does nothing, timed the same way)
-    # (a kernel called twice in a step is named twice: its second call "name 2")
-    keys = [
-        name if name not in sequence[:i] else f"{name} {sequence[: i + 1].count(name)}"
-        for i, name in enumerate(sequence)
-    ]
+    keys = call_names(sequence)
     in_step = {key: float(np.mean([c[i][3] for c in moving]) / 1e3) - inside for i, key in enumerate(keys)}
     kernels_us = sum(in_step.values())
     step_us -= off * len(sequence)  # the wrappers' cost outside their windows

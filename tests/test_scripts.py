@@ -352,6 +352,11 @@ def test_compiled_newton_benchmark_runs():
     assert "Pinocchio Newton" in out.stdout and "forward_batch" in out.stdout
 
 
+def test_tracker_kernels_names_each_call_of_a_kernel_called_twice_in_a_step():
+    names = _benchmark("tracker_kernels").call_names(("solve_schur", "prove_packed", "solve_schur", "solve_schur"))
+    assert names == ["solve_schur", "prove_packed", "solve_schur 2", "solve_schur 3"]  # no call's figure overwritten
+
+
 def test_tracker_kernels_benchmark_splits_a_step_into_its_kernels_and_the_python_around_them(tmp_path):
     report = tmp_path / "kernels.json"
     script = ROOT / "benchmarks" / "tracker_kernels.py"
