@@ -71,18 +71,17 @@ class _Timed:
 
 def intercept() -> None:
     """Time every kernel the library calls through ``direct``, and the tracker's module-level kernels."""
-    plain_direct = _DIRECT
 
     def timed_direct(dispatcher, args):
         if isinstance(dispatcher, _Timed):  # one of the tracker's: its machine code from now on, timed
-            return _Timed(dispatcher.name, dispatcher.dispatcher, plain_direct(dispatcher.dispatcher, args))
+            return _Timed(dispatcher.name, dispatcher.dispatcher, _DIRECT(dispatcher.dispatcher, args))
         name = getattr(getattr(dispatcher, "py_func", dispatcher), "__name__", repr(dispatcher))
-        return _Timed(name, dispatcher, plain_direct(dispatcher, args))
+        return _Timed(name, dispatcher, _DIRECT(dispatcher, args))
 
     # the modules imported so far, and entries itself: a module imported later (the solver's, when the
     # hexapod is made) takes the timed one from there
     for module in list(sys.modules.values()):
-        if getattr(module, "__name__", "").startswith("hexapod_model") and vars(module).get("direct") is plain_direct:
+        if getattr(module, "__name__", "").startswith("hexapod_model") and vars(module).get("direct") is _DIRECT:
             module.direct = timed_direct
     for name, value in list(vars(tracker_module).items()):
         if isinstance(value, numba.core.registry.CPUDispatcher):
