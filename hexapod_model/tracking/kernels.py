@@ -5,6 +5,8 @@ None of it releases the interpreter lock, as NumPy's ``dot`` would (:func:`motio
 :func:`reading_checks` replaces a dozen NumPy calls on 6-vectors per sample (finite readings,
 frozen runs, normalised innovations, their maximum and sum of squares) with one call, in the
 same floating-point operations (the results are bitwise the NumPy ones; a test checks).
+:func:`begin_sample` is what the tracker calls before it solves: the motion model's readings,
+those statistics, the readings ring and the observed noise scale, in one call.
 
 The branch check (:meth:`hexapod_model.tracking.tracker.Tracker._branch_check`) compares the
 solved platform pose with the motion model's pose plus the reading innovation mapped through
@@ -102,6 +104,59 @@ def motion_readings(w, L, lhat):
         lhat[k] = s
 
 
+#: the layout of :func:`begin_sample`'s ``scalars``: what the sample's statistics read, then the noise scale it updates
+SCALARS = ("stuck_tolerance", "innovation_sigma", "jump_sigmas", "scale_rate", "scale_floor", "z2", "scale")
+
+
+@njit(cache=True)
+def begin_sample(l, ring, ring_state, frozen, stuck, w, L, lhat, z, scalars):
+    """A sample's reading statistics, its entry in the readings ring and the observed noise scale, in one call.
+
+    What :meth:`~hexapod_model.tracking.tracker.Tracker.step` does before it solves: the motion
+    model's readings (:func:`motion_readings`, when the sample is checked), the statistics of
+    :func:`reading_checks` against the ring's newest readings, then, for finite readings, the
+    readings pushed into the ring and, for a sample within ``jump_sigmas``, the observed noise
+    scale updated (``z2 += scale_rate (min(z . z / 6, 1) - z2)``, ``scale = max(sqrt(z2),
+    scale_floor)``). The same floating-point operations as those steps one by one.
+
+    Args:
+        l: (6,) the readings (m).
+        ring: (m, 6) the readings kept (m), a ring: updated in place.
+        ring_state: (2,) int64, the newest row and how many rows are kept: updated in place.
+        frozen: (6,) int64, consecutive unchanged samples per leg: updated in place.
+        stuck: (6,) bool, the legs latched ``stuck``.
+        w: (n,) the motion model's weights, newest first; (0,) when the sample is not checked.
+        L: (>= n, 6) readings of the trusted samples, newest first (m).
+        lhat: (6,) out: the motion model's readings (m), written when the sample is checked.
+        z: (6,) out: ``|l - lhat| / innovation_sigma``, written when the sample is checked.
+        scalars: float64, the values :data:`SCALARS` names; ``z2`` and ``scale`` are updated in place.
+
+    Returns:
+        :func:`reading_checks`' ``(finite, zmax, zz, frozen_max, any_stuck)``. Readings that are
+        not all finite change nothing.
+    """
+    checked = w.size > 0
+    if checked:
+        motion_readings(w, L, lhat)
+    at, count = ring_state[0], ring_state[1]
+    finite, zmax, zz, fmax, any_stuck = _checks(
+        l, ring[at], count > 0, scalars[0], frozen, stuck, lhat, checked, scalars[1], z
+    )
+    if not finite:
+        return finite, zmax, zz, fmax, any_stuck
+    m = ring.shape[0]
+    if count:
+        at = (at + 1) % m
+    for k in range(6):
+        ring[at, k] = l[k]
+    ring_state[0], ring_state[1] = at, min(count + 1, m)
+    if zmax <= scalars[2]:  # the observed noise scale, for the branch check (False for NaN)
+        z2 = scalars[5]
+        z2 += scalars[3] * (min(zz / 6.0, 1.0) - z2)
+        scalars[5], scalars[6] = z2, max(math.sqrt(z2), scalars[4])
+    return finite, zmax, zz, fmax, any_stuck
+
+
 @njit(cache=True)
 def reading_checks(l, last, tol, frozen, stuck, lhat, sd, z):
     """One sample's reading statistics in one call (:meth:`~hexapod_model.tracking.tracker.Tracker.step`).
@@ -121,14 +176,20 @@ def reading_checks(l, last, tol, frozen, stuck, lhat, sd, z):
         else is computed or updated), the largest ``z`` and ``z . z`` (``nan`` and 0 when not
         checked), the longest frozen run and whether a leg is latched ``stuck``.
     """
+    return _checks(l, last, last.size > 0, tol, frozen, stuck, lhat, lhat.size > 0, sd, z)
+
+
+@njit(cache=True)
+def _checks(l, last, has_last, tol, frozen, stuck, lhat, checked, sd, z):
+    """:func:`reading_checks` with whether ``last`` and ``lhat`` hold values given apart from them."""
     for k in range(6):
         if not math.isfinite(l[k]):
             return False, math.nan, 0.0, 0, False
-    if last.size:  # frozen[k] + 1 where |l - last| <= tol, else 0
+    if has_last:  # frozen[k] + 1 where |l - last| <= tol, else 0
         for k in range(6):
             frozen[k] = frozen[k] + 1 if abs(l[k] - last[k]) <= tol else 0
     zmax, zz = math.nan, 0.0
-    if lhat.size:
+    if checked:
         zmax = -math.inf
         for k in range(6):
             z[k] = abs(l[k] - lhat[k]) / sd

@@ -187,7 +187,9 @@ class MotionModel:
         hit = self._cache.get(ages)
         if hit is None:
             t = -np.asarray(ages, dtype=float)
-            w = np.linalg.pinv(np.vander(t, 3, increasing=True))[0]  # the fit's value at t = 0
+            # the fit's value at t = 0, a contiguous row of its own: the tracker's compiled sample statistics
+            # (.kernels.begin_sample) are called with the types of their first call
+            w = np.array(np.linalg.pinv(np.vander(t, 3, increasing=True))[0], dtype=np.float64, order="C")
             hit = self._cache[ages] = (w, float(np.sqrt(1.0 + w @ w)))
         return hit
 

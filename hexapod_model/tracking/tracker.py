@@ -47,7 +47,7 @@ from ..kinematics.newton.proof import ProofState
 from ..kinematics.newton.solver import Solution
 from ..lie import pose_distance
 from .extra_readings import step_with_extra_readings
-from .kernels import branch_residual, motion_readings, predict_into, reading_checks, stuck_checks
+from .kernels import SCALARS, begin_sample, branch_residual, predict_into, stuck_checks
 from .passage import PassageMixin
 from .reading_tests import MotionModel, TrackerSettings
 from .types import (
@@ -71,6 +71,7 @@ _SCALE_FLOOR = 1e-3  # the branch check never assumes readings better than 1e-3 
 _STUCK_LOOKBACK = 8  # readings kept beyond stuck_samples to see the other legs move
 _LEG_SETS = [tuple(i for i in range(6) if bits >> i & 1) for bits in range(64)]  # the legs named by stuck_checks' bits
 _BEFORE = 24  # certified samples before a passage near a singularity that the candidates are judged by
+_INNOVATION_SIGMA, _Z2, _SCALE = (SCALARS.index(name) for name in ("innovation_sigma", "z2", "scale"))
 
 __all__ = [
     "FAILED_STATUSES",
@@ -158,11 +159,11 @@ class Tracker(PassageMixin):
         nv = hexa.model.nv
         mats = [np.zeros((3, 3)) for _ in range(3)]
         self._predict_work = (np.zeros(nv), np.zeros(nv), *mats, np.zeros(3))
-        # the compiled predictor and reading checks: the dispatchers until their first call, then the machine
-        # code it ran, called directly (every array they take is this tracker's, or a copy: .entries)
+        # the compiled predictor and sample statistics: the dispatchers until their first call, then the
+        # machine code it ran, called directly (every array they take is this tracker's, or a copy: .entries)
         self._predict_into: Callable[..., None] = predict_into
-        self._reading_checks: Callable[..., tuple] = reading_checks
-        self._predict_direct = self._checks_direct = False
+        self._begin_sample: Callable[..., tuple] = begin_sample
+        self._predict_direct = self._begin_direct = False
         self._branch_ready = False  # the branch check's kernel announced (its first call compiles it: about 1 s)
         self._Lr, self._Fr = _NewestFirst(s.window, 6), _NewestFirst(s.window, 7)
         self._L = self._Lr.rows  # readings of the trusted samples, newest first
@@ -174,9 +175,14 @@ class Tracker(PassageMixin):
         self._born: list[int] = [0] * s.window  # sample number of each trusted one, newest first
         self._run = 0  # trusted samples at consecutive sample numbers ending at _born[0]
         self._ages = [tuple(range(1, n + 1)) for n in range(s.window + 1)]  # of n of them, the sample after
-        # the readings kept for the stuck test, a ring (the newest in row _raw_at, _raw_n of them)
+        # the readings kept for the stuck test, a ring: the newest in row _ring[0], _ring[1] of them
         self._raw = np.zeros((s.stuck_samples + _STUCK_LOOKBACK, 6))
-        self._raw_n = self._raw_at = 0
+        self._ring = np.zeros(2, dtype=np.int64)
+        # begin_sample's scalars (.kernels.SCALARS): the settings it reads, the innovation sigma of the
+        # sample, and the observed / stated noise (z2 its mean square, scale its root, <= 1)
+        values = {"stuck_tolerance": s.stuck_tolerance, "jump_sigmas": s.jump_sigmas}
+        values |= {"scale_rate": _SCALE_RATE, "scale_floor": _SCALE_FLOOR, "z2": 1.0, "scale": 1.0}
+        self._scalars = np.array([values.get(name, 0.0) for name in SCALARS])
         self._moving, self._moved = np.zeros(6), np.zeros(6)  # the stuck test's work
         first_run = s.frozen_run if s.resolution > 0.0 else 1  # with counts, only an improbable run counts
         moved_bound = s.stuck_sigmas * math.sqrt(2.0) * s.reading_sigma  # another leg's change that is motion (m)
@@ -210,7 +216,7 @@ class Tracker(PassageMixin):
             if q.shape != (self.hexa.nq,) or not np.all(np.isfinite(q)):
                 raise InputError("initial", initial, f"expected a Solution or {self.hexa.nq} finite values")
         self._restart(q, trusted=False)
-        self._raw_n = 0
+        self._ring[1] = 0
         self._frozen = np.zeros(6, dtype=np.int64)
         self._stuck = np.zeros(6, dtype=bool)
         self._lost = False  # recover=False: a failed branch check latches branch_uncertain
@@ -219,7 +225,7 @@ class Tracker(PassageMixin):
         self._cond_last = self.home_condition  # of the newest trusted sample
         self._calm.clear()
         self._sign, self._near = self._sens.evaluate(q).det_sign, False  # of the newest trusted sample
-        self._z2, self._scale = 1.0, 1.0  # observed / stated noise (mean square, root), <= 1
+        self._scalars[_Z2] = self._scalars[_SCALE] = 1.0  # observed / stated noise (mean square, root), <= 1
 
     def _restart(self, q: np.ndarray, trusted: bool) -> None:
         """History = ``q`` only (``trusted``: ``q`` is a sample of the stream)."""
@@ -286,7 +292,7 @@ class Tracker(PassageMixin):
             l = np.array(lengths, dtype=float).reshape(-1) if _numeric(lengths) else np.full(6, np.nan)
         n, m = self._n, self._gap + 1
         checked = l.shape == (6,) and n >= s.settle_samples and m <= s.max_gap + 1
-        lhat, w, spread = _NONE, None, 0.0
+        lhat, w, spread = _NONE, _NONE, 0.0
         if checked:
             k = self._k
             if self._run >= n and self._born[0] == k - 1:  # no untrusted sample among the last n
@@ -295,27 +301,22 @@ class Tracker(PassageMixin):
                 ages = tuple([k - b for b in self._born[:n]])
             w, spread = self._motion.weights(ages)
             lhat = self._lhat
-            motion_readings(w, self._L, lhat)  # w @ L[:n], compiled: BLAS would release the GIL
-        # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread)
-        last = self._raw[self._raw_at] if self._raw_n else _NONE
-        sigma_nu = s.innovation_sigma(spread)
+        # in one compiled call (.kernels.begin_sample): the motion model's readings lhat = w @ L[:n];
+        # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread);
+        # then, for finite readings, the readings ring and the observed noise scale (the branch check's)
+        ring = self._ring
         if l.shape != (6,):
             finite, zmax, zz, frozen, any_stuck = False, math.nan, 0.0, 0, False
         else:
-            args = (l, last, s.stuck_tolerance, self._frozen, self._stuck, lhat, sigma_nu, self._z)
-            finite, zmax, zz, frozen, any_stuck = self._reading_checks(*args)
-            if not self._checks_direct:  # its first call: the machine code it ran, directly from now on
-                self._reading_checks, self._checks_direct = direct(reading_checks, args), True
+            scalars = self._scalars
+            scalars[_INNOVATION_SIGMA] = s.innovation_sigma(spread)
+            args = (l, self._raw, ring, self._frozen, self._stuck, w, self._L, self._lhat, self._z, scalars)
+            finite, zmax, zz, frozen, any_stuck = self._begin_sample(*args)
+            if not self._begin_direct:  # its first call: the machine code it ran, directly from now on
+                self._begin_sample, self._begin_direct = direct(begin_sample, args), True
         if not finite:
             msg = f"expected 6 finite readings, got {lengths!r}"
             return self._failure(l if l.shape == (6,) else np.full(6, np.nan), "invalid_input", msg, (), (), t0)
-        if self._raw_n:
-            self._raw_at = (self._raw_at + 1) % self._raw.shape[0]
-        self._raw[self._raw_at] = l
-        self._raw_n = min(self._raw_n + 1, self._raw.shape[0])
-        if zmax <= s.jump_sigmas:  # observed noise scale, for the branch check (False for NaN)
-            self._z2 += _SCALE_RATE * (min(zz / 6.0, 1.0) - self._z2)
-            self._scale = max(math.sqrt(self._z2), _SCALE_FLOOR)
         flags: list[str] = []
         legs: tuple[int, ...] = ()
         suspect = False
@@ -324,8 +325,8 @@ class Tracker(PassageMixin):
             first_run, run = self._stuck_args
             stuck_args = (
                 self._raw,
-                self._raw_n,
-                self._raw_at,
+                ring[1],
+                ring[0],
                 self._frozen,
                 self._z if checked else _NO_Z,
                 self._stuck,
@@ -417,7 +418,7 @@ class Tracker(PassageMixin):
             alt = self._solve(l, self._model_q(w))
             if posed(alt) and pose_distance(alt.pose, sol.pose, 1.0) > 1e-9:
                 sol, sens = alt, self._sens.evaluate(alt.q)
-        bound = self._bound * self._scale * spread
+        bound = self._bound * self._scalars.item(_SCALE) * spread
         if self._consistent(sol, sens, l, lhat, w, bound):
             return sol, sens, True
         if not self.settings.recover:

@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 from hexapod_model.kinematics.newton.kernels import largest_step
-from hexapod_model.tracking.kernels import branch_residual, motion_readings, reading_checks
+from hexapod_model.tracking.kernels import SCALARS, begin_sample, branch_residual, motion_readings, reading_checks
 
 
 def _free_flyer() -> pin.Model:
@@ -112,6 +112,90 @@ def test_reading_checks_stop_at_a_non_finite_reading():
     l = np.array([0.0, np.nan, 0.0, 0.0, 0.0, 0.0])
     out = reading_checks(l, np.zeros(6), 0.0, frozen, np.zeros(6, dtype=bool), np.zeros(6), 1.0, np.zeros(6))
     assert out[0] is False and list(frozen) == [1, 2, 3, 0, 0, 0]  # nothing updated
+
+
+def test_begin_sample_is_the_motion_model_the_checks_the_ring_and_the_noise_scale_step_by_step():
+    """One call against its parts: :func:`motion_readings`, :func:`reading_checks`, the ring and the scale in NumPy.
+
+    Over 400 samples, some unchecked (no weights), some beyond ``jump_sigmas`` (the scale kept),
+    some with a leg frozen: the ring, its state and the frozen counts exactly (copies and
+    counts); the motion model's readings (m), ``z`` (standard deviations) and the noise scale to
+    1e-12 relative (the call and its parts are compiled apart: they may round the last bit
+    differently).
+    """
+    rng = np.random.default_rng(11)
+    index = {name: i for i, name in enumerate(SCALARS)}
+    rows, tol, jump, rate, floor = 12, 1e-7, 4.0, 0.02, 1e-3
+    ring, state, frozen = np.zeros((rows, 6)), np.zeros(2, dtype=np.int64), np.zeros(6, dtype=np.int64)
+    values = {"stuck_tolerance": tol, "jump_sigmas": jump, "scale_rate": rate, "scale_floor": floor, "z2": 1.0}
+    scalars = np.array([values.get(name, 1.0) for name in SCALARS])  # the scale 1, the innovation sigma set below
+    expected_ring, at, count, expected_frozen, z2 = np.zeros((rows, 6)), 0, 0, np.zeros(6, dtype=np.int64), 1.0
+    l = rng.uniform(0.0, 0.1, 6)
+    lhat, z = np.full(6, np.nan), np.full(6, np.nan)
+    for k in range(400):
+        l = l + rng.normal(0.0, 1e-5, 6) * (rng.random(6) < 0.8)  # a leg now and then unchanged
+        checked = k % 7 != 0
+        w = rng.uniform(0.1, 1.0, int(rng.integers(3, 8))) if checked else np.zeros(0)
+        w /= max(w.sum(), 1.0)
+        jumped = k % 11 == 0  # every eleventh sample 10 sigmas from the motion model: the scale kept
+        L = l + rng.normal(0.0, 2e-6, (8, 6)) + 3e-4 * jumped
+        sd = 3e-5
+        scalars[index["innovation_sigma"]] = sd
+        stuck = rng.random(6) < 0.1
+        # its parts, one by one
+        lhat_parts, z_parts = np.full(6, np.nan), np.full(6, np.nan)
+        if checked:
+            motion_readings(w, L, lhat_parts)
+        last = expected_ring[at] if count else np.zeros(0)
+        parts = reading_checks(
+            l, last, tol, expected_frozen, stuck, lhat_parts if checked else np.zeros(0), sd, z_parts
+        )
+        if count:
+            at = (at + 1) % rows
+        expected_ring[at] = l
+        count = min(count + 1, rows)
+        if parts[1] <= jump:
+            z2 += rate * (min(parts[2] / 6.0, 1.0) - z2)
+        # in one call
+        out = begin_sample(l, ring, state, frozen, stuck, w, L, lhat, z, scalars)
+        assert out[0] and out[3:] == parts[3:]
+        assert np.array_equal(ring, expected_ring) and list(state) == [at, count]
+        assert np.array_equal(frozen, expected_frozen)
+        if checked:
+            np.testing.assert_allclose(lhat, lhat_parts, rtol=1e-12, atol=0.0)
+            np.testing.assert_allclose(z, z_parts, rtol=1e-12, atol=0.0)
+            assert out[1] == pytest.approx(parts[1], rel=1e-12, abs=0.0)
+            assert out[2] == pytest.approx(parts[2], rel=1e-12, abs=0.0)
+        else:
+            assert np.isnan(out[1]) and out[2] == 0.0
+        assert scalars[index["z2"]] == pytest.approx(z2, rel=1e-12, abs=0.0)
+        assert scalars[index["scale"]] == pytest.approx(max(np.sqrt(z2), floor), rel=1e-12, abs=0.0)
+        if checked and jumped:
+            assert out[1] > jump
+    assert z2 < 0.5  # the scale moved: the samples' innovations were smaller than their sigma
+
+
+def test_begin_sample_changes_nothing_for_a_non_finite_reading():
+    """Readings with a NaN: not finite, and the ring, its state, the frozen counts and the scale as they were."""
+    ring, state = np.arange(24.0).reshape(4, 6), np.array([2, 3], dtype=np.int64)
+    frozen, scalars = np.array([1, 2, 3, 0, 0, 0], dtype=np.int64), np.linspace(0.1, 0.7, len(SCALARS))
+    before = (ring.copy(), state.copy(), frozen.copy(), scalars.copy())
+    l = np.array([0.0, np.nan, 0.0, 0.0, 0.0, 0.0])
+    out = begin_sample(
+        l,
+        ring,
+        state,
+        frozen,
+        np.zeros(6, dtype=bool),
+        np.ones(3) / 3,
+        np.zeros((3, 6)),
+        np.zeros(6),
+        np.zeros(6),
+        scalars,
+    )
+    assert out[0] is False
+    for now, then in zip((ring, state, frozen, scalars), before):
+        assert np.array_equal(now, then)
 
 
 def test_largest_step_is_numpys_and_keeps_a_nan():
