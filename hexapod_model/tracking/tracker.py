@@ -159,11 +159,10 @@ class Tracker(PassageMixin):
         nv = hexa.model.nv
         mats = [np.zeros((3, 3)) for _ in range(3)]
         self._predict_work = (np.zeros(nv), np.zeros(nv), *mats, np.zeros(3))
-        # the compiled predictor and sample statistics: the dispatchers until their first call, then the
-        # machine code it ran, called directly (every array they take is this tracker's, or a copy: .entries)
+        # the compiled predictor: the dispatcher until its first call, then the machine code it ran,
+        # called directly (every array it takes is this tracker's, or a copy: .entries)
         self._predict_into: Callable[..., None] = predict_into
-        self._begin_sample: Callable[..., tuple] = begin_sample
-        self._predict_direct = self._begin_direct = False
+        self._predict_direct = False
         self._branch_ready = False  # the branch check's kernel announced (its first call compiles it: about 1 s)
         self._Lr, self._Fr = _NewestFirst(s.window, 6), _NewestFirst(s.window, 7)
         self._L = self._Lr.rows  # readings of the trusted samples, newest first
@@ -204,6 +203,20 @@ class Tracker(PassageMixin):
         announce(stuck_checks)
         stuck_checks(*args)
         self._stuck_checks: Callable[..., tuple] = direct(stuck_checks, args)
+        # the statistics of every sample (.kernels.begin_sample) likewise: loaded or compiled (about a
+        # second) now, on throwaway arrays of the types a step passes, and called directly from then on
+        probe = (np.zeros(6), np.zeros_like(self._raw), np.zeros(2, dtype=np.int64), np.zeros(6, dtype=np.int64))
+        probe += (
+            np.zeros(6, dtype=bool),
+            _NONE,
+            np.zeros_like(self._L),
+            np.zeros(6),
+            np.zeros(6),
+            self._scalars.copy(),
+        )
+        announce(begin_sample)
+        begin_sample(*probe)
+        self._begin_sample: Callable[..., tuple] = direct(begin_sample, probe)
 
     def reset(self, initial=None) -> None:
         """Forget the history; restart from ``initial`` (``Solution``, ``q`` or home)."""
@@ -312,8 +325,6 @@ class Tracker(PassageMixin):
             scalars[_INNOVATION_SIGMA] = s.innovation_sigma(spread)
             args = (l, self._raw, ring, self._frozen, self._stuck, w, self._L, self._lhat, self._z, scalars)
             finite, zmax, zz, frozen, any_stuck = self._begin_sample(*args)
-            if not self._begin_direct:  # its first call: the machine code it ran, directly from now on
-                self._begin_sample, self._begin_direct = direct(begin_sample, args), True
         if not finite:
             msg = f"expected 6 finite readings, got {lengths!r}"
             return self._failure(l if l.shape == (6,) else np.full(6, np.nan), "invalid_input", msg, (), (), t0)

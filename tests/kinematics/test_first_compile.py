@@ -201,8 +201,9 @@ def test_a_plain_script_sees_one_compile_warning_on_stderr():
 
 
 def test_the_tracker_and_the_pose_uncertainty_announce_their_kernels_before_their_first_calls(monkeypatch):
-    """A tracker's construction compiles the pose uncertainty's kernels (about 5 s after installation) and its
-    stuck test's; its first solved sample the uncertainty of a solve (about 3 s): each is announced first."""
+    """A tracker's construction compiles the pose uncertainty's kernels (about 5 s after installation), its
+    stuck test's and its reading statistics'; its first solved sample the uncertainty of a solve (about 3 s):
+    each is announced first."""
     import hexapod_model as hm
     from hexapod_model.analysis import sensitivity
     from hexapod_model.tracking import kernels, tracker
@@ -212,10 +213,10 @@ def test_the_tracker_and_the_pose_uncertainty_announce_their_kernels_before_thei
     monkeypatch.setattr(tracker, "announce", lambda d: seen.append(d.py_func.__name__))
     hexa = hm.Hexapod.from_preset("reference")
     stream = tracker.Tracker(hexa)
-    assert seen == ["measure", "stuck_checks"]
+    assert seen == ["measure", "stuck_checks", "begin_sample"]
     for _ in range(3):
         stream.step(hexa.closed_loop.q_home[hexa.closed_loop.prismatic_q])
-    assert seen == ["measure", "stuck_checks", "measure_solved"]  # once, at its first call
+    assert seen == ["measure", "stuck_checks", "begin_sample", "measure_solved"]  # once, at its first call
     assert set(seen) <= set(first_compile.ENTRIES) and kernels.stuck_checks.py_func.__name__ == "stuck_checks"
 
 

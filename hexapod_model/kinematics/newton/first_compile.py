@@ -39,6 +39,7 @@ ENTRIES = {
     "measure": ("the pose uncertainty", 5),
     "measure_solved": ("the pose uncertainty of a solve", 3),
     "stuck_checks": ("the tracker's stuck test", 1),
+    "begin_sample": ("the tracker's reading statistics", 1),
     "branch_residual": ("the tracker's branch check", 1),
     "measure_body": ("the body check: joint cones and collisions", 4),
 }
