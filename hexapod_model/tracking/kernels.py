@@ -6,7 +6,8 @@ None of it releases the interpreter lock, as NumPy's ``dot`` would (:func:`motio
 frozen runs, normalised innovations, their maximum and sum of squares) with one call, in the
 same floating-point operations (the results are bitwise the NumPy ones; a test checks).
 :func:`begin_sample` is what the tracker calls before it solves: the motion model's readings,
-those statistics, the readings ring and the observed noise scale, in one call.
+those statistics, the readings ring and the observed noise scale, in one call;
+:func:`push_trusted` puts a trusted sample first in the motion model's histories.
 
 The branch check (:meth:`hexapod_model.tracking.tracker.Tracker._branch_check`) compares the
 solved platform pose with the motion model's pose plus the reading innovation mapped through
@@ -285,6 +286,52 @@ def stuck_checks(ring, count, newest, frozen, z, stuck, first_run, run, bounds, 
         if jump or now:
             legs |= 1 << i
     return jumped, stuck_any, legs
+
+
+@njit(cache=True)
+def push_trusted(q, ffq, prismatic_q, F, L, f_top, l_top, replace):
+    """Put a trusted configuration first in the tracker's histories; returns their windows' new first rows.
+
+    ``F`` holds the platform's free-flyer coordinates and ``L`` the readings of the trusted
+    samples, each in a buffer twice as tall as its window (``w`` rows, newest first, from the
+    window's first row): a push writes the row above the window, and only when the buffer's
+    first row is reached is the window copied back to the bottom half (one copy every ``w``
+    pushes instead of one per push).
+
+    Args:
+        q: the configuration.
+        ffq: index of the platform's first free-flyer coordinate in ``q``.
+        prismatic_q: (6,) int64, the prismatic joints' indices in ``q`` (the readings, m).
+        F: (2 w, 7) the free-flyer coordinates' buffer.
+        L: (2 w, 6) the readings' buffer.
+        f_top: the first row of ``F``'s window.
+        l_top: the first row of ``L``'s window.
+        replace: overwrite ``F``'s newest row instead of pushing one (the first trusted sample
+            replaces the start of the history); ``L`` is pushed either way.
+
+    Returns:
+        ``(f_top, l_top)``: the windows' first rows.
+    """
+    if not replace:
+        f_top = _push_row(F, f_top)
+    for i in range(7):
+        F[f_top, i] = q[ffq + i]
+    l_top = _push_row(L, l_top)
+    for i in range(prismatic_q.shape[0]):
+        L[l_top, i] = q[prismatic_q[i]]
+    return f_top, l_top
+
+
+@njit(cache=True)
+def _push_row(buf, top):
+    """The first row of ``buf``'s window after a push (the window copied back to the bottom half at the top)."""
+    window = buf.shape[0] // 2
+    if top == 0:
+        for r in range(window):
+            for c in range(buf.shape[1]):
+                buf[window + r, c] = buf[r, c]
+        top = window
+    return top - 1
 
 
 @njit(cache=True)

@@ -47,7 +47,7 @@ from ..kinematics.newton.proof import ProofState
 from ..kinematics.newton.solver import Solution
 from ..lie import pose_distance
 from .extra_readings import step_with_extra_readings
-from .kernels import SCALARS, begin_sample, branch_residual, predict_into, stuck_checks
+from .kernels import SCALARS, begin_sample, branch_residual, predict_into, push_trusted, stuck_checks
 from .passage import PassageMixin
 from .reading_tests import MotionModel, TrackerSettings
 from .types import (
@@ -156,6 +156,8 @@ class Tracker(PassageMixin):
         self._hist: deque[np.ndarray] = deque(maxlen=s.window)
         # the predictor compiled (:func:`.kernels.predict_into`; None: Pinocchio's, :func:`.types.predict`)
         self._layout = predictor_layout(hexa.model)
+        # the predictor's (a1, a2) by the history's length (.types.predictor_weights)
+        self._predictor_weights = [predictor_weights(predictor, n) for n in range(s.window + 1)]
         nv = hexa.model.nv
         mats = [np.zeros((3, 3)) for _ in range(3)]
         self._predict_work = (np.zeros(nv), np.zeros(nv), *mats, np.zeros(3))
@@ -164,9 +166,11 @@ class Tracker(PassageMixin):
         self._predict_into: Callable[..., None] = predict_into
         self._predict_direct = False
         self._branch_ready = False  # the branch check's kernel announced (its first call compiles it: about 1 s)
-        self._Lr, self._Fr = _NewestFirst(s.window, 6), _NewestFirst(s.window, 7)
-        self._L = self._Lr.rows  # readings of the trusted samples, newest first
-        self._F = self._Fr.rows  # free-flyer coordinates of _hist, newest first
+        # the histories of the motion model, windows of buffers twice as tall (.kernels.push_trusted)
+        self._Fbuf, self._Lbuf = np.zeros((2 * s.window, 7)), np.zeros((2 * s.window, 6))
+        self._tops = (s.window, s.window)  # the windows' first rows
+        self._F = self._Fbuf[s.window :]  # free-flyer coordinates of _hist, newest first
+        self._L = self._Lbuf[s.window :]  # readings of the trusted samples, newest first
         self._e = np.zeros(6)  # the branch check's residual
         self._lhat = np.zeros(6)  # the motion model's readings (m)
         self._bound = s.branch_sigmas * s.noise  # the branch check's bound per scale and spread
@@ -206,17 +210,16 @@ class Tracker(PassageMixin):
         # the statistics of every sample (.kernels.begin_sample) likewise: loaded or compiled (about a
         # second) now, on throwaway arrays of the types a step passes, and called directly from then on
         probe = (np.zeros(6), np.zeros_like(self._raw), np.zeros(2, dtype=np.int64), np.zeros(6, dtype=np.int64))
-        probe += (
-            np.zeros(6, dtype=bool),
-            _NONE,
-            np.zeros_like(self._L),
-            np.zeros(6),
-            np.zeros(6),
-            self._scalars.copy(),
-        )
+        probe += (np.zeros(6, dtype=bool), _NONE, np.zeros_like(self._L), np.zeros(6), np.zeros(6))
+        probe += (self._scalars.copy(),)
         announce(begin_sample)
         begin_sample(*probe)
         self._begin_sample: Callable[..., tuple] = direct(begin_sample, probe)
+        # the histories' push (.kernels.push_trusted) likewise, on throwaway buffers
+        pushed = (plain(hexa.q_home), self._ffq.start, self._prism_q, np.zeros_like(self._Fbuf))
+        pushed += (np.zeros_like(self._Lbuf), 0, 0, False)
+        push_trusted(*pushed)
+        self._push_rows: Callable[..., tuple[int, int]] = direct(push_trusted, pushed)
 
     def reset(self, initial=None) -> None:
         """Forget the history; restart from ``initial`` (``Solution``, ``q`` or home)."""
@@ -255,15 +258,16 @@ class Tracker(PassageMixin):
 
     def _push_trusted(self, q: np.ndarray) -> None:
         q = plain(q)  # the predictor's one compiled type (a solver's q is one: no copy)
-        if self._n == 0:
+        first = self._n == 0
+        if first:
             # the history's one entry is the start (home, initial, reset()'s), no sample of the stream:
             # the first trusted sample replaces it, so that no prediction extrapolates from the start
             self._hist[0] = q
-            self._F[0] = q[self._ffq]
         else:
             self._hist.appendleft(q)
-            self._F = self._Fr.push(q[self._ffq])
-        self._L = self._Lr.push(q[self._prism_q])
+        tops = self._push_rows(q, self._ffq.start, self._prism_q, self._Fbuf, self._Lbuf, *self._tops, first)
+        (f, l), window = tops, self.settings.window
+        self._tops, self._F, self._L = tops, self._Fbuf[f : f + window], self._Lbuf[l : l + window]
         born, k = self._born, self._k
         self._run = self._run + 1 if born[0] == k - 1 else 1
         born.insert(0, k)  # age 0 now, one more at each sample
@@ -388,7 +392,7 @@ class Tracker(PassageMixin):
         hist = self._hist  # reads P0, P1, P2 only: the trusted samples (before the first, the start)
         if self._layout is None:  # a model of other joints: Pinocchio's
             return predict(self.hexa.model, hist, self.predictor)
-        a1, a2 = predictor_weights(self.predictor, len(hist))
+        a1, a2 = self._predictor_weights[len(hist)]
         q0 = hist[0]
         if a1 == 0.0 and a2 == 0.0:
             return q0.copy()
@@ -518,7 +522,8 @@ class Tracker(PassageMixin):
             self._uncertified = self._uncertified or (trusted is None and self._resolver is None)
         if sol.status == "out_of_limits":
             flags.append("out_of_limits")
-        flags += [f for f in ("cone_limit", "collision") if f in sol.flags]  # a path through the machine's body
+        if sol.flags:  # a path through the machine's body
+            flags += [f for f in ("cone_limit", "collision") if f in sol.flags]
         noise = s.noise
         sig_t, sig_r = noise * sens.translation, noise * sens.rotation
         if s.max_sigma_factor is not None and not math.hypot(sig_t, self.length * sig_r) <= s.max_sigma_factor * noise:
@@ -545,33 +550,6 @@ class Tracker(PassageMixin):
             sol = Solution(self.hexa.pose_of(q), q.copy(), l.copy(), status, 0, math.nan, None, message)
         nan = math.nan
         return track_result(sol, status, flags, legs, nan, nan, nan, nan, nan, time.perf_counter() - t0)
-
-
-class _NewestFirst:
-    """A (window, cols) array of rows, newest first, that a push shifts without copying it.
-
-    The rows live in a buffer twice as tall: :attr:`rows` is the window starting at the newest
-    row; a push writes one row above it, and only when the buffer's top is reached the window is
-    copied back to the bottom half (one copy every ``window`` pushes instead of one per push).
-    """
-
-    def __init__(self, window: int, cols: int):
-        self._buf = np.zeros((2 * window, cols))
-        self._window = self._top = window
-        #: the rows, newest first (a view; a push replaces it)
-        self.rows = self._buf[window:]
-
-    def push(self, row: np.ndarray) -> np.ndarray:
-        """Put ``row`` first (the oldest row leaves the window); returns the new :attr:`rows`."""
-        top, window = self._top, self._window
-        if top == 0:
-            self._buf[window:] = self._buf[:window]
-            top = window
-        top -= 1
-        self._buf[top] = row
-        self._top = top
-        self.rows = self._buf[top : top + window]
-        return self.rows
 
 
 def _numeric(values) -> bool:

@@ -7,7 +7,14 @@ import pinocchio as pin
 import pytest
 
 from hexapod_model.kinematics.newton.kernels import largest_step
-from hexapod_model.tracking.kernels import SCALARS, begin_sample, branch_residual, motion_readings, reading_checks
+from hexapod_model.tracking.kernels import (
+    SCALARS,
+    begin_sample,
+    branch_residual,
+    motion_readings,
+    push_trusted,
+    reading_checks,
+)
 
 
 def _free_flyer() -> pin.Model:
@@ -196,6 +203,32 @@ def test_begin_sample_changes_nothing_for_a_non_finite_reading():
     assert out[0] is False
     for now, then in zip((ring, state, frozen, scalars), before):
         assert np.array_equal(now, then)
+
+
+@pytest.mark.parametrize("window", [1, 3, 8])
+def test_push_trusted_keeps_the_newest_rows_first_across_the_buffers_copy_back(window):
+    """Each push puts the configuration's free-flyer coordinates and readings first; a replace overwrites F's newest.
+
+    Against the rows kept as lists, newest first, over five times the buffer's height (its
+    window copied back to the bottom half each time its top is reached): the values are copies,
+    so they are equal bit for bit.
+    """
+    rng = np.random.default_rng(window)
+    nq, ffq = 30, 4
+    prismatic_q = np.array([11, 14, 17, 20, 23, 26], dtype=np.int64)
+    F, L = np.full((2 * window, 7), np.nan), np.full((2 * window, 6), np.nan)
+    f_top = l_top = window
+    rows_f: list[np.ndarray] = [np.full(7, np.nan)] * window  # the windows as they start: never pushed
+    rows_l: list[np.ndarray] = [np.full(6, np.nan)] * window
+    for k in range(10 * window + 3):
+        q = rng.normal(size=nq)
+        replace = k % 4 == 0  # the history's start replaced (L is pushed all the same)
+        f_top, l_top = push_trusted(q, ffq, prismatic_q, F, L, f_top, l_top, replace)
+        rows_f = [q[ffq : ffq + 7], *rows_f[1:]] if replace else [q[ffq : ffq + 7], *rows_f[:-1]]
+        rows_l = [q[prismatic_q], *rows_l[:-1]]
+        assert 0 <= f_top <= window and 0 <= l_top <= window
+        np.testing.assert_array_equal(F[f_top : f_top + window], np.array(rows_f))
+        np.testing.assert_array_equal(L[l_top : l_top + window], np.array(rows_l))
 
 
 def test_largest_step_is_numpys_and_keeps_a_nan():
