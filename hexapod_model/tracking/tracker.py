@@ -209,15 +209,20 @@ class Tracker(PassageMixin):
         self._stuck_checks: Callable[..., tuple] = direct(stuck_checks, args)
         # the statistics of every sample (.kernels.begin_sample) likewise: loaded or compiled (about a
         # second) now, on throwaway arrays of the types a step passes, and called directly from then on
-        probe = (np.zeros(6), np.zeros_like(self._raw), np.zeros(2, dtype=np.int64), np.zeros(6, dtype=np.int64))
-        probe += (np.zeros(6, dtype=bool), _NONE, np.zeros_like(self._L), np.zeros(6), np.zeros(6))
-        probe += (self._scalars.copy(),)
+        l, lhat, z = np.zeros(6), np.zeros(6), np.zeros(6)
+        raw, ring, frozen, stuck = (
+            np.zeros_like(self._raw),
+            np.zeros(2, dtype=np.int64),
+            np.zeros(6, dtype=np.int64),
+            np.zeros(6, dtype=bool),
+        )
+        probe = (l, raw, ring, frozen, stuck, _NONE, np.zeros_like(self._L), lhat, z, self._scalars.copy())
         announce(begin_sample)
         begin_sample(*probe)
         self._begin_sample: Callable[..., tuple] = direct(begin_sample, probe)
         # the histories' push (.kernels.push_trusted) likewise, on throwaway buffers
-        pushed = (plain(hexa.q_home), self._ffq.start, self._prism_q, np.zeros_like(self._Fbuf))
-        pushed += (np.zeros_like(self._Lbuf), 0, 0, False)
+        buffers = (np.zeros_like(self._Fbuf), np.zeros_like(self._Lbuf))
+        pushed = (plain(hexa.q_home), self._ffq.start, self._prism_q, *buffers, 0, 0, False)
         push_trusted(*pushed)
         self._push_rows: Callable[..., tuple[int, int]] = direct(push_trusted, pushed)
 
