@@ -160,7 +160,7 @@ def begin_sample(l, ring, ring_state, frozen, stuck, w, L, lhat, z, scalars):
 
 @njit(cache=True)
 def reading_checks(l, last, tol, frozen, stuck, lhat, sd, z):
-    """One sample's reading statistics in one call (:meth:`~hexapod_model.tracking.tracker.Tracker.step`).
+    """One sample's reading statistics in one call: :func:`begin_sample`'s, on their own.
 
     Args:
         l: (6,) the readings (m).
