@@ -107,6 +107,7 @@ def motion_readings(w, L, lhat):
 
 #: the layout of :func:`begin_sample`'s ``scalars``: what the sample's statistics read, then the noise scale it updates
 SCALARS = ("stuck_tolerance", "innovation_sigma", "jump_sigmas", "scale_rate", "scale_floor", "z2", "scale")
+_TOLERANCE, _SIGMA, _JUMP, _RATE, _FLOOR, _Z2, _SCALE = range(len(SCALARS))  # their indices
 
 
 @njit(cache=True)
@@ -141,7 +142,7 @@ def begin_sample(l, ring, ring_state, frozen, stuck, w, L, lhat, z, scalars):
         motion_readings(w, L, lhat)
     at, count = ring_state[0], ring_state[1]
     finite, zmax, zz, fmax, any_stuck = _checks(
-        l, ring[at], count > 0, scalars[0], frozen, stuck, lhat, checked, scalars[1], z
+        l, ring[at], count > 0, scalars[_TOLERANCE], frozen, stuck, lhat, checked, scalars[_SIGMA], z
     )
     if not finite:
         return finite, zmax, zz, fmax, any_stuck
@@ -151,10 +152,10 @@ def begin_sample(l, ring, ring_state, frozen, stuck, w, L, lhat, z, scalars):
     for k in range(6):
         ring[at, k] = l[k]
     ring_state[0], ring_state[1] = at, min(count + 1, m)
-    if zmax <= scalars[2]:  # the observed noise scale, for the branch check (False for NaN)
-        z2 = scalars[5]
-        z2 += scalars[3] * (min(zz / 6.0, 1.0) - z2)
-        scalars[5], scalars[6] = z2, max(math.sqrt(z2), scalars[4])
+    if zmax <= scalars[_JUMP]:  # the observed noise scale, for the branch check (False for NaN)
+        z2 = scalars[_Z2]
+        z2 += scalars[_RATE] * (min(zz / 6.0, 1.0) - z2)
+        scalars[_Z2], scalars[_SCALE] = z2, max(math.sqrt(z2), scalars[_FLOOR])
     return finite, zmax, zz, fmax, any_stuck
 
 

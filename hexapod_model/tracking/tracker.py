@@ -178,9 +178,9 @@ class Tracker(PassageMixin):
         self._born: list[int] = [0] * s.window  # sample number of each trusted one, newest first
         self._run = 0  # trusted samples at consecutive sample numbers ending at _born[0]
         self._ages = [tuple(range(1, n + 1)) for n in range(s.window + 1)]  # of n of them, the sample after
-        # the readings kept for the stuck test, a ring: the newest in row _ring[0], _ring[1] of them
+        # the readings kept for the stuck test, a ring: the newest in row _raw_state[0], _raw_state[1] of them
         self._raw = np.zeros((s.stuck_samples + _STUCK_LOOKBACK, 6))
-        self._ring = np.zeros(2, dtype=np.int64)
+        self._raw_state = np.zeros(2, dtype=np.int64)
         # begin_sample's scalars (.kernels.SCALARS): the settings it reads, the innovation sigma of the
         # sample, and the observed / stated noise (z2 its mean square, scale its root, <= 1)
         values = {"stuck_tolerance": s.stuck_tolerance, "jump_sigmas": s.jump_sigmas}
@@ -210,13 +210,13 @@ class Tracker(PassageMixin):
         # the statistics of every sample (.kernels.begin_sample) likewise: loaded or compiled (about a
         # second) now, on throwaway arrays of the types a step passes, and called directly from then on
         l, lhat, z = np.zeros(6), np.zeros(6), np.zeros(6)
-        raw, ring, frozen, stuck = (
+        raw, raw_state, frozen, stuck = (
             np.zeros_like(self._raw),
             np.zeros(2, dtype=np.int64),
             np.zeros(6, dtype=np.int64),
             np.zeros(6, dtype=bool),
         )
-        probe = (l, raw, ring, frozen, stuck, _NONE, np.zeros_like(self._L), lhat, z, self._scalars.copy())
+        probe = (l, raw, raw_state, frozen, stuck, _NONE, np.zeros_like(self._L), lhat, z, self._scalars.copy())
         announce(begin_sample)
         begin_sample(*probe)
         self._begin_sample: Callable[..., tuple] = direct(begin_sample, probe)
@@ -237,7 +237,7 @@ class Tracker(PassageMixin):
             if q.shape != (self.hexa.nq,) or not np.all(np.isfinite(q)):
                 raise InputError("initial", initial, f"expected a Solution or {self.hexa.nq} finite values")
         self._restart(q, trusted=False)
-        self._ring[1] = 0
+        self._raw_state[1] = 0
         self._frozen = np.zeros(6, dtype=np.int64)
         self._stuck = np.zeros(6, dtype=bool)
         self._lost = False  # recover=False: a failed branch check latches branch_uncertain
@@ -326,13 +326,13 @@ class Tracker(PassageMixin):
         # in one compiled call (.kernels.begin_sample): the motion model's readings lhat = w @ L[:n];
         # finite readings; frozen runs (|l - previous| <= stuck_tolerance); z = |l - l^| / (noise spread);
         # then, for finite readings, the readings ring and the observed noise scale (the branch check's)
-        ring = self._ring
+        raw_state = self._raw_state
         if l.shape != (6,):
             finite, zmax, zz, frozen, any_stuck = False, math.nan, 0.0, 0, False
         else:
             scalars = self._scalars
             scalars[_INNOVATION_SIGMA] = s.innovation_sigma(spread)
-            args = (l, self._raw, ring, self._frozen, self._stuck, w, self._L, self._lhat, self._z, scalars)
+            args = (l, self._raw, raw_state, self._frozen, self._stuck, w, self._L, self._lhat, self._z, scalars)
             finite, zmax, zz, frozen, any_stuck = self._begin_sample(*args)
         if not finite:
             msg = f"expected 6 finite readings, got {lengths!r}"
@@ -345,8 +345,8 @@ class Tracker(PassageMixin):
             first_run, run = self._stuck_args
             stuck_args = (
                 self._raw,
-                ring[1],
-                ring[0],
+                raw_state[1],
+                raw_state[0],
                 self._frozen,
                 self._z if checked else _NO_Z,
                 self._stuck,
