@@ -2,12 +2,12 @@
 
 None of it releases the interpreter lock, as NumPy's ``dot`` would (:func:`motion_readings`).
 
-:func:`reading_checks` replaces a dozen NumPy calls on 6-vectors per sample (finite readings,
-frozen runs, normalised innovations, their maximum and sum of squares) with one call, in the
-same floating-point operations (the results are bitwise the NumPy ones; a test checks).
-:func:`begin_sample` is what the tracker calls before it solves: the motion model's readings,
-those statistics, the readings ring and the observed noise scale, in one call;
-:func:`push_trusted` puts a trusted sample first in the motion model's histories.
+:func:`begin_sample` is what the tracker does before it solves, in one call: the motion model's
+readings, the reading statistics that replace a dozen NumPy calls on 6-vectors (finite
+readings, frozen runs, normalised innovations, their maximum and sum of squares; the same
+floating-point operations, held to NumPy's by a test), the readings ring of the stuck test and
+the observed noise scale. :func:`push_trusted` puts a trusted sample first in the motion
+model's histories.
 
 The branch check (:meth:`hexapod_model.tracking.tracker.Tracker._branch_check`) compares the
 solved platform pose with the motion model's pose plus the reading innovation mapped through
@@ -115,8 +115,8 @@ def begin_sample(l, ring, ring_state, frozen, stuck, w, L, lhat, z, scalars):
     """A sample's reading statistics, its entry in the readings ring and the observed noise scale, in one call.
 
     What :meth:`~hexapod_model.tracking.tracker.Tracker.step` does before it solves: the motion
-    model's readings (:func:`motion_readings`, when the sample is checked), the statistics of
-    :func:`reading_checks` against the ring's newest readings, then, for finite readings, the
+    model's readings (:func:`motion_readings`, when the sample is checked), the reading
+    statistics against the ring's newest readings (:func:`_checks`), then, for finite readings, the
     readings pushed into the ring and, for a sample within ``jump_sigmas``, the observed noise
     scale updated (``z2 += scale_rate (min(z . z / 6, 1) - z2)``, ``scale = max(sqrt(z2),
     scale_floor)``). The same floating-point operations as those steps one by one.
@@ -134,8 +134,9 @@ def begin_sample(l, ring, ring_state, frozen, stuck, w, L, lhat, z, scalars):
         scalars: float64, the values :data:`SCALARS` names; ``z2`` and ``scale`` are updated in place.
 
     Returns:
-        :func:`reading_checks`' ``(finite, zmax, zz, frozen_max, any_stuck)``. Readings that are
-        not all finite change nothing.
+        ``(finite, zmax, zz, frozen_max, any_stuck)``: every reading finite (when not, nothing
+        else is computed or updated), the largest ``z`` and ``z . z`` (``nan`` and 0 when not
+        checked), the longest frozen run and whether a leg is latched ``stuck``.
     """
     checked = w.size > 0
     if checked:
@@ -160,16 +161,18 @@ def begin_sample(l, ring, ring_state, frozen, stuck, w, L, lhat, z, scalars):
 
 
 @njit(cache=True)
-def reading_checks(l, last, tol, frozen, stuck, lhat, sd, z):
-    """One sample's reading statistics in one call: :func:`begin_sample`'s, on their own.
+def _checks(l, last, has_last, tol, frozen, stuck, lhat, checked, sd, z):
+    """One sample's reading statistics (:func:`begin_sample`'s).
 
     Args:
         l: (6,) the readings (m).
-        last: (6,) the previous sample's readings, or a (0,) array when there is none.
+        last: (6,) the previous sample's readings (read when ``has_last``).
+        has_last: whether there is a previous sample.
         tol: largest change (m) that counts as unchanged (``stuck_tolerance``).
         frozen: (6,) int64, consecutive unchanged samples per leg: updated in place.
         stuck: (6,) bool, the legs latched ``stuck``.
-        lhat: (6,) the motion model's readings, or a (0,) array when the sample is not checked.
+        lhat: (6,) the motion model's readings (read when ``checked``).
+        checked: whether the sample is checked against the motion model.
         sd: innovation standard deviation (m): ``noise * spread``.
         z: (6,) out: ``|l - lhat| / sd`` (untouched when not checked).
 
@@ -178,12 +181,6 @@ def reading_checks(l, last, tol, frozen, stuck, lhat, sd, z):
         else is computed or updated), the largest ``z`` and ``z . z`` (``nan`` and 0 when not
         checked), the longest frozen run and whether a leg is latched ``stuck``.
     """
-    return _checks(l, last, last.size > 0, tol, frozen, stuck, lhat, lhat.size > 0, sd, z)
-
-
-@njit(cache=True)
-def _checks(l, last, has_last, tol, frozen, stuck, lhat, checked, sd, z):
-    """:func:`reading_checks` with whether ``last`` and ``lhat`` hold values given apart from them."""
     for k in range(6):
         if not math.isfinite(l[k]):
             return False, math.nan, 0.0, 0, False

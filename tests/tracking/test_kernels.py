@@ -13,7 +13,6 @@ from hexapod_model.tracking.kernels import (
     branch_residual,
     motion_readings,
     push_trusted,
-    reading_checks,
 )
 
 
@@ -82,104 +81,60 @@ def test_branch_residual_is_zero_on_a_constant_twist_motion():
     assert np.abs(e).max() < 1e-15
 
 
-def test_reading_checks_match_the_numpy_statistics():
-    """Frozen runs, ``z = |l - lhat| / sd``, its maximum and ``z . z`` as the tracker computed them with NumPy.
+def test_begin_sample_is_the_numpy_statistics_ring_and_noise_scale_step_by_step():
+    """One call against the tracker's NumPy of these steps: motion readings, reading statistics, ring, noise scale.
 
-    Frozen counts and the stuck flag exactly (comparisons of exact differences); ``z`` (in
-    standard deviations) to 1e-12 relative: a compiled kernel and NumPy may round the last bit
-    differently, by CPU and by library version.
-    """
-    rng = np.random.default_rng(4)
-    frozen = np.zeros(6, dtype=np.int64)
-    last = rng.normal(0.0, 1e-3, 6)
-    for k in range(500):
-        l = last.copy()
-        moved = rng.random(6) < 0.7
-        l[moved] += rng.normal(0.0, 1e-5, int(moved.sum()))
-        lhat = l + rng.normal(0.0, 2e-5, 6) if k % 5 else np.zeros(0)  # every fifth sample unchecked
-        stuck = rng.random(6) < 0.1
-        tol, sd = (0.0, 5e-6) if k % 2 else (3e-6, 2.05e-5)
-        expected_frozen = np.where(np.abs(l - last) <= tol, frozen + 1, 0)
-        z = np.zeros(6)
-        finite, zmax, zz, fmax, any_stuck = reading_checks(l, last, tol, frozen, stuck, lhat, sd, z)
-        assert finite and np.array_equal(frozen, expected_frozen)
-        assert fmax == int(expected_frozen.max()) and any_stuck == bool(stuck.any())
-        if lhat.size:
-            expected = np.abs(l - lhat) / sd
-            np.testing.assert_allclose(z, expected, rtol=1e-12, atol=0)
-            assert zmax == pytest.approx(float(expected.max()), rel=1e-12, abs=0)
-            assert zz == pytest.approx(float(expected @ expected), rel=1e-12, abs=0)
-        else:
-            assert np.isnan(zmax) and zz == 0.0
-        last = l
-
-
-def test_reading_checks_stop_at_a_non_finite_reading():
-    frozen = np.array([1, 2, 3, 0, 0, 0], dtype=np.int64)
-    l = np.array([0.0, np.nan, 0.0, 0.0, 0.0, 0.0])
-    out = reading_checks(l, np.zeros(6), 0.0, frozen, np.zeros(6, dtype=bool), np.zeros(6), 1.0, np.zeros(6))
-    assert out[0] is False and list(frozen) == [1, 2, 3, 0, 0, 0]  # nothing updated
-
-
-def test_begin_sample_is_the_motion_model_the_checks_the_ring_and_the_noise_scale_step_by_step():
-    """One call against its parts: :func:`motion_readings`, :func:`reading_checks`, the ring and the scale in NumPy.
-
-    Over 400 samples, some unchecked (no weights), some beyond ``jump_sigmas`` (the scale kept),
-    some with a leg frozen: the ring, its state and the frozen counts exactly (copies and
-    counts); the motion model's readings (m), ``z`` (standard deviations) and the noise scale to
-    1e-12 relative (the call and its parts are compiled apart: they may round the last bit
-    differently).
+    Over 500 samples, some unchecked (no weights), some beyond ``jump_sigmas`` (the scale kept),
+    legs now and then unchanged (frozen runs), latched legs, two stuck tolerances: the frozen
+    counts, the stuck flag, the ring and its state exactly (comparisons of exact differences,
+    copies, counts); the motion model's readings (m), ``z`` (standard deviations), its maximum,
+    ``z . z`` and the noise scale to 1e-12 relative (a compiled kernel and NumPy may round the
+    last bit differently, by CPU and by library version).
     """
     rng = np.random.default_rng(11)
-    index = {name: i for i, name in enumerate(SCALARS)}
-    rows, tol, jump, rate, floor = 12, 1e-7, 4.0, 0.02, 1e-3
+    rows, jump, rate, floor = 12, 4.0, 0.02, 1e-3
     ring, state, frozen = np.zeros((rows, 6)), np.zeros(2, dtype=np.int64), np.zeros(6, dtype=np.int64)
-    values = {"stuck_tolerance": tol, "jump_sigmas": jump, "scale_rate": rate, "scale_floor": floor, "z2": 1.0}
-    scalars = np.array([values.get(name, 1.0) for name in SCALARS])  # the scale 1, the innovation sigma set below
+    values = {"jump_sigmas": jump, "scale_rate": rate, "scale_floor": floor, "z2": 1.0, "scale": 1.0}
+    scalars = np.array([values.get(name, 0.0) for name in SCALARS])  # the tolerance and the sigma set below
+    index = {name: i for i, name in enumerate(SCALARS)}
     expected_ring, at, count, expected_frozen, z2 = np.zeros((rows, 6)), 0, 0, np.zeros(6, dtype=np.int64), 1.0
     l = rng.uniform(0.0, 0.1, 6)
     lhat, z = np.full(6, np.nan), np.full(6, np.nan)
-    for k in range(400):
-        l = l + rng.normal(0.0, 1e-5, 6) * (rng.random(6) < 0.8)  # a leg now and then unchanged
+    for k in range(500):
+        l = l + rng.normal(0.0, 1e-5, 6) * (rng.random(6) < 0.7)  # a leg now and then unchanged
         checked = k % 7 != 0
         w = rng.uniform(0.1, 1.0, int(rng.integers(3, 8))) if checked else np.zeros(0)
-        w /= max(w.sum(), 1.0)
+        w /= w.sum() if checked else 1.0  # weights that sum to 1, as the motion model's
         jumped = k % 11 == 0  # every eleventh sample 10 sigmas from the motion model: the scale kept
         L = l + rng.normal(0.0, 2e-6, (8, 6)) + 3e-4 * jumped
-        sd = 3e-5
-        scalars[index["innovation_sigma"]] = sd
+        tol, sd = (0.0, 3e-5) if k % 2 else (3e-6, 2.05e-5)
+        scalars[index["stuck_tolerance"]], scalars[index["innovation_sigma"]] = tol, sd
         stuck = rng.random(6) < 0.1
-        # its parts, one by one
-        lhat_parts, z_parts = np.full(6, np.nan), np.full(6, np.nan)
-        if checked:
-            motion_readings(w, L, lhat_parts)
-        last = expected_ring[at] if count else np.zeros(0)
-        parts = reading_checks(
-            l, last, tol, expected_frozen, stuck, lhat_parts if checked else np.zeros(0), sd, z_parts
-        )
+        out = begin_sample(l, ring, state, frozen, stuck, w, L, lhat, z, scalars)
+        # the same steps in NumPy
         if count:
+            expected_frozen = np.where(np.abs(l - expected_ring[at]) <= tol, expected_frozen + 1, 0)
             at = (at + 1) % rows
         expected_ring[at] = l
         count = min(count + 1, rows)
-        if parts[1] <= jump:
-            z2 += rate * (min(parts[2] / 6.0, 1.0) - z2)
-        # in one call
-        out = begin_sample(l, ring, state, frozen, stuck, w, L, lhat, z, scalars)
-        assert out[0] and out[3:] == parts[3:]
+        assert out[0] and np.array_equal(frozen, expected_frozen)
+        assert out[3] == int(expected_frozen.max()) and out[4] == bool(stuck.any())
         assert np.array_equal(ring, expected_ring) and list(state) == [at, count]
-        assert np.array_equal(frozen, expected_frozen)
         if checked:
-            np.testing.assert_allclose(lhat, lhat_parts, rtol=1e-12, atol=0.0)
-            np.testing.assert_allclose(z, z_parts, rtol=1e-12, atol=0.0)
-            assert out[1] == pytest.approx(parts[1], rel=1e-12, abs=0.0)
-            assert out[2] == pytest.approx(parts[2], rel=1e-12, abs=0.0)
+            np.testing.assert_allclose(lhat, w @ L[: w.size], rtol=1e-12, atol=0.0)
+            # z from the call's own lhat: l - lhat cancels, and would magnify lhat's last bit
+            expected_z = np.abs(l - lhat) / sd
+            np.testing.assert_allclose(z, expected_z, rtol=1e-12, atol=0.0)
+            assert out[1] == pytest.approx(float(expected_z.max()), rel=1e-12, abs=0.0)
+            assert out[2] == pytest.approx(float(expected_z @ expected_z), rel=1e-12, abs=0.0)
+            assert (out[1] > jump) == jumped
+            if not jumped:
+                z2 += rate * (min(out[2] / 6.0, 1.0) - z2)
         else:
             assert np.isnan(out[1]) and out[2] == 0.0
         assert scalars[index["z2"]] == pytest.approx(z2, rel=1e-12, abs=0.0)
         assert scalars[index["scale"]] == pytest.approx(max(np.sqrt(z2), floor), rel=1e-12, abs=0.0)
-        if checked and jumped:
-            assert out[1] > jump
-    assert z2 < 0.5  # the scale moved: the samples' innovations were smaller than their sigma
+    assert z2 < 0.5 and expected_frozen.max() > 0  # the scale moved, and legs froze
 
 
 def test_begin_sample_changes_nothing_for_a_non_finite_reading():
