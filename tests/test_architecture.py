@@ -75,6 +75,7 @@ ALLOWED_PRIVATE = {
     ("kinematics/newton/first_compile.py", "_cache"): "numba has no public query of a dispatcher's cache index",
     ("kinematics/newton/first_compile.py", "_cache_file"): "numba has no public query of a dispatcher's cache index",
     ("kinematics/newton/first_compile.py", "_index_path"): "numba has no public query of a dispatcher's cache index",
+    ("kinematics/newton/views.py", "_getvalue"): "numba's documented way to read a struct proxy's LLVM value (cgutils)",
 }
 #: argparse's type of ``add_subparsers()``'s result has no public name (the sub-commands annotate with it)
 ALLOWED_ANYWHERE = {"argparse._SubParsersAction"}

@@ -11,8 +11,9 @@ manifold. The paths:
 * **NumPy** — the same solver with :mod:`.numpy_kernels` (``compiled=False``): no numba;
 * **compiled** — :class:`.compiled.CompiledSolver`: the whole iteration in one numba call
   (:mod:`.iteration`), the chains evaluated from the Pinocchio model (:mod:`.chains`,
-  :mod:`.legs`, :mod:`.lie`), tables and buffers packed in flat arrays (:mod:`.packing`); the
-  readings path (:mod:`.follow`) and the batch loops (:mod:`.batch_kernels`) run compiled too.
+  :mod:`.legs`, :mod:`.lie`), tables and buffers packed in flat arrays (:mod:`.packing`) and
+  cut into shaped views inside the compiled code (:mod:`.views`); the readings path
+  (:mod:`.follow`) and the batch loops (:mod:`.batch_kernels`) run compiled too.
 
 :mod:`.outcomes` names the outcome codes; :mod:`.path_rules` the readings path's step rules.
 

@@ -52,6 +52,7 @@ from .kernels import (
 from .outcomes import CONVERGED, FLIPPED, INVALID_INPUT, NO_CONVERGENCE, SINGULAR, START_SINGULAR, UNCERTIFIED
 from .packing import FHEADER, LENGTH_SCALE, unpack
 from .structured import blocks_solve, schur_solve
+from .views import view
 
 
 @njit(cache=True, inline="always")
@@ -157,7 +158,7 @@ def _entries(schur: bool, step: str) -> tuple:
         nl, oc, fc = ints[5], ints[6], ints[7]
         prismatic_q, limited = ints[oc : oc + 6], ints[oc + 6 : oc + 6 + nl]
         lower, upper, slack = floats[fc : fc + nl], floats[fc + nl : fc + 2 * nl], floats[fc + 2 * nl]
-        home = floats[fc - 16 : fc].reshape((4, 4))
+        home = view(floats, fc - 16, (4, 4))
         given = settings[6]
         if given == 2.0:  # the readings are `offset`: outside the stroke (or NaN), no solve
             k = first_outside(offset, settings[13:19], settings[19:25], settings[25])

@@ -42,6 +42,7 @@ import numpy as np
 from numba import njit
 
 from .legs import ChainTables
+from .views import view
 
 HEADER = 8
 FHEADER = 6
@@ -55,17 +56,17 @@ WORK_NAMES = tuple("J R p E r x dv G LB A M nb wb state".split())
 WORK_R, WORK_STATE = WORK_NAMES.index("r"), WORK_NAMES.index("state")
 
 
-# Each view is ``buf[o : o + size]`` reshaped, ``o`` advancing: written out rather than through a
-# shared function so that Packed can run the same functions as plain Python (``.py_func``) to fill the
-# tables, without compiling them.
+# Each view is ``buf[o : o + size]`` with its shape (:func:`.views.view`), ``o`` advancing: written out
+# rather than through a shared function so that Packed can run the same functions as plain Python
+# (``.py_func``) to fill the tables, without compiling them.
 @njit(cache=True, inline="always")
 def unpack_ints(ints):
     """Views ``(leg_q, leg_v, platform_v, held_pos, colmap, free_v, kinds)`` of the integer tables, and their end."""
     n, nv, nf = ints[0], ints[1], ints[2]
     o = HEADER
-    leg_q = ints[o : o + 6 * n].reshape((6, n))
+    leg_q = view(ints, o, (6, n))
     o += 6 * n
-    leg_v = ints[o : o + 6 * n].reshape((6, n))
+    leg_v = view(ints, o, (6, n))
     o += 6 * n
     platform_v, held_pos = ints[o : o + 6], ints[o + 6 : o + 12]
     o += 12
@@ -73,7 +74,7 @@ def unpack_ints(ints):
     o += nv
     free_v = ints[o : o + nf]
     o += nf
-    kinds = ints[o : o + 6 * n].reshape((6, n))
+    kinds = view(ints, o, (6, n))
     return (leg_q, leg_v, platform_v, held_pos, colmap, free_v, kinds), o + 6 * n
 
 
@@ -82,12 +83,12 @@ def unpack_floats(ints, floats):
     """Views ``(placements, motions, closure, home)`` of the float tables, and their end."""
     n = ints[0]
     o = FHEADER + ints[2]  # after the step weights
-    placements = floats[o : o + 96 * n].reshape((6, n, 4, 4))
+    placements = view(floats, o, (6, n, 4, 4))
     o += 96 * n
-    motions = floats[o : o + 36 * n].reshape((6, n, 6))
+    motions = view(floats, o, (6, n, 6))
     o += 36 * n
-    closure = floats[o : o + 192].reshape((12, 4, 4))
-    home = floats[o + 192 : o + 208].reshape((4, 4))
+    closure = view(floats, o, (12, 4, 4))
+    home = view(floats, o + 192, (4, 4))
     return (placements, motions, closure, home), o + 208
 
 
@@ -101,7 +102,7 @@ def unpack_constants(ints, floats):
     nl, o, f = ints[5], ints[6], ints[7]  # after the tables of unpack_ints and unpack_floats
     prismatic_q, limited = ints[o : o + 6], ints[o + 6 : o + 6 + nl]
     lower, upper = floats[f : f + nl], floats[f + nl : f + 2 * nl]
-    home = floats[f - 16 : f].reshape((4, 4))
+    home = view(floats, f - 16, (4, 4))
     return (prismatic_q, limited, lower, upper, floats[f + 2 * nl], home), (o + 6 + nl, f + 2 * nl + 1)
 
 
@@ -109,11 +110,11 @@ def unpack_constants(ints, floats):
 def unpack_work(ints, work):
     """Views of the float work buffers (see the module docstring), and their end."""
     n, nv, nf = ints[0], ints[1], ints[2]
-    J = work[: 6 * nv].reshape((6, nv))
+    J = view(work, 0, (6, nv))
     o = 6 * nv
-    R = work[o : o + 108].reshape((12, 3, 3))
-    p = work[o + 108 : o + 144].reshape((12, 3))
-    E = work[o + 144 : o + 198].reshape((6, 3, 3))
+    R = view(work, o, (12, 3, 3))
+    p = view(work, o + 108, (12, 3))
+    E = view(work, o + 144, (6, 3, 3))
     o += 198
     r = work[o : o + 6 * n]
     o += 6 * n
@@ -121,13 +122,13 @@ def unpack_work(ints, work):
     o += nf
     dv = work[o : o + nv]
     o += nv
-    G = work[o : o + 6 * n * nf].reshape((6 * n, nf))
+    G = view(work, o, (6 * n, nf))
     o += 6 * n * nf
-    LB = work[o : o + 6 * n * n].reshape((6, n, n))
+    LB = view(work, o, (6, n, n))
     o += 6 * n * n
-    A = work[o : o + 36 * n].reshape((6, n, 6))
+    A = view(work, o, (6, n, 6))
     o += 36 * n
-    M = work[o : o + 36].reshape((6, 6))
+    M = view(work, o, (6, 6))
     nb, wb = work[o + 36 : o + 42], work[o + 42 : o + 48]
     state = work[o + 48 : o + 50]
     return (J, R, p, E, r, x, dv, G, LB, A, M, nb, wb, state), o + 50
@@ -137,7 +138,7 @@ def unpack_work(ints, work):
 def unpack_iwork(ints, iwork):
     """Views ``(PB, pm)`` of the integer work buffers, and their end."""
     n = ints[0]
-    return (iwork[: 6 * n].reshape((6, n)), iwork[6 * n : 6 * n + 6]), 6 * n + 6
+    return (view(iwork, 0, (6, n)), iwork[6 * n : 6 * n + 6]), 6 * n + 6
 
 
 @njit(cache=True, inline="always")
@@ -145,9 +146,9 @@ def unpack(ints, floats, work, iwork):
     """The views of all four arrays, ``(tables, frames, buffers, pivots)``: those of the four functions above.
 
     For a compiled loop that runs the iteration again and again (:func:`.iteration.iterate_schur`
-    per row of a batch, per substep of the readings path): made once and passed to each call,
-    they cost nothing per call, where making them in each call took about 0.9 us (32 views, each
-    a slice, most reshaped, and a reference count), a tenth of a warm Newton solve.
+    per row of a batch, per substep of the readings path): made once and passed to each call.
+    An entry called from Python makes its own: 32 views (:func:`.views.view`: a pointer, a shape
+    and strides each, and the buffer's reference count), a small part of a warm solve.
     """
     return (
         unpack_ints(ints)[0],

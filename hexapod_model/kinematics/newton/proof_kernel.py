@@ -18,6 +18,7 @@ from numba import njit
 
 from .kernels import copy_into
 from .krawczyk import prove_in_region, prove_path, prove_region, prove_whole
+from .views import view
 
 #: the dimensions of :func:`.krawczyk.workspace`'s arrays (V, Jm, Jr, Y, H, the 16 of the per-leg
 #: test's workspace, the 6 of the enclosure's)
@@ -274,25 +275,25 @@ def _v1(b, s, k):
 @njit(cache=True, inline="always")
 def _v2(b, s, k):
     o, a, c = s[k, 0], s[k, 1], s[k, 2]
-    return b[o : o + a * c].reshape((a, c))
+    return view(b, o, (a, c))
 
 
 @njit(cache=True, inline="always")
 def _v3(b, s, k):
     o, a, c, d = s[k, 0], s[k, 1], s[k, 2], s[k, 3]
-    return b[o : o + a * c * d].reshape((a, c, d))
+    return view(b, o, (a, c, d))
 
 
 @njit(cache=True, inline="always")
 def _v4(b, s, k):
     o, a, c, d, e = s[k, 0], s[k, 1], s[k, 2], s[k, 3], s[k, 4]
-    return b[o : o + a * c * d * e].reshape((a, c, d, e))
+    return view(b, o, (a, c, d, e))
 
 
 @njit(cache=True, inline="always")
 def _v5(b, s, k):
     o, a, c, d, e, f = s[k, 0], s[k, 1], s[k, 2], s[k, 3], s[k, 4], s[k, 5]
-    return b[o : o + a * c * d * e * f].reshape((a, c, d, e, f))
+    return view(b, o, (a, c, d, e, f))
 
 
 @njit(cache=True)

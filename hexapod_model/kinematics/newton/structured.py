@@ -136,7 +136,8 @@ def schur_solve(J, leg_cols, held_pos, ff_cols, colmap, rows, p, E, r, x, LB, PB
     det = 1.0
     for k in range(6):
         det *= M[k, k]
-    kappa = 2.0 * (fro2 / 6.0) ** 3 / abs(det) * (length * length * length)  # det of the weighted M
+    mean = fro2 / 6.0  # cubed by hand: numba compiles a power function for ``** 3``, the same product
+    kappa = 2.0 * (mean * mean * mean) / abs(det) * (length * length * length)  # det of the weighted M
     v = rhs
     lu_solve_in_place(M, pm, v, 6)
     for k in range(6):

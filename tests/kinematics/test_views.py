@@ -1,0 +1,105 @@
+"""Shaped views of packed buffers (:mod:`hexapod_model.kinematics.newton.views`), compiled and in Python."""
+
+from __future__ import annotations
+
+import gc
+
+import numpy as np
+import pytest
+from numba import njit
+from numba.core.errors import TypingError
+
+from hexapod_model.kinematics.newton.views import view
+
+
+@njit(cache=False)
+def _views(f, i, n):
+    """One view of each rank, shapes mixing constants and run-time values, and an int64 one."""
+    return (
+        view(f, 3, (n,)).copy(),
+        view(f, 5, (2, n)).copy(),
+        view(f, 1, (n, 2, 3)).copy(),
+        view(f, 7, (2, 1, n, 2)).copy(),
+        view(f, 0, (1, 2, 2, n, 2)).copy(),
+        view(i, 4, (n, 3)).copy(),
+    )
+
+
+def _python_views(f, i, n):
+    return (
+        view(f, 3, (n,)),
+        view(f, 5, (2, n)),
+        view(f, 1, (n, 2, 3)),
+        view(f, 7, (2, 1, n, 2)),
+        view(f, 0, (1, 2, 2, n, 2)),
+        view(i, 4, (n, 3)),
+    )
+
+
+def test_a_compiled_view_is_the_slice_reshaped_for_every_rank():
+    f = np.random.default_rng(0).normal(size=200)
+    i = np.arange(100, dtype=np.int64) * 7
+    for n in (1, 3, 5):
+        got, expected = _views(f, i, n), _python_views(f, i, n)
+        for g, e in zip(got, expected):
+            assert g.dtype == e.dtype and g.shape == e.shape
+            assert np.array_equal(g, e)
+        assert np.array_equal(expected[1], f[5 : 5 + 2 * n].reshape(2, n))
+
+
+@njit(cache=False)
+def _write_through(buffer, start, value):
+    v = view(buffer, start, (2, 3))
+    v[1, 2] = value
+    return v
+
+
+def test_a_compiled_view_shares_its_buffer_and_writes_reach_it():
+    buffer = np.zeros(20)
+    v = _write_through(buffer, 4, 2.5)
+    assert buffer[4 + 5] == 2.5 and np.count_nonzero(buffer) == 1
+    assert np.shares_memory(v, buffer) and v.flags.c_contiguous and v.shape == (2, 3)
+
+
+@njit(cache=False)
+def _view_of_a_new_buffer(n):
+    buffer = np.arange(float(n))
+    return view(buffer, 2, (2, 3))  # the buffer is referenced by its view alone once this returns
+
+
+def test_a_view_keeps_its_buffer_alive():
+    v = _view_of_a_new_buffer(20)
+    assert v.base is not None  # the buffer's owner, held by the view
+    gc.collect()
+    np.arange(1000.0) * 3.0  # memory reused if the buffer had been freed
+    assert np.array_equal(v, np.arange(2.0, 8.0).reshape(2, 3))
+
+
+@njit(cache=False)
+def _view_at(buffer, start, a, b):
+    return view(buffer, start, (a, b))
+
+
+@pytest.mark.parametrize("start, shape", [(-1, (2, 3)), (15, (2, 3)), (0, (5, 5)), (20, (1, 1)), (4, (-2, -3))])
+def test_a_view_reaching_outside_its_buffer_raises_compiled_and_in_python(start, shape):
+    buffer = np.zeros(20)
+    with pytest.raises(ValueError, match="outside"):
+        _view_at(buffer, start, *shape)
+    with pytest.raises(ValueError, match="outside"):
+        view(buffer, start, shape)
+
+
+def test_the_last_elements_of_a_buffer_make_a_view():
+    buffer = np.arange(20.0)
+    assert np.array_equal(_view_at(buffer, 14, 2, 3), buffer[14:].reshape(2, 3))
+    assert _view_at(buffer, 20, 0, 3).shape == (0, 3)
+
+
+@njit(cache=False)
+def _strided_view(buffer):
+    return view(buffer[::2], 0, (2, 2))
+
+
+def test_a_strided_buffer_is_refused_when_compiling():
+    with pytest.raises(TypingError):
+        _strided_view(np.zeros(20))
