@@ -96,6 +96,31 @@ def test_the_last_elements_of_a_buffer_make_a_view():
 
 
 @njit(cache=False)
+def _first(buffer):
+    return view(buffer, 0, (2, 2))[0, 0]
+
+
+@njit(cache=False)
+def _write_first(buffer):
+    view(buffer, 0, (2, 2))[0, 0] = 1.0
+
+
+def test_a_view_of_a_read_only_buffer_is_read_only():
+    buffer = np.arange(20.0)
+    buffer.setflags(write=False)
+    assert _first(buffer) == 0.0
+    with pytest.raises(TypingError):
+        _write_first(buffer)
+    with pytest.raises(ValueError):
+        view(buffer, 0, (2, 2))[0, 0] = 1.0
+
+
+def test_a_view_has_one_or_more_extents():
+    with pytest.raises(ValueError, match="extents"):
+        view(np.zeros(4), 0, ())
+
+
+@njit(cache=False)
 def _strided_view(buffer):
     return view(buffer[::2], 0, (2, 2))
 

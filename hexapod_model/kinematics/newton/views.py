@@ -39,6 +39,8 @@ def view(flat: np.ndarray, start: int, shape: tuple[int, ...]) -> np.ndarray:
         ValueError: the view would reach outside ``flat`` (``start`` or an extent negative, or
             its end past ``flat``'s).
     """
+    if not shape:
+        raise ValueError("a view needs one or more extents")
     size = math.prod(shape)
     if start < 0 or min(shape) < 0 or start + size > flat.shape[0]:
         raise ValueError(f"a view of {size} elements from {start} reaches outside a buffer of {flat.shape[0]}")
@@ -46,7 +48,11 @@ def view(flat: np.ndarray, start: int, shape: tuple[int, ...]) -> np.ndarray:
 
 
 def _shape_of(flat, start, shape) -> types.Array | None:
-    """The view's type; None (no such call) unless given a contiguous 1-D buffer, an integer and integers."""
+    """The view's type, read-only if the buffer is.
+
+    None (no such call) unless the arguments are a contiguous 1-D buffer, an integer and a tuple
+    of one or more integers.
+    """
     if not (
         isinstance(flat, types.Array)
         and flat.ndim == 1
@@ -57,7 +63,7 @@ def _shape_of(flat, start, shape) -> types.Array | None:
         and all(isinstance(d, types.Integer) for d in shape.types)
     ):
         return None
-    return types.Array(flat.dtype, len(shape), "C")
+    return types.Array(flat.dtype, len(shape), "C", readonly=not flat.mutable, aligned=flat.aligned)
 
 
 @type_callable(view)
