@@ -9,6 +9,16 @@ import pytest
 from numba import njit
 from numba.core.errors import TypingError
 
+from hexapod_model import Hexapod
+from hexapod_model.kinematics.newton.packing import (
+    WORK_NAMES,
+    unpack,
+    unpack_constants,
+    unpack_floats,
+    unpack_ints,
+    unpack_iwork,
+    unpack_work,
+)
 from hexapod_model.kinematics.newton.views import view
 
 
@@ -128,3 +138,42 @@ def _strided_view(buffer):
 def test_a_strided_buffer_is_refused_when_compiling():
     with pytest.raises(TypingError):
         _strided_view(np.zeros(20))
+
+
+@njit(cache=False)
+def _compiled_unpack(ints, floats, work, iwork):
+    """The solver's views made in compiled code (what every entry makes), and the constants' views."""
+    return unpack(ints, floats, work, iwork), unpack_constants(ints, floats)[0]
+
+
+def _same_memory(a, b):
+    """Whether ``a`` and ``b`` are the same view: shape, strides, data pointer and values."""
+    return (
+        a.shape == b.shape
+        and a.strides == b.strides
+        and a.__array_interface__["data"][0] == b.__array_interface__["data"][0]
+        and np.array_equal(a, b)
+    )
+
+
+@pytest.mark.parametrize("preset", ["reference", "spherical", "3-6"])
+def test_the_solvers_compiled_views_are_its_python_views(preset):
+    """Every view an entry makes of the packed arrays points where ``Packed``'s Python views point."""
+    hexa = Hexapod.from_preset(preset, check_body=False)
+    for held in (hexa.engine.held_forward, hexa.engine.held_inverse):
+        packed = hexa.engine.solver(held).packed
+        ints, floats, work, iwork = packed.arrays
+        (tables, frames, buffers, pivots), constants = _compiled_unpack(ints, floats, work, iwork)
+        python = (
+            unpack_ints.py_func(ints)[0],
+            unpack_floats.py_func(ints, floats)[0],
+            unpack_work.py_func(ints, work)[0],
+            unpack_iwork.py_func(ints, iwork)[0],
+        )
+        for compiled_views, python_views in zip((tables, frames, buffers, pivots), python):
+            assert len(compiled_views) == len(python_views)
+            for c, p in zip(compiled_views, python_views):
+                assert _same_memory(c, p)
+        for name, c in zip(WORK_NAMES, buffers):
+            assert _same_memory(c, packed.views[name])
+        assert _same_memory(constants[5], unpack_constants.py_func(ints, floats)[0][5])  # home (4, 4)
