@@ -260,10 +260,9 @@ def pack(arrays: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.nda
     buffers = (np.zeros(sizes[0]), np.zeros(sizes[1], dtype=np.int64))
     views = []
     for k, a in enumerate(arrays):
-        buffer = buffers[int(k in INTEGER)]
-        view = buffer[spec[k, 0] : spec[k, 0] + a.size].reshape(a.shape)
-        view[...] = a
-        views.append(view)
+        v = view(buffers[int(k in INTEGER)], int(spec[k, 0]), a.shape)  # as the compiled unpack makes it
+        v[...] = a
+        views.append(v)
     return buffers[0], buffers[1], spec, views
 
 
