@@ -37,6 +37,7 @@ from ..kinematics.newton.linalg import (
     lu_factor_in_place,
     lu_solve_transposed_in_place,
 )
+from ..kinematics.newton.proven import built
 from ..kinematics.newton.solver import NewtonSolver
 from ..kinematics.newton.structured import closure_weights, leg_block, platform_block
 
@@ -286,7 +287,12 @@ class SensitivityEvaluator:
             tt, tr, cond, det = self._measure(*args)
         if cond == math.inf:
             self.Jinv[:] = np.nan
-        return Sensitivity(math.sqrt(tt), math.sqrt(tr), cond, (det > 0.0) - (det < 0.0))
+        # Sensitivity(...), the same object, without the frozen __init__'s __setattr__ per field (one a tracker step)
+        sign = (det > 0.0) - (det < 0.0)
+        return built(
+            Sensitivity,
+            {"translation": math.sqrt(tt), "rotation": math.sqrt(tr), "condition_number": cond, "det_sign": sign},
+        )
 
     def _arguments(self, s: NewtonSolver) -> tuple | None:
         """:func:`measure_solved`'s arguments for solver ``s`` (``None``: no Schur step of these legs)."""

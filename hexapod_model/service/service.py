@@ -396,8 +396,9 @@ class FixtureService:
             else:
                 now = time.time()
                 stamp = msg.timestamp or now  # the bus's own clock: a backlog is not silence
-                behind = max(behind, now - stamp)
-                clock = min(stamp, now)  # for silence: a stamp ahead of the wall clock has not come yet
+                if now - stamp > behind:  # behind = max(behind, now - stamp), without a builtin's call a frame
+                    behind = now - stamp
+                clock = now if now < stamp else stamp  # for silence: a stamp ahead of the wall clock has not come yet
                 route = routes[bool(msg.is_extended_id)].get(msg.arbitration_id)
                 if route is None or msg.is_error_frame or msg.is_remote_frame:
                     self.unknown_frames += 1

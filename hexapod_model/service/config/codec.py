@@ -145,23 +145,20 @@ class FrameLayout:
         start, stop = self.offset, self.offset + self.width
         order, signed = self.byte_order, self.signed
         code = {1: "b", 2: "h", 4: "i", 8: "q"}.get(self.width)
-        if code is not None:
-            fmt = struct.Struct(("<" if order == "little" else ">") + (code if signed else code.upper()))
-            unpack_from, offset = fmt.unpack_from, self.offset
-
-            def count(data: bytes | bytearray) -> int:
-                return unpack_from(data, offset)[0]
-        else:
-
-            def count(data: bytes | bytearray) -> int:
-                return int.from_bytes(data[start:stop], order, signed=signed)  # type: ignore[arg-type]
-
         e, w = self.error_bit, self.warning_bit
         eb, em = (0, 0) if e is None else (e >> 3, 1 << (e & 7))
         wb, wm = (0, 0) if w is None else (w >> 3, 1 << (w & 7))
+        if code is not None:  # the count read in the one call (a function per field would be a call more a frame)
+            fmt = struct.Struct(("<" if order == "little" else ">") + (code if signed else code.upper()))
+            unpack_from, offset = fmt.unpack_from, self.offset
 
-        def unpack(data: bytes | bytearray) -> tuple[int, bool, bool]:
-            return count(data), bool(data[eb] & em), bool(data[wb] & wm)
+            def unpack(data: bytes | bytearray) -> tuple[int, bool, bool]:
+                return unpack_from(data, offset)[0], bool(data[eb] & em), bool(data[wb] & wm)
+        else:
+
+            def unpack(data: bytes | bytearray) -> tuple[int, bool, bool]:
+                count = int.from_bytes(data[start:stop], order, signed=signed)  # type: ignore[arg-type]
+                return count, bool(data[eb] & em), bool(data[wb] & wm)
 
         return unpack
 

@@ -26,7 +26,9 @@ class AheadCheck:
     """Hold an instant's first frame until the next frame says whether its stamp ran ahead (one fixture)."""
 
     def __init__(self) -> None:
-        self._held: Frame | None = None
+        #: the frame held (leg, payload, stamp), None when none is: while None, a frame that would not
+        #: open a newer instant is taken at once (:meth:`offer` returns it alone)
+        self.held: Frame | None = None
         self._found: dict[int, float] = {}  # leg -> stamp (s) of the frame that last showed it ahead
         #: legs whose frames ran ahead since the last record (the cycle names and clears them)
         self.legs: set[int] = set()
@@ -36,11 +38,11 @@ class AheadCheck:
     @property
     def held_stamp(self) -> float:
         """The stamp (s) of the frame held, -inf when none is."""
-        return -math.inf if self._held is None else self._held[2]
+        return -math.inf if self.held is None else self.held[2]
 
     def repeats(self, leg: int, data: bytes | bytearray, t: float, window: float) -> bool:
         """Whether the frame repeats the held one (same leg and payload, the same stamp or within ``window`` s)."""
-        held = self._held
+        held = self.held
         return held is not None and held[0] == leg and held[1] == data and (t == held[2] or abs(t - held[2]) <= window)
 
     def offer(
@@ -57,9 +59,9 @@ class AheadCheck:
             current: the stamp of the instant being collected (s): its first frame's, else ``newest``.
         """
         out: list[Frame] = []
-        held, self._held = self._held, None
+        held, self.held = self.held, None
         if held is not None and t < held[2] - skew and t <= current + skew:
-            self._held = held  # a frame of the instant being collected, arriving after it: not yet known
+            self.held = held  # a frame of the instant being collected, arriving after it: not yet known
             return [(leg, data, t)]
         if held is not None:
             if t < held[2] - skew:  # a newer instant than the collected one, older than it: its stamp ran ahead
@@ -73,12 +75,12 @@ class AheadCheck:
                 out.append(held)
                 newest = max(newest, held[2])
         if t > newest + skew:  # it would open a newer instant: the next frame confirms it (False for NaN)
-            self._held = (leg, data, t)
+            self.held = (leg, data, t)
         else:
             out.append((leg, data, t))
         return out
 
     def clear(self) -> None:
         """Forget the held frame and the legs found ahead (the bus clock went back)."""
-        self._held = None
+        self.held = None
         self._found.clear()

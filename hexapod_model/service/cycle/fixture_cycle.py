@@ -43,6 +43,7 @@ import logging
 import math
 from collections import deque
 from dataclasses import replace
+from operator import le
 
 import numpy as np
 import pinocchio as pin
@@ -245,8 +246,12 @@ class FixtureCycle:
             self.counters["late_frames"] += 1
             self._late.add(leg)
             return None
-        since, window = t - self._t[leg], REPEAT * self._period  # a repeat comes at once, not a period later
-        if (since == 0.0 or since <= window) and data == self._data[leg] or self._ahead.repeats(leg, data, t, window):
+        since, window, ahead = t - self._t[leg], REPEAT * self._period, self._ahead  # a repeat comes at once
+        if (
+            (since == 0.0 or since <= window)
+            and data == self._data[leg]
+            or (ahead.held is not None and ahead.repeats(leg, data, t, window))
+        ):
             self.counters["repeated_frames"] += 1  # the same frame again (a gateway's repeat)
             return None
         if self._checks is not None and check and leg < self._n_legs:  # the legs' layout (not the inclinometer's)
@@ -256,9 +261,11 @@ class FixtureCycle:
                 if len(self._failed) > 64:  # frames dropped meanwhile (ahead): never taken
                     self._failed.clear()
                 self._failed[leg, t] = failed
+        if ahead.held is None and not t > self._t_newest + skew:  # taken at once, as offer() would (False for NaN)
+            return self._take(leg, data, t, skew)
         published = None
         current = self._t_first if self._n_fresh else self._t_newest
-        for frame in self._ahead.offer(leg, data, t, skew, self._t_newest, current):
+        for frame in ahead.offer(leg, data, t, skew, self._t_newest, current):
             published = self._take(*frame, skew) or published
         return published
 
@@ -317,10 +324,12 @@ class FixtureCycle:
         if self._held is not None:  # (a second frame of one call: the held set's record before any other)
             self._queue_held()
         published = None
-        if self._n_fresh:
+        n_fresh, ts = self._n_fresh, self._t
+        if n_fresh:
             repeat = self._fresh[leg]
-            if t - self._t_first > skew or (repeat and not t - self._t[leg] <= skew):
+            if t - self._t_first > skew or (repeat and not t - ts[leg] <= skew):
                 published = self._close_incomplete()  # a newer instant begins: this set cannot complete
+                n_fresh = 0
             elif repeat:  # a second frame on this id within one instant
                 self.counters["duplicate_frames"] += 1
                 self._duplicate.add(leg)
@@ -340,26 +349,27 @@ class FixtureCycle:
                 self._tags[leg] = data[self._sync_byte]
         else:
             self._bad[leg], self._readings[leg] = "bad_frame", math.nan
-        dt = t - self._t[leg]
+        dt = t - ts[leg]
         if 0.0 < dt <= self._staleness:  # the lower quartile ignores missed frames (up to 3 in 4 intervals)
-            if dt > LOST_BETWEEN * self._period:  # sets were lost between: one period of them (False for NaN),
-                dt /= round(dt / self._period)  # so that losing most sets (a busy sender) cannot double the period
-            if len(self._intervals) < INTERVALS:
-                self._intervals.append(dt)
+            period, intervals, k = self._period, self._intervals, self._n_frames
+            if dt > LOST_BETWEEN * period:  # sets were lost between: one period of them (False for NaN),
+                dt /= round(dt / period)  # so that losing most sets (a busy sender) cannot double the period
+            if len(intervals) < INTERVALS:
+                intervals.append(dt)
             else:
-                self._intervals[self._n_frames % INTERVALS] = dt
-            self._n_frames += 1
-            if self._n_frames % 32 == 8:
-                self._period = sorted(self._intervals)[len(self._intervals) // 4]
-        self._t[leg], self._data[leg] = t, data
+                intervals[k % INTERVALS] = dt
+            self._n_frames = k = k + 1
+            if k % 32 == 8:
+                self._period = sorted(intervals)[len(intervals) // 4]
+        ts[leg], self._data[leg] = t, data
         if t > self._t_newest:
             self._t_newest = t
-        if not self._n_fresh:
+        if not n_fresh:
             self._t_first = t
         self._fresh[leg] = True
-        self._n_fresh += 1
-        if self._n_fresh == self._n:
-            self._fresh = [False] * self._n
+        self._n_fresh = n_fresh = n_fresh + 1
+        if n_fresh == self._n:
+            self._fresh = [False] * n_fresh
             self._n_fresh = 0
             if self._duplicate:
                 self._lost += 1
@@ -523,8 +533,9 @@ class FixtureCycle:
         if any(self._err):
             flags = [f"encoder_error:{self._names[k]}" for k in range(self._n) if self._err[k]]
             return self._failure(t, "encoder_error", self._set_flags(flags))
-        out = [k for k in range(len(self._lo)) if not self._lo[k] <= self._readings[k] <= self._hi[k]]
-        if out:
+        lo, hi, readings = self._lo, self._hi, self._readings
+        if not (all(map(le, lo, readings)) and all(map(le, readings, hi))):  # False for NaN, as below
+            out = [k for k in range(len(lo)) if not lo[k] <= readings[k] <= hi[k]]
             return self._failure(t, "out_of_stroke", self._set_flags([f"out_of_stroke:leg{k + 1}" for k in out]))
         stuck = self.stuck.update(self._instant, self._counts[:6], six)
         if stuck:

@@ -34,6 +34,8 @@ class StuckDetector:
     def __init__(self, sigmas: float, noise: float, resolution: float, alpha: float = 0.3):
         self.limit = sigmas * max(noise, abs(resolution))
         self.alpha = alpha
+        # the average's weight of a change over n instants, 1 - (1 - alpha)^n, for n = 0 .. GAP_INSTANTS
+        self._gain = [1.0 - (1.0 - alpha) ** n for n in range(GAP_INSTANTS + 1)]
         self._counts: list[int] | None = None
         self._since = [0] * 6  # sampling instant the current count was first seen
         self._value = [0.0] * 6  # its reading (m)
@@ -48,7 +50,7 @@ class StuckDetector:
         if self.limit == 0.0:
             return []
         stuck = []
-        prev, since, value, v = self._counts, self._since, self._value, self._v
+        prev, since, value, v, gain = self._counts, self._since, self._value, self._v, self._gain
         for k in range(6):
             if prev is not None and counts[k] == prev[k]:
                 n = instant - since[k]
@@ -59,7 +61,7 @@ class StuckDetector:
                 continue
             n = instant - since[k]
             if prev is not None and 0 < n <= GAP_INSTANTS:  # an average over n instants weighs as n sets
-                v[k] += (1.0 - (1.0 - self.alpha) ** n) * ((float(readings[k]) - value[k]) / n - v[k])
+                v[k] += gain[n] * ((float(readings[k]) - value[k]) / n - v[k])
             elif n > GAP_INSTANTS:  # the speed before a long gap says nothing about now
                 v[k] = 0.0
             since[k], value[k] = instant, float(readings[k])
