@@ -148,7 +148,7 @@ class FrameLayout:
         e, w = self.error_bit, self.warning_bit
         eb, em = (0, 0) if e is None else (e >> 3, 1 << (e & 7))
         wb, wm = (0, 0) if w is None else (w >> 3, 1 << (w & 7))
-        if code is not None:  # the count read in the one call (a function per field would be a call more a frame)
+        if code is not None:  # one Python call a frame: the count is read inside it, not by a function of its own
             fmt = struct.Struct(("<" if order == "little" else ">") + (code if signed else code.upper()))
             unpack_from, offset = fmt.unpack_from, self.offset
 
