@@ -578,7 +578,10 @@ def main(argv=None) -> int:
     hexa = Hexapod.from_preset("reference")
     readings = readings_sequence(hexa)
     one = rates_of(args.one)
-    step_us, solve_us, idle = solve_cost(hexa, readings, one)
+    groups = [(1, one), (args.fixtures, rates_of(args.many)), *args.more]
+    # the solve after the idle gap of every one-fixture run (--fixtures 1 and --more 1:RATES are some)
+    alone = list(dict.fromkeys(rate for n, rates in groups if n == 1 for rate in rates))
+    step_us, solve_us, idle = solve_cost(hexa, readings, alone)
     print(
         f"a set alone: tracker step {step_us:.0f} us CPU (solve, checks, uncertainty), of which the solve "
         f"(forward from the prediction, with its proof) {solve_us:.0f} us; "
@@ -602,7 +605,6 @@ def main(argv=None) -> int:
             flush=True,
         )
     reports = []
-    groups = [(1, one), (args.fixtures, rates_of(args.many)), *args.more]
     with tempfile.TemporaryDirectory() as tmp:
         for n, rates in groups:
             for rate in rates:

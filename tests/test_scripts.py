@@ -572,6 +572,27 @@ def test_service_benchmark_reads_the_feeders_cpu_while_it_lives(tmp_path, monkey
     assert report["records"] > 0 and report["os_sim_cpu_pct"] > 0.0
 
 
+def test_service_benchmark_times_the_idle_gap_solve_of_every_one_fixture_run(monkeypatch):
+    """``--fixtures 1`` (and ``--more 1:RATE``) runs of one fixture: each gets its solve after its own idle gap.
+
+    Such a run looked up an idle-gap solve that was only timed for the ``--one`` rates, and the
+    script stopped on a ``KeyError``.
+    """
+    bench = _benchmark("service")
+    runs = []
+
+    def run(hexa, readings, n, rate, seconds, tmp):  # the fed run itself: its arguments, no stream
+        runs.append((n, rate))
+        return {"fixtures": n, "rate_hz": rate, "sustained": True}
+
+    monkeypatch.setattr(bench, "run", run)
+    monkeypatch.setattr(bench, "line", repr)
+    monkeypatch.setattr(bench, "IDLE_SOLVES", 3)
+    argv = ["--seconds", "0.1", "--one", "1000", "--many", "500", "--fixtures", "1", "--more", "1:250"]
+    assert bench.main(argv) == 0
+    assert runs == [(1, 1000.0), (1, 500.0), (1, 250.0)]
+
+
 @pytest.mark.parametrize("more", ["5", "5:", "0:100", "x:100", "5:-1", "5:nan", "5:100,inf"])
 def test_service_benchmark_refuses_a_bad_group_in_one_line(more):
     cmd = [sys.executable, str(ROOT / "benchmarks" / "service.py"), "--more", more]
