@@ -64,6 +64,16 @@ def _after_idle(r: dict) -> str:
     return f"; {r['service_cpu_us_per_set'] / us:.1f}x the solve after the same idle gap, {us:.0f} µs"
 
 
+def _paced(r: dict) -> str:
+    """A fed run's set before the bus and threads: its cycles' work at the stream's pace and the bus's wake-ups."""
+    if "paced_by_hand_us" not in r:
+        return ""
+    return (
+        f"; its cycles handed their frames at the stream's pace, without the bus: {r['paced_by_hand_us']:.0f} µs a set "
+        f"(back to back: {r['warm_by_hand_us']:.0f} µs), the bus's wake-ups alone: {r['wakeups_us']:.0f} µs a set"
+    )
+
+
 def _backlog(r: dict) -> str:
     """For a run that fell behind: its CPU per set handled times the sets sent a second (over 100 % is possible)."""
     return "" if r["sustained"] else " needed by the sets sent"
@@ -79,7 +89,7 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
             f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x its solve's {r['solve_us']:.0f} µs{_after_idle(r)}), "
             "latency median "
             f"{r['latency_ms_median']:.2f} ms, p99 {r['latency_ms_p99']:.1f} ms, "
-            f"{'sustained' if r['sustained'] else 'not sustained'}{_warm_up(r)}",
+            f"{'sustained' if r['sustained'] else 'not sustained'}{_warm_up(r)}{_paced(r)}",
         )
         for r in runs
     ]

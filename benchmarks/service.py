@@ -28,7 +28,11 @@ is *sustained* when at least 99 % of the sets sent are solved and the p99 latenc
 capacity. Each run prints the service's CPU per solved set beside the tracker step's and the solve's
 own (measured first, alone, in this process), and a run of one fixture also against the solve timed
 after the same idle gap (``1 / rate``): after a gap the caches are cold, and the same solve costs
-more CPU (docs/performance.md). Each fixture plays the trajectory from a point of its own (fixture
+more CPU (docs/performance.md). Each fed run is also split before the bus and the threads: the
+same fixtures' cycles handed the same frames on this thread at the stream's pace, asleep between
+periods (their caches cold after each idle gap, as the cycle thread's), beside the same handed
+back to back, and a thread that only takes the stream's frames off the virtual bus (the bus's
+wake-ups alone), each CPU a set. Each fixture plays the trajectory from a point of its own (fixture
 ``i`` of ``F`` from sample ``i * SETS / F``): the fixtures of a cell stand at poses of their own
 (fixtures in step would share what one proof leaves for the next step, its region and
 preconditioner, as no cell does). Every fixture's frames of one sampling period are queued together:
@@ -68,6 +72,7 @@ from hexapod_model import Hexapod
 from hexapod_model.analysis.sensitivity import SensitivityEvaluator
 from hexapod_model.analysis.trajectories import box_poses
 from hexapod_model.service import FixtureCycle, FixtureService, PoseSolver, config_from_dict, geometry_hash
+from hexapod_model.service.service import bus_wait
 from hexapod_model.service.sim.config import trajectory_sequence
 from hexapod_model.service.threads import NamedThread
 from hexapod_model.tracking.types import characteristic_length, predict
@@ -242,7 +247,9 @@ def frames_of(config, readings: np.ndarray, periods: int) -> list[tuple[int, int
     ]
 
 
-def cycles_by_hand(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, sets: int, folder: Path) -> float:
+def cycles_by_hand(
+    hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, sets: int, folder: Path, paced: bool = False
+) -> float:
     """CPU (us) a set of the fixtures' cycles handed their frames directly: no bus, no threads, no store.
 
     The frames of :func:`capacity`'s run (same configuration, readings and stamps) go to each
@@ -251,6 +258,11 @@ def cycles_by_hand(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: flo
     committed at once, as the store would): the set's work in the service's Python, from its
     frames to its record (tracker step included), without what python-can's bus, the other
     threads and the store add. ``sets`` periods are timed after a warm-up of 200.
+
+    ``paced``: each timed period's frames are handed over at the period's time (``rate`` periods
+    a second), the thread asleep in between, as a fed stream's cycle thread waits for its
+    frames: the same work after the stream's idle gaps, its caches cold (only the CPU of the
+    periods is counted, not the sleep).
     """
     warm = 200
     _, config = make_config(fixtures, folder)
@@ -277,9 +289,21 @@ def cycles_by_hand(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: flo
 
     first = len(frames) * warm // (warm + sets)  # every period has the same frames
     feed(frames[:first])
-    c0 = time.thread_time()
-    records = feed(frames[first:])
-    cpu = time.thread_time() - c0
+    if paced:
+        per = 6 * fixtures  # a period's frames
+        periods = [frames[k : k + per] for k in range(first, len(frames), per)]
+        records, cpu, start = 0, 0.0, time.perf_counter()
+        for k, part in enumerate(periods):
+            wait = start + k / rate - time.perf_counter()
+            if wait > 0.0:
+                time.sleep(wait)
+            c0 = time.thread_time()
+            records += feed(part)
+            cpu += time.thread_time() - c0
+    else:
+        c0 = time.thread_time()
+        records = feed(frames[first:])
+        cpu = time.thread_time() - c0
     if records != sets * fixtures:
         raise RuntimeError(f"cycles by hand: {records} records of {sets * fixtures} sets")
     return 1e6 * cpu / (sets * fixtures)
@@ -347,6 +371,48 @@ def solves_cost(hexa: Hexapod, readings: np.ndarray, tol: float, gap: float = 0.
         spent += time.thread_time() - t if k >= 200 else 0.0
         history.appendleft(sol.q)
     return 1e6 * spent / (last - 200)
+
+
+def wakeups(readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> float:
+    """CPU (us) a set of a thread that only takes a fed run's frames off the bus: the bus's wake-ups alone.
+
+    The frames of ``fixtures`` fixtures' sets are delivered ``rate`` periods a second for
+    ``seconds``, as :func:`run`'s feeder delivers them; the thread waits for each frame as the
+    service's loop does (python-can's ``recv`` with the service's wait, :func:`bus_wait`) and
+    does nothing with it. Its CPU per set is what waiting for the stream's frames costs a
+    served set before any of the service's work.
+    """
+    channel, config = make_config(fixtures, folder)
+    bus = can.Bus(interface="virtual", channel=channel)
+    period_frames = [m for _, _, _, m in frames_of(config, readings, 1)]
+    stop, taken, cpu = threading.Event(), [0], [0.0]
+    tick = bus_wait(config)
+
+    def take() -> None:
+        recv, c0 = bus.recv, time.thread_time()
+        while not stop.is_set():
+            if recv(tick) is not None:
+                taken[0] += 1
+        cpu[0] = time.thread_time() - c0
+
+    receiver = threading.Thread(target=take, name="bench-recv")
+    receiver.start()
+    deliver, periods = bus.queue.put, max(1, int(seconds * rate))
+    try:
+        start = time.perf_counter()
+        for k in range(periods):
+            wait = start + k / rate - time.perf_counter()
+            if wait > 0.0:
+                time.sleep(wait)
+            for m in period_frames:
+                deliver(m)
+        while taken[0] < periods * len(period_frames) and time.perf_counter() - start < seconds + 5.0:
+            time.sleep(0.01)
+    finally:
+        stop.set()
+        receiver.join()
+        bus.shutdown()
+    return 1e6 * cpu[0] / (periods * fixtures)
 
 
 def caught_up(
@@ -501,6 +567,22 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
     }
 
 
+def split_of_fed(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> dict:
+    """What a fed run's set costs before the bus and threads: its cycles' work at the stream's pace, the bus's wake-ups.
+
+    ``paced_by_hand_us``: the fixtures' cycles handed their frames at the stream's pace
+    (:func:`cycles_by_hand` ``paced``), their caches cold after each idle gap, beside
+    ``warm_by_hand_us``, the same handed back to back; ``wakeups_us``: a thread that only takes
+    the stream's frames off the bus (:func:`wakeups`). All CPU us a set.
+    """
+    sets = max(200, int(seconds * rate))
+    return {
+        "paced_by_hand_us": cycles_by_hand(hexa, readings, fixtures, rate, sets, folder, paced=True),
+        "warm_by_hand_us": cycles_by_hand(hexa, readings, fixtures, rate, sets, folder),
+        "wakeups_us": wakeups(readings, fixtures, rate, seconds, folder),
+    }
+
+
 def line(r: dict) -> str:
     return (
         f"{r['fixtures']:3d} x {r['rate_hz']:6.0f} Hz  sets {r['sets_sent']:7d}  solved {r['records']:7d}  "
@@ -513,6 +595,17 @@ def line(r: dict) -> str:
         f"hx-sim {r['os_sim_cpu_pct']:.1f}, other {r['os_other_cpu_pct']:.1f})  "
         f"{'sustained' if r['sustained'] else 'NOT sustained'}  {r['statuses']}  "
         f"(after a warm-up of {r['warm_up_s']:.1f} s{'' if r['caught_up'] else ': still behind'})"
+        f"{paced(r)}"
+    )
+
+
+def paced(r: dict) -> str:
+    """The fed run's set before the bus and threads (:func:`split_of_fed`), or empty."""
+    if "paced_by_hand_us" not in r:
+        return ""
+    return (
+        f"\n    its cycles handed their frames at the stream's pace, without the bus: {r['paced_by_hand_us']:.0f} us "
+        f"a set (back to back: {r['warm_by_hand_us']:.0f}); the bus's wake-ups alone: {r['wakeups_us']:.0f} us a set"
     )
 
 
@@ -609,10 +702,12 @@ def main(argv=None) -> int:
         for n, rates in groups:
             for rate in rates:
                 extra = {"solve_us": solve_us} | ({"solve_idle_us": idle[rate]} if n == 1 else {})
+                extra |= split_of_fed(hexa, readings, n, rate, args.seconds, Path(tmp))
                 reports.append(run(hexa, readings, n, rate, args.seconds, Path(tmp)) | extra)
                 print(line(reports[-1]), flush=True)
         if still is not None:
             extra = {"solve_us": rest_solve_us, "motion": "rest"}
+            extra |= split_of_fed(hexa, still, args.fixtures, 100.0, args.seconds, Path(tmp))
             reports.append(run(hexa, still, args.fixtures, 100.0, args.seconds, Path(tmp)) | extra)
             print("at rest " + line(reports[-1]), flush=True)
         if args.capacity:

@@ -545,6 +545,11 @@ def test_service_benchmark_runs(tmp_path):
     assert fed[1]["solve_idle_us"] > 0.0 and "solve_idle_us" not in fed[2]
     assert "the solve after the same idle gap, " in rows["pose service, 1 fixture(s) × 100 Hz"]
     assert "idle gap" not in rows["pose service, 2 fixture(s) × 20 Hz"]
+    # every fed run beside its cycles handed their frames at the stream's pace and the bus's wake-ups alone
+    for r in [*fed.values(), *rest]:
+        assert all(0.0 < r[k] < 1e6 for k in ("paced_by_hand_us", "warm_by_hand_us", "wakeups_us")), r
+    paced = f"at the stream's pace, without the bus: {fed[1]['paced_by_hand_us']:.0f} µs a set"
+    assert paced in rows["pose service, 1 fixture(s) × 100 Hz"] and "the bus's wake-ups alone" in out.stdout
 
 
 def test_service_benchmark_reads_the_feeders_cpu_while_it_lives(tmp_path, monkeypatch):

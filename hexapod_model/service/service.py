@@ -54,6 +54,15 @@ TRANSIT_WINDOW = 1.0  # s: silence is judged allowing for the longest wait of a 
 HOLD_LIMIT = 0.002  # s: a complete set waits at most this long for the frames queued behind it (_loop)
 
 
+def bus_wait(config: ServiceConfig) -> float:
+    """How long (s) the service's loop waits for a frame before it checks the fixtures for silence.
+
+    Half the shortest ``staleness`` of the fixtures, within 2 ms and 50 ms: a silent leg is
+    reported within half its staleness, and a quiet bus wakes the loop no more often than that.
+    """
+    return min(0.05, max(0.002, min(f.staleness for f in config.fixtures) / 2))
+
+
 class FixtureService:
     """Run the pose service of every fixture of ``config``.
 
@@ -363,7 +372,7 @@ class FixtureService:
     # ----- the cycle thread -----
     def _loop(self) -> None:
         assert self._bus is not None
-        tick = min(0.05, max(0.002, min(f.staleness for f in self.config.fixtures) / 2))
+        tick = bus_wait(self.config)
         routes, recv, last_check = self._routes, self._bus.recv, time.time()
         behind = 0.0  # s, the most a frame waited between its stamp and its handling since the last check
         # the most a frame waited lately: a quiet bus is quiet up to the wall clock minus this (frames stamped

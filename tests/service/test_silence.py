@@ -160,3 +160,15 @@ def test_the_warm_up_before_the_first_frame_is_no_silence_through_the_service(tm
     assert bus.start is not None and bus.start - service.started > 0.05  # the warm-up took longer than staleness
     assert sum(r.status == "ok" for r in records) > 10
     assert not any(r.status == "silent_leg" for r in records), [r.flags for r in records if r.status == "silent_leg"]
+
+
+def test_the_loops_wait_is_half_the_shortest_staleness_within_its_bounds(tmp_path):
+    """``bus_wait``: half the shortest staleness of the fixtures, never under 2 ms nor over 50 ms."""
+    from hexapod_model.service.service import bus_wait
+
+    def wait(*stale: float) -> float:
+        tables = [fixture_table(f"f{i}", i, staleness=s) for i, s in enumerate(stale)]
+        return bus_wait(service_config(tmp_path, tables))
+
+    assert wait(0.05) == TICK and wait(0.05, 0.02) == 0.01
+    assert wait(1e-3) == 0.002 and wait(10.0) == 0.05
