@@ -343,6 +343,14 @@ def false_alarm_rows(data: list[dict]) -> list[tuple[str, str]]:
     return rows
 
 
+def _python_before(r: dict) -> str:
+    """`` (before solve_schur 7.2, ...)``: the tracker step's Python by where it runs, the largest first (or empty)."""
+    if "python_before_us" not in r:
+        return ""
+    parts = sorted(r["python_before_us"].items(), key=lambda kv: -kv[1])
+    return " (" + ", ".join(f"{'' if n == 'after the last' else 'before '}{n} {us:.1f}" for n, us in parts[:5]) + ")"
+
+
 def tracker_kernel_rows(r: dict) -> list[tuple[str, str]]:
     """``tracker_kernels.py``: a moving tracker step's compiled kernels, the Python around them, and their floor."""
     parts = sorted(r["kernels_in_step_us"].items(), key=lambda kv: -kv[1])
@@ -356,7 +364,8 @@ def tracker_kernel_rows(r: dict) -> list[tuple[str, str]]:
         (
             "reference: tracker step, moving at 1 kHz, where its CPU goes",
             f"{r['step_us']:.1f} µs: its {len(r['sequence'])} compiled kernels {r['kernels_in_step_total_us']:.1f} µs "
-            f"inside the step ({named}, the rest less), the Python around them {r['python_in_step_us']:.1f} µs",
+            f"inside the step ({named}, the rest less), the Python around them {r['python_in_step_us']:.1f} µs"
+            f"{_python_before(r)}",
         ),
         (
             "reference: tracker step's compiled kernels without the Python between them, CPU a step",

@@ -7,7 +7,10 @@ through one :class:`~hexapod_model.service.PoseSolver`, as the service's cycle s
 
 1. the step's CPU (``PoseSolver.step``: the tracker's step and the service's outcome);
 2. each compiled kernel the step calls, timed inside the step (the thread's CPU clock around each
-   call); the rest of the step is the Python around them (checks, results, bookkeeping);
+   call); the rest of the step is the Python around them (checks, results, bookkeeping), split by
+   where it runs: before each kernel (from the step's start or the last kernel's end) and after
+   the last, in the shares of the recorded steps' gaps (recording slows the Python between the
+   kernels: its shares are kept, its sum is the step's);
 3. the same kernels with the same arguments, replayed step after step from Python without the
    step's other work: what they cost when no Python runs between them (whose objects would
    otherwise evict their code and data from the caches);
@@ -52,7 +55,7 @@ class _Timed:
     """A kernel (machine code or dispatcher) that, while :attr:`recording`, logs each call's arguments and CPU."""
 
     recording = False
-    log: list[tuple[str, Callable, tuple, int]] = []
+    log: list[tuple[str, Callable, tuple, int, int]] = []  # name, dispatcher, arguments, CPU (ns), start (ns)
 
     def __init__(self, name: str, dispatcher: Callable, code: Callable):
         self.name, self.dispatcher, self.code = name, dispatcher, code
@@ -62,7 +65,7 @@ class _Timed:
             return self.code(*args)
         t = time.thread_time_ns()
         out = self.code(*args)
-        _Timed.log.append((self.name, self.dispatcher, args, time.thread_time_ns() - t))
+        _Timed.log.append((self.name, self.dispatcher, args, time.thread_time_ns() - t, t))
         return out
 
     def __getattr__(self, name: str):  # signatures, the cache: what the library asks a dispatcher
@@ -103,17 +106,22 @@ def _noop(*args) -> None:
     return None
 
 
-def wrapper_cost(calls: int = 20000) -> tuple[float, float]:
-    """CPU (us) a :class:`_Timed` adds to a call: not recording, and inside its timed window while recording."""
+def wrapper_cost(calls: int = 20000) -> tuple[float, float, float]:
+    """CPU (us) a :class:`_Timed` adds to a call: not recording; while recording, inside its window and outside it."""
     timed, args = _Timed("noop", _noop, _noop), (np.zeros(6), 0.0)
     off = cpu_per_call(lambda: timed(*args), calls) - cpu_per_call(lambda: _noop(*args), calls)
     _Timed.log, _Timed.recording = [], True
+    gc.disable()  # as while the steps are recorded
+    t = time.thread_time_ns()
     for _ in range(calls):
         timed(*args)
+    recorded = (time.thread_time_ns() - t) / calls / 1e3
+    gc.enable()
     _Timed.recording = False
     inside = float(np.median([c[3] for c in _Timed.log]) / 1e3)
     _Timed.log = []
-    return max(off, 0.0), inside
+    bare = cpu_per_call(lambda: _noop(*args), calls)
+    return max(off, 0.0), inside, max(recorded - inside - bare, 0.0)
 
 
 def call_names(sequence: tuple[str, ...]) -> list[str]:
@@ -146,24 +154,38 @@ def measure(steps: int, fused: bool) -> dict:
         k0[0] = k + 1
 
     step_us = cpu_per_call(step, steps, rounds=1)
-    recorded = []
+    recorded, bounds = [], []
     gc.disable()  # the records' tuples would trigger collections inside the timed calls
     for _ in range(steps):
         _Timed.log = []
         _Timed.recording = True
+        t = time.thread_time_ns()
         step()
+        bounds.append((t, time.thread_time_ns()))
         _Timed.recording = False
         recorded.append(_Timed.log)
     gc.enable()
-    off, inside = wrapper_cost()
+    off, inside, outside = wrapper_cost()
     sequence, _ = Counter(tuple(c[0] for c in calls) for calls in recorded).most_common(1)[0]
-    moving = [calls for calls in recorded if tuple(c[0] for c in calls) == sequence]
+    chosen = [i for i, calls in enumerate(recorded) if tuple(c[0] for c in calls) == sequence]
+    moving = [recorded[i] for i in chosen]
     # less the timing's own cost inside the window (a Python function that does nothing, timed the same way)
     keys = call_names(sequence)
     in_step = {key: float(np.mean([c[i][3] for c in moving]) / 1e3) - inside for i, key in enumerate(keys)}
     kernels_us = sum(in_step.values())
     step_us -= off * len(sequence)  # the wrappers' cost outside their windows
-    codes = [_DIRECT(dispatcher, args) for _, dispatcher, args, _ in moving[0]]
+    # the Python before each call (from the step's start or the last call's end) and after the last: the
+    # recorded steps' CPU between the timed windows, less a recording wrapper's cost outside its window,
+    # in shares of the Python around the kernels (recording slows the steps' Python: its shares, not its sum)
+    gaps = []
+    for i, calls in zip(chosen, moving, strict=True):
+        ends = [bounds[i][0]] + [c[4] + c[3] for c in calls]
+        gaps.append([c[4] - end for c, end in zip(calls, ends, strict=False)] + [bounds[i][1] - ends[-1]])
+    between = np.mean(np.array(gaps, dtype=float), axis=0) / 1e3
+    between[:-1] -= outside  # a recording wrapper's cost before its window (its part after it: small)
+    between = np.maximum(between, 0.0) * (step_us - kernels_us) / max(float(np.sum(between)), 1e-9)
+    python_before = {key: float(us) for key, us in zip([*keys, "after the last"], between, strict=True)}
+    codes = [_DIRECT(dispatcher, args) for _, dispatcher, args, *_ in moving[0]]
     argsets = [[c[2] for c in calls] for calls in moving]
     at = [0]
 
@@ -181,13 +203,14 @@ def measure(steps: int, fused: bool) -> dict:
         "kernels_in_step_us": in_step,
         "kernels_in_step_total_us": kernels_us,
         "python_in_step_us": step_us - kernels_us,
+        "python_before_us": python_before,  # the Python before each call, and after the last (recorded steps)
         "replayed_us": replayed_us,
-        "wrapper_us": {"outside": off, "inside": inside},
+        "wrapper_us": {"outside": off, "inside": inside, "outside_recording": outside},
     }
     if fused:
         names = [f"a{i}" for i in range(len(sequence))]
         source = f"def fused({', '.join(names)}):\n" + "".join(f"    k{i}(*a{i})\n" for i in range(len(names)))
-        scope: dict = {f"k{i}": dispatcher for i, (_, dispatcher, _, _) in enumerate(moving[0])}
+        scope: dict = {f"k{i}": dispatcher for i, (_, dispatcher, *_) in enumerate(moving[0])}
         exec(source + "    return 0\n", scope)  # noqa: S102 - a call of each kernel, generated for this sequence
         function = numba.njit(scope["fused"])
         t = time.process_time()
@@ -219,6 +242,8 @@ def main(argv=None) -> int:
         f"  {'together':24s}{r['kernels_in_step_total_us']:7.1f} us; "
         f"the Python around them {r['python_in_step_us']:.1f} us"
     )
+    print("the Python around them, before each kernel and after the last (shares of the recorded steps' gaps):")
+    print("  " + ", ".join(f"{name} {us:.1f}" for name, us in r["python_before_us"].items()) + " us")
     print(f"the same kernels replayed step after step, no Python between them: {r['replayed_us']:.1f} us a step")
     if "fused_us" in r:
         print(

@@ -375,6 +375,11 @@ def test_tracker_kernels_benchmark_splits_a_step_into_its_kernels_and_the_python
     assert 0 < data["replayed_us"] < data["step_us"]  # the kernels without the step's Python cost less than the step
     assert data["fused_us"] > 0 and data["fused_compile_s"] > 0
     assert 0 <= data["wrapper_us"]["inside"] < 5  # the timing's own cost, taken off each kernel
+    # the Python around the kernels split before each call and after the last: shares that add up to it
+    before = data["python_before_us"]
+    assert list(before) == [*data["kernels_in_step_us"], "after the last"] and min(before.values()) >= 0.0
+    assert sum(before.values()) == pytest.approx(data["python_in_step_us"], rel=1e-9)
+    assert "before each kernel and after the last" in out.stdout
     rows = dict(_performance_table().tracker_kernel_rows(data))
     assert "the Python around them" in rows["reference: tracker step, moving at 1 kHz, where its CPU goes"]
     assert (
