@@ -64,6 +64,11 @@ def _after_idle(r: dict) -> str:
     return f"; {r['service_cpu_us_per_set'] / us:.1f}x the solve after the same idle gap, {us:.0f} µs"
 
 
+def _frame_gap(r: dict) -> str:
+    """``, a set's frames 130 µs apart`` for a fed run with ``--frame-gap`` (else empty)."""
+    return f", a set's frames {r['frame_gap_us']:.0f} µs apart" if "frame_gap_us" in r else ""
+
+
 def _paced(r: dict) -> str:
     """A fed run's set before the bus and threads: its cycles' work at the stream's pace and the bus's wake-ups."""
     if "paced_by_hand_us" not in r:
@@ -71,6 +76,7 @@ def _paced(r: dict) -> str:
     return (
         f"; its cycles handed their frames at the stream's pace, without the bus: {r['paced_by_hand_us']:.0f} µs a set "
         f"(back to back: {r['warm_by_hand_us']:.0f} µs), the bus's wake-ups alone: {r['wakeups_us']:.0f} µs a set"
+        + (f" (frames delivered {r['frame_gap_delivered_us']:.0f} µs apart)" if "frame_gap_us" in r else "")
     )
 
 
@@ -84,7 +90,7 @@ def service_rows(data: list[dict]) -> list[tuple[str, str]]:
     runs = [r for r in data if r.get("kind") != "capacity"]
     rows = [
         (
-            f"pose service, {r['fixtures']} fixture(s) × {r['rate_hz']:.0f} Hz{_at_rest(r)}",
+            f"pose service, {r['fixtures']} fixture(s) × {r['rate_hz']:.0f} Hz{_at_rest(r)}{_frame_gap(r)}",
             f"{r['service_cpu_pct']:.0f} % of a core{_backlog(r)} ({r['service_cpu_us_per_set']:.0f} µs a set, "
             f"{r['service_cpu_us_per_set'] / r['solve_us']:.1f}x its solve's {r['solve_us']:.0f} µs{_after_idle(r)}), "
             "latency median "
@@ -403,6 +409,11 @@ BENCHMARKS: list[tuple[list[str], list[str], Callable[[Any], list[tuple[str, str
             "--rest",
         ],
         ["service.py"],
+        service_rows,
+    ),
+    (  # one fixture at 1 kHz on a bus that carries a set's frames one after another (1 Mbit/s)
+        ["service.py", "--seconds", "2", "--one", "1000", "--many", "", "--frame-gap", "130"],
+        ["service.py", "--one", "1000", "--many", "", "--frame-gap", "130"],
         service_rows,
     ),
     (["service_memory.py", "--fixtures", "1,20", "--sets", "100"], ["service_memory.py"], memory_rows),

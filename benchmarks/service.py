@@ -1,7 +1,7 @@
 """Throughput, CPU and latency of the fixture pose service (not a test: figures are printed).
 
 python benchmarks/service.py [--seconds S] [--one 250,500,1000,2000] [--many 50,100,200] [--fixtures 20]
-                             [--more FIXTURES:RATES ...] [--capacity] [--rest]
+                             [--more FIXTURES:RATES ...] [--capacity] [--rest] [--frame-gap US]
 
 A feeder thread plays trajectory A (reference hexapod, 10 um reading noise, frames encoded with each
 fixture's layout and CAN ids) on python-can's virtual bus at a set rate per fixture; the service
@@ -32,10 +32,13 @@ more CPU (docs/performance.md). Each fed run is also split before the bus and th
 same fixtures' cycles handed the same frames on this thread at the stream's pace, asleep between
 periods (their caches cold after each idle gap, as the cycle thread's), beside the same handed
 back to back, and a thread that only takes the stream's frames off the virtual bus (the bus's
-wake-ups alone), each CPU a set. Each fixture plays the trajectory from a point of its own (fixture
-``i`` of ``F`` from sample ``i * SETS / F``): the fixtures of a cell stand at poses of their own
-(fixtures in step would share what one proof leaves for the next step, its region and
-preconditioner, as no cell does). Every fixture's frames of one sampling period are queued together:
+wake-ups alone), each CPU a set. The feeder delivers a period's frames at once; ``--frame-gap
+130`` delivers a set's frames leg by leg 130 us apart, as a 1 Mbit/s bus carries them, and the
+cycle thread then wakes for each (the gaps delivered, the feeder's sleeps, are printed). Each
+fixture plays the trajectory from a point of its own (fixture ``i`` of ``F`` from sample
+``i * SETS / F``): the fixtures of a cell stand at poses of their own (fixtures in step would
+share what one proof leaves for the next step, its region and preconditioner, as no cell does).
+Every fixture's frames of one sampling period are queued together (without ``--frame-gap``):
 the last fixture's set of a period waits for the sets of the others (its latency holds
 ``FIXTURES - 1`` sets' CPU). ``--more 5:1000`` adds runs of 5 fixtures at 1 kHz: the 5,000 sets a
 second of 50 fixtures at 100 Hz, in periods of 5 sets instead of 50. ``--rest`` adds ``--fixtures`` fixtures at
@@ -373,11 +376,14 @@ def solves_cost(hexa: Hexapod, readings: np.ndarray, tol: float, gap: float = 0.
     return 1e6 * spent / (last - 200)
 
 
-def wakeups(readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> float:
+def wakeups(
+    readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path, frame_gap: float = 0.0
+) -> float:
     """CPU (us) a set of a thread that only takes a fed run's frames off the bus: the bus's wake-ups alone.
 
     The frames of ``fixtures`` fixtures' sets are delivered ``rate`` periods a second for
-    ``seconds``, as :func:`run`'s feeder delivers them; the thread waits for each frame as the
+    ``seconds``, as :func:`run`'s feeder delivers them (``frame_gap``: leg by leg, that far
+    apart); the thread waits for each frame as the
     service's loop does (python-can's ``recv`` with the service's wait, :func:`bus_wait`) and
     does nothing with it. Its CPU per set is what waiting for the stream's frames costs a
     served set before any of the service's work.
@@ -385,6 +391,7 @@ def wakeups(readings: np.ndarray, fixtures: int, rate: float, seconds: float, fo
     channel, config = make_config(fixtures, folder)
     bus = can.Bus(interface="virtual", channel=channel)
     period_frames = [m for _, _, _, m in frames_of(config, readings, 1)]
+    per_leg = [[m for _, _, j, m in frames_of(config, readings, 1) if j == leg] for leg in range(6)]
     stop, taken, cpu = threading.Event(), [0], [0.0]
     tick = bus_wait(config)
 
@@ -404,8 +411,16 @@ def wakeups(readings: np.ndarray, fixtures: int, rate: float, seconds: float, fo
             wait = start + k / rate - time.perf_counter()
             if wait > 0.0:
                 time.sleep(wait)
-            for m in period_frames:
-                deliver(m)
+            if frame_gap <= 0.0:
+                for m in period_frames:
+                    deliver(m)
+                continue
+            for j, msgs in enumerate(per_leg):  # leg by leg, frame_gap apart, as run's feeder
+                wait = start + k / rate + j * frame_gap - time.perf_counter()
+                if j and wait > 0.0:
+                    time.sleep(wait)
+                for m in msgs:
+                    deliver(m)
         while taken[0] < periods * len(period_frames) and time.perf_counter() - start < seconds + 5.0:
             time.sleep(0.01)
     finally:
@@ -430,8 +445,21 @@ def caught_up(
     return time.monotonic() - t0, done
 
 
-def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> dict:
+def run(
+    hexa: Hexapod,
+    readings: np.ndarray,
+    fixtures: int,
+    rate: float,
+    seconds: float,
+    folder: Path,
+    frame_gap: float = 0.0,
+) -> dict:
     """One run: ``fixtures`` fixtures at ``rate`` sets per second each for ``seconds``, after the warm-up.
+
+    ``frame_gap`` (s): 0 delivers a period's frames at once; else a set's frame of leg ``j`` is
+    delivered ``j * frame_gap`` after the period's start (every fixture's frame of leg ``j``
+    together), as a bus carries a set's frames one after another (a frame takes about 130 us
+    on a 1 Mbit/s bus). The feeder sleeps between them: the gaps delivered are reported.
 
     One stream from start to end: the warm-up (caches, each tracker's first samples) goes on
     until the service has published a record for the sets sent (at least :data:`WARM_UP` s, at
@@ -482,6 +510,8 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
     # settling) are spread out instead of queueing 50 fixtures' at once
     joins = [(i * int(RAMP * rate)) // fixtures for i in range(fixtures)]
 
+    spans: list[float] = []  # with a frame gap: each period's time from its first frame to its last (s)
+
     def feed() -> None:  # the warm-up, then the measured phase
         period, k, start, wall = 1.0 / rate, 0, time.perf_counter(), time.time()
         while not stop.is_set() and k < len(ahead):
@@ -489,14 +519,30 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
             if wait > 0:
                 time.sleep(wait)
             stamp = wall + k * period  # the sampling time, as an encoder's frame would carry it
-            for name, msgs, join in zip(names, ahead[k], joins):
-                if k < join:
-                    continue
-                for j, m in enumerate(msgs):
-                    m.timestamp = stamp + j * 130e-6
-                    deliver(m)
-                arrived[(name, m.timestamp)] = time.time()  # the set's last frame is at the receiver
-                delivered[0] += 1
+            if frame_gap <= 0.0:  # every frame of the period at once
+                for name, msgs, join in zip(names, ahead[k], joins):
+                    if k < join:
+                        continue
+                    for j, m in enumerate(msgs):
+                        m.timestamp = stamp + j * 130e-6
+                        deliver(m)
+                    arrived[(name, m.timestamp)] = time.time()  # the set's last frame is at the receiver
+                    delivered[0] += 1
+            else:  # leg by leg, frame_gap apart
+                live = [(name, msgs) for name, msgs, join in zip(names, ahead[k], joins) if k >= join]
+                first = time.perf_counter()
+                for j in range(len(ahead[k][0])):
+                    wait = start + k * period + j * frame_gap - time.perf_counter()
+                    if j and wait > 0:
+                        time.sleep(wait)
+                    for _, msgs in live:
+                        msgs[j].timestamp = stamp + j * 130e-6
+                        deliver(msgs[j])
+                spans.append(time.perf_counter() - first)
+                now = time.time()
+                for name, msgs in live:
+                    arrived[(name, msgs[-1].timestamp)] = now
+                    delivered[0] += 1
             sent[0] += 1
             k += 1
         # alive until its thread's CPU is read (a read while the cycle thread holds the GIL can take
@@ -564,10 +610,26 @@ def run(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds
         * sum(v for k, v in named.items() if k not in SERVICE_THREADS and k != "hx-sim")
         / fed,
         "sustained": records >= 0.99 * sent[0] * fixtures and records > 0 and float(np.percentile(lat, 99)) < 10.0,
-    }
+    } | gaps_of(frame_gap, spans, len(frames[0][0]))
 
 
-def split_of_fed(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path) -> dict:
+def gaps_of(frame_gap: float, spans: list[float], legs: int) -> dict:
+    """A run's frame gap asked and delivered (us; the median of its periods' spans over the gaps), or nothing."""
+    if frame_gap <= 0.0:
+        return {}
+    delivered = float(np.median(spans)) / (legs - 1) if spans and legs > 1 else float("nan")
+    return {"frame_gap_us": 1e6 * frame_gap, "frame_gap_delivered_us": 1e6 * delivered}
+
+
+def split_of_fed(
+    hexa: Hexapod,
+    readings: np.ndarray,
+    fixtures: int,
+    rate: float,
+    seconds: float,
+    folder: Path,
+    frame_gap: float = 0.0,
+) -> dict:
     """What a fed run's set costs before the bus and threads: its cycles' work at the stream's pace, the bus's wake-ups.
 
     ``paced_by_hand_us``: the fixtures' cycles handed their frames at the stream's pace
@@ -579,7 +641,7 @@ def split_of_fed(hexa: Hexapod, readings: np.ndarray, fixtures: int, rate: float
     return {
         "paced_by_hand_us": cycles_by_hand(hexa, readings, fixtures, rate, sets, folder, paced=True),
         "warm_by_hand_us": cycles_by_hand(hexa, readings, fixtures, rate, sets, folder),
-        "wakeups_us": wakeups(readings, fixtures, rate, seconds, folder),
+        "wakeups_us": wakeups(readings, fixtures, rate, seconds, folder, frame_gap),
     }
 
 
@@ -603,9 +665,15 @@ def paced(r: dict) -> str:
     """The fed run's set before the bus and threads (:func:`split_of_fed`), or empty."""
     if "paced_by_hand_us" not in r:
         return ""
+    gap = (
+        f"; a set's frames {r['frame_gap_us']:.0f} us apart (delivered {r['frame_gap_delivered_us']:.0f} us apart)"
+        if "frame_gap_us" in r
+        else ""
+    )
     return (
         f"\n    its cycles handed their frames at the stream's pace, without the bus: {r['paced_by_hand_us']:.0f} us "
         f"a set (back to back: {r['warm_by_hand_us']:.0f}); the bus's wake-ups alone: {r['wakeups_us']:.0f} us a set"
+        f"{gap}"
     )
 
 
@@ -658,6 +726,13 @@ def main(argv=None) -> int:
         metavar="FIXTURES:RATES",
         help="also FIXTURES fixtures at each of RATES (Hz, comma-separated), e.g. 5:1000 (repeatable)",
     )
+    ap.add_argument(
+        "--frame-gap",
+        type=float,
+        default=0.0,
+        metavar="US",
+        help="fed runs: deliver a set's frames leg by leg, US microseconds apart (0: at once; ~130 on a 1 Mbit/s bus)",
+    )
     ap.add_argument("--json", help="also write the runs (and the capacity figures, kind 'capacity') as JSON")
     ap.add_argument(
         "--capacity", action="store_true", help="also the cycle thread's CPU per set from a full queue (no idle gaps)"
@@ -668,6 +743,9 @@ def main(argv=None) -> int:
         help="also --fixtures fixtures at 100 Hz at rest, each at a pose of its own (fed, and with --capacity)",
     )
     args = ap.parse_args(argv)
+    if not 0.0 <= args.frame_gap < 1e5:  # NaN too
+        ap.error(f"--frame-gap {args.frame_gap}: expected 0 <= us < 100000")
+    gap = 1e-6 * args.frame_gap
     hexa = Hexapod.from_preset("reference")
     readings = readings_sequence(hexa)
     one = rates_of(args.one)
@@ -702,13 +780,13 @@ def main(argv=None) -> int:
         for n, rates in groups:
             for rate in rates:
                 extra = {"solve_us": solve_us} | ({"solve_idle_us": idle[rate]} if n == 1 else {})
-                extra |= split_of_fed(hexa, readings, n, rate, args.seconds, Path(tmp))
-                reports.append(run(hexa, readings, n, rate, args.seconds, Path(tmp)) | extra)
+                extra |= split_of_fed(hexa, readings, n, rate, args.seconds, Path(tmp), gap)
+                reports.append(run(hexa, readings, n, rate, args.seconds, Path(tmp), gap) | extra)
                 print(line(reports[-1]), flush=True)
         if still is not None:
             extra = {"solve_us": rest_solve_us, "motion": "rest"}
-            extra |= split_of_fed(hexa, still, args.fixtures, 100.0, args.seconds, Path(tmp))
-            reports.append(run(hexa, still, args.fixtures, 100.0, args.seconds, Path(tmp)) | extra)
+            extra |= split_of_fed(hexa, still, args.fixtures, 100.0, args.seconds, Path(tmp), gap)
+            reports.append(run(hexa, still, args.fixtures, 100.0, args.seconds, Path(tmp), gap) | extra)
             print("at rest " + line(reports[-1]), flush=True)
         if args.capacity:
             runs = [(1, 1000.0, None), (args.fixtures, 100.0, None)]
@@ -736,7 +814,7 @@ def main(argv=None) -> int:
                     f", the {n} fixtures' tracker steps in turn, without the bus: {turn:.0f} us"
                     f" and their cycles handed the frames, without the bus, the threads and the store: {hand:.0f} us"
                 )
-    for n in dict.fromkeys(n for n, _ in groups):  # each fixture count once, in order (moving)
+    for n in dict.fromkeys(n for n, rates in groups if rates):  # each fixture count run once, in order (moving)
         ok = [r["rate_hz"] for r in reports if r["fixtures"] == n and r.get("sustained") and "motion" not in r]
         print(f"highest sustained set rate, {n} fixture(s): {max(ok):.0f} Hz" if ok else f"{n} fixture(s): none")
     if args.json:

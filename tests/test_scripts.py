@@ -591,7 +591,7 @@ def test_service_benchmark_times_the_idle_gap_solve_of_every_one_fixture_run(mon
     bench = _benchmark("service")
     runs = []
 
-    def run(hexa, readings, n, rate, seconds, tmp):  # the fed run itself: its arguments, no stream
+    def run(hexa, readings, n, rate, seconds, tmp, frame_gap=0.0):  # the fed run itself: its arguments, no stream
         runs.append((n, rate))
         return {"fixtures": n, "rate_hz": rate, "sustained": True}
 
@@ -601,6 +601,29 @@ def test_service_benchmark_times_the_idle_gap_solve_of_every_one_fixture_run(mon
     argv = ["--seconds", "0.1", "--one", "1000", "--many", "500", "--fixtures", "1", "--more", "1:250"]
     assert bench.main(argv) == 0
     assert runs == [(1, 1000.0), (1, 500.0), (1, 250.0)]
+
+
+def test_service_benchmark_delivers_a_sets_frames_leg_by_leg_with_a_frame_gap(tmp_path):
+    """``--frame-gap``: a set's frames leg by leg, that far apart (the feeder's sleeps: at least the gap)."""
+    bench = _benchmark("service")
+    hexa = hm.Hexapod.from_preset("reference")
+    readings = bench.readings_sequence(hexa)[:300]
+    report = bench.run(hexa, readings, 2, 100.0, 0.3, tmp_path, frame_gap=1e-3)
+    assert report["records"] > 0 and report["frame_gap_us"] == pytest.approx(1000.0)
+    assert 950.0 <= report["frame_gap_delivered_us"] < 5000.0  # a sleep ends after its time, seldom 4 ms late
+    assert "frame_gap_us" not in bench.run(hexa, readings, 1, 100.0, 0.2, tmp_path)
+    assert bench.wakeups(readings, 1, 100.0, 0.2, tmp_path, 1e-3) > 0.0
+    assert bench.gaps_of(0.0, [], 6) == {} and bench.gaps_of(1e-4, [5e-4, 7e-4, 6e-4], 6) == pytest.approx(
+        {"frame_gap_us": 100.0, "frame_gap_delivered_us": 120.0}
+    )
+
+
+@pytest.mark.parametrize("gap", ["-1", "nan", "1e6"])
+def test_service_benchmark_refuses_a_bad_frame_gap_in_one_line(gap):
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "service.py"), "--frame-gap", gap]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2 and out.stdout == ""
+    assert "--frame-gap" in out.stderr and "Traceback" not in out.stderr
 
 
 @pytest.mark.parametrize("more", ["5", "5:", "0:100", "x:100", "5:-1", "5:nan", "5:100,inf"])
