@@ -604,13 +604,14 @@ def test_service_benchmark_times_the_idle_gap_solve_of_every_one_fixture_run(mon
 
 
 def test_service_benchmark_delivers_a_sets_frames_leg_by_leg_with_a_frame_gap(tmp_path):
-    """``--frame-gap``: a set's frames leg by leg, that far apart (the feeder's sleeps: at least the gap)."""
+    """``--frame-gap``: a set's frames leg by leg, about that far apart (the feeder sleeps between them)."""
     bench = _benchmark("service")
     hexa = hm.Hexapod.from_preset("reference")
     readings = bench.readings_sequence(hexa)[:300]
     report = bench.run(hexa, readings, 2, 100.0, 0.3, tmp_path, frame_gap=1e-3)
     assert report["records"] > 0 and report["frame_gap_us"] == pytest.approx(1000.0)
-    assert 950.0 <= report["frame_gap_delivered_us"] < 5000.0  # a sleep ends after its time, seldom 4 ms late
+    # from the first frame to the last, the median period: a sleep ends after its time (the first frame may be late)
+    assert 800.0 <= report["frame_gap_delivered_us"] < 5000.0
     assert "frame_gap_us" not in bench.run(hexa, readings, 1, 100.0, 0.2, tmp_path)
     assert bench.wakeups(readings, 1, 100.0, 0.2, tmp_path, 1e-3) > 0.0
     assert bench.gaps_of(0.0, [], 6) == {} and bench.gaps_of(1e-4, [5e-4, 7e-4, 6e-4], 6) == pytest.approx(
