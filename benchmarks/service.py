@@ -66,6 +66,7 @@ import threading
 import time
 import uuid
 from collections import deque
+from collections.abc import Callable
 from pathlib import Path
 
 import can
@@ -376,6 +377,20 @@ def solves_cost(hexa: Hexapod, readings: np.ndarray, tol: float, gap: float = 0.
     return 1e6 * spent / (last - 200)
 
 
+def leg_by_leg(sets: list[list[can.Message]], deliver: Callable[[can.Message], None], due: float, gap: float) -> None:
+    """Deliver a period's ``sets`` (each a fixture's frames, leg order) leg by leg: leg ``j`` at ``due + j * gap``.
+
+    ``due``: the period's start on :func:`time.perf_counter`'s clock; every set's frame of a leg
+    goes together. The thread sleeps between legs (a sleep ends after its time, never before).
+    """
+    for j in range(len(sets[0]) if sets else 0):
+        wait = due + j * gap - time.perf_counter()
+        if j and wait > 0.0:
+            time.sleep(wait)
+        for msgs in sets:
+            deliver(msgs[j])
+
+
 def wakeups(
     readings: np.ndarray, fixtures: int, rate: float, seconds: float, folder: Path, frame_gap: float = 0.0
 ) -> float:
@@ -391,7 +406,7 @@ def wakeups(
     channel, config = make_config(fixtures, folder)
     bus = can.Bus(interface="virtual", channel=channel)
     period_frames = [m for _, _, _, m in frames_of(config, readings, 1)]
-    per_leg = [[m for _, _, j, m in frames_of(config, readings, 1) if j == leg] for leg in range(6)]
+    sets = [period_frames[6 * i : 6 * i + 6] for i in range(fixtures)]  # each fixture's six, leg order
     stop, taken, cpu = threading.Event(), [0], [0.0]
     tick = bus_wait(config)
 
@@ -414,13 +429,8 @@ def wakeups(
             if frame_gap <= 0.0:
                 for m in period_frames:
                     deliver(m)
-                continue
-            for j, msgs in enumerate(per_leg):  # leg by leg, frame_gap apart, as run's feeder
-                wait = start + k / rate + j * frame_gap - time.perf_counter()
-                if j and wait > 0.0:
-                    time.sleep(wait)
-                for m in msgs:
-                    deliver(m)
+            else:  # as run's feeder
+                leg_by_leg(sets, deliver, start + k / rate, frame_gap)
         while taken[0] < periods * len(period_frames) and time.perf_counter() - start < seconds + 5.0:
             time.sleep(0.01)
     finally:
@@ -530,14 +540,11 @@ def run(
                     delivered[0] += 1
             else:  # leg by leg, frame_gap apart
                 live = [(name, msgs) for name, msgs, join in zip(names, ahead[k], joins) if k >= join]
+                for _, msgs in live:
+                    for j, m in enumerate(msgs):
+                        m.timestamp = stamp + j * 130e-6
                 first = time.perf_counter()
-                for j in range(len(ahead[k][0])):
-                    wait = start + k * period + j * frame_gap - time.perf_counter()
-                    if j and wait > 0:
-                        time.sleep(wait)
-                    for _, msgs in live:
-                        msgs[j].timestamp = stamp + j * 130e-6
-                        deliver(msgs[j])
+                leg_by_leg([msgs for _, msgs in live], deliver, start + k * period, frame_gap)
                 spans.append(time.perf_counter() - first)
                 now = time.time()
                 for name, msgs in live:
