@@ -56,18 +56,22 @@ class Said(logging.Handler):
     def emit(self, record):
         said.append(record.getMessage())
 class Top(ev.Listener):  # each compilation started from Python (numba compiles its callees inside it)
-    depth = 0
+    # announced: its own entry's line was said, or a line was said since the last one ended (the wait
+    # that line announced goes on through the compilations that follow it without a line between)
+    depth, heard = 0, 0
     def on_start(self, event):
         if self.depth == 0:
             self.name, self.t0 = event.data["dispatcher"].py_func.__name__, time.process_time()
             what = ENTRIES.get(self.name, ("?",))[0]
-            self.told = any(f"({what})" in line for line in said)
+            self.told = len(said) > self.heard or any(f"({what})" in line for line in said)
         self.depth += 1
     def on_end(self, event):
         self.depth -= 1
         cpu = time.process_time() - self.t0
-        if self.depth == 0 and cpu > 1.0 and not self.told:
-            unannounced.append(f"{self.name} {cpu:.1f} s")
+        if self.depth == 0:
+            self.heard = len(said)
+            if cpu > 1.0 and not self.told:
+                unannounced.append(f"{self.name} {cpu:.1f} s")
 logging.getLogger(LOGGER).addHandler(Said())
 logging.getLogger(LOGGER).setLevel(logging.INFO)
 ev.register("numba:compile", Top())

@@ -415,7 +415,8 @@ class SolveEngine(JointSpace):
         check: bool = True,
     ) -> Solution:
         """Inverse kinematics of ``pose`` (4x4, base -> platform, m): :meth:`.hexapod.Hexapod.inverse`."""
+        solver = self.solver(self.held_inverse)  # made first: a first solve after installation is announced
         q = self.start(guess)
-        self.set_pose(q, pose)
+        self.set_pose(q, pose)  # the first after installation compiles its check and conversion: announced above
         tol = self.default_tol if tol is None else tol
-        return self.finish(self.solver(self.held_inverse), q, tol, max_iter, check)
+        return self.finish(solver, q, tol, max_iter, check)

@@ -161,10 +161,16 @@ class Tracker(PassageMixin):
         nv = hexa.model.nv
         mats = [np.zeros((3, 3)) for _ in range(3)]
         self._predict_work = (np.zeros(nv), np.zeros(nv), *mats, np.zeros(3))
-        # the compiled predictor: the dispatcher until its first call, then the machine code it ran,
-        # called directly (every array it takes is this tracker's, or a copy: .entries)
+        # the compiled predictor: loaded (or compiled, about a second after installation) now, on
+        # throwaway arrays of the types a step passes (every array it takes is plain: .entries), and
+        # called directly from then on
         self._predict_into: Callable[..., None] = predict_into
-        self._predict_direct = False
+        if self._layout is not None:
+            q0 = np.array(hexa.q_home, dtype=float)
+            probe_args = (q0, q0, 1.0, q0, 0.0, self._layout, np.empty(q0.size), self._predict_work)
+            announce(predict_into)
+            predict_into(*probe_args)
+            self._predict_into = direct(predict_into, probe_args)
         self._branch_ready = False  # the branch check's kernel announced (its first call compiles it: about 1 s)
         # the histories of the motion model, windows of buffers twice as tall (.kernels.push_trusted)
         self._Fbuf, self._Lbuf = np.zeros((2 * s.window, 7)), np.zeros((2 * s.window, 6))
@@ -223,6 +229,7 @@ class Tracker(PassageMixin):
         # the histories' push (.kernels.push_trusted) likewise, on throwaway buffers
         buffers = (np.zeros_like(self._Fbuf), np.zeros_like(self._Lbuf))
         pushed = (plain(hexa.q_home), self._ffq.start, self._prism_q, *buffers, 0, 0, False)
+        announce(push_trusted)
         push_trusted(*pushed)
         self._push_rows: Callable[..., tuple[int, int]] = direct(push_trusted, pushed)
 
@@ -407,8 +414,6 @@ class Tracker(PassageMixin):
         else:
             args = (q0, hist[2], a2, q0, 0.0, self._layout, out, self._predict_work)
         self._predict_into(*args)
-        if not self._predict_direct:  # its first call: the machine code it ran, directly from now on
-            self._predict_into, self._predict_direct = direct(predict_into, args), True
         return out
 
     def _solve(self, l: np.ndarray, guess: np.ndarray) -> Solution:

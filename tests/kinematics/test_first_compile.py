@@ -202,8 +202,8 @@ def test_a_plain_script_sees_one_compile_warning_on_stderr():
 
 def test_the_tracker_and_the_pose_uncertainty_announce_their_kernels_before_their_first_calls(monkeypatch):
     """A tracker's construction compiles the pose uncertainty's kernels (about 5 s after installation), its
-    stuck test's and its reading statistics'; its first solved sample the uncertainty of a solve (about 3 s):
-    each is announced first."""
+    predictor's, its stuck test's, its reading statistics' and its histories' (each about a second on a
+    slower machine); its first solved sample the uncertainty of a solve (about 3 s): each is announced first."""
     import hexapod_model as hm
     from hexapod_model.analysis import sensitivity
     from hexapod_model.tracking import kernels, tracker
@@ -213,10 +213,11 @@ def test_the_tracker_and_the_pose_uncertainty_announce_their_kernels_before_thei
     monkeypatch.setattr(tracker, "announce", lambda d: seen.append(d.py_func.__name__))
     hexa = hm.Hexapod.from_preset("reference")
     stream = tracker.Tracker(hexa)
-    assert seen == ["measure", "stuck_checks", "begin_sample"]
+    made = ["measure", "predict_into", "stuck_checks", "begin_sample", "push_trusted"]
+    assert seen == made
     for _ in range(3):
         stream.step(hexa.closed_loop.q_home[hexa.closed_loop.prismatic_q])
-    assert seen == ["measure", "stuck_checks", "begin_sample", "measure_solved"]  # once, at its first call
+    assert seen == [*made, "measure_solved"]  # once, at its first call
     assert set(seen) <= set(first_compile.ENTRIES) and kernels.stuck_checks.py_func.__name__ == "stuck_checks"
 
 
@@ -234,3 +235,24 @@ def test_the_tracker_announces_its_branch_check_before_its_first_call(monkeypatc
     results = [stream.step(home + 1e-6 * k) for k in range(stream.settings.settle_samples + 3)]
     assert results[-1].status == "ok" and "settling" not in results[-1].flags
     assert seen.count("branch_residual") == 1 and "branch_residual" in first_compile.ENTRIES
+
+
+def test_a_first_inverse_is_announced_before_its_pose_is_checked_and_converted(monkeypatch):
+    """An inverse's first call after installation compiles the pose's check and conversion (about a second
+    on a slower machine) before its solver's entry: the line comes before both."""
+    import hexapod_model as hm
+    from hexapod_model.kinematics import joint_space
+    from hexapod_model.kinematics.newton import compiled
+
+    seen: list[str] = []
+    monkeypatch.setattr(compiled, "announce", lambda d: seen.append(d.py_func.__name__))
+    set_pose = joint_space.JointSpace.set_pose
+
+    def recorded(self, q, pose):
+        seen.append("set_pose")
+        set_pose(self, q, pose)
+
+    monkeypatch.setattr(joint_space.JointSpace, "set_pose", recorded)
+    hexa = hm.Hexapod.from_preset("reference")
+    assert hexa.inverse(hexa.home_pose).converged
+    assert seen.index("solve_blocks") < seen.index("set_pose")

@@ -40,7 +40,9 @@ ENTRIES = {
     "measure_solved": ("the pose uncertainty of a solve", 3),
     "stuck_checks": ("the tracker's stuck test", 1),
     "begin_sample": ("the tracker's reading statistics", 1),
-    "branch_residual": ("the tracker's branch check", 1),
+    "branch_residual": ("the tracker's branch check", 2),
+    "predict_into": ("the tracker's predictor", 1),
+    "push_trusted": ("the tracker's histories", 1),
     "measure_body": ("the body check: joint cones and collisions", 4),
 }
 
