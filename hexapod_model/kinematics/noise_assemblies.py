@@ -21,7 +21,9 @@ sensitivity ``dz = -(dP) (z) / P'(z)``. Within the box the gap falls fastest tow
 as the square root of the distance to it, so the linear estimate ``g / G`` (in fractions of the
 box) is twice that distance: a pair whose estimate is at most 2 is taken, the readings moved
 towards that corner by ``1.1, 1.5, 2`` times half the estimate (at most the corner itself), and
-the assemblies that appear there with ``psi_0`` within ``ANGLE`` of the pair's are returned.
+the assemblies there with ``psi_0`` within ``ANGLE`` of the pair's are returned when they are more
+than the measured readings' own within ``ANGLE`` of it (those move with the readings: a pair next
+to one of them finds it there too, and only more of them means that some appeared).
 """
 
 from __future__ import annotations
@@ -80,6 +82,7 @@ def noise_assemblies(fk: ThreeSixFK, lengths, reach) -> list[ThreeSixSolution]:
     except WorkspaceError:
         return []
     found: list[ThreeSixSolution] = []
+    own: list[float] | None = None  # psi_0 of the measured readings' own assemblies, at the first pair taken
     for k in range(z.size):
         corner = -box * np.sign(grad[k])  # the corner of the box towards which the gap falls fastest
         g, rate = -np.log(np.abs(z[k])), float(np.abs(grad[k]) @ box)
@@ -91,8 +94,25 @@ def noise_assemblies(fk: ThreeSixFK, lengths, reach) -> list[ThreeSixSolution]:
                 sols = fk.solve_all(lengths + s * corner)
             except WorkspaceError:
                 continue
-            near = [a for a in sols if abs(np.angle(np.exp(1j * a.psi[0]) / z[k] * abs(z[k]))) < ANGLE]
-            if near:
+            near = [a for a in sols if _apart(a.psi[0], z[k]) < ANGLE]
+            if own is None:
+                own = _own_angles(fk, lengths)
+            # more assemblies there than the measured readings have about that angle: some appeared (their
+            # own assemblies moved with the readings also lie there: a pair next to one of them is not new)
+            if len(near) > sum(_apart(psi0, z[k]) < ANGLE for psi0 in own):
                 found.extend(near)
                 break
     return found
+
+
+def _apart(psi0: float, z: complex) -> float:
+    """The angle (rad) between the circle angle ``psi0`` and the root ``z``'s."""
+    return float(abs(np.angle(np.exp(1j * psi0) / z * abs(z))))
+
+
+def _own_angles(fk: ThreeSixFK, lengths: np.ndarray) -> list[float]:
+    """``psi_0`` of each assembly of ``lengths`` itself (none when two legs of a pair cannot meet)."""
+    try:
+        return [float(a.psi[0]) for a in fk.solve_all(lengths)]
+    except WorkspaceError:
+        return []

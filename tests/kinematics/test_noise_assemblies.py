@@ -84,6 +84,21 @@ def test_the_assemblies_appear_within_the_reach_and_close_the_moved_readings(k):
     assert not noise_assemblies(fk, readings, 1e-9)  # not within a nanometre: the pair is complex
 
 
+def test_the_readings_own_assemblies_next_to_a_pair_are_not_new(monkeypatch):
+    """A pair whose readings are moved towards it finds the readings' own assemblies there too (moved with
+    them): they are not new. At home the 3-6 resultant has triple roots, whose gap gradient is the
+    rounding's (LAPACK's roots differ in their last bits between processors): on one machine's a
+    pair at -0.47 was taken, and the own assemblies 0.18 rad from it came back as noise assemblies."""
+    from hexapod_model.kinematics import noise_assemblies as module
+
+    hexa = hexapod("3-6")
+    fk = ThreeSixFK(hexa.geometry)
+    own = fk.solve_all(np.zeros(6))
+    z = np.array([0.5 * np.exp(1j * own[0].psi[0])])  # a complex root inside the circle at an own assembly's angle
+    monkeypatch.setattr(module, "_gaps", lambda fk, lengths: (z, np.full((1, 6), 1e4)))  # steep: taken
+    assert not noise_assemblies(fk, np.zeros(6), noise_reach(NOISY))
+
+
 def test_readings_far_from_any_fold_have_no_noise_assemblies():
     hexa = hexapod("3-6")
     fk = ThreeSixFK(hexa.geometry)
