@@ -168,10 +168,8 @@ class Tracker(PassageMixin):
         if self._layout is not None:
             q0 = np.array(hexa.q_home, dtype=float)
             probe_args = (q0, q0, 1.0, q0, 0.0, self._layout, np.empty(q0.size), self._predict_work)
-            announce(predict_into)
-            predict_into(*probe_args)
-            self._predict_into = direct(predict_into, probe_args)
-        self._branch_ready = False  # the branch check's kernel announced (its first call compiles it: about 1 s)
+            self._predict_into = _loaded(predict_into, probe_args)
+        self._branch_ready = False  # the branch check's kernel announced (its first call compiles it: 1-2 s)
         # the histories of the motion model, windows of buffers twice as tall (.kernels.push_trusted)
         self._Fbuf, self._Lbuf = np.zeros((2 * s.window, 7)), np.zeros((2 * s.window, 6))
         self._tops = (s.window, s.window)  # the windows' first rows
@@ -210,9 +208,7 @@ class Tracker(PassageMixin):
         # the stuck test's kernel runs only when a reading repeats (a fixture at rest): loaded (or
         # compiled, about a second after installation) now, on no reading, and called directly from then on
         args = (self._raw, 0, 0, self._frozen, _NO_Z, self._stuck, 1, 1, self._stuck_bounds, self._moving, self._moved)
-        announce(stuck_checks)
-        stuck_checks(*args)
-        self._stuck_checks: Callable[..., tuple] = direct(stuck_checks, args)
+        self._stuck_checks: Callable[..., tuple] = _loaded(stuck_checks, args)
         # the statistics of every sample (.kernels.begin_sample) likewise: loaded or compiled (about a
         # second) now, on throwaway arrays of the types a step passes, and called directly from then on
         l, lhat, z = np.zeros(6), np.zeros(6), np.zeros(6)
@@ -223,15 +219,11 @@ class Tracker(PassageMixin):
             np.zeros(6, dtype=bool),
         )
         probe = (l, raw, raw_state, frozen, stuck, _NONE, np.zeros_like(self._L), lhat, z, self._scalars.copy())
-        announce(begin_sample)
-        begin_sample(*probe)
-        self._begin_sample: Callable[..., tuple] = direct(begin_sample, probe)
+        self._begin_sample: Callable[..., tuple] = _loaded(begin_sample, probe)
         # the histories' push (.kernels.push_trusted) likewise, on throwaway buffers
         buffers = (np.zeros_like(self._Fbuf), np.zeros_like(self._Lbuf))
         pushed = (plain(hexa.q_home), self._ffq.start, self._prism_q, *buffers, 0, 0, False)
-        announce(push_trusted)
-        push_trusted(*pushed)
-        self._push_rows: Callable[..., tuple[int, int]] = direct(push_trusted, pushed)
+        self._push_rows: Callable[..., tuple[int, int]] = _loaded(push_trusted, pushed)
 
     def reset(self, initial=None) -> None:
         """Forget the history; restart from ``initial`` (``Solution``, ``q`` or home)."""
@@ -560,6 +552,16 @@ class Tracker(PassageMixin):
             sol = Solution(self.hexa.pose_of(q), q.copy(), l.copy(), status, 0, math.nan, None, message)
         nan = math.nan
         return track_result(sol, status, flags, legs, nan, nan, nan, nan, nan, time.perf_counter() - t0)
+
+
+def _loaded(kernel: Callable, args: tuple) -> Callable:
+    """``kernel``'s machine code for ``args``' types, to call directly.
+
+    Announced (:func:`.first_compile.announce`), then loaded or compiled by a call on ``args``.
+    """
+    announce(kernel)
+    kernel(*args)
+    return direct(kernel, args)
 
 
 def _numeric(values) -> bool:
